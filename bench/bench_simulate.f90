@@ -1,0 +1,49 @@
+!> Speed of the uniaxial simulator on the thesis's three tests at default tolerances:
+!> wall time per simulation, steps and right-hand-side evaluations
+program bench_simulate
+   use, intrinsic :: iso_fortran_env, only: int64, output_unit
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_miller, only: miller_model, model_setup
+   use usharp_history, only: history_type, output_times, thesis_lcf_history, relaxation_history, &
+                             ratchet_history
+   use usharp_simulation, only: solver_options, sim_result
+   use usharp_cvode_driver, only: simulate_cvode
+   implicit none
+   type(miller_model) :: m
+   type(history_type) :: h
+   type(sim_result) :: r
+   type(solver_options) :: opts
+   type(error_type), allocatable :: err
+   real(dp), allocatable :: tout(:)
+   integer(int64) :: c0, c1, rate
+   integer :: k, rep
+   integer, parameter :: nrep = 500
+   character(len=10), parameter :: names(3) = ['lcf       ', 'relaxation', 'ratchet   ']
+   call model_setup(m, err)
+   write (output_unit, '(a)') '# test        ms/simulation   steps   rhs-evals   jac-evals  (default rtol, '// &
+      'atol; 0.5 s output interval; best of 3 batches of 500)'
+   do k = 1, 3
+      select case (k)
+      case (1); call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, h, err)
+      case (2); call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], h, err)
+      case default; call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, h, err)
+      end select
+      tout = output_times(h, 0.5_dp)
+      block
+         real(dp) :: best, t
+         integer :: batch
+         best = huge(1.0_dp)
+         do batch = 1, 3
+            call system_clock(c0, rate)
+            do rep = 1, nrep
+               call simulate_cvode(m, h, tout, opts, r, err)
+            end do
+            call system_clock(c1)
+            t = real(c1 - c0, dp)/real(rate, dp)/nrep*1.0e3_dp
+            best = min(best, t)
+         end do
+         write (output_unit, '(a12,f14.4,3i11)') names(k), best, r%nsteps, r%nrhs, r%njac
+      end block
+   end do
+end program bench_simulate

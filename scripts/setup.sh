@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Install what usharp needs to build and test, without prompts; a no-op when all is present.
+# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface. PyPI: fpm.
+set -euo pipefail
+
+need_apt=()
+command -v gfortran >/dev/null 2>&1 || need_apt+=(gfortran)
+[ -e /usr/include/sundials/fortran/fcvode_mod.mod ] || need_apt+=(libsundials-fortran-dev libsundials-dev)
+ls /usr/lib/x86_64-linux-gnu/liblapack.so* >/dev/null 2>&1 || ls /usr/lib/*/liblapack.so >/dev/null 2>&1 || need_apt+=(liblapack-dev)
+ls /usr/lib/*/libblas.so >/dev/null 2>&1 || need_apt+=(libblas-dev)
+
+if [ ${#need_apt[@]} -gt 0 ]; then
+  echo "setup: installing Debian packages: ${need_apt[*]}" >&2
+  sudo_cmd=""
+  [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo_cmd apt-get update -qq
+  $sudo_cmd apt-get install -y -qq --no-install-recommends "${need_apt[@]}" >/dev/null
+fi
+
+if ! command -v fpm >/dev/null 2>&1; then
+  echo "setup: installing fpm from PyPI" >&2
+  python3 -m pip install --quiet --disable-pip-version-check 'fpm>=0.12,<0.13'
+  hash -r
+fi
+command -v fpm >/dev/null 2>&1 || { echo "setup: fpm not on PATH after install" >&2; exit 1; }

@@ -1,0 +1,74 @@
+!> `usharp simulate`: simulate every test of an input file and write <out_dir>/<test>.sim.txt
+module usharp_cmd_simulate
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_strings, only: str, real_str
+   use usharp_miller, only: n_constants, constant_names, get_constant
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config
+   use usharp_simulation, only: sim_result
+   use usharp_simulate, only: simulate_test, add_stress_noise
+   use usharp_history, only: control_strain
+   use usharp_output, only: write_sim_file
+   use usharp_filesys, only: make_dir, join_path
+   use usharp_version, only: usharp_version_string
+   implicit none
+   private
+
+   public :: simulate_command
+
+contains
+
+   !> Run the simulate command. out_dir overrides the input file's &output out_dir when not
+   !> empty. Each written file is reported through the written list.
+   subroutine simulate_command(path, out_dir, written, error)
+      character(len=*), intent(in) :: path
+      character(len=*), intent(in) :: out_dir
+      character(len=256), allocatable, intent(out) :: written(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(sim_result) :: res
+      character(len=:), allocatable :: dir, command, file, line
+      character(len=512), allocatable :: header(:)
+      integer :: i, k
+      allocate (written(0))
+      call read_config(path, cfg, error)
+      if (allocated(error)) return
+      dir = cfg%out_dir
+      command = 'usharp simulate '//path
+      if (len_trim(out_dir) > 0) then
+         dir = trim(out_dir)
+         command = command//' --out-dir '//trim(out_dir)
+      end if
+      call make_dir(dir, error)
+      if (allocated(error)) return
+      do i = 1, size(cfg%tests)
+         call simulate_test(cfg%model, cfg%solver, cfg%tests(i), res, error)
+         if (allocated(error)) return
+         call add_stress_noise(res, cfg%tests(i)%noise, cfg%tests(i)%seed)
+         allocate (header(0))
+         header = [character(len=512) :: &
+            'usharp '//usharp_version_string//" simulation of test '"//cfg%tests(i)%name// &
+            "' (history "//cfg%tests(i)%history_kind//', '// &
+            merge('strain', 'stress', cfg%tests(i)%hist%control == control_strain)//' control)', &
+            'regenerate: '//command, &
+            'model miller, T = '//real_str(cfg%model%temperature, 'g0.8')//' K, Tm = '// &
+            real_str(cfg%model%tm, 'g0.8')//' K, E = '//real_str(cfg%model%youngs, 'g0.8')//' '// &
+            cfg%units//', D0 = '//real_str(cfg%model%d0, 'g0.8')//' '//cfg%units]
+         line = 'constants:'
+         do k = 1, n_constants
+            line = line//' '//trim(constant_names(k))//' = '// &
+                   real_str(get_constant(cfg%model%c, k), 'es12.5')
+         end do
+         header = [character(len=512) :: header, line]
+         if (cfg%tests(i)%noise > 0.0_dp) header = [character(len=512) :: header, &
+            'stress noise: Gaussian, sd = '//real_str(cfg%tests(i)%noise, 'g0.6')// &
+            ' x max|stress|, seed '//str(cfg%tests(i)%seed)]
+         file = join_path(dir, cfg%tests(i)%name//'.sim.txt')
+         call write_sim_file(file, res, header, cfg%units, error)
+         deallocate (header)
+         if (allocated(error)) return
+         written = [character(len=256) :: written, file]
+      end do
+   end subroutine simulate_command
+end module usharp_cmd_simulate

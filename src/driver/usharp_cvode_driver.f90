@@ -1,0 +1,261 @@
+!> Uniaxial simulation of the Miller model with CVODE (BDF, Newton, dense linear solver,
+!> analytic Jacobian). The integration restarts at every corner of the load history, so no
+!> step straddles a kink, and stops exactly at each corner.
+module usharp_cvode_driver
+   use, intrinsic :: iso_c_binding
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use fcvode_mod
+   use fsundials_context_mod
+   use fsundials_nvector_mod
+   use fsundials_matrix_mod
+   use fsundials_linearsolver_mod
+   use fnvector_serial_mod
+   use fsunmatrix_dense_mod
+   use fsunlinsol_dense_mod
+   use usharp_kinds, only: dp, i8
+   use usharp_error, only: error_type, fatal_error, stat_failure
+   use usharp_strings, only: str, real_str
+   use usharp_miller, only: miller_model, uniaxial_rates
+   use usharp_history, only: history_type, control_strain
+   use usharp_simulation, only: solver_options, sim_result
+   implicit none
+   private
+
+   public :: simulate_cvode
+
+   integer(c_int), parameter :: neq = 3
+
+   !> What the callbacks need: the model and the current linear segment of the load
+   type :: rhs_context
+      type(miller_model) :: model
+      integer :: control = control_strain
+      real(dp) :: t0 = 0.0_dp, v0 = 0.0_dp, slope = 0.0_dp
+   end type rhs_context
+
+contains
+
+   !> Simulate the history from the virgin state, writing the response at the output times
+   !> tout (s, increasing, within the history's span).
+   subroutine simulate_cvode(model, hist, tout, opts, res, error)
+      type(miller_model), intent(in) :: model
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: tout(:)
+      type(solver_options), intent(in) :: opts
+      type(sim_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+
+      type(rhs_context), target :: ctx
+      type(c_ptr) :: sunctx, cvode_mem
+      type(N_Vector), pointer :: yvec, abstol
+      type(SUNMatrix), pointer :: amat
+      type(SUNLinearSolver), pointer :: lsol
+      real(c_double), target :: y(neq), atol(neq)
+      real(c_double) :: tret(1), tnext
+      integer(c_int) :: ierr
+      integer(c_long) :: counter(1)
+      integer :: k, iout, nout, nseg
+      real(dp) :: tend
+
+      nout = size(tout)
+      call res%allocate(nout)
+      nseg = size(hist%t) - 1
+      tend = hist%end_time()
+      if (nout > 0) then
+         if (tout(1) < hist%t(1) - 1.0e-9_dp*max(1.0_dp, abs(tend)) .or. &
+             tout(nout) > tend*(1.0_dp + 1.0e-12_dp) + 1.0e-12_dp) then
+            call fatal_error(error, 'output times lie outside the history [' // &
+               str(hist%t(1))//', '//str(tend)//'] s', stat_failure)
+            return
+         end if
+      end if
+
+      ctx%model = model
+      ctx%control = hist%control
+      y = [0.0_dp, 0.0_dp, model%d0]
+      atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs]
+
+      ierr = FSUNContext_Create(c_null_ptr, sunctx)
+      yvec => FN_VMake_Serial(int(neq, c_long), y, sunctx)
+      abstol => FN_VMake_Serial(int(neq, c_long), atol, sunctx)
+      amat => FSUNDenseMatrix(int(neq, c_long), int(neq, c_long), sunctx)
+      lsol => FSUNLinSol_Dense(yvec, amat, sunctx)
+      cvode_mem = FCVodeCreate(CV_BDF, sunctx)
+      call set_segment(ctx, hist, 1)
+      ierr = FCVodeInit(cvode_mem, c_funloc(rhs_fn), hist%t(1), yvec)
+      ierr = ior(ierr, FCVodeSVtolerances(cvode_mem, opts%rtol, abstol))
+      ierr = ior(ierr, FCVodeSetUserData(cvode_mem, c_loc(ctx)))
+      ierr = ior(ierr, FCVodeSetLinearSolver(cvode_mem, lsol, amat))
+      ierr = ior(ierr, FCVodeSetJacFn(cvode_mem, c_funloc(jac_fn)))
+      ierr = ior(ierr, FCVodeSetMaxNumSteps(cvode_mem, int(opts%max_steps, c_long)))
+      if (opts%max_step > 0.0_dp) ierr = ior(ierr, FCVodeSetMaxStep(cvode_mem, opts%max_step))
+      ierr = ior(ierr, FCVodeSetErrHandlerFn(cvode_mem, c_funloc(silent_handler), c_null_ptr))
+      if (ierr /= 0) then
+         call fatal_error(error, 'CVODE could not be set up', stat_failure)
+         call release()
+         return
+      end if
+
+      iout = 1
+      ! Outputs at the start time
+      do while (iout <= nout)
+         if (tout(iout) > hist%t(1)) exit
+         call store(iout, hist%t(1))
+         iout = iout + 1
+      end do
+      do k = 1, nseg
+         if (k > 1) then
+            call add_counts()
+            call set_segment(ctx, hist, k)
+            ierr = FCVodeReInit(cvode_mem, hist%t(k), yvec)
+         end if
+         ierr = FCVodeSetStopTime(cvode_mem, hist%t(k + 1))
+         ! Outputs inside this segment, then the corner itself
+         do
+            if (iout <= nout) then
+               tnext = min(tout(iout), hist%t(k + 1))
+            else
+               tnext = hist%t(k + 1)
+            end if
+            ierr = FCVode(cvode_mem, tnext, yvec, tret, CV_NORMAL)
+            if (ierr < 0 .or. .not. all(ieee_is_finite(y))) then
+               call fatal_error(error, 'integration failed at t = '//real_str(tret(1), 'es12.5')// &
+                  ' s (CVODE flag '//str(int(ierr))//': '//flag_text(ierr)//')', stat_failure)
+               call release()
+               return
+            end if
+            do while (iout <= nout)
+               if (tout(iout) > tret(1) + 1.0e-12_dp*max(1.0_dp, abs(tret(1)))) exit
+               call store(iout, tout(iout))
+               iout = iout + 1
+            end do
+            if (tret(1) >= hist%t(k + 1)) exit
+         end do
+      end do
+      call add_counts()
+      call release()
+
+   contains
+
+      !> ReInit resets CVODE's counters: add them up segment by segment
+      subroutine add_counts()
+         ierr = FCVodeGetNumSteps(cvode_mem, counter)
+         res%nsteps = res%nsteps + counter(1)
+         ierr = FCVodeGetNumRhsEvals(cvode_mem, counter)
+         res%nrhs = res%nrhs + counter(1)
+         ierr = FCVodeGetNumJacEvals(cvode_mem, counter)
+         res%njac = res%njac + counter(1)
+      end subroutine add_counts
+
+      subroutine store(i, t)
+         integer, intent(in) :: i
+         real(dp), intent(in) :: t
+         real(dp) :: load
+         load = hist%value_at(t)
+         res%t(i) = tout(i)
+         res%eps_in(i) = y(1)
+         res%back(i) = y(2)
+         res%drag(i) = y(3)
+         if (hist%control == control_strain) then
+            res%strain(i) = load
+            res%stress(i) = model%youngs*(load - y(1))
+         else
+            res%stress(i) = load
+            res%strain(i) = load/model%youngs + y(1)
+         end if
+      end subroutine store
+
+      subroutine release()
+         call FCVodeFree(cvode_mem)
+         ierr = FSUNLinSolFree(lsol)
+         call FSUNMatDestroy(amat)
+         call FN_VDestroy(yvec)
+         call FN_VDestroy(abstol)
+         ierr = FSUNContext_Free(sunctx)
+      end subroutine release
+   end subroutine simulate_cvode
+
+   !> Make segment k (from corner k to k+1) the current one
+   pure subroutine set_segment(ctx, hist, k)
+      type(rhs_context), intent(inout) :: ctx
+      type(history_type), intent(in) :: hist
+      integer, intent(in) :: k
+      ctx%t0 = hist%t(k)
+      ctx%v0 = hist%v(k)
+      ctx%slope = (hist%v(k + 1) - hist%v(k))/(hist%t(k + 1) - hist%t(k))
+   end subroutine set_segment
+
+   !> Stress and d(stress)/d(eps_in) for the state at time t
+   pure subroutine stress_of(ctx, t, y, sigma, dsig)
+      type(rhs_context), intent(in) :: ctx
+      real(dp), intent(in) :: t, y(neq)
+      real(dp), intent(out) :: sigma, dsig
+      real(dp) :: load
+      load = ctx%v0 + ctx%slope*(t - ctx%t0)
+      if (ctx%control == control_strain) then
+         sigma = ctx%model%youngs*(load - y(1))
+         dsig = -ctx%model%youngs
+      else
+         sigma = load
+         dsig = 0.0_dp
+      end if
+   end subroutine stress_of
+
+   integer(c_int) function rhs_fn(t, yv, fv, udata) result(ierr) bind(C)
+      real(c_double), value :: t
+      type(N_Vector) :: yv, fv
+      type(c_ptr), value :: udata
+      type(rhs_context), pointer :: ctx
+      real(c_double), pointer :: y(:), f(:)
+      real(dp) :: sigma, dsig
+      call c_f_pointer(udata, ctx)
+      y => FN_VGetArrayPointer(yv)
+      f => FN_VGetArrayPointer(fv)
+      ! A non-positive drag stress is outside the model: let CVODE retry with a smaller step
+      if (y(3) <= 0.0_dp) then
+         ierr = 1
+         return
+      end if
+      call stress_of(ctx, t, y, sigma, dsig)
+      call uniaxial_rates(ctx%model, sigma, dsig, y, f)
+      ierr = merge(0, 1, all(ieee_is_finite(f)))
+   end function rhs_fn
+
+   integer(c_int) function jac_fn(t, yv, fv, jmat, udata, tmp1, tmp2, tmp3) result(ierr) bind(C)
+      real(c_double), value :: t
+      type(N_Vector) :: yv, fv, tmp1, tmp2, tmp3
+      type(SUNMatrix) :: jmat
+      type(c_ptr), value :: udata
+      type(rhs_context), pointer :: ctx
+      real(c_double), pointer :: y(:), jdata(:), jac(:, :)
+      real(dp) :: sigma, dsig, ydot(neq)
+      call c_f_pointer(udata, ctx)
+      y => FN_VGetArrayPointer(yv)
+      ! The binding's data pointer has length 1; view the column-major storage as 3x3
+      jdata => FSUNDenseMatrix_Data(jmat)
+      call c_f_pointer(c_loc(jdata(1)), jac, [neq, neq])
+      call stress_of(ctx, t, y, sigma, dsig)
+      call uniaxial_rates(ctx%model, sigma, dsig, y, ydot, jac)
+      ierr = merge(0, 1, all(ieee_is_finite(jac)))
+   end function jac_fn
+
+   !> Keep CVODE quiet: failures come back as an error_type, printed once by the program
+   subroutine silent_handler(error_code, module, function, msg, udata) bind(C)
+      integer(c_int), value :: error_code
+      type(c_ptr), value :: module, function, msg, udata
+   end subroutine silent_handler
+
+   pure function flag_text(flag) result(text)
+      integer(c_int), intent(in) :: flag
+      character(len=:), allocatable :: text
+      select case (flag)
+      case (CV_TOO_MUCH_WORK); text = 'too many steps'
+      case (CV_TOO_MUCH_ACC); text = 'accuracy not reachable'
+      case (CV_ERR_FAILURE); text = 'repeated error-test failures'
+      case (CV_CONV_FAILURE); text = 'repeated Newton convergence failures'
+      case (CV_RHSFUNC_FAIL, CV_REPTD_RHSFUNC_ERR, CV_UNREC_RHSFUNC_ERR)
+         text = 'rates not finite'
+      case (CV_LSETUP_FAIL, CV_LSOLVE_FAIL); text = 'linear solver failure'
+      case default; text = 'solution not finite'
+      end select
+   end function flag_text
+end module usharp_cvode_driver

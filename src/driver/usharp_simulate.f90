@@ -1,0 +1,45 @@
+!> Simulating one configured test: output times, the integrator, error context
+module usharp_simulate
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, prefix_error
+   use usharp_miller, only: miller_model
+   use usharp_history, only: output_times
+   use usharp_simulation, only: solver_options, sim_result
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_config, only: test_config
+   use usharp_rng, only: rng_type
+   implicit none
+   private
+
+   public :: simulate_test, add_stress_noise
+
+contains
+
+   !> Simulate a test at its output interval; errors name the test
+   subroutine simulate_test(model, solver, test, res, error)
+      type(miller_model), intent(in) :: model
+      type(solver_options), intent(in) :: solver
+      type(test_config), intent(in) :: test
+      type(sim_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      call simulate_cvode(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+      if (allocated(error)) call prefix_error(error, "test '"//test%name//"': ")
+   end subroutine simulate_test
+
+   !> Add Gaussian noise of standard deviation level*max|stress| to the stress (synthetic
+   !> measurement noise), reproducibly from the seed
+   subroutine add_stress_noise(res, level, seed)
+      type(sim_result), intent(inout) :: res
+      real(dp), intent(in) :: level
+      integer, intent(in) :: seed
+      type(rng_type) :: rng
+      real(dp) :: scale
+      integer :: i
+      if (level <= 0.0_dp) return
+      call rng%seed(seed)
+      scale = level*maxval(abs(res%stress))
+      do i = 1, size(res%stress)
+         res%stress(i) = res%stress(i) + scale*rng%normal()
+      end do
+   end subroutine add_stress_noise
+end module usharp_simulate

@@ -1,0 +1,67 @@
+!> The contents of a usharp input namelist file after reading and checking
+module usharp_config
+   use usharp_kinds, only: dp
+   use usharp_miller, only: miller_model, n_constants
+   use usharp_history, only: history_type
+   use usharp_simulation, only: solver_options
+   implicit none
+   private
+
+   public :: run_config, test_config, data_spec, fit_config, max_list
+
+   !> Longest list in a namelist array variable (levels, holds, fit, filter values)
+   integer, parameter :: max_list = 64
+
+   !> Where a test's measured data come from and how to read them
+   type :: data_spec
+      character(len=:), allocatable :: file         !< path (relative to the namelist file)
+      character(len=:), allocatable :: time_col     !< column name or position
+      character(len=:), allocatable :: stress_col
+      character(len=:), allocatable :: strain_col
+      character(len=:), allocatable :: weight_col   !< optional user weight column
+      character(len=:), allocatable :: unit         !< stress unit of the file: ksi or MPa
+      character(len=:), allocatable :: filter_col   !< optional row filter column
+      character(len=128), allocatable :: filter_values(:)
+      character(len=:), allocatable :: format       !< optional Fortran format for fixed files
+   end type data_spec
+
+   !> One test: its load history, output interval and (for fits) its data and weighting
+   type :: test_config
+      character(len=:), allocatable :: name
+      character(len=:), allocatable :: history_kind
+      type(history_type) :: hist
+      real(dp) :: dt_out = 1.0_dp           !< output interval, s
+      real(dp) :: noise = 0.0_dp            !< relative Gaussian noise on stress (synthetic data)
+      integer :: seed = 1                   !< noise seed
+      logical :: has_data = .false.
+      type(data_spec) :: data
+      character(len=:), allocatable :: weighting  !< threshold, relaxation, none, column
+      real(dp) :: sig = 0.0_dp              !< threshold stress for 'threshold' weighting
+   end type test_config
+
+   !> Fit settings (&fit group)
+   type :: fit_config
+      logical :: fitted(n_constants) = .false.     !< which constants are searched
+      character(len=:), allocatable :: method      !< hooke-jeeves
+      character(len=:), allocatable :: objective   !< eq7 or eq13
+      real(dp) :: rho = 0.5_dp
+      real(dp) :: eps = 1.0e-6_dp
+      integer :: itermax = 1000
+      integer :: max_evals = 100000
+      integer :: max_failures = 100                !< failures in a row before the fit aborts
+      logical :: log_search = .false.
+   end type fit_config
+
+   !> Everything one input file holds
+   type :: run_config
+      character(len=:), allocatable :: path      !< the namelist file
+      character(len=:), allocatable :: base_dir  !< its folder, for relative paths
+      character(len=:), allocatable :: out_dir
+      character(len=:), allocatable :: units     !< model stress unit: ksi or MPa
+      character(len=:), allocatable :: integrator
+      type(miller_model) :: model
+      type(solver_options) :: solver
+      type(fit_config) :: fit
+      type(test_config), allocatable :: tests(:)
+   end type run_config
+end module usharp_config

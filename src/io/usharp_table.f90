@@ -1,0 +1,318 @@
+!> Reader for measured data tables: comma or white-space separated, '#' comments, an optional
+!> header row, quoted fields; columns picked by name or position; an optional row filter on a
+!> column's text; and the original's fixed-format files through a Fortran format string.
+module usharp_table
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_is_finite
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: lower, str, split_fields
+   implicit none
+   private
+
+   public :: read_columns, merge_repeated_times
+
+   integer, parameter :: max_fields = 64, field_len = 128, line_len = 4096
+
+contains
+
+   !> Read the named columns of a data file into values(npoint, size(columns)).
+   !> A column is given by its header name (case-insensitive, surrounding blanks ignored) or by
+   !> its 1-based position. With filter_column, only rows whose text in that column equals one
+   !> of filter_values are kept. With fmt (a Fortran format such as '(2E12.5)'), each data line
+   !> is read with that format and columns must be positions.
+   subroutine read_columns(file, columns, values, error, filter_column, filter_values, fmt)
+      character(len=*), intent(in) :: file
+      character(len=*), intent(in) :: columns(:)
+      real(dp), allocatable, intent(out) :: values(:, :)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in), optional :: filter_column
+      character(len=*), intent(in), optional :: filter_values(:)
+      character(len=*), intent(in), optional :: fmt
+
+      character(len=line_len) :: line
+      character(len=field_len) :: fields(max_fields), header(max_fields)
+      character(len=line_len) :: last_comment
+      character(len=256) :: msg
+      integer :: unit, ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter
+      logical :: have_header, filtering, fixed
+      real(dp), allocatable :: buf(:, :)
+      real(dp) :: row(max_fields)
+
+      filtering = .false.
+      if (present(filter_column)) filtering = len_trim(filter_column) > 0
+      fixed = .false.
+      if (present(fmt)) fixed = len_trim(fmt) > 0
+      open (newunit=unit, file=file, status='old', action='read', iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+         call fatal_error(error, file//': cannot open ('//trim(msg)//')')
+         return
+      end if
+      have_header = .false.
+      nheader = 0
+      icol = 0
+      ifilter = 0
+      npt = 0
+      lineno = 0
+      last_comment = ''
+      allocate (buf(size(columns), 1024))
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         lineno = lineno + 1
+         if (len_trim(line) == 0) cycle
+         if (index(adjustl(line), '#') == 1) then
+            last_comment = adjustl(line)
+            last_comment = last_comment(2:)
+            cycle
+         end if
+         if (fixed) then
+            call read_fixed(line, fmt, row, nfield, ios)
+            if (ios /= 0) then
+               call fatal_error(error, file//':'//str(lineno)//': does not match format '//trim(fmt))
+               exit
+            end if
+            if (npt == 0) call resolve_positions(nfield)
+            if (allocated(error)) exit
+            call append([(row(icol(j)), j=1, size(columns))])
+            cycle
+         end if
+         call split_fields(line, fields, nfield)
+         if (nfield > max_fields) then
+            call fatal_error(error, file//':'//str(lineno)//': more than '//str(max_fields)//' columns')
+            exit
+         end if
+         if (.not. have_header .and. npt == 0 .and. nheader == 0) then
+            if (.not. all_numeric(fields(:nfield))) then
+               ! The first non-comment row with text is the header
+               have_header = .true.
+               nheader = nfield
+               header(:nfield) = fields(:nfield)
+               call resolve_names()
+               if (allocated(error)) exit
+               cycle
+            end if
+            ! No header row: a comment line just above the data that names as many columns
+            ! as the data have serves as the header ('# time strain stress')
+            call split_fields(last_comment, header, nheader)
+            if (nheader == nfield .and. .not. all_numeric(header(:nheader)) .and. &
+                .not. all_positions()) then
+               call resolve_names()
+            else
+               call resolve_positions(nfield)
+            end if
+            if (allocated(error)) exit
+            nheader = -1
+         end if
+         if (filtering) then
+            if (ifilter > nfield) cycle
+            if (.not. any(trim(fields(ifilter)) == filter_values)) cycle
+         end if
+         do j = 1, size(columns)
+            if (icol(j) > nfield) then
+               call fatal_error(error, file//':'//str(lineno)//': row has '//str(nfield)// &
+                  ' columns, column '//trim(columns(j))//' is missing')
+               exit
+            end if
+            call to_real(fields(icol(j)), row(j), ios)
+            if (ios /= 0) then
+               call fatal_error(error, file//':'//str(lineno)//':'//str(icol(j))//": '"// &
+                  trim(fields(icol(j)))//"' in column "//trim(columns(j))//' is not a number')
+               exit
+            end if
+            if (.not. ieee_is_finite(row(j))) then
+               call fatal_error(error, file//':'//str(lineno)//':'//str(icol(j))//': '// &
+                  trim(fields(icol(j)))//' in column '//trim(columns(j))//' is not finite')
+               exit
+            end if
+         end do
+         if (allocated(error)) exit
+         call append(row(:size(columns)))
+      end do
+      close (unit)
+      if (allocated(error)) return
+      if (npt < 3) then
+         call fatal_error(error, file//': needs at least 3 data rows, found '//str(npt))
+         return
+      end if
+      values = transpose(buf(:, :npt))
+
+   contains
+
+      subroutine append(vals)
+         real(dp), intent(in) :: vals(:)
+         real(dp), allocatable :: tmp(:, :)
+         if (npt == size(buf, 2)) then
+            allocate (tmp(size(buf, 1), 2*size(buf, 2)))
+            tmp(:, :npt) = buf(:, :npt)
+            call move_alloc(tmp, buf)
+         end if
+         npt = npt + 1
+         buf(:, npt) = vals
+      end subroutine append
+
+      subroutine resolve_names()
+         integer :: k, m
+         do k = 1, size(columns)
+            icol(k) = 0
+            do m = 1, nheader
+               if (lower(trim(adjustl(header(m)))) == lower(trim(adjustl(columns(k))))) then
+                  icol(k) = m
+                  exit
+               end if
+            end do
+            if (icol(k) == 0) icol(k) = position(columns(k), nheader)
+            if (icol(k) == 0) then
+               call fatal_error(error, file//": no column '"//trim(columns(k))// &
+                  "' (columns: "//joined(header(:nheader))//')')
+               return
+            end if
+         end do
+         if (filtering) then
+            ifilter = 0
+            do m = 1, nheader
+               if (lower(trim(adjustl(header(m)))) == lower(trim(adjustl(filter_column)))) ifilter = m
+            end do
+            if (ifilter == 0) ifilter = position(filter_column, nheader)
+            if (ifilter == 0) call fatal_error(error, file//": no filter column '"// &
+               trim(filter_column)//"' (columns: "//joined(header(:nheader))//')')
+         end if
+      end subroutine resolve_names
+
+      logical function all_positions()
+         integer :: k
+         all_positions = .true.
+         do k = 1, size(columns)
+            if (verify(trim(adjustl(columns(k))), '0123456789') /= 0) all_positions = .false.
+         end do
+      end function all_positions
+
+      subroutine resolve_positions(ncol)
+         integer, intent(in) :: ncol
+         integer :: k
+         do k = 1, size(columns)
+            icol(k) = position(columns(k), ncol)
+            if (icol(k) == 0) then
+               call fatal_error(error, file//": column '"//trim(columns(k))// &
+                  "' not found: the file has no header row and "//str(ncol)//' columns')
+               return
+            end if
+         end do
+         if (filtering) then
+            ifilter = position(filter_column, ncol)
+            if (ifilter == 0) call fatal_error(error, file//": filter column '"// &
+               trim(filter_column)//"' not found")
+         end if
+      end subroutine resolve_positions
+   end subroutine read_columns
+
+   !> Position given as a number 1..ncol, else 0
+   integer function position(text, ncol) result(pos)
+      character(len=*), intent(in) :: text
+      integer, intent(in) :: ncol
+      integer :: ios
+      read (text, *, iostat=ios) pos
+      if (ios /= 0 .or. verify(trim(adjustl(text)), '0123456789') /= 0) pos = 0
+      if (pos < 1 .or. pos > ncol) pos = 0
+   end function position
+
+   subroutine read_fixed(line, fmt, row, nfield, ios)
+      character(len=*), intent(in) :: line, fmt
+      real(dp), intent(out) :: row(:)
+      integer, intent(out) :: nfield, ios
+      integer :: k
+      row = ieee_nan()
+      read (line, fmt, iostat=ios) row
+      if (ios < 0) ios = 0  ! a short record leaves the rest unset
+      nfield = 0
+      do k = 1, size(row)
+         if (ieee_is_nan(row(k))) exit
+         nfield = k
+      end do
+   end subroutine read_fixed
+
+   real(dp) function ieee_nan() result(x)
+      use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+      x = ieee_value(1.0_dp, ieee_quiet_nan)
+   end function ieee_nan
+
+   subroutine to_real(text, val, ios)
+      character(len=*), intent(in) :: text
+      real(dp), intent(out) :: val
+      integer, intent(out) :: ios
+      ios = 1
+      val = 0.0_dp
+      if (len_trim(text) == 0) return
+      ! List-directed reads accept '1,2' or '1/': insist on a plain number
+      if (verify(trim(adjustl(text)), '0123456789+-.eEdD') /= 0) then
+         if (lower(trim(adjustl(text))) == 'nan' .or. lower(trim(adjustl(text))) == 'inf' &
+             .or. lower(trim(adjustl(text))) == '-inf' .or. lower(trim(adjustl(text))) == 'infinity') then
+            read (text, *, iostat=ios) val
+         end if
+         return
+      end if
+      read (text, *, iostat=ios) val
+   end subroutine to_real
+
+   logical function all_numeric(fields) result(ok)
+      character(len=*), intent(in) :: fields(:)
+      integer :: k, ios
+      real(dp) :: val
+      ok = .true.
+      do k = 1, size(fields)
+         if (len_trim(fields(k)) == 0) cycle
+         call to_real(fields(k), val, ios)
+         if (ios /= 0) then
+            ok = .false.
+            return
+         end if
+      end do
+   end function all_numeric
+
+   pure function joined(names) result(text)
+      character(len=*), intent(in) :: names(:)
+      character(len=:), allocatable :: text
+      integer :: k
+      text = ''
+      do k = 1, size(names)
+         if (k > 1) text = text//', '
+         text = text//trim(adjustl(names(k)))
+      end do
+   end function joined
+
+   !> Merge rows with the same time (column 1) into one by averaging, and check that time
+   !> increases. Measured files repeat a time stamp where the logger wrote two samples at once.
+   !> nmerged returns how many rows were folded into their predecessor.
+   subroutine merge_repeated_times(values, file, nmerged, error)
+      real(dp), allocatable, intent(inout) :: values(:, :)
+      character(len=*), intent(in) :: file
+      integer, intent(out) :: nmerged
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i, m, cnt
+      real(dp), allocatable :: out(:, :)
+      allocate (out(size(values, 1), size(values, 2)))
+      m = 1
+      cnt = 1
+      out(1, :) = values(1, :)
+      nmerged = 0
+      do i = 2, size(values, 1)
+         if (values(i, 1) < values(i - 1, 1)) then
+            call fatal_error(error, file//': time is not increasing at data row '//str(i)// &
+               ' ('//str(values(i, 1))//' s after '//str(values(i - 1, 1))//' s)')
+            return
+         else if (values(i, 1) == out(m, 1)) then
+            cnt = cnt + 1
+            out(m, 2:) = out(m, 2:) + (values(i, 2:) - out(m, 2:))/real(cnt, dp)
+            nmerged = nmerged + 1
+         else
+            m = m + 1
+            cnt = 1
+            out(m, :) = values(i, :)
+         end if
+      end do
+      if (m < 3) then
+         call fatal_error(error, file//': needs at least 3 distinct times, found '//str(m))
+         return
+      end if
+      values = out(:m, :)
+   end subroutine merge_repeated_times
+end module usharp_table

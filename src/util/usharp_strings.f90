@@ -1,0 +1,120 @@
+!> Small string helpers
+module usharp_strings
+   use usharp_kinds, only: dp
+   implicit none
+   private
+
+   public :: lower, str, real_str, split_fields
+
+   !> Text form of a number
+   interface str
+      module procedure :: str_int
+      module procedure :: str_real
+   end interface str
+
+contains
+
+   !> Lower-case copy of a string (ASCII)
+   pure function lower(text) result(res)
+      character(len=*), intent(in) :: text
+      character(len=len(text)) :: res
+      integer :: i, ic
+      res = text
+      do i = 1, len(text)
+         ic = iachar(text(i:i))
+         if (ic >= iachar('A') .and. ic <= iachar('Z')) res(i:i) = achar(ic + 32)
+      end do
+   end function lower
+
+   pure function str_int(val) result(res)
+      integer, intent(in) :: val
+      character(len=:), allocatable :: res
+      character(len=24) :: buf
+      write (buf, '(i0)') val
+      res = trim(buf)
+   end function str_int
+
+   pure function str_real(val) result(res)
+      real(dp), intent(in) :: val
+      character(len=:), allocatable :: res
+      res = real_str(val, 'g0.6')
+   end function str_real
+
+   !> Real number written with a given edit descriptor, trimmed
+   pure function real_str(val, fmt) result(res)
+      real(dp), intent(in) :: val
+      character(len=*), intent(in) :: fmt
+      character(len=:), allocatable :: res
+      character(len=64) :: buf
+      write (buf, '('//fmt//')') val
+      res = trim(adjustl(buf))
+   end function real_str
+
+   !> Split a line into fields: by commas when the line holds one, else by white space.
+   !> Double quotes group a field (a comma inside quotes does not split); quotes are removed.
+   pure subroutine split_fields(line, fields, nfield)
+      character(len=*), intent(in) :: line
+      character(len=*), intent(out) :: fields(:)
+      integer, intent(out) :: nfield
+      logical :: comma, inquote, infield
+      integer :: i, k
+      character :: c
+      comma = has_unquoted_comma(line)
+      fields = ''
+      nfield = 0
+      inquote = .false.
+      infield = .false.
+      k = 0
+      do i = 1, len_trim(line)
+         c = line(i:i)
+         if (c == '"') then
+            inquote = .not. inquote
+            if (.not. infield) then
+               nfield = nfield + 1; k = 0; infield = .true.
+            end if
+            cycle
+         end if
+         if (.not. inquote) then
+            if (comma .and. c == ',') then
+               if (.not. infield) nfield = nfield + 1
+               infield = .false.
+               cycle
+            else if (.not. comma .and. (c == ' ' .or. c == achar(9))) then
+               infield = .false.
+               cycle
+            end if
+         end if
+         if (.not. infield) then
+            nfield = nfield + 1; k = 0; infield = .true.
+         end if
+         if (nfield <= size(fields)) then
+            k = k + 1
+            if (k <= len(fields)) fields(nfield)(k:k) = c
+         end if
+      end do
+      ! A trailing comma ends with an empty last field
+      if (comma .and. len_trim(line) > 0) then
+         if (line(len_trim(line):len_trim(line)) == ',') nfield = nfield + 1
+      end if
+      if (comma) then
+         do i = 1, min(nfield, size(fields))
+            fields(i) = adjustl(fields(i))
+         end do
+      end if
+   end subroutine split_fields
+
+   pure logical function has_unquoted_comma(line) result(found)
+      character(len=*), intent(in) :: line
+      logical :: inquote
+      integer :: i
+      found = .false.
+      inquote = .false.
+      do i = 1, len_trim(line)
+         if (line(i:i) == '"') inquote = .not. inquote
+         if (line(i:i) == ',' .and. .not. inquote) then
+            found = .true.
+            return
+         end if
+      end do
+   end function has_unquoted_comma
+end module usharp_strings

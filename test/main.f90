@@ -1,0 +1,51 @@
+!> Runs every test suite and ends with the line 'N passed, M failed'
+program tester
+   use, intrinsic :: iso_fortran_env, only: output_unit
+   use testdrive, only: error_type, unittest_type, testsuite_type, new_testsuite, skipped
+   use test_model, only: collect_model
+   use test_history, only: collect_history
+   use test_driver, only: collect_driver
+   use test_input, only: collect_input
+   use test_table, only: collect_table
+   implicit none
+   type(testsuite_type), allocatable :: suites(:)
+   type(unittest_type), allocatable :: tests(:)
+   type(error_type), allocatable :: error
+   character(len=64) :: only
+   integer :: is, it, npass, nfail, nskip
+
+   suites = [ &
+      new_testsuite('model', collect_model), &
+      new_testsuite('history', collect_history), &
+      new_testsuite('driver', collect_driver), &
+      new_testsuite('table', collect_table), &
+      new_testsuite('input', collect_input)]
+   ! An optional argument runs one suite only
+   only = ''
+   if (command_argument_count() > 0) call get_command_argument(1, only)
+   npass = 0
+   nfail = 0
+   nskip = 0
+   do is = 1, size(suites)
+      if (len_trim(only) > 0 .and. suites(is)%name /= trim(only)) cycle
+      write (output_unit, '(a)') '# suite '//suites(is)%name
+      call suites(is)%collect(tests)
+      do it = 1, size(tests)
+         call tests(it)%test(error)
+         if (.not. allocated(error)) then
+            npass = npass + 1
+            write (output_unit, '(2x,a)') 'ok    '//tests(it)%name
+         else if (error%stat == skipped) then
+            nskip = nskip + 1
+            write (output_unit, '(2x,a)') 'SKIP  '//tests(it)%name//': '//error%message
+         else
+            nfail = nfail + 1
+            write (output_unit, '(2x,a)') 'FAIL  '//tests(it)%name//': '//error%message
+         end if
+         flush (output_unit)
+         if (allocated(error)) deallocate (error)
+      end do
+   end do
+   write (output_unit, '(i0,a,i0,a,i0,a)') npass, ' passed, ', nfail, ' failed, ', nskip, ' skipped'
+   if (nfail > 0) error stop 1
+end program tester

@@ -1,0 +1,141 @@
+!> Tests of the CVODE driver: accuracy against a tight-tolerance reference, the thesis's
+!> figures, stress control against strain control, and failures that name test and time
+module test_driver
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type
+   use usharp_miller, only: miller_model, model_setup
+   use usharp_history
+   use usharp_simulation, only: solver_options, sim_result
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_config, only: test_config
+   use usharp_simulate, only: simulate_test
+   implicit none
+   private
+   public :: collect_driver, thesis_test
+
+contains
+
+   subroutine collect_driver(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('accuracy-vs-tight-reference', test_accuracy), &
+         new_unittest('thesis-sanity-figures', test_thesis_figures), &
+         new_unittest('stress-control-matches-strain-control', test_stress_control), &
+         new_unittest('failure-names-test-and-time', test_failure)]
+   end subroutine collect_driver
+
+   !> The thesis's three tests: 1 LCF ramp, 2 relaxation, 3 ratcheting
+   subroutine thesis_test(k, h)
+      integer, intent(in) :: k
+      type(history_type), intent(out) :: h
+      type(uerror), allocatable :: uerr
+      select case (k)
+      case (1); call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, h, uerr)
+      case (2); call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], h, uerr)
+      case default; call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, h, uerr)
+      end select
+   end subroutine thesis_test
+
+   subroutine test_accuracy(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(history_type) :: h
+      type(sim_result) :: r, ref
+      type(solver_options) :: def, tight
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: tout(:)
+      real(dp) :: dev
+      integer :: k
+      character(len=80) :: buf
+      call model_setup(m, uerr)
+      tight%rtol = 1.0e-11_dp
+      tight%atol_strain = 1.0e-15_dp
+      do k = 1, 3
+         call thesis_test(k, h)
+         tout = output_times(h, 0.5_dp)
+         call simulate_cvode(m, h, tout, def, r, uerr)
+         call simulate_cvode(m, h, tout, tight, ref, uerr)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         dev = maxval(abs(r%stress - ref%stress))/maxval(abs(ref%stress))
+         write (buf, '(a,i0,a,es10.3)') 'test ', k, ': max |stress - reference| / peak = ', dev
+         call check(error, dev <= 1.0e-4_dp, trim(buf))
+         if (allocated(error)) return
+      end do
+   end subroutine test_accuracy
+
+   subroutine test_thesis_figures(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(history_type) :: h
+      type(sim_result) :: r
+      type(solver_options) :: opts
+      type(uerror), allocatable :: uerr
+      call model_setup(m, uerr)
+      call thesis_test(2, h)
+      call simulate_cvode(m, h, output_times(h, 1.0_dp), opts, r, uerr)
+      ! Relaxation starts near 16.9 ksi (thesis): the stress at the end of the first ramp
+      call check(error, r%stress(2), 16.9_dp, 'relaxation start stress, ksi', thr=0.15_dp)
+      if (allocated(error)) return
+      call thesis_test(1, h)
+      call simulate_cvode(m, h, output_times(h, 0.5_dp), opts, r, uerr)
+      call check(error, maxval(r%stress) >= 21.0_dp .and. maxval(r%stress) <= 22.0_dp, &
+                 'LCF tensile peak within 21..22 ksi')
+      if (allocated(error)) return
+      call check(error, -minval(r%stress) >= 21.0_dp .and. -minval(r%stress) <= 22.5_dp, &
+                 'LCF compressive peak within -21..-22.5 ksi')
+   end subroutine test_thesis_figures
+
+   !> Drive a strain-controlled relaxation, then impose its stress history under stress
+   !> control: the strain must come back (creep at the stress that relaxation reaches)
+   subroutine test_stress_control(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(history_type) :: h, hs
+      type(sim_result) :: r, rs
+      type(solver_options) :: opts
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: tout(:)
+      real(dp) :: dev
+      character(len=80) :: buf
+      call model_setup(m, uerr)
+      opts%rtol = 1.0e-9_dp
+      opts%atol_strain = 1.0e-13_dp
+      call relaxation_history([0.00075_dp], 1.0_dp, [100.0_dp], h, uerr)
+      tout = output_times(h, 0.02_dp)
+      call simulate_cvode(m, h, tout, opts, r, uerr)
+      call history_from_points(r%t, r%stress, control_stress, hs, uerr)
+      call simulate_cvode(m, hs, tout, opts, rs, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      dev = maxval(abs(rs%strain - r%strain))/0.00075_dp
+      write (buf, '(a,es10.3)') 'max |strain(stress control) - strain| / 0.075 % = ', dev
+      call check(error, dev <= 2.0e-3_dp, trim(buf))
+      if (allocated(error)) return
+      call check(error, abs(rs%eps_in(size(rs%t)) - r%eps_in(size(r%t))) <= 1.0e-3_dp*r%eps_in(size(r%t)), &
+                 'inelastic strain at the end agrees to 0.1 %')
+   end subroutine test_stress_control
+
+   subroutine test_failure(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(test_config) :: tc
+      type(sim_result) :: r
+      type(solver_options) :: opts
+      type(uerror), allocatable :: uerr
+      call model_setup(m, uerr)
+      opts%max_steps = 3
+      tc%name = 'lcf'
+      tc%dt_out = 5.0_dp
+      call thesis_test(1, tc%hist)
+      call simulate_test(m, opts, tc, r, uerr)
+      call check(error, allocated(uerr), 'too few steps must fail')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, "test 'lcf': integration failed at t = ") == 1, uerr%message)
+   end subroutine test_failure
+end module test_driver

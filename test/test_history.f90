@@ -1,0 +1,138 @@
+!> Tests of the load-history generators against hand-computed corner points
+module test_history
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type
+   use usharp_history
+   implicit none
+   private
+   public :: collect_history
+
+contains
+
+   subroutine collect_history(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('thesis-lcf-corners', test_lcf), &
+         new_unittest('relaxation-corners', test_relax), &
+         new_unittest('ratchet-corners', test_ratchet), &
+         new_unittest('cyclic-corners-with-holds', test_cyclic), &
+         new_unittest('tensile-and-creep', test_tensile_creep), &
+         new_unittest('value-between-corners', test_value), &
+         new_unittest('output-times-include-corners', test_output_times), &
+         new_unittest('time-not-increasing-rejected', test_bad_points)]
+   end subroutine collect_history
+
+   subroutine same(error, actual, expected, what)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), intent(in) :: actual(:), expected(:)
+      character(len=*), intent(in) :: what
+      integer :: k
+      if (size(actual) /= size(expected)) then
+         call test_failed(error, what//': wrong number of corners')
+         return
+      end if
+      do k = 1, size(actual)
+         call check(error, actual(k), expected(k), what, thr=1e-12_dp*max(1.0_dp, abs(expected(k))))
+         if (allocated(error)) return
+      end do
+   end subroutine same
+
+   subroutine test_lcf(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      real(dp) :: m
+      call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, h, uerr)
+      call check(error, size(h%t), 25, 'corners: start + 12 peaks + 12 zeros')
+      if (allocated(error)) return
+      call check(error, h%end_time(), 240.0_dp, 'thesis LCF lasts 240 s')
+      if (allocated(error)) return
+      m = 10.0_dp**(1.0_dp/11.0_dp)
+      ! By hand: +0.0005 at 10 s, 0 at 20 s, -0.0005*m at 30 s, +0.0005*m**2 at 50 s, -0.005 at 230 s
+      call same(error, [h%t(2), h%v(2), h%t(3), h%v(3), h%t(4), h%v(4), h%v(6), h%t(24), h%v(24)], &
+                [10.0_dp, 0.0005_dp, 20.0_dp, 0.0_dp, 30.0_dp, -0.0005_dp*m, 0.0005_dp*m**2, &
+                 230.0_dp, -0.005_dp], 'LCF corners')
+   end subroutine test_lcf
+
+   subroutine test_relax(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], h, uerr)
+      call same(error, h%t, [0.0_dp, 1.0_dp, 601.0_dp, 602.0_dp, 1202.0_dp], 'relaxation times')
+      if (allocated(error)) return
+      call same(error, h%v, [0.0_dp, 0.00075_dp, 0.00075_dp, 0.001_dp, 0.001_dp], 'relaxation strains')
+   end subroutine test_relax
+
+   subroutine test_ratchet(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, h, uerr)
+      call check(error, h%end_time(), 1200.0_dp, 'ratchet lasts 1200 s')
+      if (allocated(error)) return
+      call check(error, maxval(h%v), 0.004_dp, 'peak strain 0.4 %', thr=1e-15_dp)
+      if (allocated(error)) return
+      call same(error, h%v(1:5), [0.0_dp, 0.0005_dp, 0.00025_dp, 0.00075_dp, 0.0005_dp], 'first corners')
+   end subroutine test_ratchet
+
+   subroutine test_cyclic(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      ! 1 % range at 1e-3/s: quarter cycle 5 s; 30 s hold at the tensile peak; 2 cycles
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 30.0_dp, 0.0_dp, h, uerr)
+      call same(error, h%t, [0.0_dp, 5.0_dp, 35.0_dp, 45.0_dp, 50.0_dp, 55.0_dp, 85.0_dp, 95.0_dp, &
+                             100.0_dp], 'cyclic times')
+      if (allocated(error)) return
+      call same(error, h%v, [0.0_dp, 0.005_dp, 0.005_dp, -0.005_dp, 0.0_dp, 0.005_dp, 0.005_dp, &
+                             -0.005_dp, 0.0_dp], 'cyclic strains')
+      if (allocated(error)) return
+      ! Given by period instead of rate: 20 s period gives the same 5 s quarter
+      call cyclic_history(0.01_dp, 0.0_dp, 0.0_dp, 20.0_dp, 1, 0.0_dp, 0.0_dp, h, uerr)
+      call same(error, h%t, [0.0_dp, 5.0_dp, 15.0_dp, 20.0_dp], 'cyclic by period')
+   end subroutine test_cyclic
+
+   subroutine test_tensile_creep(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call tensile_history(1.0e-4_dp, 0.02_dp, h, uerr)
+      call same(error, [h%t, h%v], [0.0_dp, 200.0_dp, 0.0_dp, 0.02_dp], 'tensile')
+      if (allocated(error)) return
+      call creep_history(15.0_dp, 1.0_dp, 1000.0_dp, h, uerr)
+      call check(error, h%control, control_stress, 'creep is stress controlled')
+      if (allocated(error)) return
+      call same(error, [h%t, h%v], [0.0_dp, 1.0_dp, 1000.0_dp, 0.0_dp, 15.0_dp, 15.0_dp], 'creep')
+   end subroutine test_tensile_creep
+
+   subroutine test_value(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call history_from_points([0.0_dp, 2.0_dp, 6.0_dp], [0.0_dp, 1.0_dp, -1.0_dp], control_strain, h, uerr)
+      call same(error, [h%value_at(1.0_dp), h%value_at(2.0_dp), h%value_at(5.0_dp), h%value_at(9.0_dp)], &
+                [0.5_dp, 1.0_dp, -0.5_dp, -1.0_dp], 'interpolated values')
+   end subroutine test_value
+
+   subroutine test_output_times(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call history_from_points([0.0_dp, 1.0_dp, 2.5_dp], [0.0_dp, 1.0_dp, 0.0_dp], control_strain, h, uerr)
+      call same(error, output_times(h, 1.0_dp), [0.0_dp, 1.0_dp, 2.0_dp, 2.5_dp], 'grid + corners')
+      if (allocated(error)) return
+      call same(error, output_times(h, 0.0_dp), [0.0_dp, 1.0_dp, 2.5_dp], 'corners only')
+   end subroutine test_output_times
+
+   subroutine test_bad_points(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call history_from_points([0.0_dp, 2.0_dp, 2.0_dp], [0.0_dp, 1.0_dp, 0.0_dp], control_strain, h, uerr)
+      call check(error, allocated(uerr), 'repeated time rejected')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'not increasing at point 3') > 0, uerr%message)
+   end subroutine test_bad_points
+end module test_history

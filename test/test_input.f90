@@ -1,0 +1,194 @@
+!> Bad input gives one clear line naming file, group and variable, and a non-zero exit
+module test_input
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type, stat_input, stat_io, stat_usage
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config
+   use usharp_cmd_simulate, only: simulate_command
+   use test_util, only: write_text, usharp_exe, read_text, scratch_dir
+   implicit none
+   private
+   public :: collect_input, deck_lines
+
+   character(len=*), parameter :: base_model = &
+      "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"
+   character(len=*), parameter :: base_constants = &
+      '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /'
+
+contains
+
+   subroutine collect_input(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('missing-input-file', test_missing_file), &
+         new_unittest('misspelled-variable', test_misspelled), &
+         new_unittest('unknown-group-line-and-column', test_unknown_group), &
+         new_unittest('unknown-history', test_unknown_history), &
+         new_unittest('constant-not-positive', test_constant), &
+         new_unittest('history-file-time-not-increasing', test_file_time), &
+         new_unittest('history-file-empty-or-garbled', test_file_garbled), &
+         new_unittest('unwritable-output-folder', test_unwritable), &
+         new_unittest('simulate-writes-files', test_simulate_ok), &
+         new_unittest('cli-exit-codes-and-one-line-errors', test_cli)]
+   end subroutine collect_input
+
+   !> An input file of the model, the constants and the given extra lines
+   function deck_lines(extra) result(lines)
+      character(len=*), intent(in) :: extra(:)
+      character(len=200), allocatable :: lines(:)
+      lines = [character(len=200) :: base_model, base_constants, extra]
+   end function deck_lines
+
+   subroutine expect_config_error(error, name, extra, text)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in) :: name, extra(:), text
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      call read_config(write_text(name, deck_lines(extra)), cfg, uerr)
+      call expect(error, uerr, text)
+   end subroutine expect_config_error
+
+   subroutine expect(error, e, text)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable, intent(in) :: e
+      character(len=*), intent(in) :: text
+      if (.not. allocated(e)) then
+         call test_failed(error, 'no error for: '//text)
+      else if (index(e%message, text) == 0) then
+         call test_failed(error, "message '"//e%message//"' lacks '"//text//"'")
+      end if
+   end subroutine expect
+
+   subroutine test_missing_file(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      call read_config('no/such/fit.nml', cfg, uerr)
+      call expect(error, uerr, 'no/such/fit.nml: no such input file')
+      if (allocated(error)) return
+      call check(error, uerr%stat, stat_input, 'input error category')
+   end subroutine test_missing_file
+
+   subroutine test_misspelled(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'misspelled.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', ampfirst=0.001 /"], &
+         "misspelled.nml: &test #1 'lcf': Cannot match namelist object name ampfirst")
+   end subroutine test_misspelled
+
+   subroutine test_unknown_group(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'group.nml', [character(len=80) :: &
+         '&tset name="lcf" /'], 'group.nml:3:1: unknown namelist group &tset')
+   end subroutine test_unknown_group
+
+   subroutine test_unknown_history(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'history.nml', [character(len=80) :: &
+         "&test name='x', history='sawtooth' /"], "&test #1 'x': history = 'sawtooth' is not known")
+   end subroutine test_unknown_history
+
+   subroutine test_constant(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      character(len=200), allocatable :: lines(:)
+      lines = deck_lines([character(len=80) :: "&test name='lcf', history='thesis_lcf' /"])
+      lines(2) = '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=-280, h2=100, n=5.8, q=91000 /'
+      call read_config(write_text('negative.nml', lines), cfg, uerr)
+      call expect(error, uerr, 'negative.nml: &constants: constant H1 must be > 0, got -280')
+   end subroutine test_constant
+
+   subroutine test_file_time(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: hfile
+      hfile = write_text('back.hist', [character(len=20) :: '0 0', '10 0.001', '5 0', '20 0'])
+      call expect_config_error(error, 'backtime.nml', [character(len=80) :: &
+         "&test name='f', history='file', file='back.hist' /"], &
+         'back.hist: history time is not increasing at point 3')
+   end subroutine test_file_time
+
+   subroutine test_file_garbled(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: hfile
+      hfile = write_text('empty.hist', [character(len=20) :: '# nothing here'])
+      call expect_config_error(error, 'empty.nml', [character(len=80) :: &
+         "&test name='f', history='file', file='empty.hist' /"], &
+         'empty.hist: needs at least 3 data rows, found 0')
+      if (allocated(error)) return
+      hfile = write_text('garbled.hist', [character(len=20) :: '0 0', '10 0.0x01', '20 0'])
+      call expect_config_error(error, 'garbled.nml', [character(len=80) :: &
+         "&test name='f', history='file', file='garbled.hist' /"], &
+         "garbled.hist:2:2: '0.0x01' in column 2 is not a number")
+   end subroutine test_file_garbled
+
+   subroutine test_unwritable(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      character(len=256), allocatable :: written(:)
+      character(len=:), allocatable :: path
+      path = write_text('unwritable.nml', deck_lines([character(len=80) :: &
+         "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002 /"]))
+      call simulate_command(path, '/proc/usharp-cannot-write-here', written, uerr)
+      call expect(error, uerr, '/proc/usharp-cannot-write-here: output folder cannot be created or written')
+      if (allocated(error)) return
+      call check(error, uerr%stat, stat_io, 'output error category')
+   end subroutine test_unwritable
+
+   subroutine test_simulate_ok(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      character(len=256), allocatable :: written(:)
+      character(len=:), allocatable :: path, text
+      path = write_text('ok.nml', deck_lines([character(len=120) :: &
+         "&test name='pull', history='tensile', strain_rate=1e-4, final_strain=0.002, dt_out=2 /", &
+         "&test name='creep', history='creep', stress=15.0, ramp_time=1, duration=100 /"]))
+      call simulate_command(path, scratch_dir//'/ok-out', written, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, size(written), 2, 'two files written')
+      if (allocated(error)) return
+      text = read_text(scratch_dir//'/ok-out/pull.sim.txt')
+      call check(error, index(text, '# time strain stress eps_in back_stress drag_stress') > 0, &
+                 'column header present')
+   end subroutine test_simulate_ok
+
+   !> The program itself: exit codes and one-line errors on stderr
+   subroutine test_cli(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, errfile
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'usharp executable not found beside the test program')
+         return
+      end if
+      errfile = scratch_dir//'/stderr.txt'
+      call expect_exit(exe, '', 2)
+      if (allocated(error)) return
+      call expect_exit(exe, 'frobnicate', 2)
+      if (allocated(error)) return
+      call expect_exit(exe, '--help', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, '--version', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, 'simulate --help', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, 'simulate --version', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, 'simulate no-such.nml', stat_input)
+      if (allocated(error)) return
+      call check(error, read_text(errfile) == 'usharp: error: no-such.nml: no such input file'//new_line('a'), &
+                 'one line on stderr, no backtrace: '//read_text(errfile))
+   contains
+      subroutine expect_exit(exe, args, code)
+         character(len=*), intent(in) :: exe, args
+         integer, intent(in) :: code
+         integer :: stat
+         call execute_command_line(exe//' '//args//' > /dev/null 2> '//errfile, exitstat=stat)
+         call check(error, stat, code, "exit code of 'usharp "//args//"'")
+      end subroutine expect_exit
+   end subroutine test_cli
+end module test_input

@@ -1,0 +1,173 @@
+!> Tests of the data-table reader on small files and on the real Alloy 617 files
+module test_table
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type
+   use usharp_table, only: read_columns, merge_repeated_times
+   use test_util, only: write_text
+   implicit none
+   private
+   public :: collect_table
+
+   character(len=*), parameter :: realdata = '../shared/realdata/a617-950C'
+
+contains
+
+   subroutine collect_table(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('csv-quoted-header-by-name-and-filter', test_csv), &
+         new_unittest('whitespace-comment-header', test_whitespace), &
+         new_unittest('fixed-format', test_fixed), &
+         new_unittest('bad-tables-rejected', test_bad), &
+         new_unittest('repeated-times-merged', test_merge), &
+         new_unittest('real-a617-files-load', test_realdata)]
+   end subroutine collect_table
+
+   subroutine test_csv(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      path = write_text('quoted.csv', [character(len=80) :: &
+         '"Stress Mpa","Label","Elapsed Time Sec"', &
+         '10.5,"Cycle 1",0.0', '12.0,"Cycle 1",1.0', '-3.0,"Cycle, 2",2.0', &
+         '7.0,"Cycle 3",3.0', '8.0,"Cycle 1",4.0'])
+      call read_columns(path, [character(len=32) :: 'elapsed time sec', 'Stress Mpa'], v, uerr, &
+                        'Label', [character(len=16) :: 'Cycle 1', 'Cycle, 2'])
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, size(v, 1), 4, 'rows kept by the filter')
+      if (allocated(error)) return
+      call check(error, v(3, 1), 2.0_dp, 'time of the quoted "Cycle, 2" row')
+      if (allocated(error)) return
+      call check(error, v(3, 2), -3.0_dp, 'stress picked by name')
+   end subroutine test_csv
+
+   subroutine test_whitespace(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      path = write_text('ws.txt', [character(len=80) :: '# produced by a test', &
+         '# time strain stress', '0 0 0', '1  1e-4  2.25', '2 2e-4 4.5'])
+      call read_columns(path, [character(len=8) :: 'stress', '1'], v, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, v(3, 1), 4.5_dp, 'stress by name from the comment header')
+      if (allocated(error)) return
+      call check(error, v(2, 2), 1.0_dp, 'time by position')
+   end subroutine test_whitespace
+
+   subroutine test_fixed(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      ! The original's files: E12.5 columns with no separator
+      path = write_text('fixed.txt', [character(len=80) :: &
+         ' 0.00000E+00-1.25000E+01', ' 1.00000E+00 1.30000E+01', ' 2.00000E+00-1.40000E+01'])
+      call read_columns(path, [character(len=2) :: '1', '2'], v, uerr, fmt='(2E12.5)')
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, v(1, 2), -12.5_dp, 'first stress')
+      if (allocated(error)) return
+      call check(error, v(3, 1), 2.0_dp, 'last time')
+   end subroutine test_fixed
+
+   subroutine test_bad(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: nm
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      path = write_text('missingcol.csv', [character(len=40) :: 'time,stress', '0,1', '1,2', '2,3'])
+      call read_columns(path, [character(len=8) :: 'time', 'strain'], v, uerr)
+      call expect(uerr, "no column 'strain' (columns: time, stress)")
+      if (allocated(error)) return
+      path = write_text('garbled.csv', [character(len=40) :: 'time,stress', '0,1', '1,abc', '2,3'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call expect(uerr, "garbled.csv:3:2: 'abc' in column stress is not a number")
+      if (allocated(error)) return
+      path = write_text('nan.csv', [character(len=40) :: 'time,stress', '0,1', '1,NaN', '2,3'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call expect(uerr, 'nan.csv:3:2: NaN in column stress is not finite')
+      if (allocated(error)) return
+      path = write_text('short.csv', [character(len=40) :: 'time,stress', '0,1', '1,2'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call expect(uerr, 'needs at least 3 data rows, found 2')
+      if (allocated(error)) return
+      path = write_text('back.csv', [character(len=40) :: 'time,stress', '0,1', '2,2', '1,3', '3,3'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call merge_repeated_times(v, path, nm, uerr)
+      call expect(uerr, 'time is not increasing at data row 3')
+   contains
+      subroutine expect(e, text)
+         type(uerror), allocatable, intent(in) :: e
+         character(len=*), intent(in) :: text
+         if (.not. allocated(e)) then
+            call test_failed(error, 'no error for: '//text)
+         else if (index(e%message, text) == 0) then
+            call test_failed(error, "message '"//e%message//"' lacks '"//text//"'")
+         end if
+      end subroutine expect
+   end subroutine test_bad
+
+   subroutine test_merge(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      integer :: nmerged
+      v = reshape([0.0_dp, 1.0_dp, 1.0_dp, 2.0_dp, 10.0_dp, 20.0_dp, 30.0_dp, 40.0_dp], [4, 2])
+      call merge_repeated_times(v, 'x', nmerged, uerr)
+      call check(error, nmerged, 1, 'one repeated time')
+      if (allocated(error)) return
+      call check(error, v(2, 2), 25.0_dp, 'repeated rows averaged')
+   end subroutine test_merge
+
+   subroutine test_realdata(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      logical :: exists
+      integer :: nmerged
+      inquire (file=realdata//'/lcf/HTM_A19_Cycles_435.csv', exist=exists)
+      if (.not. exists) then
+         call skip_test(error, 'measured data not found at '//realdata//' (shared/ not beside the checkout)')
+         return
+      end if
+      call read_columns(realdata//'/lcf/HTM_A19_Cycles_435.csv', &
+                        [character(len=24) :: 'Elapsed Time Sec', 'Stress Mpa', 'Strain'], v, uerr, &
+                        'Cycle Label', [character(len=16) :: 'Cycle 1', 'Cycle 2'])
+      if (.not. allocated(uerr)) call merge_repeated_times(v, 'lcf', nmerged, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      ! Cycles 1 and 2 of sample 43-5 end at 12.28 s (a later cycle would extend the span)
+      call check(error, v(size(v, 1), 1), 12.28_dp, 'end of cycle 2, s')
+      if (allocated(error)) return
+      call check(error, maxval(v(:, 3)), 0.00165_dp, 'largest strain in cycles 1-2', thr=1e-12_dp)
+      if (allocated(error)) return
+      call read_columns(realdata//'/creep/AirBase_950_19_a.csv', [character(len=8) :: 'time', 'strain'], v, uerr)
+      if (.not. allocated(uerr)) call merge_repeated_times(v, 'creep', nmerged, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, size(v, 1) > 1000, 'creep curve rows')
+      if (allocated(error)) return
+      call read_columns(realdata//'/tensile/AirBase_950_D11.csv', [character(len=8) :: 'time', 'stress'], v, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, maxval(v(:, 2)) > 50.0_dp, 'tensile stress in MPa')
+   end subroutine test_realdata
+end module test_table

@@ -1,0 +1,62 @@
+!> Helpers for the tests: scratch files and locating the usharp executable
+module test_util
+   use usharp_error, only: uerror => error_type
+   use usharp_filesys, only: make_dir
+   implicit none
+   private
+   public :: scratch_dir, write_text, usharp_exe, read_text
+
+   !> Scratch folder for test files (inside the build tree, never in the sources)
+   character(len=*), parameter :: scratch_dir = 'build/test-scratch'
+
+contains
+
+   !> Write lines of text to scratch_dir/name and return the path
+   function write_text(name, lines) result(path)
+      character(len=*), intent(in) :: name
+      character(len=*), intent(in) :: lines(:)
+      character(len=:), allocatable :: path
+      type(uerror), allocatable :: uerr
+      integer :: unit, i
+      call make_dir(scratch_dir, uerr)
+      path = scratch_dir//'/'//name
+      open (newunit=unit, file=path, status='replace', action='write')
+      do i = 1, size(lines)
+         write (unit, '(a)') trim(lines(i))
+      end do
+      close (unit)
+   end function write_text
+
+   !> Whole text of a file (lines joined by new lines), '' if missing
+   function read_text(path) result(text)
+      character(len=*), intent(in) :: path
+      character(len=:), allocatable :: text
+      character(len=4096) :: line
+      integer :: unit, ios
+      text = ''
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         text = text//trim(line)//new_line('a')
+      end do
+      close (unit)
+   end function read_text
+
+   !> Path of the usharp executable that fpm built next to this test program ('' if absent):
+   !> build/<compiler_hash>/test/tester -> build/<compiler_hash>/app/usharp
+   function usharp_exe() result(path)
+      character(len=:), allocatable :: path
+      character(len=1024) :: self
+      integer :: k
+      logical :: exists
+      call get_command_argument(0, self)
+      k = index(self, '/test/', back=.true.)
+      path = ''
+      if (k == 0) return
+      path = self(:k)//'app/usharp'
+      inquire (file=path, exist=exists)
+      if (.not. exists) path = ''
+   end function usharp_exe
+end module test_util
