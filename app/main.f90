@@ -4,11 +4,14 @@ program usharp_main
    use usharp_error, only: error_type, stat_usage
    use usharp_version, only: usharp_version_string
    use usharp_cmd_simulate, only: simulate_command
+   use usharp_cmd_run, only: run_command
    implicit none
 
-   character(len=:), allocatable :: command, input, out_dir, arg
+   character(len=:), allocatable :: command, input, out_dir, constants, arg
    character(len=256), allocatable :: written(:)
+   character(len=160), allocatable :: summary(:)
    type(error_type), allocatable :: error
+   logical :: resume, quiet
    integer :: i, nargs
 
    nargs = command_argument_count()
@@ -21,41 +24,69 @@ program usharp_main
    case ('-V', '--version')
       call print_version()
       stop
-   case ('simulate')
-      input = ''
-      out_dir = ''
-      i = 2
-      do while (i <= nargs)
-         arg = get_arg(i)
-         select case (arg)
-         case ('-h', '--help')
-            write (output_unit, '(a)') simulate_usage()
-            stop
-         case ('-V', '--version')
-            call print_version()
-            stop
-         case ('-o', '--out-dir')
-            i = i + 1
-            if (i > nargs) call usage_exit(simulate_usage(), arg//' needs a folder')
-            out_dir = get_arg(i)
-         case default
-            if (arg(1:1) == '-') call usage_exit(simulate_usage(), 'unknown option '//arg)
-            if (len(input) > 0) call usage_exit(simulate_usage(), 'more than one input file')
-            input = arg
-         end select
-         i = i + 1
-      end do
-      if (len(input) == 0) call usage_exit(simulate_usage(), 'no input file given')
-      call simulate_command(input, out_dir, written, error)
-      if (allocated(error)) call error_exit(error)
-      do i = 1, size(written)
-         write (output_unit, '(a)') 'wrote '//trim(written(i))
-      end do
+   case ('simulate', 'run')
    case default
       call usage_exit(main_usage(), "unknown command '"//command//"'")
    end select
 
+   input = ''
+   out_dir = ''
+   constants = ''
+   resume = .false.
+   quiet = .false.
+   i = 2
+   do while (i <= nargs)
+      arg = get_arg(i)
+      select case (arg)
+      case ('-h', '--help')
+         write (output_unit, '(a)') command_usage(command)
+         stop
+      case ('-V', '--version')
+         call print_version()
+         stop
+      case ('-o', '--out-dir')
+         out_dir = option_value()
+      case ('-c', '--constants')
+         constants = option_value()
+      case ('--resume')
+         if (command /= 'run') call usage_exit(command_usage(command), 'unknown option '//arg)
+         resume = .true.
+      case ('-q', '--quiet')
+         quiet = .true.
+      case default
+         if (arg(1:1) == '-') call usage_exit(command_usage(command), 'unknown option '//arg)
+         if (len(input) > 0) call usage_exit(command_usage(command), 'more than one input file')
+         input = arg
+      end select
+      i = i + 1
+   end do
+   if (len(input) == 0) call usage_exit(command_usage(command), 'no input file given')
+
+   select case (command)
+   case ('simulate')
+      call simulate_command(input, out_dir, written, error, constants)
+      if (allocated(error)) call error_exit(error)
+      if (.not. quiet) then
+         do i = 1, size(written)
+            write (output_unit, '(a)') 'wrote '//trim(written(i))
+         end do
+      end if
+   case ('run')
+      call run_command(input, out_dir, constants, resume, quiet, summary, error)
+      if (allocated(error)) call error_exit(error)
+      do i = 1, size(summary)
+         write (output_unit, '(a)') trim(summary(i))
+      end do
+   end select
+
 contains
+
+   function option_value() result(val)
+      character(len=:), allocatable :: val
+      i = i + 1
+      if (i > nargs) call usage_exit(command_usage(command), arg//' needs a value')
+      val = get_arg(i)
+   end function option_value
 
    function get_arg(k) result(val)
       integer, intent(in) :: k
@@ -86,24 +117,43 @@ contains
 
    function main_usage() result(text)
       character(len=:), allocatable :: text
-      text = 'usage: usharp <command> [options] <input.nml>'//new_line('a')// &
-         new_line('a')//'commands:'//new_line('a')// &
-         '  simulate   simulate every &test of the input file, write <out_dir>/<test>.sim.txt'// &
-         new_line('a')//new_line('a')//'options:'//new_line('a')// &
-         '  -h, --help     show this help (also after a command)'//new_line('a')// &
-         '  -V, --version  show the version'//new_line('a')//new_line('a')// &
+      character(len=*), parameter :: nl = new_line('a')
+      text = 'usage: usharp <command> [options] <input.nml>'//nl//nl//'commands:'//nl// &
+         '  run        fit the constants of &fit to the data of every &test (Hooke-Jeeves)'//nl// &
+         '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl//nl// &
+         'options:'//nl// &
+         '  -h, --help     show this help (after a command: the command''s help)'//nl// &
+         '  -V, --version  show the version'//nl//nl// &
          'exit codes: 0 success, 1 input error, 2 usage error, 3 failed simulation or fit, '// &
          '4 output not writable'
    end function main_usage
 
-   function simulate_usage() result(text)
+   function command_usage(cmd) result(text)
+      character(len=*), intent(in) :: cmd
       character(len=:), allocatable :: text
-      text = 'usage: usharp simulate [options] <input.nml>'//new_line('a')//new_line('a')// &
-         'Simulates every &test group of the input file with the &model and &constants'// &
-         new_line('a')//'groups and writes one file <out_dir>/<test>.sim.txt per test.'// &
-         new_line('a')//new_line('a')//'options:'//new_line('a')// &
-         '  -o, --out-dir DIR  write to DIR instead of &output out_dir'//new_line('a')// &
-         '  -h, --help         show this help'//new_line('a')// &
-         '  -V, --version      show the version'
-   end function simulate_usage
+      character(len=*), parameter :: nl = new_line('a')
+      select case (cmd)
+      case ('run')
+         text = 'usage: usharp run [options] <fit.nml>'//nl//nl// &
+            'Fits the constants named in &fit to the data files of the &test groups and'//nl// &
+            'writes GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, fit.journal, best.nml, summary.txt'//nl// &
+            'and <test>.sim.txt / <test>.fit.txt into the output folder.'//nl//nl//'options:'//nl// &
+            '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
+            '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
+            '      --resume          continue a killed run from its fit.journal'//nl// &
+            '  -q, --quiet           no progress line on stderr'//nl// &
+            '  -h, --help            show this help'//nl// &
+            '  -V, --version         show the version'
+      case default
+         text = 'usage: usharp simulate [options] <input.nml>'//nl//nl// &
+            'Simulates every &test group of the input file with the &model and &constants'//nl// &
+            'groups and writes one file <out_dir>/<test>.sim.txt per test.'//nl//nl// &
+            'options:'//nl// &
+            '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
+            '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
+            '  -q, --quiet           do not list the files written'//nl// &
+            '  -h, --help            show this help'//nl// &
+            '  -V, --version         show the version'
+      end select
+   end function command_usage
 end program usharp_main

@@ -3,7 +3,9 @@
 # Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface. PyPI: fpm.
 set -euo pipefail
 
+command -v python3 >/dev/null 2>&1 || need_py=1
 need_apt=()
+[ -n "${need_py:-}" ] && need_apt+=(python3 python3-pip)
 command -v gfortran >/dev/null 2>&1 || need_apt+=(gfortran)
 [ -e /usr/include/sundials/fortran/fcvode_mod.mod ] || need_apt+=(libsundials-fortran-dev libsundials-dev)
 ls /usr/lib/x86_64-linux-gnu/liblapack.so* >/dev/null 2>&1 || ls /usr/lib/*/liblapack.so >/dev/null 2>&1 || need_apt+=(liblapack-dev)
@@ -20,7 +22,9 @@ fi
 
 if ! command -v fpm >/dev/null 2>&1; then
   echo "setup: installing fpm from PyPI" >&2
-  python3 -m pip install --quiet --disable-pip-version-check 'fpm>=0.12,<0.13'
+  python3 -m pip install --quiet --disable-pip-version-check 'fpm>=0.12,<0.13' 2>/dev/null \
+    || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages 'fpm>=0.12,<0.13'
   hash -r
 fi
+command -v pyenv >/dev/null 2>&1 && pyenv rehash 2>/dev/null || true
 command -v fpm >/dev/null 2>&1 || { echo "setup: fpm not on PATH after install" >&2; exit 1; }

@@ -7,6 +7,7 @@ program tester
    use test_driver, only: collect_driver
    use test_input, only: collect_input
    use test_table, only: collect_table
+   use test_fit, only: collect_fit
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -19,7 +20,8 @@ program tester
       new_testsuite('history', collect_history), &
       new_testsuite('driver', collect_driver), &
       new_testsuite('table', collect_table), &
-      new_testsuite('input', collect_input)]
+      new_testsuite('input', collect_input), &
+      new_testsuite('fit', collect_fit)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

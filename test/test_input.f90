@@ -30,6 +30,7 @@ contains
          new_unittest('history-file-empty-or-garbled', test_file_garbled), &
          new_unittest('unwritable-output-folder', test_unwritable), &
          new_unittest('simulate-writes-files', test_simulate_ok), &
+         new_unittest('thesis-data-reproducible-bit-for-bit', test_data_reproducible), &
          new_unittest('cli-exit-codes-and-one-line-errors', test_cli)]
    end subroutine collect_input
 
@@ -155,6 +156,42 @@ contains
       call check(error, index(text, '# time strain stress eps_in back_stress drag_stress') > 0, &
                  'column header present')
    end subroutine test_simulate_ok
+
+   !> data/thesis and data/thesis-noise1 come back byte for byte from their decks (the
+   !> 'regenerate' line differs only by the --out-dir given here)
+   subroutine test_data_reproducible(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      character(len=256), allocatable :: written(:)
+      character(len=:), allocatable :: fresh, kept
+      character(len=*), parameter :: sets(2) = ['thesis       ', 'thesis-noise1']
+      character(len=*), parameter :: tests(3) = ['lcf    ', 'relax  ', 'ratchet']
+      integer :: i, j
+      do i = 1, 2
+         call simulate_command('decks/'//trim(merge('thesis-data       ', 'thesis-data-noise1', i == 1))//'.nml', &
+                               scratch_dir//'/'//trim(sets(i)), written, uerr)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         do j = 1, 3
+            fresh = without_line2(read_text(scratch_dir//'/'//trim(sets(i))//'/'//trim(tests(j))//'.sim.txt'))
+            kept = without_line2(read_text('data/'//trim(sets(i))//'/'//trim(tests(j))//'.sim.txt'))
+            call check(error, len(kept) > 1000 .and. fresh == kept, &
+                       'data/'//trim(sets(i))//'/'//trim(tests(j))//'.sim.txt differs from its regeneration')
+            if (allocated(error)) return
+         end do
+      end do
+   contains
+      function without_line2(text) result(rest)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: rest
+         integer :: a, b
+         a = index(text, new_line('a'))
+         b = index(text(a + 1:), new_line('a')) + a
+         rest = text(:a)//text(b + 1:)
+      end function without_line2
+   end subroutine test_data_reproducible
 
    !> The program itself: exit codes and one-line errors on stderr
    subroutine test_cli(error)

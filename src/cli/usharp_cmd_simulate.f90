@@ -5,7 +5,7 @@ module usharp_cmd_simulate
    use usharp_strings, only: str, real_str
    use usharp_miller, only: n_constants, constant_names, get_constant
    use usharp_config, only: run_config
-   use usharp_input, only: read_config
+   use usharp_input, only: read_config, override_constants
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test, add_stress_noise
    use usharp_history, only: control_strain
@@ -21,9 +21,10 @@ contains
 
    !> Run the simulate command. out_dir overrides the input file's &output out_dir when not
    !> empty. Each written file is reported through the written list.
-   subroutine simulate_command(path, out_dir, written, error)
+   subroutine simulate_command(path, out_dir, written, error, constants_file)
       character(len=*), intent(in) :: path
       character(len=*), intent(in) :: out_dir
+      character(len=*), intent(in), optional :: constants_file  !< a best.nml to use
       character(len=256), allocatable, intent(out) :: written(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
@@ -34,8 +35,15 @@ contains
       allocate (written(0))
       call read_config(path, cfg, error)
       if (allocated(error)) return
-      dir = cfg%out_dir
       command = 'usharp simulate '//path
+      if (present(constants_file)) then
+         if (len_trim(constants_file) > 0) then
+            call override_constants(cfg, constants_file, error)
+            if (allocated(error)) return
+            command = command//' --constants '//trim(constants_file)
+         end if
+      end if
+      dir = cfg%out_dir
       if (len_trim(out_dir) > 0) then
          dir = trim(out_dir)
          command = command//' --out-dir '//trim(out_dir)

@@ -16,7 +16,7 @@ module usharp_input
    implicit none
    private
 
-   public :: read_config, resolve_path, known_groups, read_data_columns
+   public :: read_config, resolve_path, known_groups, read_data_columns, override_constants
 
    character(len=9), parameter :: known_groups(6) = &
       ['model    ', 'constants', 'solver   ', 'output   ', 'fit      ', 'test     ']
@@ -58,6 +58,29 @@ contains
       call model_setup(cfg%model, error)
       if (allocated(error)) call prefix_error(error, path//': &constants: ')
    end subroutine read_config
+
+   !> Replace the constants of cfg by the &constants group of another file (a best.nml)
+   subroutine override_constants(cfg, path, error)
+      type(run_config), intent(inout) :: cfg
+      character(len=*), intent(in) :: path
+      type(error_type), allocatable, intent(out) :: error
+      integer :: unit, ios
+      character(len=512) :: msg
+      character(len=:), allocatable :: main_path
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+         call fatal_error(error, path//': cannot open constants file ('//trim(msg)//')')
+         return
+      end if
+      main_path = cfg%path
+      cfg%path = path
+      call read_constants(unit, cfg, error)
+      cfg%path = main_path
+      close (unit)
+      if (allocated(error)) return
+      call model_setup(cfg%model, error)
+      if (allocated(error)) call prefix_error(error, path//': &constants: ')
+   end subroutine override_constants
 
    !> Reject namelist groups that usharp does not know (a misspelt group would be skipped)
    subroutine check_groups(unit, path, error)
@@ -373,7 +396,7 @@ contains
             call prefix_error(error, where)
             return
          end if
-         tests = [tests, tc]
+         call append_test(tests, tc)
       end do
       if (ntest == 0) then
          call fatal_error(error, cfg%path//': no &test group: at least one test is needed')
@@ -517,6 +540,21 @@ contains
       end subroutine build_test
    end subroutine read_tests
 
+   !> Append by element-wise copies (array constructors of types with allocatable
+   !> components are miscompiled by some gfortran versions)
+   subroutine append_test(tests, tc)
+      type(test_config), allocatable, intent(inout) :: tests(:)
+      type(test_config), intent(in) :: tc
+      type(test_config), allocatable :: tmp(:)
+      integer :: k
+      allocate (tmp(size(tests) + 1))
+      do k = 1, size(tests)
+         tmp(k) = tests(k)
+      end do
+      tmp(size(tests) + 1) = tc
+      call move_alloc(tmp, tests)
+   end subroutine append_test
+
    !> History from a file of (time, value) points; control is 'strain' or 'stress'
    subroutine file_history(path, control, hist, error)
       character(len=*), intent(in) :: path, control
@@ -544,7 +582,10 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: vals(:, :)
       integer :: nmerged
-      call read_data_columns(spec, [spec%time_col, spec%strain_col], vals, error)
+      character(len=128) :: cols(2)
+      cols(1) = spec%time_col
+      cols(2) = spec%strain_col
+      call read_data_columns(spec, cols, vals, error)
       if (allocated(error)) return
       call merge_repeated_times(vals, spec%file, nmerged, error)
       if (allocated(error)) return

@@ -1,0 +1,169 @@
+!> `usharp run`: fit the constants to the tests' data with Hooke-Jeeves; write the logs,
+!> best.nml, the best fit's curves beside the data, and a summary
+module usharp_cmd_run
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_io
+   use usharp_strings, only: str, real_str
+   use usharp_miller, only: n_constants, constant_names, get_constant, miller_model
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config, override_constants
+   use usharp_objective, only: fit_problem, setup_problem
+   use usharp_fit, only: run_fit, fit_outcome
+   use usharp_simulation, only: sim_result
+   use usharp_output, only: write_sim_file
+   use usharp_filesys, only: make_dir, join_path
+   use usharp_version, only: usharp_version_string
+   implicit none
+   private
+
+   public :: run_command
+
+contains
+
+   !> Run a fit. out_dir overrides &output out_dir; constants_file, when given, replaces the
+   !> starting constants. summary returns the lines to show the user.
+   subroutine run_command(path, out_dir, constants_file, resume, quiet, summary, error)
+      character(len=*), intent(in) :: path, out_dir, constants_file
+      logical, intent(in) :: resume, quiet
+      character(len=160), allocatable, intent(out) :: summary(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(fit_outcome) :: out
+      type(miller_model) :: best
+      character(len=:), allocatable :: dir
+      real(dp) :: start(n_constants)
+      integer :: i, j
+      allocate (summary(0))
+      call read_config(path, cfg, error)
+      if (allocated(error)) return
+      if (len_trim(constants_file) > 0) then
+         call override_constants(cfg, constants_file, error)
+         if (allocated(error)) return
+      end if
+      dir = cfg%out_dir
+      if (len_trim(out_dir) > 0) dir = trim(out_dir)
+      call setup_problem(cfg, prob, error)
+      if (allocated(error)) return
+      call make_dir(dir, error)
+      if (allocated(error)) return
+      call run_fit(prob, dir, resume, quiet, out, error)
+      if (allocated(error)) return
+
+      best = cfg%model
+      do j = 1, n_constants
+         start(j) = get_constant(cfg%model%c, j)
+      end do
+      call prob%model_of(out%opt%x, best, error)
+      if (allocated(error)) return
+      call write_best(join_path(dir, 'best.nml'), path, best, out, error)
+      if (allocated(error)) return
+      call write_curves(prob, best, dir, error)
+      if (allocated(error)) return
+
+      summary = [character(len=160) :: &
+         'usharp run '//path//': '//out%opt%reason, &
+         '  objective ('//cfg%fit%objective//'): start '//real_str(out%f_start, 'es12.5')// &
+         ', best '//real_str(out%opt%f, 'es12.5'), &
+         '  evaluations '//str(out%opt%nevals)//' ('//str(out%nreplayed)//' replayed), iterations '// &
+         str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
+         real_str(out%seconds, 'f0.2')//' s']
+      do i = 1, size(cfg%tests)
+         summary = [character(len=160) :: summary, '  test '//cfg%tests(i)%name//': '// &
+            real_str(out%per_test(i), 'es12.5')]
+      end do
+      summary = [character(len=160) :: summary, '  constant        start          fitted']
+      do j = 1, n_constants
+         summary = [character(len=160) :: summary, '  '//constant_names(j)//'  '// &
+            real_str(start(j), 'es14.6')//'  '//real_str(get_constant(best%c, j), 'es14.6')// &
+            merge('         ', '  (fixed)', cfg%fit%fitted(j))]
+      end do
+      summary = [character(len=160) :: summary, '  D0 = '//real_str(best%d0, 'g0.6')//' '//cfg%units, &
+         '  wrote '//join_path(dir, 'best.nml')//', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
+         '<test>.fit.txt']
+      call write_lines(join_path(dir, 'summary.txt'), summary, error)
+   end subroutine run_command
+
+   subroutine write_best(file, path, best, out, error)
+      character(len=*), intent(in) :: file, path
+      type(miller_model), intent(in) :: best
+      type(fit_outcome), intent(in) :: out
+      type(error_type), allocatable, intent(out) :: error
+      character(len=160), allocatable :: lines(:)
+      integer :: j
+      lines = [character(len=160) :: &
+         '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
+         real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
+         '! simulate with it: usharp simulate '//path//' --constants '//file, '&constants']
+      do j = 1, n_constants
+         lines = [character(len=160) :: lines, '  '//trim(lower_name(constant_names(j)))//' = '// &
+            real_str(get_constant(best%c, j), 'es23.15e3')]
+      end do
+      lines = [character(len=160) :: lines, '/']
+      call write_lines(file, lines, error)
+   contains
+      pure function lower_name(name) result(low)
+         character(len=*), intent(in) :: name
+         character(len=len(name)) :: low
+         integer :: k
+         low = name
+         do k = 1, len(name)
+            if (name(k:k) >= 'A' .and. name(k:k) <= 'Z') low(k:k) = achar(iachar(name(k:k)) + 32)
+         end do
+      end function lower_name
+   end subroutine write_best
+
+   !> The best fit's curves: <test>.sim.txt (full response) and <test>.fit.txt (data beside
+   !> simulation at the simulation's times, with residual and weight)
+   subroutine write_curves(prob, best, dir, error)
+      type(fit_problem), intent(in) :: prob
+      type(miller_model), intent(in) :: best
+      character(len=*), intent(in) :: dir
+      type(error_type), allocatable, intent(out) :: error
+      type(sim_result), allocatable :: res(:)
+      integer :: i, k, unit, ios
+      character(len=:), allocatable :: file
+      character(len=120) :: header(1)
+      allocate (res(size(prob%targets)))
+      call prob%simulate_all(best, res, error)
+      if (allocated(error)) return
+      do i = 1, size(prob%targets)
+         header(1) = "best fit, test '"//prob%cfg%tests(i)%name//"'"
+         call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), res(i), &
+                             header, prob%cfg%units, error)
+         if (allocated(error)) return
+         file = join_path(dir, prob%cfg%tests(i)%name//'.fit.txt')
+         open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
+         if (ios /= 0) then
+            call fatal_error(error, file//': cannot write', stat_io)
+            return
+         end if
+         write (unit, '(a)') "# best fit of test '"//prob%cfg%tests(i)%name//"' against "//prob%cfg%tests(i)%data%file
+         write (unit, '(a)') '# columns: time (s), strain (-), measured stress ('// &
+            prob%cfg%units//'), simulated stress ('//prob%cfg%units//'), residual ('// &
+            prob%cfg%units//'), weight (-)'
+         write (unit, '(a)') '# time strain stress_exp stress_sim residual weight'
+         do k = 1, size(prob%targets(i)%t)
+            write (unit, '(6es20.11e3)') prob%targets(i)%t(k), res(i)%strain(k), prob%targets(i)%y_ex(k), &
+               res(i)%stress(k), prob%targets(i)%y_ex(k) - res(i)%stress(k), prob%targets(i)%w(k)
+         end do
+         close (unit)
+      end do
+   end subroutine write_curves
+
+   subroutine write_lines(file, lines, error)
+      character(len=*), intent(in) :: file
+      character(len=*), intent(in) :: lines(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: unit, ios, k
+      open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
+      if (ios /= 0) then
+         call fatal_error(error, file//': cannot write', stat_io)
+         return
+      end if
+      do k = 1, size(lines)
+         write (unit, '(a)') trim(lines(k))
+      end do
+      close (unit)
+   end subroutine write_lines
+end module usharp_cmd_run

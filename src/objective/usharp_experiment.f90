@@ -1,0 +1,78 @@
+!> Measured (or synthetic) test data for a fit, in the model's units, and their linear
+!> interpolation onto the simulation's output times
+module usharp_experiment
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: str, real_str
+   use usharp_config, only: test_config
+   use usharp_input, only: read_data_columns
+   use usharp_table, only: merge_repeated_times
+   use usharp_units, only: stress_factor
+   implicit none
+   private
+
+   public :: experiment_type, load_experiment, interpolate
+
+   !> One test's data: time (s), stress (model unit) and optional user weights
+   type :: experiment_type
+      real(dp), allocatable :: t(:)
+      real(dp), allocatable :: stress(:)
+      real(dp), allocatable :: weight(:)  !< only with weighting = 'column'
+      integer :: nmerged = 0              !< rows with a repeated time folded into one
+   end type experiment_type
+
+contains
+
+   !> Read a test's data file (columns, unit, filter as the &test group says)
+   subroutine load_experiment(test, model_units, exp, error)
+      type(test_config), intent(in) :: test
+      character(len=*), intent(in) :: model_units
+      type(experiment_type), intent(out) :: exp
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: vals(:, :)
+      character(len=128) :: cols(3)
+      if (.not. test%has_data) then
+         call fatal_error(error, "test '"//test%name//"' has no data_file to fit")
+         return
+      end if
+      cols(1) = test%data%time_col
+      cols(2) = test%data%stress_col
+      cols(3) = ''
+      if (test%weighting == 'column') cols(3) = test%data%weight_col
+      call read_data_columns(test%data, pack(cols, len_trim(cols) > 0), vals, error)
+      if (allocated(error)) return
+      call merge_repeated_times(vals, test%data%file, exp%nmerged, error)
+      if (allocated(error)) return
+      exp%t = vals(:, 1)
+      exp%stress = vals(:, 2)*stress_factor(test%data%unit, model_units)
+      if (test%weighting == 'column') exp%weight = vals(:, 3)
+   end subroutine load_experiment
+
+   !> Linear interpolation of (x, y) at the points xi; points outside [x(1), x(n)] by more
+   !> than a relative 1e-9 are an error (no extrapolation)
+   pure subroutine interpolate(x, y, xi, yi, error)
+      real(dp), intent(in) :: x(:), y(:), xi(:)
+      real(dp), intent(out) :: yi(:)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: tol, w
+      integer :: i, k, n
+      n = size(x)
+      tol = 1.0e-9_dp*max(1.0_dp, abs(x(n)))
+      if (xi(1) < x(1) - tol .or. xi(size(xi)) > x(n) + tol) then
+         call fatal_error(error, 'data cover '//real_str(x(1), 'g0.6')//' to '// &
+            real_str(x(n), 'g0.6')//' s but the simulation runs from '// &
+            real_str(xi(1), 'g0.6')//' to '//real_str(xi(size(xi)), 'g0.6')//' s')
+         return
+      end if
+      k = 1
+      do i = 1, size(xi)
+         do while (k < n - 1)
+            if (x(k + 1) >= xi(i)) exit
+            k = k + 1
+         end do
+         w = (xi(i) - x(k))/(x(k + 1) - x(k))
+         w = min(max(w, 0.0_dp), 1.0_dp)
+         yi(i) = (1.0_dp - w)*y(k) + w*y(k + 1)
+      end do
+   end subroutine interpolate
+end module usharp_experiment

@@ -1,0 +1,201 @@
+!> The fit problem: tests with data, the objective of the thesis (Eq. 7 per test summed by
+!> Eq. 8, or Eq. 13) and the original's penalties
+module usharp_objective
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, prefix_error
+   use usharp_miller, only: miller_model, model_setup, n_constants, get_constant, set_constant
+   use usharp_history, only: output_times
+   use usharp_simulation, only: sim_result
+   use usharp_simulate, only: simulate_test
+   use usharp_config, only: run_config
+   use usharp_experiment, only: experiment_type, load_experiment, interpolate
+   use usharp_weighting, only: threshold_weights, relaxation_weights
+   implicit none
+   private
+
+   public :: fit_problem, test_target, test_objective, setup_problem
+   public :: eval_ok, eval_invalid, eval_failed, penalty_invalid, penalty_failed
+
+   !> Outcome of one evaluation
+   integer, parameter :: eval_ok = 0, eval_invalid = 1, eval_failed = 2
+   !> The original's penalties per test: invalid constants, failed simulation
+   real(dp), parameter :: penalty_invalid = 1.0e10_dp, penalty_failed = 2.0e10_dp
+
+   !> One test's target: experimental stress and weights at the simulation's output times
+   type :: test_target
+      real(dp), allocatable :: t(:)     !< s
+      real(dp), allocatable :: y_ex(:)  !< model unit
+      real(dp), allocatable :: w(:)
+      real(dp) :: y_ex_max = 0.0_dp     !< largest |stress| of the dataset
+      type(experiment_type) :: exp
+   end type test_target
+
+   !> Everything needed to evaluate the objective for a vector of fitted parameters
+   type :: fit_problem
+      type(run_config) :: cfg
+      type(test_target), allocatable :: targets(:)
+      integer, allocatable :: idx(:)   !< indices of the fitted constants
+   contains
+      procedure :: model_of => problem_model_of
+      procedure :: start_point => problem_start_point
+      procedure :: evaluate => problem_evaluate
+      procedure :: simulate_all => problem_simulate_all
+   end type fit_problem
+
+contains
+
+   !> Load every test's data and precompute its target at the simulation's output times
+   subroutine setup_problem(cfg, prob, error)
+      type(run_config), intent(in) :: cfg
+      type(fit_problem), intent(out) :: prob
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i, k
+      logical, allocatable :: in_hold(:)
+      prob%cfg = cfg
+      prob%idx = pack([(k, k=1, n_constants)], cfg%fit%fitted)
+      if (size(prob%idx) == 0) then
+         call fatal_error(error, cfg%path//': &fit: fitted names no constant to fit')
+         return
+      end if
+      allocate (prob%targets(size(cfg%tests)))
+      do i = 1, size(cfg%tests)
+            call load_experiment(cfg%tests(i), cfg%units, prob%targets(i)%exp, error)
+         if (allocated(error)) exit
+         prob%targets(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         allocate (prob%targets(i)%y_ex(size(prob%targets(i)%t)))
+         call interpolate(prob%targets(i)%exp%t, prob%targets(i)%exp%stress, prob%targets(i)%t, prob%targets(i)%y_ex, error)
+         if (allocated(error)) then
+            call prefix_error(error, cfg%tests(i)%data%file//': ')
+            exit
+         end if
+         prob%targets(i)%y_ex_max = maxval(abs(prob%targets(i)%exp%stress))
+         select case (cfg%tests(i)%weighting)
+         case ('threshold')
+            prob%targets(i)%w = threshold_weights(prob%targets(i)%y_ex, cfg%tests(i)%sig)
+         case ('relaxation')
+            in_hold = hold_points(cfg%tests(i)%hist%t, cfg%tests(i)%hist%v, prob%targets(i)%t)
+            prob%targets(i)%w = relaxation_weights(prob%targets(i)%t, prob%targets(i)%y_ex, in_hold)
+         case ('column')
+            allocate (prob%targets(i)%w(size(prob%targets(i)%t)))
+            call interpolate(prob%targets(i)%exp%t, prob%targets(i)%exp%weight, prob%targets(i)%t, prob%targets(i)%w, error)
+            if (allocated(error)) exit
+         case default
+            allocate (prob%targets(i)%w(size(prob%targets(i)%t)))
+            prob%targets(i)%w = 1.0_dp
+         end select
+      end do
+      if (allocated(error)) call prefix_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': ")
+   end subroutine setup_problem
+
+   !> Points that lie inside a hold (a segment of constant control value)
+   pure function hold_points(tc, vc, t) result(hold)
+      real(dp), intent(in) :: tc(:), vc(:), t(:)
+      logical :: hold(size(t))
+      integer :: i, k
+      hold = .false.
+      do k = 1, size(tc) - 1
+         if (vc(k + 1) /= vc(k)) cycle
+         do i = 1, size(t)
+            if (t(i) > tc(k) .and. t(i) < tc(k + 1)) hold(i) = .true.
+         end do
+      end do
+   end function hold_points
+
+   !> One test's objective: Eq. 7 (percent of the peak, mean over points) or Eq. 13
+   pure real(dp) function test_objective(kind, y_ex, y_sim, w, y_ex_max) result(s)
+      character(len=*), intent(in) :: kind
+      real(dp), intent(in) :: y_ex(:), y_sim(:), w(:), y_ex_max
+      if (kind == 'eq13') then
+         s = sum(w*(y_ex - y_sim)**2)
+      else
+         s = sum(w*(100.0_dp*(y_ex - y_sim)/y_ex_max)**2)/real(size(y_ex), dp)
+      end if
+   end function test_objective
+
+   !> The starting point: the fitted constants of the input (log10 of them with log_search)
+   pure function problem_start_point(self) result(x)
+      class(fit_problem), intent(in) :: self
+      real(dp) :: x(size(self%idx))
+      integer :: j
+      do j = 1, size(self%idx)
+         x(j) = get_constant(self%cfg%model%c, self%idx(j))
+         if (self%cfg%fit%log_search) x(j) = log10(max(x(j), tiny(1.0_dp)))
+      end do
+   end function problem_start_point
+
+   !> The model with the fitted constants set from x, checked and set up
+   pure subroutine problem_model_of(self, x, model, error)
+      class(fit_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      type(miller_model), intent(out) :: model
+      type(error_type), allocatable, intent(out) :: error
+      integer :: j
+      model = self%cfg%model
+      do j = 1, size(self%idx)
+         if (self%cfg%fit%log_search) then
+            call set_constant(model%c, self%idx(j), 10.0_dp**x(j))
+         else
+            call set_constant(model%c, self%idx(j), x(j))
+         end if
+      end do
+      call model_setup(model, error)
+   end subroutine problem_model_of
+
+   !> Simulate every test with the model of x; error on the first failure
+   subroutine problem_simulate_all(self, model, res, error)
+      class(fit_problem), intent(in) :: self
+      type(miller_model), intent(in) :: model
+      type(sim_result), intent(out) :: res(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i
+      do i = 1, size(self%cfg%tests)
+         call simulate_test(model, self%cfg%solver, self%cfg%tests(i), res(i), error)
+         if (allocated(error)) return
+      end do
+   end subroutine problem_simulate_all
+
+   !> Objective at x: per-test values and their sum (Eq. 8). Invalid constants give the
+   !> original's 1e10 per test, a failed simulation 2e10 per test; status and message say why.
+   subroutine problem_evaluate(self, x, total, per_test, status, message)
+      class(fit_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: total
+      real(dp), intent(out) :: per_test(:)
+      integer, intent(out) :: status
+      character(len=:), allocatable, intent(out) :: message
+      type(miller_model) :: model
+      type(sim_result) :: res
+      type(error_type), allocatable :: error
+      integer :: i
+      status = eval_ok
+      message = ''
+      call self%model_of(x, model, error)
+      if (allocated(error)) then
+         status = eval_invalid
+         message = error%message
+         per_test = penalty_invalid
+         total = sum(per_test)
+         return
+      end if
+      do i = 1, size(self%targets)
+         call simulate_test(model, self%cfg%solver, self%cfg%tests(i), res, error)
+         if (allocated(error)) then
+            status = eval_failed
+            message = error%message
+            per_test = penalty_failed
+            total = sum(per_test)
+            return
+         end if
+         per_test(i) = test_objective(self%cfg%fit%objective, self%targets(i)%y_ex, res%stress, &
+                                      self%targets(i)%w, self%targets(i)%y_ex_max)
+      end do
+      total = sum(per_test)
+      if (.not. ieee_is_finite(total)) then
+         status = eval_failed
+         message = 'objective is not finite'
+         per_test = penalty_failed
+         total = sum(per_test)
+      end if
+   end subroutine problem_evaluate
+end module usharp_objective

@@ -1,0 +1,168 @@
+!> A fit: the objective of a fit problem wrapped with the logs, the journal replay for
+!> --resume, the failure count, and the progress display
+module usharp_fit
+   use, intrinsic :: iso_c_binding, only: c_int
+   use, intrinsic :: iso_fortran_env, only: error_unit, int64
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_failure, stat_input
+   use usharp_strings, only: str, real_str
+   use usharp_miller, only: get_constant, constant_names
+   use usharp_objective, only: fit_problem, eval_ok, eval_invalid
+   use usharp_optimiser, only: objective_type, optimum_type
+   use usharp_hooke_jeeves, only: hooke_jeeves
+   use usharp_fit_log, only: fit_log, journal_record, read_journal, journal_name
+   use usharp_filesys, only: join_path
+   implicit none
+   private
+
+   public :: fit_objective, run_fit, fit_outcome
+
+   !> The objective an optimiser sees during a fit
+   type, extends(objective_type) :: fit_objective
+      type(fit_problem) :: prob
+      type(fit_log) :: log
+      type(journal_record), allocatable :: replay(:)
+      integer :: nevals = 0
+      integer :: nfail_row = 0          !< failures in a row
+      integer :: nfail_total = 0
+      integer :: ninvalid_total = 0
+      real(dp) :: best = huge(1.0_dp)
+      real(dp) :: first = huge(1.0_dp)
+      real(dp), allocatable :: best_per_test(:)
+      logical :: show_progress = .false.
+      integer(int64) :: clock0 = 0
+   contains
+      procedure :: eval => fit_eval
+      procedure :: constants_of => fit_constants_of
+   end type fit_objective
+
+   !> What a finished fit reports
+   type :: fit_outcome
+      type(optimum_type) :: opt
+      real(dp) :: f_start = 0.0_dp
+      real(dp), allocatable :: per_test(:)
+      real(dp), allocatable :: constants(:)  !< fitted constants, physical units
+      integer :: nfail = 0, ninvalid = 0, nreplayed = 0
+      real(dp) :: seconds = 0.0_dp
+   end type fit_outcome
+
+   interface
+      function c_isatty(fd) bind(C, name='isatty') result(r)
+         import :: c_int
+         integer(c_int), value :: fd
+         integer(c_int) :: r
+      end function c_isatty
+   end interface
+
+contains
+
+   !> Fitted constants in physical units for a search point x
+   pure function fit_constants_of(self, x) result(c)
+      class(fit_objective), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp) :: c(size(x))
+      c = x
+      if (self%prob%cfg%fit%log_search) c = 10.0_dp**x
+   end function fit_constants_of
+
+   subroutine fit_eval(self, x, f, error)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: per_test(size(self%prob%targets))
+      integer :: status, k
+      character(len=:), allocatable :: message
+      self%nevals = self%nevals + 1
+      k = self%nevals
+      if (k <= size(self%replay)) then
+         ! Resuming: the search is deterministic, so evaluation k is at the journal's point
+         if (any(abs(x - self%replay(k)%x) > 1.0e-12_dp*max(1.0_dp, abs(x)))) then
+            call fatal_error(error, 'cannot resume: evaluation '//str(k)//' of '// &
+               journal_name//' was made at other constants (did the input change?)', stat_input)
+            return
+         end if
+         f = self%replay(k)%f
+         per_test = self%replay(k)%per_test
+         status = self%replay(k)%status
+         message = 'replayed'
+      else
+         call self%prob%evaluate(x, f, per_test, status, message)
+      end if
+      call self%log%record(k, status, f, per_test, x, self%constants_of(x))
+      if (k == 1) self%first = f
+      if (status /= eval_ok) then
+         self%nfail_row = self%nfail_row + 1
+         self%nfail_total = self%nfail_total + 1
+         if (status == eval_invalid) self%ninvalid_total = self%ninvalid_total + 1
+         if (k > size(self%replay)) call self%log%event('evaluation '//str(k)//': penalty '// &
+            real_str(f, 'es10.3')//': '//message)
+         if (self%nfail_row >= self%prob%cfg%fit%max_failures) then
+            call fatal_error(error, 'fit aborted: '//str(self%nfail_row)// &
+               ' failed evaluations in a row (max_failures); last: '//message, stat_failure)
+            call self%log%event(error%message)
+            return
+         end if
+      else
+         self%nfail_row = 0
+      end if
+      if (f < self%best) then
+         self%best = f
+         self%best_per_test = per_test
+      end if
+      if (self%show_progress) call progress(self)
+   end subroutine fit_eval
+
+   subroutine progress(self)
+      class(fit_objective), intent(in) :: self
+      integer(int64) :: now, rate
+      call system_clock(now, rate)
+      write (error_unit, '(a)', advance='no') achar(13)//'usharp run: '//str(self%nevals)// &
+         ' evaluations, best '//real_str(self%best, 'es11.4')//', '// &
+         real_str(real(now - self%clock0, dp)/real(rate, dp), 'f0.1')//' s   '
+      flush (error_unit)
+   end subroutine progress
+
+   !> Run the fit of a problem with its &fit settings, logging into dir. With resume, the
+   !> journal in dir is replayed first. quiet suppresses the progress line.
+   subroutine run_fit(prob, dir, resume, quiet, outcome, error)
+      type(fit_problem), intent(in) :: prob
+      character(len=*), intent(in) :: dir
+      logical, intent(in) :: resume, quiet
+      type(fit_outcome), intent(out) :: outcome
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_objective) :: obj
+      integer(int64) :: now, rate
+      obj%prob = prob
+      allocate (obj%replay(0))
+      if (resume) then
+         call read_journal(join_path(dir, journal_name), size(prob%targets), size(prob%idx), &
+                           obj%replay, error)
+         if (allocated(error)) return
+      end if
+      call obj%log%open(dir, error)
+      if (allocated(error)) return
+      if (size(obj%replay) > 0) call obj%log%event('resumed: replaying '// &
+         str(size(obj%replay))//' evaluations from '//journal_name)
+      obj%show_progress = .not. quiet .and. c_isatty(2_c_int) == 1
+      call system_clock(obj%clock0, rate)
+      associate (fc => prob%cfg%fit)
+         call hooke_jeeves(obj, prob%start_point(), fc%rho, fc%eps, fc%itermax, fc%max_evals, &
+                           outcome%opt, error)
+      end associate
+      if (obj%show_progress) write (error_unit, '(a)') ''
+      call system_clock(now)
+      outcome%seconds = real(now - obj%clock0, dp)/real(rate, dp)
+      outcome%f_start = obj%first
+      outcome%nfail = obj%nfail_total
+      outcome%ninvalid = obj%ninvalid_total
+      outcome%nreplayed = size(obj%replay)
+      if (.not. allocated(error)) then
+         outcome%constants = obj%constants_of(outcome%opt%x)
+         outcome%per_test = obj%best_per_test
+         call obj%log%event('finished: '//outcome%opt%reason//', objective '// &
+            real_str(outcome%opt%f, 'es12.5')//' after '//str(outcome%opt%nevals)//' evaluations')
+      end if
+      call obj%log%close()
+   end subroutine run_fit
+end module usharp_fit

@@ -1,0 +1,269 @@
+!> Tests of the fit: interpolation, weighting, objective, Hooke-Jeeves, failures, resume
+module test_fit
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type, stat_failure
+   use usharp_experiment, only: interpolate
+   use usharp_weighting, only: threshold_weights, relaxation_weights
+   use usharp_objective, only: test_objective, fit_problem, setup_problem
+   use usharp_optimiser, only: objective_type, optimum_type
+   use usharp_hooke_jeeves, only: hooke_jeeves
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config
+   use usharp_cmd_run, only: run_command
+   use test_util, only: write_text, usharp_exe, read_text, scratch_dir
+   implicit none
+   private
+   public :: collect_fit
+
+   !> Rosenbrock's function (minimum 0 at (1, 1))
+   type, extends(objective_type) :: rosenbrock
+      integer :: nevals = 0
+   contains
+      procedure :: eval => rosen_eval
+   end type rosenbrock
+
+   !> A quadratic with its minimum 0.25 at (3, -2, 0.5)
+   type, extends(objective_type) :: quadratic
+   contains
+      procedure :: eval => quad_eval
+   end type quadratic
+
+contains
+
+   subroutine collect_fit(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('interpolation-hand-values', test_interp), &
+         new_unittest('threshold-weights-hand-values', test_threshold), &
+         new_unittest('relaxation-weights-hand-values', test_relax_weights), &
+         new_unittest('eq7-invariant-to-resampling-eq13-not', test_resampling), &
+         new_unittest('hooke-jeeves-rosenbrock', test_hj_rosenbrock), &
+         new_unittest('hooke-jeeves-quadratic', test_hj_quadratic), &
+         new_unittest('hooke-jeeves-honours-itermax-and-eps', test_hj_limits), &
+         new_unittest('data-not-covering-span-rejected', test_coverage), &
+         new_unittest('data-unit-converted', test_units), &
+         new_unittest('fit-aborts-after-failures-in-a-row', test_abort), &
+         new_unittest('kill-9-then-resume-same-result', test_resume)]
+   end subroutine collect_fit
+
+   subroutine rosen_eval(self, x, f, error)
+      class(rosenbrock), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(uerror), allocatable, intent(out) :: error
+      self%nevals = self%nevals + 1
+      f = 100.0_dp*(x(2) - x(1)**2)**2 + (1.0_dp - x(1))**2
+   end subroutine rosen_eval
+
+   subroutine quad_eval(self, x, f, error)
+      class(quadratic), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(uerror), allocatable, intent(out) :: error
+      f = 0.25_dp + (x(1) - 3.0_dp)**2 + 4.0_dp*(x(2) + 2.0_dp)**2 + 10.0_dp*(x(3) - 0.5_dp)**2 &
+          + (x(1) - 3.0_dp)*(x(2) + 2.0_dp)
+   end subroutine quad_eval
+
+   subroutine test_interp(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      real(dp) :: yi(4)
+      call interpolate([0.0_dp, 1.0_dp, 3.0_dp], [0.0_dp, 10.0_dp, -10.0_dp], &
+                       [0.0_dp, 0.25_dp, 2.0_dp, 3.0_dp], yi, uerr)
+      call check(error, .not. allocated(uerr), 'inside the data')
+      if (allocated(error)) return
+      call check(error, maxval(abs(yi - [0.0_dp, 2.5_dp, 0.0_dp, -10.0_dp])) < 1e-14_dp, 'hand values')
+      if (allocated(error)) return
+      call interpolate([0.0_dp, 1.0_dp, 3.0_dp], [0.0_dp, 10.0_dp, -10.0_dp], [0.5_dp, 3.5_dp], yi(1:2), uerr)
+      call check(error, allocated(uerr), 'no extrapolation past the data')
+   end subroutine test_interp
+
+   subroutine test_threshold(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: w(4)
+      w = threshold_weights([-15.0_dp, 13.9_dp, 14.0_dp, 20.0_dp], 14.0_dp)
+      call check(error, all(w == [2.5_dp, 1.0_dp, 1.0_dp, 2.5_dp]), 'w = 2.5 above SIG, 1 below')
+   end subroutine test_threshold
+
+   !> Stress 10, 8, 7, 6.5, 6.25 at t = 0..4 s, all in a hold. By hand: s' = -1, -0.5, -0.25
+   !> at points 2..4 and s'' = 1, 0.5, 0.25; the largest |s'| is at point 2, so
+   !> C0 = 7/3 (1 + 1) = 14/3; w2 = (14/3 + 2)/(14/3 - 2) = 2.5, w3 = (14/3 + 1)/(14/3 - 1)
+   !> = 17/11, w4 = (14/3 + 0.5)/(14/3 - 0.5) = 31/25; first and last weight 0.
+   subroutine test_relax_weights(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: w(5)
+      w = relaxation_weights([0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp], &
+                             [10.0_dp, 8.0_dp, 7.0_dp, 6.5_dp, 6.25_dp], spread(.true., 1, 5))
+      call check(error, maxval(abs(w - [0.0_dp, 2.5_dp, 17.0_dp/11.0_dp, 31.0_dp/25.0_dp, &
+                 0.0_dp])) < 1e-14_dp, 'relaxation weights by hand')
+   end subroutine test_relax_weights
+
+   subroutine test_resampling(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: t1(:), t4(:)
+      real(dp) :: s7a, s7b, s13a, s13b
+      integer :: i
+      character(len=100) :: buf
+      t1 = [(real(i, dp)*0.1_dp, i=0, 100)]
+      t4 = [(real(i, dp)*0.025_dp, i=0, 400)]
+      s7a = test_objective('eq7', 20*sin(t1), 20*sin(t1) + cos(3*t1), 0*t1 + 1, 20.0_dp)
+      s7b = test_objective('eq7', 20*sin(t4), 20*sin(t4) + cos(3*t4), 0*t4 + 1, 20.0_dp)
+      s13a = test_objective('eq13', 20*sin(t1), 20*sin(t1) + cos(3*t1), 0*t1 + 1, 20.0_dp)
+      s13b = test_objective('eq13', 20*sin(t4), 20*sin(t4) + cos(3*t4), 0*t4 + 1, 20.0_dp)
+      write (buf, '(a,2es11.3,a,2es11.3)') 'eq7 ', s7a, s7b, ' eq13 ', s13a, s13b
+      call check(error, abs(s7b/s7a - 1.0_dp) < 0.01_dp, 'Eq. 7 changes < 1 % with 4x the points: '//trim(buf))
+      if (allocated(error)) return
+      call check(error, abs(s13b/s13a - 4.0_dp) < 0.1_dp, 'Eq. 13 grows with the points: '//trim(buf))
+   end subroutine test_resampling
+
+   subroutine test_hj_rosenbrock(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rosenbrock) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: uerr
+      call hooke_jeeves(obj, [-1.2_dp, 1.0_dp], 0.5_dp, 1.0e-8_dp, 5000, 100000, opt, uerr)
+      call check(error, abs(opt%x(1) - 1.0_dp) < 1e-3_dp .and. abs(opt%x(2) - 1.0_dp) < 2e-3_dp, &
+                 'Rosenbrock minimum (1, 1) found')
+      if (allocated(error)) return
+      call check(error, opt%f < 1e-6_dp, 'Rosenbrock value near 0')
+      if (allocated(error)) return
+      call check(error, opt%nevals, obj%nevals, 'evaluations counted')
+   end subroutine test_hj_rosenbrock
+
+   subroutine test_hj_quadratic(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(quadratic) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: uerr
+      call hooke_jeeves(obj, [0.0_dp, 0.0_dp, 0.0_dp], 0.5_dp, 1.0e-9_dp, 5000, 100000, opt, uerr)
+      call check(error, maxval(abs(opt%x - [3.0_dp, -2.0_dp, 0.5_dp])) < 1e-6_dp, 'minimum at (3, -2, 0.5)')
+      if (allocated(error)) return
+      call check(error, opt%f, 0.25_dp, 'minimum value', thr=1e-10_dp)
+   end subroutine test_hj_quadratic
+
+   subroutine test_hj_limits(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rosenbrock) :: obj
+      type(optimum_type) :: opt, opt2
+      type(uerror), allocatable :: uerr
+      call hooke_jeeves(obj, [-1.2_dp, 1.0_dp], 0.5_dp, 1.0e-8_dp, 3, 100000, opt, uerr)
+      call check(error, opt%iterations, 3, 'itermax = 3 stops after 3 iterations')
+      if (allocated(error)) return
+      call check(error, opt%reason, 'itermax reached', 'reason')
+      if (allocated(error)) return
+      ! rho = 0.5: the step length falls 0.5, 0.25, ... so eps = 0.1 allows few reductions
+      call hooke_jeeves(obj, [-1.2_dp, 1.0_dp], 0.5_dp, 0.1_dp, 5000, 100000, opt, uerr)
+      call hooke_jeeves(obj, [-1.2_dp, 1.0_dp], 0.5_dp, 1.0e-6_dp, 5000, 100000, opt2, uerr)
+      call check(error, opt%reason, 'step length <= eps', 'stopped by eps')
+      if (allocated(error)) return
+      call check(error, opt%nevals < opt2%nevals .and. opt%f > opt2%f, 'larger eps stops earlier')
+   end subroutine test_hj_limits
+
+   !> A fit deck in the scratch folder against data/thesis (relative to the scratch folder)
+   function fit_deck(name, extra_fit, test_lines) result(path)
+      character(len=*), intent(in) :: name, extra_fit
+      character(len=*), intent(in) :: test_lines(:)
+      character(len=:), allocatable :: path
+      path = write_text(name, [character(len=200) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200 "//extra_fit//' /', &
+         test_lines])
+   end function fit_deck
+
+   subroutine test_coverage(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      ! The relaxation history lasts 1202 s; the LCF data cover only 240 s
+      call read_config(fit_deck('cover.nml', '', [character(len=200) :: &
+         "&test name='r', history='relaxation', data_file='../../data/thesis/lcf.sim.txt' /"]), cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      call check(error, allocated(uerr), 'short data rejected')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'data cover 0.00000 to 240.000 s but the '// &
+                 'simulation runs from 0.00000 to 1202.00 s') > 0, uerr%message)
+   end subroutine test_coverage
+
+   subroutine test_units(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: dfile
+      dfile = write_text('mpa.csv', [character(len=40) :: 'time,stress', '0,0', '5,68.94757293168361', '10,0'])
+      call read_config(fit_deck('units.nml', '', [character(len=200) :: &
+         "&test name='t', history='file', file='mpa.csv', data_file='mpa.csv', data_unit='MPa' /"]), cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, prob%targets(1)%y_ex_max, 10.0_dp, '68.95 MPa read as 10 ksi', thr=1e-12_dp)
+   end subroutine test_units
+
+   subroutine test_abort(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      character(len=160), allocatable :: summary(:)
+      character(len=:), allocatable :: deck
+      ! rho = 0.99 steps H1 and n by 99 %: with max_failures = 1 the first bad point aborts
+      deck = fit_deck('abort.nml', 'max_failures=1, rho=0.99', [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='../../data/thesis/lcf.sim.txt' /"])
+      call run_command(deck, scratch_dir//'/abort-out', '', .false., .true., summary, uerr)
+      call check(error, allocated(uerr), 'fit must abort')
+      if (allocated(error)) return
+      call check(error, uerr%stat, stat_failure, 'failed-fit exit category')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'fit aborted: 1 failed evaluations in a row') == 1, uerr%message)
+   end subroutine test_abort
+
+   !> kill -9 during a run, then --resume: the same logs and result as an uninterrupted run
+   subroutine test_resume(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, deck, full, killed, cmd
+      integer :: stat
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'usharp executable not found beside the test program')
+         return
+      end if
+      deck = fit_deck('resume.nml', 'eps=1e-7', [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='../../data/thesis/lcf.sim.txt', "// &
+         "weighting='threshold', sig=14 /"])
+      full = scratch_dir//'/resume-full'
+      killed = scratch_dir//'/resume-killed'
+      call execute_command_line('rm -rf '//full//' '//killed, exitstat=stat)
+      call execute_command_line(exe//' run '//deck//' -q -o '//full//' > /dev/null', exitstat=stat)
+      call check(error, stat, 0, 'uninterrupted run')
+      if (allocated(error)) return
+      ! Start the same run, kill it hard once 30 evaluations are journalled, then resume
+      cmd = exe//' run '//deck//' -q -o '//killed//' > /dev/null & pid=$!; n=0; '// &
+         'while [ "$(cat '//killed//'/fit.journal 2>/dev/null | wc -l)" -lt 30 ] && [ $n -lt 3000 ]; '// &
+         'do sleep 0.01; n=$((n+1)); done; kill -9 $pid; wait $pid 2>/dev/null; true'
+      call execute_command_line('sh -c '''//cmd//'''', exitstat=stat)
+      call check(error, len(read_text(killed//'/best.nml')) == 0, 'the killed run did not finish')
+      if (allocated(error)) return
+      call execute_command_line(exe//' run '//deck//' -q --resume -o '//killed//' > /dev/null', exitstat=stat)
+      call check(error, stat, 0, 'resumed run')
+      if (allocated(error)) return
+      call check(error, len(read_text(full//'/FOM.TXT')) > 0 .and. &
+                 read_text(killed//'/FOM.TXT') == read_text(full//'/FOM.TXT'), 'FOM.TXT identical')
+      if (allocated(error)) return
+      call check(error, read_text(killed//'/GUESS.TXT') == read_text(full//'/GUESS.TXT'), 'GUESS.TXT identical')
+      if (allocated(error)) return
+      call check(error, body(read_text(killed//'/best.nml')) == body(read_text(full//'/best.nml')), &
+                 'best.nml identical')
+   contains
+      !> The text after the comment lines (which name the output folder)
+      function body(text) result(rest)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: rest
+         integer :: k
+         k = index(text, '&constants')
+         rest = text(max(k, 1):)
+      end function body
+   end subroutine test_resume
+end module test_fit
