@@ -67,7 +67,7 @@ contains
          ', best '//real_str(out%opt%f, 'es12.5'), &
          '  evaluations '//str(out%opt%nevals)//' ('//str(out%nreplayed)//' replayed), iterations '// &
          str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
-         real_str(out%seconds, 'f0.2')//' s']
+         real_str(out%seconds, 'f10.2')//' s']
       do i = 1, size(cfg%tests)
          summary = [character(len=160) :: summary, '  test '//cfg%tests(i)%name//': '// &
             real_str(out%per_test(i), 'es12.5')]

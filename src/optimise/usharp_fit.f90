@@ -119,7 +119,7 @@ contains
       call system_clock(now, rate)
       write (error_unit, '(a)', advance='no') achar(13)//'usharp run: '//str(self%nevals)// &
          ' evaluations, best '//real_str(self%best, 'es11.4')//', '// &
-         real_str(real(now - self%clock0, dp)/real(rate, dp), 'f0.1')//' s   '
+         real_str(real(now - self%clock0, dp)/real(rate, dp), 'f10.1')//' s   '
       flush (error_unit)
    end subroutine progress
 
