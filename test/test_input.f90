@@ -6,7 +6,7 @@ module test_input
    use usharp_config, only: run_config
    use usharp_input, only: read_config
    use usharp_cmd_simulate, only: simulate_command
-   use test_util, only: write_text, usharp_exe, read_text, scratch_dir
+   use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message
    implicit none
    private
    public :: collect_input, deck_lines
@@ -47,26 +47,15 @@ contains
       type(run_config) :: cfg
       type(uerror), allocatable :: uerr
       call read_config(write_text(name, deck_lines(extra)), cfg, uerr)
-      call expect(error, uerr, text)
+      call check_message(error, uerr, text)
    end subroutine expect_config_error
-
-   subroutine expect(error, e, text)
-      type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable, intent(in) :: e
-      character(len=*), intent(in) :: text
-      if (.not. allocated(e)) then
-         call test_failed(error, 'no error for: '//text)
-      else if (index(e%message, text) == 0) then
-         call test_failed(error, "message '"//e%message//"' lacks '"//text//"'")
-      end if
-   end subroutine expect
 
    subroutine test_missing_file(error)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(uerror), allocatable :: uerr
       call read_config('no/such/fit.nml', cfg, uerr)
-      call expect(error, uerr, 'no/such/fit.nml: no such input file')
+      call check_message(error, uerr, 'no/such/fit.nml: no such input file')
       if (allocated(error)) return
       call check(error, uerr%stat, stat_input, 'input error category')
    end subroutine test_missing_file
@@ -98,7 +87,7 @@ contains
       lines = deck_lines([character(len=80) :: "&test name='lcf', history='thesis_lcf' /"])
       lines(2) = '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=-280, h2=100, n=5.8, q=91000 /'
       call read_config(write_text('negative.nml', lines), cfg, uerr)
-      call expect(error, uerr, 'negative.nml: &constants: constant H1 must be > 0, got -280')
+      call check_message(error, uerr, 'negative.nml: &constants: constant H1 must be > 0, got -280')
    end subroutine test_constant
 
    subroutine test_file_time(error)
@@ -132,7 +121,7 @@ contains
       path = write_text('unwritable.nml', deck_lines([character(len=80) :: &
          "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002 /"]))
       call simulate_command(path, '/proc/usharp-cannot-write-here', written, uerr)
-      call expect(error, uerr, '/proc/usharp-cannot-write-here: output folder cannot be created or written')
+      call check_message(error, uerr, '/proc/usharp-cannot-write-here: output folder cannot be created or written')
       if (allocated(error)) return
       call check(error, uerr%stat, stat_io, 'output error category')
    end subroutine test_unwritable

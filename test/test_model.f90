@@ -3,6 +3,7 @@ module test_model
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
+   use test_util, only: check_message
    use usharp_miller, only: miller_model, theta_miller, model_setup, uniaxial_rates, &
                             gas_constant, set_constant, constant_index
    implicit none
@@ -150,38 +151,29 @@ contains
       m = miller_model()
       call set_constant(m%c, constant_index('H1'), -3.0_dp)
       call model_setup(m, uerr)
-      call expect(uerr, 'constant H1 must be > 0')
+      call check_message(error, uerr, 'constant H1 must be > 0')
       if (allocated(error)) return
       m = miller_model()
       call set_constant(m%c, constant_index('n'), huge(1.0_dp)*0.0_dp + ieee_nan())
       call model_setup(m, uerr)
-      call expect(uerr, 'constant n is not finite')
+      call check_message(error, uerr, 'constant n is not finite')
       if (allocated(error)) return
       m = miller_model()
       m%temperature = 1800.0_dp
       call model_setup(m, uerr)
-      call expect(uerr, 'at or above Tm')
+      call check_message(error, uerr, 'at or above Tm')
       if (allocated(error)) return
       m = miller_model()
       m%youngs = 0.0_dp
       call model_setup(m, uerr)
-      call expect(uerr, "Young's modulus E must be > 0")
+      call check_message(error, uerr, "Young's modulus E must be > 0")
       if (allocated(error)) return
       ! H1 so large that YS - 0.002*H1 < 0: D0 cannot be computed
       m = miller_model()
       m%c%h1 = 1.0e4_dp
       call model_setup(m, uerr)
-      call expect(uerr, 'initial drag stress D0')
+      call check_message(error, uerr, 'initial drag stress D0')
    contains
-      subroutine expect(e, text)
-         type(uerror), allocatable, intent(in) :: e
-         character(len=*), intent(in) :: text
-         if (.not. allocated(e)) then
-            call test_failed(error, 'no error for: '//text)
-         else if (index(e%message, text) == 0) then
-            call test_failed(error, "message '"//e%message//"' lacks '"//text//"'")
-         end if
-      end subroutine expect
       real(dp) function ieee_nan()
          use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
          ieee_nan = ieee_value(1.0_dp, ieee_quiet_nan)

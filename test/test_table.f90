@@ -4,7 +4,7 @@ module test_table
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_table, only: read_columns, merge_repeated_times
-   use test_util, only: write_text
+   use test_util, only: write_text, check_message
    implicit none
    private
    public :: collect_table
@@ -89,34 +89,25 @@ contains
       character(len=:), allocatable :: path
       path = write_text('missingcol.csv', [character(len=40) :: 'time,stress', '0,1', '1,2', '2,3'])
       call read_columns(path, [character(len=8) :: 'time', 'strain'], v, uerr)
-      call expect(uerr, "no column 'strain' (columns: time, stress)")
+      call check_message(error, uerr, "no column 'strain' (columns: time, stress)")
       if (allocated(error)) return
       path = write_text('garbled.csv', [character(len=40) :: 'time,stress', '0,1', '1,abc', '2,3'])
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
-      call expect(uerr, "garbled.csv:3:2: 'abc' in column stress is not a number")
+      call check_message(error, uerr, "garbled.csv:3:2: 'abc' in column stress is not a number")
       if (allocated(error)) return
       path = write_text('nan.csv', [character(len=40) :: 'time,stress', '0,1', '1,NaN', '2,3'])
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
-      call expect(uerr, 'nan.csv:3:2: NaN in column stress is not finite')
+      call check_message(error, uerr, 'nan.csv:3:2: NaN in column stress is not finite')
       if (allocated(error)) return
       path = write_text('short.csv', [character(len=40) :: 'time,stress', '0,1', '1,2'])
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
-      call expect(uerr, 'needs at least 3 data rows, found 2')
+      call check_message(error, uerr, 'needs at least 3 data rows, found 2')
       if (allocated(error)) return
       path = write_text('back.csv', [character(len=40) :: 'time,stress', '0,1', '2,2', '1,3', '3,3'])
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
       call merge_repeated_times(v, path, nm, uerr)
-      call expect(uerr, 'time is not increasing at data row 3')
+      call check_message(error, uerr, 'time is not increasing at data row 3')
    contains
-      subroutine expect(e, text)
-         type(uerror), allocatable, intent(in) :: e
-         character(len=*), intent(in) :: text
-         if (.not. allocated(e)) then
-            call test_failed(error, 'no error for: '//text)
-         else if (index(e%message, text) == 0) then
-            call test_failed(error, "message '"//e%message//"' lacks '"//text//"'")
-         end if
-      end subroutine expect
    end subroutine test_bad
 
    subroutine test_merge(error)

@@ -1,15 +1,28 @@
 !> Helpers for the tests: scratch files and locating the usharp executable
 module test_util
+   use testdrive, only: error_type, test_failed
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
    implicit none
    private
-   public :: scratch_dir, write_text, usharp_exe, read_text
+   public :: scratch_dir, write_text, usharp_exe, read_text, check_message
 
    !> Scratch folder for test files (inside the build tree, never in the sources)
    character(len=*), parameter :: scratch_dir = 'build/test-scratch'
 
 contains
+
+   !> Fail unless the usharp error e exists and its message contains text
+   subroutine check_message(error, e, text)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable, intent(in) :: e
+      character(len=*), intent(in) :: text
+      if (.not. allocated(e)) then
+         call test_failed(error, 'no error for: '//text)
+      else if (index(e%message, text) == 0) then
+         call test_failed(error, "message '"//e%message//"' lacks '"//text//"'")
+      end if
+   end subroutine check_message
 
    !> Write lines of text to scratch_dir/name and return the path
    function write_text(name, lines) result(path)

@@ -98,26 +98,25 @@ contains
          real(dp), intent(in) :: prevbest
          real(dp), intent(out) :: minf
          real(dp) :: z(size(point)), ftmp
-         integer :: j
+         integer :: j, attempt
+         logical :: improved
          z = point
          minf = prevbest
          do j = 1, size(point)
-            z(j) = point(j) + delta(j)
-            call evaluate(z, ftmp)
-            if (allocated(error)) return
-            if (ftmp < minf) then
-               minf = ftmp
-            else
-               delta(j) = -delta(j)
+            ! Try +delta; if that is no better, flip the step and try again; else restore
+            improved = .false.
+            do attempt = 1, 2
+               if (attempt == 2) delta(j) = -delta(j)
                z(j) = point(j) + delta(j)
                call evaluate(z, ftmp)
                if (allocated(error)) return
                if (ftmp < minf) then
                   minf = ftmp
-               else
-                  z(j) = point(j)
+                  improved = .true.
+                  exit
                end if
-            end if
+            end do
+            if (.not. improved) z(j) = point(j)
          end do
          point = z
       end subroutine best_nearby
