@@ -8,6 +8,7 @@ program tester
    use test_input, only: collect_input
    use test_table, only: collect_table
    use test_fit, only: collect_fit
+   use test_update, only: collect_update
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -21,7 +22,8 @@ program tester
       new_testsuite('driver', collect_driver), &
       new_testsuite('table', collect_table), &
       new_testsuite('input', collect_input), &
-      new_testsuite('fit', collect_fit)]
+      new_testsuite('fit', collect_fit), &
+      new_testsuite('update', collect_update)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

@@ -6,6 +6,7 @@ module usharp_simulate
    use usharp_history, only: output_times
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
+   use usharp_umat_driver, only: simulate_umat
    use usharp_config, only: test_config
    use usharp_rng, only: rng_type
    implicit none
@@ -15,14 +16,18 @@ module usharp_simulate
 
 contains
 
-   !> Simulate a test at its output interval; errors name the test
+   !> Simulate a test at its output interval with the chosen integrator; errors name the test
    subroutine simulate_test(model, solver, test, res, error)
       type(miller_model), intent(in) :: model
       type(solver_options), intent(in) :: solver
       type(test_config), intent(in) :: test
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
-      call simulate_cvode(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+      if (solver%integrator == 'umat') then
+         call simulate_umat(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+      else
+         call simulate_cvode(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+      end if
       if (allocated(error)) call prefix_error(error, "test '"//test%name//"': ")
    end subroutine simulate_test
 

@@ -8,10 +8,13 @@ module usharp_simulation
 
    !> Integrator settings
    type :: solver_options
+      character(len=8) :: integrator = 'cvode'  !< 'cvode' or 'umat' (implicit stress update)
       real(dp) :: rtol = 1.0e-7_dp         !< relative tolerance
       real(dp) :: atol_strain = 1.0e-10_dp !< absolute tolerance on strain; stresses get E times it
       real(dp) :: max_step = 0.0_dp        !< largest step, s (0: no limit)
       integer :: max_steps = 500000        !< most steps between two outputs
+      !> Time increments of the umat path, s, as the original APDL deck: initial, min, max
+      real(dp) :: dt_init = 0.1_dp, dt_min = 1.0e-8_dp, dt_max = 0.15_dp
    end type solver_options
 
    !> Response at the output times

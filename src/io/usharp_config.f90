@@ -58,7 +58,6 @@ module usharp_config
       character(len=:), allocatable :: base_dir  !< its folder, for relative paths
       character(len=:), allocatable :: out_dir
       character(len=:), allocatable :: units     !< model stress unit: ksi or MPa
-      character(len=:), allocatable :: integrator
       type(miller_model) :: model
       type(solver_options) :: solver
       type(fit_config) :: fit

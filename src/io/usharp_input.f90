@@ -225,11 +225,14 @@ contains
       type(run_config), intent(inout) :: cfg
       type(error_type), allocatable, intent(out) :: error
       character(len=32) :: integrator
-      real(dp) :: rtol, atol_strain, max_step
+      real(dp) :: rtol, atol_strain, max_step, dt_init, dt_min, dt_max
       integer :: max_steps, ios
       character(len=512) :: msg
-      namelist /solver/ integrator, rtol, atol_strain, max_step, max_steps
+      namelist /solver/ integrator, rtol, atol_strain, max_step, max_steps, dt_init, dt_min, dt_max
       integrator = 'cvode'
+      dt_init = cfg%solver%dt_init
+      dt_min = cfg%solver%dt_min
+      dt_max = cfg%solver%dt_max
       rtol = cfg%solver%rtol
       atol_strain = cfg%solver%atol_strain
       max_step = cfg%solver%max_step
@@ -240,11 +243,20 @@ contains
          call nml_error(error, cfg%path, 'solver', ios, msg)
          return
       end if
-      if (lower(trim(integrator)) /= 'cvode') then
+      integrator = lower(integrator)
+      if (integrator /= 'cvode' .and. integrator /= 'umat') then
          call fatal_error(error, cfg%path//": &solver: integrator = '"//trim(integrator)// &
-            "' is not known (known: cvode)")
+            "' is not known (cvode or umat)")
          return
       end if
+      if (.not. (dt_min > 0.0_dp .and. dt_min <= dt_init .and. dt_init <= dt_max)) then
+         call fatal_error(error, cfg%path//': &solver: need 0 < dt_min <= dt_init <= dt_max')
+         return
+      end if
+      cfg%solver%integrator = trim(integrator)
+      cfg%solver%dt_init = dt_init
+      cfg%solver%dt_min = dt_min
+      cfg%solver%dt_max = dt_max
       if (.not. (rtol > 0.0_dp .and. rtol < 1.0_dp)) then
          call fatal_error(error, cfg%path//': &solver: rtol must lie in (0, 1)')
          return
@@ -257,7 +269,6 @@ contains
          call fatal_error(error, cfg%path//': &solver: max_step must be >= 0 and max_steps >= 1')
          return
       end if
-      cfg%integrator = lower(trim(integrator))
       cfg%solver%rtol = rtol
       cfg%solver%atol_strain = atol_strain
       cfg%solver%max_step = max_step
