@@ -198,7 +198,7 @@ contains
       real(dp) :: s
       if (z <= 0.0_dp) then
          p = 0.0_dp
-         dp_dz = merge(1.0_dp, 0.0_dp, n == 1.0_dp)
+         dp_dz = merge(1.0_dp, 0.0_dp, abs(n - 1.0_dp) < epsilon(1.0_dp))
       else if (z > zmax) then
          p = ieee_value(1.0_dp, ieee_positive_inf)
          dp_dz = p
