@@ -64,7 +64,8 @@ contains
          new_unittest('umat-matches-cvode-thesis-tests', test_umat_vs_cvode), &
          new_unittest('umat-first-order-convergence', test_order), &
          new_unittest('ansys-and-abaqus-adapters-agree', test_adapters), &
-         new_unittest('drop-in-source-builds-warnings-as-errors', test_dropin_build)]
+         new_unittest('drop-in-source-builds-warnings-as-errors', test_dropin_build), &
+         new_unittest('calculix-c3d8-cube-matches-uniaxial-driver', test_calculix)]
    end subroutine collect_update
 
    !> Largest relative difference between the tangent and central differences of the update
@@ -237,4 +238,31 @@ contains
                                 exitstat=stat)
       call check(error, stat, 0, 'scripts/build-umat.sh (gfortran -Wall -Wextra -Werror)')
    end subroutine test_dropin_build
+   !> The UMAT inside CalculiX (scripts/calculix-check.sh): exit 0 passed, 77 skipped with the
+   !> reason it printed, anything else failed
+   subroutine test_calculix(error)
+      use testdrive, only: skip_test
+      use test_util, only: read_text
+      type(error_type), allocatable, intent(out) :: error
+      integer :: stat
+      character(len=:), allocatable :: log
+      call execute_command_line('bash scripts/calculix-check.sh > build/calculix-check.log 2>&1', &
+                                exitstat=stat)
+      log = read_text('build/calculix-check.log')
+      if (stat == 77) then
+         call skip_test(error, last_line(log))
+      else
+         call check(error, stat, 0, 'scripts/calculix-check.sh: '//last_line(log))
+      end if
+   contains
+      function last_line(text) result(line)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: line
+         integer :: k
+         line = text
+         if (len(line) > 0) line = line(:len(line) - 1)
+         k = index(line, new_line('a'), back=.true.)
+         line = line(k + 1:)
+      end function last_line
+   end subroutine test_calculix
 end module test_update
