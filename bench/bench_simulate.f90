@@ -5,8 +5,7 @@ program bench_simulate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_miller, only: miller_model, model_setup
-   use usharp_history, only: history_type, output_times, thesis_lcf_history, relaxation_history, &
-                             ratchet_history
+   use usharp_history, only: history_type, output_times, thesis_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
    implicit none
@@ -24,11 +23,7 @@ program bench_simulate
    write (output_unit, '(a)') '# test        ms/simulation   steps   rhs-evals   jac-evals  (default rtol, '// &
       'atol; 0.5 s output interval; best of 3 batches of 500)'
    do k = 1, 3
-      select case (k)
-      case (1); call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, h, err)
-      case (2); call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], h, err)
-      case default; call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, h, err)
-      end select
+      call thesis_history(k, h, err)
       tout = output_times(h, 0.5_dp)
       block
          real(dp) :: best, t

@@ -6,8 +6,7 @@ program bench_umat
    use usharp_error, only: error_type
    use usharp_miller, only: miller_model, model_setup
    use usharp_miller_update, only: miller_update, n_state
-   use usharp_history, only: history_type, output_times, thesis_lcf_history, relaxation_history, &
-                             ratchet_history
+   use usharp_history, only: history_type, output_times, thesis_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_umat_driver, only: simulate_umat
    implicit none
@@ -37,11 +36,7 @@ program bench_umat
       ncalls/t, ' (', nsub, ' backward-Euler substeps each)'
    write (output_unit, '(a)') '# test        ms/simulation  increments  update calls'
    do k = 1, 3
-      select case (k)
-      case (1); call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, h, err)
-      case (2); call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], h, err)
-      case default; call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, h, err)
-      end select
+      call thesis_history(k, h, err)
       call system_clock(c0)
       do rep = 1, 3
          call simulate_umat(m, h, output_times(h, 1.0_dp), opts, r, err)

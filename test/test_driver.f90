@@ -30,11 +30,7 @@ contains
       integer, intent(in) :: k
       type(history_type), intent(out) :: h
       type(uerror), allocatable :: uerr
-      select case (k)
-      case (1); call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, h, uerr)
-      case (2); call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], h, uerr)
-      case default; call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, h, uerr)
-      end select
+      call thesis_history(k, h, uerr)
    end subroutine thesis_test
 
    subroutine test_accuracy(error)

@@ -30,6 +30,7 @@ contains
          new_unittest('history-file-empty-or-garbled', test_file_garbled), &
          new_unittest('unwritable-output-folder', test_unwritable), &
          new_unittest('simulate-writes-files', test_simulate_ok), &
+         new_unittest('integrator-chosen-in-namelist', test_integrator_choice), &
          new_unittest('thesis-data-reproducible-bit-for-bit', test_data_reproducible), &
          new_unittest('cli-exit-codes-and-one-line-errors', test_cli)]
    end subroutine collect_input
@@ -145,6 +146,32 @@ contains
       call check(error, index(text, '# time strain stress eps_in back_stress drag_stress') > 0, &
                  'column header present')
    end subroutine test_simulate_ok
+
+   !> &solver integrator = 'umat' runs the single-element driver; an unknown one is an error
+   subroutine test_integrator_choice(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      character(len=256), allocatable :: written(:)
+      character(len=:), allocatable :: text_u, text_c
+      character(len=120), parameter :: pull = &
+         "&test name='pull', history='tensile', strain_rate=1e-4, final_strain=0.003, dt_out=30 /"
+      call simulate_command(write_text('umat.nml', deck_lines([character(len=120) :: &
+         "&solver integrator='umat' /", pull])), scratch_dir//'/umat-out', written, uerr)
+      if (.not. allocated(uerr)) call simulate_command(write_text('cvode.nml', deck_lines( &
+         [character(len=120) :: pull])), scratch_dir//'/cvode-out', written, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      text_u = read_text(scratch_dir//'/umat-out/pull.sim.txt')
+      text_c = read_text(scratch_dir//'/cvode-out/pull.sim.txt')
+      ! Different integrators, so the files differ (but both have the 11 rows of 0..300 s)
+      call check(error, len(text_u) > 0 .and. text_u /= text_c, 'umat output differs from cvode output')
+      if (allocated(error)) return
+      call expect_config_error(error, 'badint.nml', [character(len=80) :: "&solver integrator='rk4' /", &
+         "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002 /"], &
+         "&solver: integrator = 'rk4' is not known (cvode or umat)")
+   end subroutine test_integrator_choice
 
    !> data/thesis and data/thesis-noise1 come back byte for byte from their decks (the
    !> 'regenerate' line differs only by the --out-dir given here)

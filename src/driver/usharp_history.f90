@@ -10,7 +10,7 @@ module usharp_history
 
    public :: history_type, control_strain, control_stress
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
-   public :: cyclic_history, tensile_history, creep_history, output_times
+   public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
 
    !> Control modes
    integer, parameter :: control_strain = 1, control_stress = 2
@@ -270,6 +270,20 @@ contains
       call history_from_points([0.0_dp, ramp_time, duration], [0.0_dp, stress, stress], &
                                control_stress, hist, error)
    end subroutine creep_history
+
+   !> The thesis's three tests with their published parameters (spec Section 2):
+   !> k = 1 ramping-amplitude LCF, 2 two-level relaxation, 3 ratcheting
+   pure subroutine thesis_history(k, hist, error)
+      integer, intent(in) :: k
+      type(history_type), intent(out) :: hist
+      type(error_type), allocatable, intent(out) :: error
+      select case (k)
+      case (1); call thesis_lcf_history(0.0005_dp, 0.005_dp, 12, 10.0_dp, hist, error)
+      case (2); call relaxation_history([0.00075_dp, 0.001_dp], 1.0_dp, [600.0_dp, 600.0_dp], hist, error)
+      case (3); call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, hist, error)
+      case default; call fatal_error(error, 'the thesis has tests 1 to 3 only')
+      end select
+   end subroutine thesis_history
 
    !> Output times: a uniform grid of step dt (s) from the start plus every corner, sorted,
    !> without near-duplicates. dt <= 0 gives the corners only.
