@@ -629,16 +629,31 @@ contains
       end if
    end function dirname
 
-   !> A path relative to base unless absolute or empty
+   !> A path relative to base unless absolute or empty; leading '../' steps are folded into
+   !> base ('decks' + '../data/x' gives 'data/x')
    pure function resolve_path(base, path) result(full)
       character(len=*), intent(in) :: base, path
       character(len=:), allocatable :: full
+      character(len=:), allocatable :: b, p
       if (len(path) == 0) then
          full = ''
-      else if (path(1:1) == '/' .or. base == '.') then
+         return
+      else if (path(1:1) == '/') then
          full = path
+         return
+      end if
+      b = base
+      p = path
+      do while (len(p) > 3 .and. b /= '.' .and. b /= '/')
+         if (p(1:3) /= '../') exit
+         if (b == '..' .or. index(b, '/..', back=.true.) == max(len(b) - 2, 1)) exit
+         b = dirname(b)
+         p = p(4:)
+      end do
+      if (b == '.') then
+         full = p
       else
-         full = base//'/'//path
+         full = b//'/'//p
       end if
    end function resolve_path
 
