@@ -25,12 +25,14 @@ contains
          new_unittest('misspelled-variable', test_misspelled), &
          new_unittest('unknown-group-line-and-column', test_unknown_group), &
          new_unittest('unknown-history', test_unknown_history), &
+         new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
          new_unittest('history-file-time-not-increasing', test_file_time), &
          new_unittest('history-file-empty-or-garbled', test_file_garbled), &
          new_unittest('unwritable-output-folder', test_unwritable), &
          new_unittest('simulate-writes-files', test_simulate_ok), &
          new_unittest('integrator-chosen-in-namelist', test_integrator_choice), &
+         new_unittest('history-from-measured-strain-column', test_data_history), &
          new_unittest('thesis-data-reproducible-bit-for-bit', test_data_reproducible), &
          new_unittest('cli-exit-codes-and-one-line-errors', test_cli)]
    end subroutine collect_input
@@ -73,6 +75,14 @@ contains
       call expect_config_error(error, 'group.nml', [character(len=80) :: &
          '&tset name="lcf" /'], 'group.nml:3:1: unknown namelist group &tset')
    end subroutine test_unknown_group
+
+   subroutine test_unterminated(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'unterminated.nml', [character(len=80) :: &
+         "&test name='a', history='tensile', strain_rate=1e-4, final_strain=0.002 /", &
+         "&test name='b', history='tensile', strain_rate=1e-4, final_strain=0.002"], &
+         "unterminated.nml: &test #2 is not terminated by '/'")
+   end subroutine test_unterminated
 
    subroutine test_unknown_history(error)
       type(error_type), allocatable, intent(out) :: error
@@ -146,6 +156,42 @@ contains
       call check(error, index(text, '# time strain stress eps_in back_stress drag_stress') > 0, &
                  'column header present')
    end subroutine test_simulate_ok
+
+   !> history = 'data': the strain column of a measured Alloy 617 file drives the simulation
+   subroutine test_data_history(error)
+      use testdrive, only: skip_test
+      use usharp_simulation, only: sim_result
+      use usharp_simulate, only: simulate_test
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      type(sim_result) :: res
+      character(len=*), parameter :: file = '../shared/realdata/a617-950C/lcf/HTM_A19_Cycles_435.csv'
+      logical :: exists
+      inquire (file=file, exist=exists)
+      if (.not. exists) then
+         call skip_test(error, 'measured data not found at '//file//' (shared/ not beside the checkout)')
+         return
+      end if
+      ! The deck lives in build/test-scratch, so the file is three folders up
+      call read_config(write_text('datahist.nml', deck_lines([character(len=200) :: &
+         "&test name='a617', history='data', dt_out=0.5, data_file='../../"//file//"', ", &
+         "time_column='Elapsed Time Sec', strain_column='Strain', filter_column='Cycle Label', ", &
+         "filter='Cycle 1' /"])), cfg, uerr)
+      if (.not. allocated(uerr)) call simulate_test(cfg%model, cfg%solver, cfg%tests(1), res, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      ! The history's corners are the file's (time, strain) rows of cycle 1: ends at its last
+      ! row and reaches the largest measured strain of cycle 1 (0.00159; 227 rows, 218 times)
+      call check(error, size(cfg%tests(1)%hist%t), 218, 'one corner per distinct time of cycle 1')
+      if (allocated(error)) return
+      call check(error, maxval(cfg%tests(1)%hist%v), 0.00159_dp, 'largest strain of cycle 1', thr=1e-12_dp)
+      if (allocated(error)) return
+      call check(error, res%strain(size(res%t)), cfg%tests(1)%hist%v(size(cfg%tests(1)%hist%v)), &
+                 'simulated strain follows the measured one to the end', thr=1e-15_dp)
+   end subroutine test_data_history
 
    !> &solver integrator = 'umat' runs the single-element driver; an unknown one is an error
    subroutine test_integrator_choice(error)

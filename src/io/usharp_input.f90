@@ -30,7 +30,7 @@ contains
       character(len=*), intent(in) :: path
       type(run_config), intent(out) :: cfg
       type(error_type), allocatable, intent(out) :: error
-      integer :: unit, ios
+      integer :: unit, ios, ntest_groups
       logical :: exists
       character(len=512) :: msg
 
@@ -46,13 +46,18 @@ contains
       end if
       cfg%path = path
       cfg%base_dir = dirname(path)
-      call check_groups(unit, path, error)
+      call check_groups(unit, path, ntest_groups, error)
       if (.not. allocated(error)) call read_model(unit, cfg, error)
       if (.not. allocated(error)) call read_constants(unit, cfg, error)
       if (.not. allocated(error)) call read_solver(unit, cfg, error)
       if (.not. allocated(error)) call read_output(unit, cfg, error)
       if (.not. allocated(error)) call read_fit(unit, cfg, error)
       if (.not. allocated(error)) call read_tests(unit, cfg, error)
+      ! A group without its closing '/' reads as the end of the file
+      if (.not. allocated(error)) then
+         if (size(cfg%tests) < ntest_groups) call fatal_error(error, path//': &test #'// &
+            str(size(cfg%tests) + 1)//" is not terminated by '/'")
+      end if
       close (unit)
       if (allocated(error)) return
       call model_setup(cfg%model, error)
@@ -83,14 +88,16 @@ contains
    end subroutine override_constants
 
    !> Reject namelist groups that usharp does not know (a misspelt group would be skipped)
-   subroutine check_groups(unit, path, error)
+   subroutine check_groups(unit, path, ntest, error)
       integer, intent(in) :: unit
       character(len=*), intent(in) :: path
+      integer, intent(out) :: ntest  !< number of &test groups
       type(error_type), allocatable, intent(out) :: error
       character(len=1024) :: line
       character(len=64) :: word
       integer :: ios, lineno, col, e
       lineno = 0
+      ntest = 0
       rewind (unit)
       do
          read (unit, '(a)', iostat=ios) line
@@ -103,6 +110,7 @@ contains
          if (e == col) e = len_trim(line) + 1
          word = lower(line(col + 1:e - 1))
          if (len_trim(word) == 0 .or. trim(word) == 'end') cycle
+         if (trim(word) == 'test') ntest = ntest + 1
          if (.not. any(trim(word) == known_groups)) then
             call fatal_error(error, path//':'//str(lineno)//':'//str(col)// &
                ': unknown namelist group &'//trim(word)//' (known: &model, &constants, '// &
