@@ -1,6 +1,9 @@
 !> usharp command line: argument parsing and dispatch only
 program usharp_main
+   use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+   use usharp_kinds, only: dp
+   use usharp_strings, only: str, real_str
    use usharp_error, only: error_type, stat_usage
    use usharp_version, only: usharp_version_string
    use usharp_cmd_simulate, only: simulate_command
@@ -13,6 +16,14 @@ program usharp_main
    type(error_type), allocatable :: error
    logical :: resume, quiet
    integer :: i, nargs
+
+   interface
+      function c_isatty(fd) bind(C, name='isatty') result(r)
+         import :: c_int
+         integer(c_int), value :: fd
+         integer(c_int) :: r
+      end function c_isatty
+   end interface
 
    nargs = command_argument_count()
    if (nargs == 0) call usage_exit(main_usage())
@@ -72,7 +83,13 @@ program usharp_main
          end do
       end if
    case ('run')
-      call run_command(input, out_dir, constants, resume, quiet, summary, error)
+      ! The progress line only on a terminal and without --quiet
+      if (.not. quiet .and. c_isatty(2_c_int) == 1) then
+         call run_command(input, out_dir, constants, resume, summary, error, show_progress)
+         write (error_unit, '(a)') ''
+      else
+         call run_command(input, out_dir, constants, resume, summary, error)
+      end if
       if (allocated(error)) call error_exit(error)
       do i = 1, size(summary)
          write (output_unit, '(a)') trim(summary(i))
@@ -80,6 +97,14 @@ program usharp_main
    end select
 
 contains
+
+   subroutine show_progress(nevals, best, seconds)
+      integer, intent(in) :: nevals
+      real(dp), intent(in) :: best, seconds
+      write (error_unit, '(a)', advance='no') achar(13)//'usharp run: '//str(nevals)// &
+         ' evaluations, best '//real_str(best, 'es11.4')//', '//real_str(seconds, 'f10.1')//' s   '
+      flush (error_unit)
+   end subroutine show_progress
 
    function option_value() result(val)
       character(len=:), allocatable :: val

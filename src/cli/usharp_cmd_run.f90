@@ -8,7 +8,7 @@ module usharp_cmd_run
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
    use usharp_objective, only: fit_problem, setup_problem
-   use usharp_fit, only: run_fit, fit_outcome
+   use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file
    use usharp_filesys, only: make_dir, join_path
@@ -21,12 +21,14 @@ module usharp_cmd_run
 contains
 
    !> Run a fit. out_dir overrides &output out_dir; constants_file, when given, replaces the
-   !> starting constants. summary returns the lines to show the user.
-   subroutine run_command(path, out_dir, constants_file, resume, quiet, summary, error)
+   !> starting constants. summary returns the lines to show the user; progress, when given,
+   !> is called after every evaluation.
+   subroutine run_command(path, out_dir, constants_file, resume, summary, error, progress)
       character(len=*), intent(in) :: path, out_dir, constants_file
-      logical, intent(in) :: resume, quiet
+      logical, intent(in) :: resume
       character(len=160), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
+      procedure(progress_interface), optional :: progress
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(fit_outcome) :: out
@@ -47,7 +49,7 @@ contains
       if (allocated(error)) return
       call make_dir(dir, error)
       if (allocated(error)) return
-      call run_fit(prob, dir, resume, quiet, out, error)
+      call run_fit(prob, dir, resume, out, error, progress)
       if (allocated(error)) return
 
       best = cfg%model

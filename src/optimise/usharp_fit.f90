@@ -1,8 +1,8 @@
 !> A fit: the objective of a fit problem wrapped with the logs, the journal replay for
-!> --resume, the failure count, and the progress display
+!> --resume, the failure count, and a progress report to a caller-supplied procedure
+!> (the library itself never prints)
 module usharp_fit
-   use, intrinsic :: iso_c_binding, only: c_int
-   use, intrinsic :: iso_fortran_env, only: error_unit, int64
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure, stat_input
    use usharp_strings, only: str, real_str
@@ -15,7 +15,16 @@ module usharp_fit
    implicit none
    private
 
-   public :: fit_objective, run_fit, fit_outcome
+   public :: fit_objective, run_fit, fit_outcome, progress_interface
+
+   abstract interface
+      !> Called after every evaluation: evaluations so far, best objective, elapsed s
+      subroutine progress_interface(nevals, best, seconds)
+         import :: dp
+         integer, intent(in) :: nevals
+         real(dp), intent(in) :: best, seconds
+      end subroutine progress_interface
+   end interface
 
    !> The objective an optimiser sees during a fit
    type, extends(objective_type) :: fit_objective
@@ -29,7 +38,7 @@ module usharp_fit
       real(dp) :: best = huge(1.0_dp)
       real(dp) :: first = huge(1.0_dp)
       real(dp), allocatable :: best_per_test(:)
-      logical :: show_progress = .false.
+      procedure(progress_interface), pointer, nopass :: progress => null()
       integer(int64) :: clock0 = 0
    contains
       procedure :: eval => fit_eval
@@ -45,14 +54,6 @@ module usharp_fit
       integer :: nfail = 0, ninvalid = 0, nreplayed = 0
       real(dp) :: seconds = 0.0_dp
    end type fit_outcome
-
-   interface
-      function c_isatty(fd) bind(C, name='isatty') result(r)
-         import :: c_int
-         integer(c_int), value :: fd
-         integer(c_int) :: r
-      end function c_isatty
-   end interface
 
 contains
 
@@ -110,27 +111,25 @@ contains
          self%best = f
          self%best_per_test = per_test
       end if
-      if (self%show_progress) call progress(self)
+      if (associated(self%progress)) call report(self)
    end subroutine fit_eval
 
-   subroutine progress(self)
+   subroutine report(self)
       class(fit_objective), intent(in) :: self
       integer(int64) :: now, rate
       call system_clock(now, rate)
-      write (error_unit, '(a)', advance='no') achar(13)//'usharp run: '//str(self%nevals)// &
-         ' evaluations, best '//real_str(self%best, 'es11.4')//', '// &
-         real_str(real(now - self%clock0, dp)/real(rate, dp), 'f10.1')//' s   '
-      flush (error_unit)
-   end subroutine progress
+      call self%progress(self%nevals, self%best, real(now - self%clock0, dp)/real(rate, dp))
+   end subroutine report
 
    !> Run the fit of a problem with its &fit settings, logging into dir. With resume, the
-   !> journal in dir is replayed first. quiet suppresses the progress line.
-   subroutine run_fit(prob, dir, resume, quiet, outcome, error)
+   !> journal in dir is replayed first. progress, when given, hears of every evaluation.
+   subroutine run_fit(prob, dir, resume, outcome, error, progress)
       type(fit_problem), intent(in) :: prob
       character(len=*), intent(in) :: dir
-      logical, intent(in) :: resume, quiet
+      logical, intent(in) :: resume
       type(fit_outcome), intent(out) :: outcome
       type(error_type), allocatable, intent(out) :: error
+      procedure(progress_interface), optional :: progress
       type(fit_objective) :: obj
       integer(int64) :: now, rate
       obj%prob = prob
@@ -144,13 +143,12 @@ contains
       if (allocated(error)) return
       if (size(obj%replay) > 0) call obj%log%event('resumed: replaying '// &
          str(size(obj%replay))//' evaluations from '//journal_name)
-      obj%show_progress = .not. quiet .and. c_isatty(2_c_int) == 1
+      if (present(progress)) obj%progress => progress
       call system_clock(obj%clock0, rate)
       associate (fc => prob%cfg%fit)
          call hooke_jeeves(obj, prob%start_point(), fc%rho, fc%eps, fc%itermax, fc%max_evals, &
                            outcome%opt, error)
       end associate
-      if (obj%show_progress) write (error_unit, '(a)') ''
       call system_clock(now)
       outcome%seconds = real(now - obj%clock0, dp)/real(rate, dp)
       outcome%f_start = obj%first
