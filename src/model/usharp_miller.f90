@@ -15,7 +15,7 @@ module usharp_miller
    public :: miller_constants, miller_model, n_constants, constant_names
    public :: theta_miller, model_setup, check_constants, initial_drag
    public :: get_constant, set_constant, constant_index
-   public :: flow_rate, back_recovery, drag_recovery, uniaxial_rates
+   public :: flow_rate, back_recovery, drag_recovery, uniaxial_rates, rate_terms, rate_terms_at
 
    !> Universal gas constant in cal/(mol K), as the thesis uses it
    real(dp), parameter, public :: gas_constant = 1.9859_dp
@@ -53,6 +53,16 @@ module usharp_miller
       real(dp) :: btheta = 0.0_dp          !< B*theta(T), 1/s
       real(dp) :: d0 = 0.0_dp              !< initial drag stress in use
    end type miller_model
+
+   !> The scalar parts of the rates at equivalent overstress x, back stress r and drag stress D,
+   !> with their derivatives: what the uniaxial and the multiaxial forms share
+   type :: rate_terms
+      real(dp) :: f = 0.0_dp, f_x = 0.0_dp, f_d = 0.0_dp  !< flow rate f(x, D), 1/s
+      real(dp) :: g = 0.0_dp, g_r = 0.0_dp  !< back-stress recovery g(r)
+      real(dp) :: h = 0.0_dp, h_d = 0.0_dp  !< drag recovery h(D)
+      real(dp) :: w = 0.0_dp  !< C2 + r - (A2/A1) D**3
+      real(dp) :: a = 0.0_dp  !< A2/A1
+   end type rate_terms
 
 contains
 
@@ -249,6 +259,18 @@ contains
       h_d = model%c%h2*model%c%c2*model%btheta*pz*3.0_dp*model%c%a2*d**2
    end subroutine drag_recovery
 
+   !> Evaluate the shared scalar terms
+   elemental function rate_terms_at(model, x, r, d) result(t)
+      type(miller_model), intent(in) :: model
+      real(dp), intent(in) :: x, r, d
+      type(rate_terms) :: t
+      t%a = model%c%a2/model%c%a1
+      call flow_rate(model, x, d, t%f, t%f_x, t%f_d)
+      call back_recovery(model, r, t%g, t%g_r)
+      call drag_recovery(model, d, t%h, t%h_d)
+      t%w = model%c%c2 + r - t%a*d**3
+   end function rate_terms_at
+
    !> Uniaxial Miller rates (Eqs. 2-4) of the state y = (eps_in, R, D) at stress sigma,
    !> and their Jacobian jac(i,j) = d ydot_i / d y_j, where sigma depends on eps_in through
    !> dsig_depsin (-E under strain control, 0 under stress control).
@@ -259,30 +281,25 @@ contains
       real(dp), intent(in) :: y(3)         !< eps_in (-), R, D (model unit)
       real(dp), intent(out) :: ydot(3)     !< rates, 1/s and unit/s
       real(dp), intent(out), optional :: jac(3, 3)
-      real(dp) :: s, sg, sgr, x, r, d, f, f_x, f_d, g, g_r, h, h_d, w, a
+      real(dp) :: s, sg, sgr, d
+      type(rate_terms) :: t
       s = sigma - y(2)
       sg = sign(1.0_dp, s)
-      x = abs(s)
-      r = abs(y(2))
       sgr = sign(1.0_dp, y(2))
       d = y(3)
-      a = model%c%a2/model%c%a1
-      call flow_rate(model, x, d, f, f_x, f_d)
-      call back_recovery(model, r, g, g_r)
-      call drag_recovery(model, d, h, h_d)
-      w = model%c%c2 + r - a*d**3
-      ydot(1) = f*sg
-      ydot(2) = model%c%h1*ydot(1) - g*sgr
-      ydot(3) = model%c%h2*f*w - h
+      t = rate_terms_at(model, abs(s), abs(y(2)), d)
+      ydot(1) = t%f*sg
+      ydot(2) = model%c%h1*ydot(1) - t%g*sgr
+      ydot(3) = model%c%h2*t%f*t%w - t%h
       if (.not. present(jac)) return
       ! d(eps_in_dot)/dy: x = |sigma - R|, dx/deps_in = sg*dsig_depsin, dx/dR = -sg
-      jac(1, 1) = f_x*dsig_depsin
-      jac(1, 2) = -f_x
-      jac(1, 3) = f_d*sg
+      jac(1, 1) = t%f_x*dsig_depsin
+      jac(1, 2) = -t%f_x
+      jac(1, 3) = t%f_d*sg
       jac(2, :) = model%c%h1*jac(1, :)
-      jac(2, 2) = jac(2, 2) - g_r
-      jac(3, 1) = model%c%h2*f_x*sg*dsig_depsin*w
-      jac(3, 2) = -model%c%h2*f_x*sg*w + model%c%h2*f*sgr
-      jac(3, 3) = model%c%h2*(f_d*w - 3.0_dp*a*f*d**2) - h_d
+      jac(2, 2) = jac(2, 2) - t%g_r
+      jac(3, 1) = model%c%h2*t%f_x*sg*dsig_depsin*t%w
+      jac(3, 2) = -model%c%h2*t%f_x*sg*t%w + model%c%h2*t%f*sgr
+      jac(3, 3) = model%c%h2*(t%f_d*t%w - 3.0_dp*t%a*t%f*d**2) - t%h_d
    end subroutine uniaxial_rates
 end module usharp_miller

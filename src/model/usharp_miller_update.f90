@@ -12,7 +12,7 @@
 module usharp_miller_update
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
-   use usharp_miller, only: miller_model, flow_rate, back_recovery, drag_recovery
+   use usharp_miller, only: miller_model, rate_terms, rate_terms_at
    use usharp_lapack, only: solve_dense
    implicit none
    private
@@ -156,6 +156,7 @@ contains
       real(dp), intent(in) :: g, p(6, 6), eps(6), yprev(n_state), dt, y(n_state)
       real(dp), intent(out) :: r(n_state), jac(n_state, n_state), drde(n_state, 6)
       real(dp) :: s(6), nh(6), mh(6), x, rb, d, f, f_x, f_d, gr, gr_r, h, h_d, w, a
+      type(rate_terms) :: t
       real(dp) :: phi(6), psi(6), dphi(6, 6), dpsi(6, 6), fx_over, g_over, eye(6, 6)
       integer :: i
       eye = 0.0_dp
@@ -166,11 +167,11 @@ contains
       x = sqrt(1.5_dp*dot_product(s, s))
       rb = sqrt(1.5_dp*dot_product(y(7:12), y(7:12)))
       d = y(13)
-      a = model%c%a2/model%c%a1
-      call flow_rate(model, x, d, f, f_x, f_d)
-      call back_recovery(model, rb, gr, gr_r)
-      call drag_recovery(model, d, h, h_d)
-      w = model%c%c2 + rb - a*d**3
+      t = rate_terms_at(model, x, rb, d)
+      f = t%f; f_x = t%f_x; f_d = t%f_d
+      gr = t%g; gr_r = t%g_r
+      h = t%h; h_d = t%h_d
+      w = t%w; a = t%a
       ! Unit directions and their derivatives; at x = 0 (or r = 0) the limits are used
       if (x > 0.0_dp) then
          nh = s/x
