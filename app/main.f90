@@ -8,9 +8,10 @@ program usharp_main
    use usharp_version, only: usharp_version_string
    use usharp_cmd_simulate, only: simulate_command
    use usharp_cmd_run, only: run_command
+   use usharp_cmd_deck, only: deck_command
    implicit none
 
-   character(len=:), allocatable :: command, input, out_dir, constants, arg
+   character(len=:), allocatable :: command, input, out_dir, constants, arg, first, only_test
    character(len=256), allocatable :: written(:)
    character(len=160), allocatable :: summary(:)
    type(error_type), allocatable :: error
@@ -35,12 +36,14 @@ program usharp_main
    case ('-V', '--version')
       call print_version()
       stop
-   case ('simulate', 'run')
+   case ('simulate', 'run', 'deck')
    case default
       call usage_exit(main_usage(), "unknown command '"//command//"'")
    end select
 
    input = ''
+   first = ''
+   only_test = ''
    out_dir = ''
    constants = ''
    resume = .false.
@@ -59,6 +62,9 @@ program usharp_main
          out_dir = option_value()
       case ('-c', '--constants')
          constants = option_value()
+      case ('-t', '--test')
+         if (command /= 'simulate') call usage_exit(command_usage(command), 'unknown option '//arg)
+         only_test = option_value()
       case ('--resume')
          if (command /= 'run') call usage_exit(command_usage(command), 'unknown option '//arg)
          resume = .true.
@@ -66,7 +72,10 @@ program usharp_main
          quiet = .true.
       case default
          if (arg(1:1) == '-') call usage_exit(command_usage(command), 'unknown option '//arg)
-         if (len(input) > 0) call usage_exit(command_usage(command), 'more than one input file')
+         if (len(input) > 0 .and. (command /= 'deck' .or. len(first) > 0)) &
+            call usage_exit(command_usage(command), 'more than one input file')
+         ! deck takes an optional test name before the input file
+         first = input
          input = arg
       end select
       i = i + 1
@@ -74,8 +83,12 @@ program usharp_main
    if (len(input) == 0) call usage_exit(command_usage(command), 'no input file given')
 
    select case (command)
-   case ('simulate')
-      call simulate_command(input, out_dir, written, error, constants)
+   case ('simulate', 'deck')
+      if (command == 'simulate') then
+         call simulate_command(input, out_dir, written, error, constants, only_test)
+      else
+         call deck_command(input, first, out_dir, constants, written, error)
+      end if
       if (allocated(error)) call error_exit(error)
       if (.not. quiet) then
          do i = 1, size(written)
@@ -145,7 +158,8 @@ contains
       character(len=*), parameter :: nl = new_line('a')
       text = 'usage: usharp <command> [options] <input.nml>'//nl//nl//'commands:'//nl// &
          '  run        fit the constants of &fit to the data of every &test (Hooke-Jeeves)'//nl// &
-         '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl//nl// &
+         '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl// &
+         '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl//nl// &
          'options:'//nl// &
          '  -h, --help     show this help (after a command: the command''s help)'//nl// &
          '  -V, --version  show the version'//nl//nl// &
@@ -169,6 +183,18 @@ contains
             '  -q, --quiet           no progress line on stderr'//nl// &
             '  -h, --help            show this help'//nl// &
             '  -V, --version         show the version'
+      case ('deck')
+         text = 'usage: usharp deck [options] [<test>] <input.nml>'//nl//nl// &
+            'Writes the ANSYS APDL input deck of the &test named <test> (of every test when'//nl// &
+            'none is named) as <out_dir>/<test>.inp, and the constants file it reads (the'//nl// &
+            'constants_file of the test, Constants.txt by default) with the input''s constants.'//nl// &
+            'The deck needs an ANSYS linked with the usharp USERMAT (see the README).'//nl//nl// &
+            'options:'//nl// &
+            '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
+            '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
+            '  -q, --quiet           do not list the files written'//nl// &
+            '  -h, --help            show this help'//nl// &
+            '  -V, --version         show the version'
       case default
          text = 'usage: usharp simulate [options] <input.nml>'//nl//nl// &
             'Simulates every &test group of the input file with the &model and &constants'//nl// &
@@ -176,6 +202,7 @@ contains
             'options:'//nl// &
             '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
+            '  -t, --test NAME       simulate only the &test named NAME'//nl// &
             '  -q, --quiet           do not list the files written'//nl// &
             '  -h, --help            show this help'//nl// &
             '  -V, --version         show the version'

@@ -9,6 +9,7 @@ program tester
    use test_table, only: collect_table
    use test_fit, only: collect_fit
    use test_update, only: collect_update
+   use test_external, only: collect_external
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -23,7 +24,8 @@ program tester
       new_testsuite('table', collect_table), &
       new_testsuite('input', collect_input), &
       new_testsuite('fit', collect_fit), &
-      new_testsuite('update', collect_update)]
+      new_testsuite('update', collect_update), &
+      new_testsuite('external', collect_external)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

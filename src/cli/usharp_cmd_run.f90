@@ -45,6 +45,7 @@ contains
       end if
       dir = cfg%out_dir
       if (len_trim(out_dir) > 0) dir = trim(out_dir)
+      cfg%out_dir = dir
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return
       call make_dir(dir, error)

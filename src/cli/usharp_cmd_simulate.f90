@@ -1,7 +1,7 @@
 !> `usharp simulate`: simulate every test of an input file and write <out_dir>/<test>.sim.txt
 module usharp_cmd_simulate
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type
+   use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
    use usharp_miller, only: n_constants, constant_names, get_constant
    use usharp_config, only: run_config
@@ -21,10 +21,11 @@ contains
 
    !> Run the simulate command. out_dir overrides the input file's &output out_dir when not
    !> empty. Each written file is reported through the written list.
-   subroutine simulate_command(path, out_dir, written, error, constants_file)
+   subroutine simulate_command(path, out_dir, written, error, constants_file, only_test)
       character(len=*), intent(in) :: path
       character(len=*), intent(in) :: out_dir
       character(len=*), intent(in), optional :: constants_file  !< a best.nml to use
+      character(len=*), intent(in), optional :: only_test       !< simulate only this test
       character(len=256), allocatable, intent(out) :: written(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
@@ -48,9 +49,21 @@ contains
          dir = trim(out_dir)
          command = command//' --out-dir '//trim(out_dir)
       end if
+      if (present(only_test)) then
+         if (len(only_test) > 0) then
+            if (.not. any([(cfg%tests(i)%name == only_test, i=1, size(cfg%tests))])) then
+               call fatal_error(error, path//": no &test named '"//only_test//"'", stat_input)
+               return
+            end if
+            command = command//' --test '//only_test
+         end if
+      end if
       call make_dir(dir, error)
       if (allocated(error)) return
       do i = 1, size(cfg%tests)
+         if (present(only_test)) then
+            if (len(only_test) > 0 .and. cfg%tests(i)%name /= only_test) cycle
+         end if
          call simulate_test(cfg%model, cfg%solver, cfg%tests(i), res, error)
          if (allocated(error)) return
          call add_stress_noise(res, cfg%tests(i)%noise, cfg%tests(i)%seed)

@@ -7,7 +7,7 @@ module usharp_config
    implicit none
    private
 
-   public :: run_config, test_config, data_spec, fit_config, max_list
+   public :: run_config, test_config, data_spec, fit_config, external_spec, max_list
 
    !> Longest list in a namelist array variable (levels, holds, fit, filter values)
    integer, parameter :: max_list = 64
@@ -25,6 +25,21 @@ module usharp_config
       character(len=:), allocatable :: format       !< optional Fortran format for fixed files
    end type data_spec
 
+   !> How a test is simulated by an external program (an FE code in batch mode) instead of
+   !> the internal integrator: the command, what it writes, and the constants file it reads
+   type :: external_spec
+      logical :: enabled = .false.                     !< backend = 'external'
+      character(len=:), allocatable :: command         !< shell command, placeholders {work} ...
+      character(len=:), allocatable :: output_file     !< written by the command in its work folder
+      character(len=:), allocatable :: output_format   !< prvar or columns
+      character(len=:), allocatable :: time_title      !< column title (or position) of time, s
+      character(len=:), allocatable :: stress_title    !< column title (or position) of stress
+      character(len=:), allocatable :: unit            !< stress unit of the output: ksi or MPa
+      character(len=:), allocatable :: constants_file  !< name of the constants file in the work folder
+      character(len=:), allocatable :: constants_format !< Fortran format of one constant, (E12.5)
+      real(dp) :: time_limit = 3600.0_dp               !< s, then the command is killed
+   end type external_spec
+
    !> One test: its load history, output interval and (for fits) its data and weighting
    type :: test_config
       character(len=:), allocatable :: name
@@ -37,6 +52,7 @@ module usharp_config
       type(data_spec) :: data
       character(len=:), allocatable :: weighting  !< threshold, relaxation, none, column
       real(dp) :: sig = 0.0_dp              !< threshold stress for 'threshold' weighting
+      type(external_spec) :: ext            !< external backend (when ext%enabled)
    end type test_config
 
    !> Fit settings (&fit group)

@@ -12,7 +12,7 @@ module usharp_input
                              cyclic_history, tensile_history, creep_history
    use usharp_table, only: read_columns, merge_repeated_times
    use usharp_units, only: ksi_to_mpa
-   use usharp_config, only: run_config, test_config, data_spec, fit_config, max_list
+   use usharp_config, only: run_config, test_config, data_spec, fit_config, external_spec, max_list
    implicit none
    private
 
@@ -379,11 +379,15 @@ contains
       ! Variables of the &test group (see the README's namelist reference)
       character(len=name_len) :: name, history, file, control, data_file, time_column, &
                                  stress_column, strain_column, weight_column, data_unit, &
-                                 filter_column, data_format, weighting
+                                 filter_column, data_format, weighting, backend, output_file, &
+                                 output_format, output_time, output_stress, output_unit, &
+                                 constants_file, constants_format
+      character(len=2048) :: command
       character(len=128) :: filter(max_list)
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
-                  period, hold_max, hold_min, final_strain, stress, duration, noise, sig
+                  period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
+                  time_limit
       integer :: npeaks, repeats, cycles, seed, ios, ntest
       character(len=512) :: msg
       type(test_config), allocatable :: tests(:)
@@ -393,7 +397,9 @@ contains
          ramp_time, holds, up, down, repeats, seg_time, strain_range, mean_strain, strain_rate, &
          period, cycles, hold_max, hold_min, final_strain, stress, duration, file, control, &
          data_file, time_column, stress_column, strain_column, weight_column, data_unit, &
-         filter_column, filter, data_format, weighting, sig, noise, seed
+         filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
+         output_file, output_format, output_time, output_stress, output_unit, constants_file, &
+         constants_format, time_limit
 
       allocate (tests(0))
       rewind (unit)
@@ -448,6 +454,9 @@ contains
          cycles = 1; hold_max = 0.0_dp; hold_min = 0.0_dp
          final_strain = unset; stress = unset; duration = unset
          noise = 0.0_dp; seed = 1; sig = 0.0_dp
+         backend = 'internal'; command = ''; output_file = ''; output_format = 'prvar'
+         output_time = 'TIME'; output_stress = 'STRESS'; output_unit = ''
+         constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = 3600.0_dp
       end subroutine set_defaults
 
       subroutine build_test(t, error)
@@ -504,6 +513,8 @@ contains
          t%data%filter_col = trim(filter_column)
          t%data%filter_values = pack(filter, len_trim(filter) > 0)
          t%data%format = trim(data_format)
+         call build_external(t%name, t%ext, error)
+         if (allocated(error)) return
          nlev = count(levels /= unset)
          nhold = count(holds /= unset)
          select case (t%history_kind)
@@ -557,6 +568,61 @@ contains
                'relaxation, ratchet, cyclic, tensile, creep, file, data)')
          end select
       end subroutine build_test
+
+      !> The external backend's settings, checked
+      subroutine build_external(test_name, ext, error)
+         character(len=*), intent(in) :: test_name
+         type(external_spec), intent(out) :: ext
+         type(error_type), allocatable, intent(out) :: error
+         character(len=64) :: probe
+         integer :: ios
+         select case (lower(trim(backend)))
+         case ('internal')
+            ext%enabled = .false.
+         case ('external')
+            ext%enabled = .true.
+         case default
+            call fatal_error(error, "backend = '"//trim(backend)//"' is not known (internal or external)")
+            return
+         end select
+         ext%command = trim(command)
+         ext%output_file = trim(output_file)
+         if (len_trim(output_file) == 0) ext%output_file = test_name//'_prvar.txt'
+         ext%output_format = lower(trim(output_format))
+         ext%time_title = trim(output_time)
+         ext%stress_title = trim(output_stress)
+         ext%unit = trim(output_unit)
+         if (len_trim(output_unit) == 0) ext%unit = cfg%units
+         if (lower(ext%unit) == 'mpa') ext%unit = 'MPa'
+         ext%constants_file = trim(constants_file)
+         ext%constants_format = trim(constants_format)
+         ext%time_limit = time_limit
+         if (.not. ext%enabled) return
+         if (len_trim(command) == 0) then
+            call fatal_error(error, "backend = 'external' needs command")
+         else if (len_trim(command) == len(command)) then
+            call fatal_error(error, 'command is longer than '//str(len(command) - 1)//' characters')
+         else if (ext%output_format /= 'prvar' .and. ext%output_format /= 'columns') then
+            call fatal_error(error, "output_format = '"//trim(output_format)// &
+               "' is not known (prvar or columns)")
+         else if (ext%unit /= 'ksi' .and. ext%unit /= 'MPa') then
+            call fatal_error(error, "output_unit = '"//trim(output_unit)//"' is not known (ksi or MPa)")
+         else if (.not. (time_limit > 0.0_dp)) then
+            call fatal_error(error, 'time_limit must be > 0 s')
+         else if (len_trim(constants_file) == 0 .or. index(constants_file, '/') > 0) then
+            call fatal_error(error, "constants_file = '"//trim(constants_file)// &
+               "' must be a plain file name (it is written into the work folder)")
+         else if (index(ext%output_file, '/') > 0 .or. index(ext%output_file, '..') > 0) then
+            call fatal_error(error, "output_file = '"//ext%output_file// &
+               "' must be a plain file name inside the work folder")
+         end if
+         if (allocated(error)) return
+         write (probe, ext%constants_format, iostat=ios) 1.0_dp
+         if (ios /= 0 .or. verify(ext%constants_format, '()0123456789.EeSsDdGg') /= 0) then
+            call fatal_error(error, "constants_format = '"//ext%constants_format// &
+               "' is not a Fortran format for one real such as (E12.5)")
+         end if
+      end subroutine build_external
    end subroutine read_tests
 
    !> Append by element-wise copies (array constructors of types with allocatable

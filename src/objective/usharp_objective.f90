@@ -11,6 +11,8 @@ module usharp_objective
    use usharp_config, only: run_config
    use usharp_experiment, only: experiment_type, load_experiment, interpolate
    use usharp_weighting, only: threshold_weights, relaxation_weights
+   use usharp_external, only: run_external
+   use usharp_filesys, only: join_path
    implicit none
    private
 
@@ -41,6 +43,7 @@ module usharp_objective
       procedure :: start_point => problem_start_point
       procedure :: evaluate => problem_evaluate
       procedure :: simulate_all => problem_simulate_all
+      procedure :: response => problem_response
    end type fit_problem
 
 contains
@@ -142,28 +145,70 @@ contains
       call model_setup(model, error)
    end subroutine problem_model_of
 
-   !> Simulate every test with the model of x; error on the first failure
-   subroutine problem_simulate_all(self, model, res, error)
+   !> Simulate every test with the model of x; error on the first failure. tag names the
+   !> work folders of external tests ('best' when absent).
+   subroutine problem_simulate_all(self, model, res, error, tag)
       class(fit_problem), intent(in) :: self
       type(miller_model), intent(in) :: model
       type(sim_result), intent(out) :: res(:)
       type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in), optional :: tag
       integer :: i
       do i = 1, size(self%cfg%tests)
-         call simulate_test(model, self%cfg%solver, self%cfg%tests(i), res(i), error)
+         if (present(tag)) then
+            call self%response(i, model, tag, res(i), error)
+         else
+            call self%response(i, model, 'best', res(i), error)
+         end if
          if (allocated(error)) return
       end do
    end subroutine problem_simulate_all
 
+   !> Response of test i at its output times: the internal integrator, or the external
+   !> command (its stress; strain from the history; inelastic strain as strain - stress/E;
+   !> back and drag stress are not known there and set to 0). tag names the work folder.
+   subroutine problem_response(self, i, model, tag, res, error)
+      class(fit_problem), intent(in) :: self
+      integer, intent(in) :: i
+      type(miller_model), intent(in) :: model
+      character(len=*), intent(in) :: tag
+      type(sim_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k
+      associate (test => self%cfg%tests(i))
+         if (.not. test%ext%enabled) then
+            call simulate_test(model, self%cfg%solver, test, res, error)
+            return
+         end if
+         call res%allocate(size(self%targets(i)%t))
+         res%t = self%targets(i)%t
+         call run_external(test%ext, model, self%cfg%units, test%hist, test%name, &
+                           self%cfg%base_dir, join_path(self%cfg%out_dir, 'work'), tag, res%t, &
+                           res%stress, error)
+         if (allocated(error)) then
+            call prefix_error(error, "test '"//test%name//"': ")
+            return
+         end if
+         do k = 1, size(res%t)
+            res%strain(k) = test%hist%value_at(res%t(k))
+         end do
+         res%eps_in = res%strain - res%stress/model%youngs
+         res%back = 0.0_dp
+         res%drag = 0.0_dp
+      end associate
+   end subroutine problem_response
+
    !> Objective at x: per-test values and their sum (Eq. 8). Invalid constants give the
    !> original's 1e10 per test, a failed simulation 2e10 per test; status and message say why.
-   subroutine problem_evaluate(self, x, total, per_test, status, message)
+   !> tag (the evaluation's number) names the work folders of external tests.
+   subroutine problem_evaluate(self, x, total, per_test, status, message, tag)
       class(fit_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: total
       real(dp), intent(out) :: per_test(:)
       integer, intent(out) :: status
       character(len=:), allocatable, intent(out) :: message
+      character(len=*), intent(in), optional :: tag
       type(miller_model) :: model
       type(sim_result) :: res
       type(error_type), allocatable :: error
@@ -179,7 +224,11 @@ contains
          return
       end if
       do i = 1, size(self%targets)
-         call simulate_test(model, self%cfg%solver, self%cfg%tests(i), res, error)
+         if (present(tag)) then
+            call self%response(i, model, tag, res, error)
+         else
+            call self%response(i, model, 'eval', res, error)
+         end if
          if (allocated(error)) then
             status = eval_failed
             message = error%message

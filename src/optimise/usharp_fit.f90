@@ -88,7 +88,7 @@ contains
          status = self%replay(k)%status
          message = 'replayed'
       else
-         call self%prob%evaluate(x, f, per_test, status, message)
+         call self%prob%evaluate(x, f, per_test, status, message, str(k))
       end if
       call self%log%record(k, status, f, per_test, x, self%constants_of(x))
       if (k == 1) self%first = f

@@ -18,7 +18,7 @@ module usharp_upf
    implicit none
    private
 
-   public :: upf_update, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
+   public :: upf_update, upf_props, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
 
    integer, parameter :: n_upf_props = 13, n_upf_state = 13
    !> Position in the code's 6-vector of each Mandel component (11, 22, 33, 12, 23, 13)
@@ -28,6 +28,14 @@ module usharp_upf
    real(dp), parameter :: w_mandel(6) = [1.0_dp, 1.0_dp, 1.0_dp, s2, s2, s2]
 
 contains
+
+   !> The 13 properties of the TB,USER table (order above) for a model; C1 is written as 0
+   pure function upf_props(model) result(props)
+      type(miller_model), intent(in) :: model
+      real(dp) :: props(n_upf_props)
+      props = [model%youngs, model%poisson, model%c%a1, model%c%a2, model%c%b, 0.0_dp, model%c%c2, &
+               gas_constant, model%c%h1, model%c%h2, model%c%n, model%c%q, model%tm]
+   end function upf_props
 
    !> One increment for a 3-D stress state (ntens = 6) given in the code's order perm.
    !> stran: strain at the start, dstran: increment (engineering shear), dt: s, temp: K at

@@ -4,7 +4,7 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields
+   public :: lower, str, real_str, split_fields, shell_quote
 
    !> Text form of a number
    interface str
@@ -117,4 +117,20 @@ contains
          end if
       end do
    end function has_unquoted_comma
+
+   !> A text quoted for the POSIX shell: in single quotes, each ' written as '\''
+   pure function shell_quote(text) result(quoted)
+      character(len=*), intent(in) :: text
+      character(len=:), allocatable :: quoted
+      integer :: k
+      quoted = "'"
+      do k = 1, len(text)
+         if (text(k:k) == "'") then
+            quoted = quoted//"'\''"
+         else
+            quoted = quoted//text(k:k)
+         end if
+      end do
+      quoted = quoted//"'"
+   end function shell_quote
 end module usharp_strings

@@ -1,0 +1,168 @@
+!> ANSYS APDL input decks for one test, as the original drove ANSYS: a unit-cube SOLID185 element
+!> with symmetry planes x = 0, y = 0, z = 0, the Miller user material through TB,USER (the 13
+!> properties in the order of usharp_upf) read from the constants file with *VREAD, TB,STATE
+!> with the initial drag stress, TUNIF for the temperature, one load step per segment of the
+!> same history the internal driver integrates, automatic time stepping with the namelist's
+!> increments, and a POST26 PRVAR listing of time, axial stress and axial strain.
+module usharp_apdl
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: str, real_str
+   use usharp_config, only: run_config, test_config
+   use usharp_history, only: control_strain
+   use usharp_upf, only: n_upf_props, n_upf_state
+   use usharp_external, only: n_constants_file
+   use usharp_version, only: usharp_version_string
+   implicit none
+   private
+
+   public :: apdl_deck, apdl_real, line_len
+
+   integer, parameter :: line_len = 160
+
+contains
+
+   !> A real as APDL reads it: the fewest digits that read back as the same double
+   pure function apdl_real(x) result(text)
+      real(dp), intent(in) :: x
+      character(len=:), allocatable :: text
+      character(len=32) :: buf
+      real(dp) :: back
+      integer :: d, ios
+      do d = 1, 16
+         write (buf, '(es32.'//str(d)//'e3)') x
+         read (buf, *, iostat=ios) back
+         if (ios == 0 .and. back == x) exit
+      end do
+      text = trim(adjustl(buf))
+   end function apdl_real
+
+   !> The deck's lines for test of cfg; command is the usharp command that regenerates it
+   subroutine apdl_deck(cfg, test, command, lines, error)
+      type(run_config), intent(in) :: cfg
+      type(test_config), intent(in) :: test
+      character(len=*), intent(in) :: command
+      character(len=line_len), allocatable, intent(out) :: lines(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: n, k
+      character(len=:), allocatable :: cname, cext, oname, oext, temp
+      real(dp) :: v
+      logical :: strain
+
+      associate (h => test%hist, ext => test%ext)
+         if (h%t(1) < 0.0_dp .or. (h%t(1) == 0.0_dp .and. h%v(1) /= 0.0_dp)) then
+            call fatal_error(error, "test '"//test%name//"': an APDL deck starts unloaded at "// &
+               't = 0; this history starts at t = '//real_str(h%t(1), 'g0.6')//' s with value '// &
+               real_str(h%v(1), 'g0.6'))
+            return
+         end if
+         strain = h%control == control_strain
+         call split_name(ext%constants_file, cname, cext)
+         call split_name(ext%output_file, oname, oext)
+         temp = apdl_real(cfg%model%temperature)
+         allocate (lines(80 + 7*size(h%t)))
+         n = 0
+         call add('! usharp '//usharp_version_string//" APDL deck for test '"//test%name//"' of "// &
+                  cfg%path)
+         call add('! regenerate: '//command)
+         call add('! history '//test%history_kind//', '//merge('strain', 'stress', strain)// &
+                  ' control, '//str(size(h%t) - 1)//' load steps, '//real_str(h%end_time(), 'g0.8')// &
+                  ' s')
+         call add('! units: stress '//cfg%units//' (E and the constants), time s, temperature K;')
+         call add('! the cube has unit edges, so the top displacement is the axial strain.')
+         call add('! needs an ANSYS linked with the usharp USERMAT (src/upf, see the README).')
+         call add('! reads '//ext%constants_file//' (E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, '// &
+                  'Q, Tm, D0), writes '//ext%output_file)
+         call add('/BATCH')
+         call add('/TITLE,usharp '//test%name)
+         call add('/PREP7')
+         call add('*DIM,props,ARRAY,'//str(n_constants_file))
+         call add('*VREAD,props(1),'//cname//','//cext//',,IJK,'//str(n_constants_file))
+         call add(ext%constants_format)
+         call add('ET,1,SOLID185')
+         call add('N,1,0,0,0')
+         call add('N,2,1,0,0')
+         call add('N,3,1,1,0')
+         call add('N,4,0,1,0')
+         call add('N,5,0,0,1')
+         call add('N,6,1,0,1')
+         call add('N,7,1,1,1')
+         call add('N,8,0,1,1')
+         call add('TYPE,1')
+         call add('MAT,1')
+         call add('E,1,2,3,4,5,6,7,8')
+         call add('TB,USER,1,1,'//str(n_upf_props))
+         call add('TBTEMP,'//temp)
+         call add('TBDATA,1,props(1),props(2),props(3),props(4),props(5),props(6)')
+         call add('TBDATA,7,props(7),props(8),props(9),props(10),props(11),props(12)')
+         call add('TBDATA,13,props(13)')
+         call add('TB,STATE,1,,'//str(n_upf_state))
+         call add('TBDATA,7,props(14)            ! initial drag stress D0')
+         call add('TUNIF,'//temp)
+         call add('! symmetry planes x = 0, y = 0, z = 0')
+         call add('D,1,UX,0')
+         call add('D,4,UX,0')
+         call add('D,5,UX,0')
+         call add('D,8,UX,0')
+         call add('D,1,UY,0')
+         call add('D,2,UY,0')
+         call add('D,5,UY,0')
+         call add('D,6,UY,0')
+         call add('D,1,UZ,0,,4,1')
+         call add('FINISH')
+         call add('/SOLU')
+         call add('ANTYPE,STATIC')
+         call add('NROPT,FULL')
+         call add('AUTOTS,ON')
+         call add('KBC,0')
+         call add('OUTRES,ALL,ALL')
+         do k = 2, size(h%t)
+            v = h%v(k)
+            call add('! load step '//str(k - 1))
+            call add('TIME,'//apdl_real(h%t(k)))
+            call add('DELTIM,'//apdl_real(cfg%solver%dt_init)//','//apdl_real(cfg%solver%dt_min)// &
+                     ','//apdl_real(cfg%solver%dt_max))
+            if (strain) then
+               call add('D,5,UZ,'//apdl_real(v)//',,8,1')
+            else
+               ! uniform traction on the unit top face: a quarter of the force at each node
+               call add('F,5,FZ,'//apdl_real(0.25_dp*v)//',,8,1')
+            end if
+            call add('SOLVE')
+         end do
+         call add('FINISH')
+         call add('/POST26')
+         call add('NUMVAR,10')
+         call add('ESOL,2,1,7,S,Z,STRESS')
+         call add('NSOL,3,7,U,Z,STRAIN')
+         call add('/OUTPUT,'//oname//','//oext)
+         call add('PRVAR,STRESS,STRAIN')
+         call add('/OUTPUT')
+         call add('FINISH')
+      end associate
+      lines = lines(:n)
+
+   contains
+
+      subroutine add(text)
+         character(len=*), intent(in) :: text
+         n = n + 1
+         lines(n) = text
+      end subroutine add
+   end subroutine apdl_deck
+
+   !> 'Constants.txt' -> 'Constants', 'txt' (APDL takes name and extension apart)
+   pure subroutine split_name(file, name, ext)
+      character(len=*), intent(in) :: file
+      character(len=:), allocatable, intent(out) :: name, ext
+      integer :: k
+      k = index(file, '.', back=.true.)
+      if (k == 0) then
+         name = file
+         ext = ''
+      else
+         name = file(:k - 1)
+         ext = file(k + 1:)
+      end if
+   end subroutine split_name
+end module usharp_apdl

@@ -1,0 +1,216 @@
+!> The external backend: a test simulated by a program of the user's (an FE code in batch mode,
+!> as the original ran ANSYS) instead of the internal integrator. Per evaluation usharp makes a
+!> work folder of its own, writes the constants file into it, runs the user's command there
+!> under a time limit with its output sent to files, checks the exit status and reads the
+!> stress history the command wrote. Every failure is an error that says why.
+!>
+!> The command comes from the namelist only. The placeholders {work}, {constants}, {output}
+!> and {input_dir} are replaced by quoted absolute paths, {test} by the test's name (letters,
+!> digits, _ - . only). The command runs with `sh` in the work folder, stdin from /dev/null,
+!> stdout and stderr in the files stdout.txt and stderr.txt there.
+module usharp_external
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, prefix_error
+   use usharp_strings, only: str, real_str, shell_quote
+   use usharp_miller, only: miller_model
+   use usharp_upf, only: upf_props
+   use usharp_config, only: external_spec
+   use usharp_history, only: history_type, control_strain
+   use usharp_prvar, only: read_prvar
+   use usharp_table, only: read_columns, merge_repeated_times
+   use usharp_units, only: stress_factor
+   use usharp_experiment, only: interpolate
+   use usharp_filesys, only: make_dir, join_path, file_exists, absolute_path, remove_file, &
+                             remove_dir
+   implicit none
+   private
+
+   public :: run_external, write_constants_file, expand_command, n_constants_file
+
+   !> Values in the constants file: the 13 TB,USER properties, then the initial drag stress D0
+   integer, parameter :: n_constants_file = 14
+   character(len=*), parameter :: script_name = 'usharp-command.sh'
+   character(len=*), parameter :: stdout_name = 'stdout.txt', stderr_name = 'stderr.txt'
+
+contains
+
+   !> Write the constants file: E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, Q, Tm, D0 (stress in
+   !> the model unit, Q in cal/mol, Tm in K), one value per line in format fmt
+   subroutine write_constants_file(path, model, fmt, error)
+      character(len=*), intent(in) :: path, fmt
+      type(miller_model), intent(in) :: model
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: vals(n_constants_file)
+      integer :: unit, ios, k
+      character(len=256) :: msg
+      vals(:n_constants_file - 1) = upf_props(model)
+      vals(n_constants_file) = model%d0
+      open (newunit=unit, file=path, status='replace', action='write', iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+         call fatal_error(error, path//': cannot write the constants file ('//trim(msg)//')')
+         return
+      end if
+      do k = 1, n_constants_file
+         write (unit, fmt, iostat=ios) vals(k)
+      end do
+      close (unit)
+   end subroutine write_constants_file
+
+   !> The command with its placeholders replaced: {work} {constants} {output} {input_dir} by
+   !> quoted paths, {test} by the name
+   pure function expand_command(command, work, constants, output, input_dir, test) result(cmd)
+      character(len=*), intent(in) :: command, work, constants, output, input_dir, test
+      character(len=:), allocatable :: cmd
+      integer :: k, j
+      character(len=:), allocatable :: key
+      cmd = ''
+      k = 1
+      do while (k <= len(command))
+         if (command(k:k) == '{') then
+            j = index(command(k:), '}')
+            if (j > 0) then
+               key = command(k:k + j - 1)
+               select case (key)
+               case ('{work}'); cmd = cmd//shell_quote(work)
+               case ('{constants}'); cmd = cmd//shell_quote(constants)
+               case ('{output}'); cmd = cmd//shell_quote(output)
+               case ('{input_dir}'); cmd = cmd//shell_quote(input_dir)
+               case ('{test}'); cmd = cmd//test
+               case default; cmd = cmd//key
+               end select
+               k = k + j
+               cycle
+            end if
+         end if
+         cmd = cmd//command(k:k)
+         k = k + 1
+      end do
+   end function expand_command
+
+   !> Run the external command of a test for a model and return its stress (model unit) at the
+   !> output times t_out. work_root holds the work folders; tag makes this one's name unique
+   !> (<work_root>/<test>.<tag>); input_dir is the namelist's folder. On success the work folder
+   !> is removed, on failure it is kept and named in the message.
+   subroutine run_external(ext, model, units, hist, test, input_dir, work_root, tag, t_out, &
+                           stress, error)
+      type(external_spec), intent(in) :: ext
+      type(miller_model), intent(in) :: model
+      character(len=*), intent(in) :: units, test, input_dir, work_root, tag
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: t_out(:)
+      real(dp), intent(out) :: stress(:)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: work, cmd, output, constants, in_dir
+      character(len=256) :: names(5)
+      character(len=64) :: cols(2)
+      real(dp), allocatable :: vals(:, :)
+      integer :: unit, ios, stat, nmerged
+      logical :: gone
+
+      call make_dir(join_path(work_root, test//'.'//tag), error)
+      if (allocated(error)) return
+      work = absolute_path(join_path(work_root, test//'.'//tag))
+      in_dir = absolute_path(input_dir)
+      output = join_path(work, ext%output_file)
+      constants = join_path(work, ext%constants_file)
+      names(1) = ext%output_file
+      names(2) = ext%constants_file
+      names(3) = script_name
+      names(4) = stdout_name
+      names(5) = stderr_name
+      ! A stale output of an earlier run must never be read as this one's
+      gone = remove_file(output)
+      if (.not. gone) then
+         call fatal_error(error, output//': cannot remove an old output file')
+         return
+      end if
+      call write_constants_file(constants, model, ext%constants_format, error)
+      if (allocated(error)) return
+      cmd = expand_command(ext%command, work, constants, output, in_dir, test)
+      open (newunit=unit, file=join_path(work, script_name), status='replace', action='write', &
+            iostat=ios)
+      if (ios /= 0) then
+         call fatal_error(error, join_path(work, script_name)//': cannot write')
+         return
+      end if
+      write (unit, '(a)') '# usharp external backend: test '//test//', evaluation '//tag
+      write (unit, '(a)') cmd
+      close (unit)
+      ! timeout(1) stops the command at the limit (TERM, then KILL 5 s later) and exits 124
+      call execute_command_line('cd '//shell_quote(work)//' && exec timeout -k 5 '// &
+         real_str(ext%time_limit, 'f0.1')//' sh ./'//script_name//' </dev/null >'//stdout_name// &
+         ' 2>'//stderr_name, exitstat=stat)
+      if (stat /= 0) then
+         select case (stat)
+         case (124, 137)
+            call fatal_error(error, 'command ran past its time_limit of '// &
+               real_str(ext%time_limit, 'g0.6')//' s and was stopped')
+         case (127)
+            call fatal_error(error, 'command not found (exit status 127): '// &
+               last_line(join_path(work, stderr_name)))
+         case default
+            call fatal_error(error, 'command failed with exit status '//str(stat)// &
+               trim(': '//last_line(join_path(work, stderr_name))))
+         end select
+      else if (.not. file_exists(output)) then
+         call fatal_error(error, 'command did not write its output file '//ext%output_file)
+      else
+         ! (element by element: constructors of deferred-length components trip gfortran 12)
+         cols(1) = ext%time_title
+         cols(2) = ext%stress_title
+         if (ext%output_format == 'prvar') then
+            call read_prvar(output, cols, vals, error)
+         else
+            call read_columns(output, cols, vals, error)
+         end if
+         if (.not. allocated(error)) call to_output_times(vals, error)
+      end if
+      if (allocated(error)) then
+         call prefix_error(error, 'external run (work folder '//work//'): ')
+         return
+      end if
+      call remove_dir(work, names)
+
+   contains
+
+      !> Stress at t_out from the (time, stress) listing: repeated times merged, the unstressed
+      !> start added when the listing begins at the first increment, no extrapolation
+      subroutine to_output_times(vals, error)
+         real(dp), allocatable, intent(inout) :: vals(:, :)
+         type(error_type), allocatable, intent(out) :: error
+         real(dp) :: start(1, 2)
+         if (size(vals, 1) > 0) then
+            if (vals(1, 1) > hist%t(1)) then
+               start(1, 1) = hist%t(1)
+               start(1, 2) = 0.0_dp
+               if (hist%control /= control_strain) start(1, 2) = hist%v(1)/ &
+                  stress_factor(ext%unit, units)
+               vals = reshape([start(1, 1), vals(:, 1), start(1, 2), vals(:, 2)], &
+                              [size(vals, 1) + 1, 2])
+            end if
+         end if
+         call merge_repeated_times(vals, output, nmerged, error)
+         if (allocated(error)) return
+         call interpolate(vals(:, 1), vals(:, 2)*stress_factor(ext%unit, units), t_out, stress, &
+                          error)
+         if (allocated(error)) call prefix_error(error, output//': short output: ')
+      end subroutine to_output_times
+   end subroutine run_external
+
+   !> The last non-blank line of a text file, at most 200 characters ('' if none)
+   function last_line(path) result(text)
+      character(len=*), intent(in) :: path
+      character(len=:), allocatable :: text
+      character(len=1024) :: line
+      integer :: unit, ios
+      text = ''
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         if (len_trim(line) > 0) text = trim(adjustl(line(:200)))
+      end do
+      close (unit)
+   end function last_line
+end module usharp_external
