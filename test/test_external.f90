@@ -27,6 +27,7 @@ contains
          new_unittest('prvar-page-breaks-and-titles', test_prvar), &
          new_unittest('prvar-bad-listings-rejected', test_prvar_bad), &
          new_unittest('deck-load-steps-are-history-corners', test_deck_corners), &
+         new_unittest('committed-decks-regenerate', test_committed_decks), &
          new_unittest('command-placeholders-quoted', test_placeholders), &
          new_unittest('external-run-failures-named', test_failures), &
          new_unittest('external-command-time-limit', test_time_limit), &
@@ -171,6 +172,46 @@ contains
          deallocate (t, v)
       end do
    end subroutine test_deck_corners
+
+   !> decks/ansys holds what `usharp deck decks/thesis-data.nml -o decks/ansys` writes now
+   subroutine test_committed_decks(error)
+      use usharp_cmd_deck, only: deck_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=256), allocatable :: written(:)
+      character(len=:), allocatable :: new, old
+      integer :: k
+      call deck_command('decks/thesis-data.nml', '', scratch_dir//'/decks', '', written, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      call check(error, size(written), 4, 'three decks and the constants file')
+      if (allocated(error)) return
+      do k = 1, size(written)
+         new = read_text(trim(written(k)))
+         old = read_text('decks/ansys/'//trim(written(k)(index(written(k), '/', back=.true.) + 1:)))
+         if (index(written(k), '.inp') > 0) then
+            ! the second line names the output folder
+            new = after_lines(new, 2)
+            old = after_lines(old, 2)
+         end if
+         call check(error, len(old) > 0 .and. old == new, trim(written(k))// &
+                    ' differs from the one in decks/ansys')
+         if (allocated(error)) return
+      end do
+   contains
+      function after_lines(text, n) result(rest)
+         character(len=*), intent(in) :: text
+         integer, intent(in) :: n
+         character(len=:), allocatable :: rest
+         integer :: i
+         rest = text
+         do i = 1, n
+            rest = rest(index(rest, new_line('a')) + 1:)
+         end do
+      end function after_lines
+   end subroutine test_committed_decks
 
    subroutine test_placeholders(error)
       type(error_type), allocatable, intent(out) :: error

@@ -25,6 +25,7 @@ contains
          new_unittest('misspelled-variable', test_misspelled), &
          new_unittest('unknown-group-line-and-column', test_unknown_group), &
          new_unittest('unknown-history', test_unknown_history), &
+         new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
          new_unittest('history-file-time-not-increasing', test_file_time), &
@@ -89,6 +90,29 @@ contains
       call expect_config_error(error, 'history.nml', [character(len=80) :: &
          "&test name='x', history='sawtooth' /"], "&test #1 'x': history = 'sawtooth' is not known")
    end subroutine test_unknown_history
+
+   subroutine test_backend_settings(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'backend.nml', [character(len=80) :: &
+         "&test name='x', history='thesis_lcf', backend='ansys' /"], &
+         "&test #1 'x': backend = 'ansys' is not known (internal or external)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'nocommand.nml', [character(len=80) :: &
+         "&test name='x', history='thesis_lcf', backend='external' /"], &
+         "&test #1 'x': backend = 'external' needs command")
+      if (allocated(error)) return
+      call expect_config_error(error, 'outformat.nml', [character(len=90) :: &
+         "&test name='x', history='thesis_lcf', backend='external', command='true',", &
+         "  output_format='odb' /"], "output_format = 'odb' is not known (prvar or columns)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'cformat.nml', [character(len=90) :: &
+         "&test name='x', history='thesis_lcf', backend='external', command='true',", &
+         "  constants_format='(A12)' /"], "constants_format = '(A12)' is not a Fortran format")
+      if (allocated(error)) return
+      call expect_config_error(error, 'timelimit.nml', [character(len=90) :: &
+         "&test name='x', history='thesis_lcf', backend='external', command='true',", &
+         "  time_limit=0 /"], 'time_limit must be > 0 s')
+   end subroutine test_backend_settings
 
    subroutine test_constant(error)
       type(error_type), allocatable, intent(out) :: error
@@ -276,6 +300,19 @@ contains
       call expect_exit(exe, 'simulate --help', 0)
       if (allocated(error)) return
       call expect_exit(exe, 'simulate --version', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, 'deck --help', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, 'deck --version', 0)
+      if (allocated(error)) return
+      call expect_exit(exe, 'deck', 2)
+      if (allocated(error)) return
+      call expect_exit(exe, 'deck a b c.nml', 2)
+      if (allocated(error)) return
+      call expect_exit(exe, 'deck nosuch decks/thesis-data.nml -o '//scratch_dir//'/decks', stat_input)
+      if (allocated(error)) return
+      call check(error, read_text(errfile) == "usharp: error: decks/thesis-data.nml: no &test named 'nosuch'"// &
+                 new_line('a'), 'deck of an unknown test: '//read_text(errfile))
       if (allocated(error)) return
       call expect_exit(exe, 'simulate no-such.nml', stat_input)
       if (allocated(error)) return
