@@ -9,11 +9,12 @@ program usharp_main
    use usharp_cmd_simulate, only: simulate_command
    use usharp_cmd_run, only: run_command
    use usharp_cmd_deck, only: deck_command
+   use usharp_cmd_identify, only: identify_command
    implicit none
 
    character(len=:), allocatable :: command, input, out_dir, constants, arg, first, only_test
    character(len=256), allocatable :: written(:)
-   character(len=160), allocatable :: summary(:)
+   character(len=200), allocatable :: summary(:)
    type(error_type), allocatable :: error
    logical :: resume, quiet
    integer :: i, nargs
@@ -36,7 +37,7 @@ program usharp_main
    case ('-V', '--version')
       call print_version()
       stop
-   case ('simulate', 'run', 'deck')
+   case ('simulate', 'run', 'deck', 'identify')
    case default
       call usage_exit(main_usage(), "unknown command '"//command//"'")
    end select
@@ -95,6 +96,12 @@ program usharp_main
             write (output_unit, '(a)') 'wrote '//trim(written(i))
          end do
       end if
+   case ('identify')
+      call identify_command(input, out_dir, constants, summary, error)
+      if (allocated(error)) call error_exit(error)
+      do i = 1, size(summary)
+         write (output_unit, '(a)') trim(summary(i))
+      end do
    case ('run')
       ! The progress line only on a terminal and without --quiet
       if (.not. quiet .and. c_isatty(2_c_int) == 1) then
@@ -157,9 +164,10 @@ contains
       character(len=:), allocatable :: text
       character(len=*), parameter :: nl = new_line('a')
       text = 'usage: usharp <command> [options] <input.nml>'//nl//nl//'commands:'//nl// &
-         '  run        fit the constants of &fit to the data of every &test (Hooke-Jeeves)'//nl// &
+         '  run        fit the constants of &fit to the data of every &test'//nl// &
          '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl// &
-         '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl//nl// &
+         '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl// &
+         '  identify   identifiability of the &fit constants at the input''s constants'//nl//nl// &
          'options:'//nl// &
          '  -h, --help     show this help (after a command: the command''s help)'//nl// &
          '  -V, --version  show the version'//nl//nl// &
@@ -181,6 +189,17 @@ contains
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
             '      --resume          continue a killed run from its fit.journal'//nl// &
             '  -q, --quiet           no progress line on stderr'//nl// &
+            '  -h, --help            show this help'//nl// &
+            '  -V, --version         show the version'
+      case ('identify')
+         text = 'usage: usharp identify [options] <fit.nml>'//nl//nl// &
+            'Reports, at the &constants of the input (or of --constants FILE, e.g. a best.nml),'//nl// &
+            'how well the tests with their data determine the constants named in &fit: the'//nl// &
+            'singular values of the scaled Jacobian, 95 % intervals, correlations, constants at'//nl// &
+            'a bound and the poorly determined directions. Writes <out_dir>/identify.txt.'//nl//nl// &
+            'options:'//nl// &
+            '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
+            '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
             '  -h, --help            show this help'//nl// &
             '  -V, --version         show the version'
       case ('deck')

@@ -13,6 +13,8 @@ module usharp_cmd_run
    use usharp_output, only: write_sim_file
    use usharp_filesys, only: make_dir, join_path
    use usharp_version, only: usharp_version_string
+   use usharp_identify, only: identify_result, identify_at, identify_report
+   use usharp_cmd_identify, only: write_report
    implicit none
    private
 
@@ -26,13 +28,15 @@ contains
    subroutine run_command(path, out_dir, constants_file, resume, summary, error, progress)
       character(len=*), intent(in) :: path, out_dir, constants_file
       logical, intent(in) :: resume
-      character(len=160), allocatable, intent(out) :: summary(:)
+      character(len=200), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
       procedure(progress_interface), optional :: progress
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(fit_outcome) :: out
       type(miller_model) :: best
+      type(identify_result) :: ident
+      character(len=200), allocatable :: report(:)
       character(len=:), allocatable :: dir
       real(dp) :: start(n_constants)
       integer :: i, j
@@ -64,7 +68,7 @@ contains
       call write_curves(prob, best, dir, error)
       if (allocated(error)) return
 
-      summary = [character(len=160) :: &
+      summary = [character(len=200) :: &
          'usharp run '//path//': '//out%opt%reason, &
          '  objective ('//cfg%fit%objective//'): start '//real_str(out%f_start, 'es12.5')// &
          ', best '//real_str(out%opt%f, 'es12.5'), &
@@ -72,18 +76,26 @@ contains
          str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
          real_str(out%seconds, 'f10.2')//' s']
       do i = 1, size(cfg%tests)
-         summary = [character(len=160) :: summary, '  test '//cfg%tests(i)%name//': '// &
+         summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
             real_str(out%per_test(i), 'es12.5')]
       end do
-      summary = [character(len=160) :: summary, '  constant        start          fitted']
+      summary = [character(len=200) :: summary, '  constant        start          fitted']
       do j = 1, n_constants
-         summary = [character(len=160) :: summary, '  '//constant_names(j)//'  '// &
+         summary = [character(len=200) :: summary, '  '//constant_names(j)//'  '// &
             real_str(start(j), 'es14.6')//'  '//real_str(get_constant(best%c, j), 'es14.6')// &
             merge('         ', '  (fixed)', cfg%fit%fitted(j))]
       end do
-      summary = [character(len=160) :: summary, '  D0 = '//real_str(best%d0, 'g0.6')//' '//cfg%units, &
+      summary = [character(len=200) :: summary, '  D0 = '//real_str(best%d0, 'g0.6')//' '//cfg%units, &
          '  wrote '//join_path(dir, 'best.nml')//', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
          '<test>.fit.txt']
+      if (cfg%fit%identify) then
+         call identify_at(prob, out%constants, cfg%fit%fd_step, ident, error)
+         if (allocated(error)) return
+         report = identify_report(ident)
+         call write_report(join_path(dir, 'identify.txt'), report, error)
+         if (allocated(error)) return
+         summary = [character(len=200) :: summary, report]
+      end if
       call write_lines(join_path(dir, 'summary.txt'), summary, error)
    end subroutine run_command
 
@@ -92,17 +104,17 @@ contains
       type(miller_model), intent(in) :: best
       type(fit_outcome), intent(in) :: out
       type(error_type), allocatable, intent(out) :: error
-      character(len=160), allocatable :: lines(:)
+      character(len=200), allocatable :: lines(:)
       integer :: j
-      lines = [character(len=160) :: &
+      lines = [character(len=200) :: &
          '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
          real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
          '! simulate with it: usharp simulate '//path//' --constants '//file, '&constants']
       do j = 1, n_constants
-         lines = [character(len=160) :: lines, '  '//trim(lower_name(constant_names(j)))//' = '// &
+         lines = [character(len=200) :: lines, '  '//trim(lower_name(constant_names(j)))//' = '// &
             real_str(get_constant(best%c, j), 'es23.15e3')]
       end do
-      lines = [character(len=160) :: lines, '/']
+      lines = [character(len=200) :: lines, '/']
       call write_lines(file, lines, error)
    contains
       pure function lower_name(name) result(low)

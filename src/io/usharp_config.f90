@@ -66,6 +66,16 @@ module usharp_config
       integer :: max_evals = 100000
       integer :: max_failures = 100                !< failures in a row before the fit aborts
       logical :: log_search = .false.
+      !> Search bounds (physical units); lm, nelder-mead, anneal and multistart keep to them
+      real(dp) :: lower(n_constants) = 0.0_dp, upper(n_constants) = 0.0_dp
+      !> Box of the multi-start points (physical units)
+      real(dp) :: box_lower(n_constants) = 0.0_dp, box_upper(n_constants) = 0.0_dp
+      integer :: multistart = 0                    !< number of Latin-hypercube starts (0: none)
+      integer :: seed = 1                          !< seed of multi-start and annealing
+      real(dp) :: fd_step = 1.0e-3_dp              !< forward-difference step in log10 of a constant
+      real(dp) :: anneal_t0 = 0.0_dp               !< initial temperature (0: the start objective)
+      real(dp) :: anneal_rt = 0.85_dp              !< temperature reduction factor
+      logical :: identify = .true.                 !< identifiability report after the fit
    end type fit_config
 
    !> Everything one input file holds

@@ -4,14 +4,14 @@ module usharp_input
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error, stat_input
-   use usharp_strings, only: lower, str
+   use usharp_strings, only: lower_text => lower, str
    use usharp_miller, only: miller_model, n_constants, constant_index, model_setup, &
-                            miller_constants
+                            miller_constants, literature_low, literature_high, stress_power
    use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
                              thesis_lcf_history, relaxation_history, ratchet_history, &
                              cyclic_history, tensile_history, creep_history
    use usharp_table, only: read_columns, merge_repeated_times
-   use usharp_units, only: ksi_to_mpa
+   use usharp_units, only: ksi_to_mpa, stress_factor
    use usharp_config, only: run_config, test_config, data_spec, fit_config, external_spec, max_list
    implicit none
    private
@@ -108,7 +108,7 @@ contains
          if (len_trim(line(:col - 1)) > 0) cycle  ! only a group start at the line's beginning
          e = scan(line(col + 1:), ' ,/!') + col
          if (e == col) e = len_trim(line) + 1
-         word = lower(line(col + 1:e - 1))
+         word = lower_text(line(col + 1:e - 1))
          if (len_trim(word) == 0 .or. trim(word) == 'end') cycle
          if (trim(word) == 'test') ntest = ntest + 1
          if (.not. any(trim(word) == known_groups)) then
@@ -155,12 +155,12 @@ contains
          call nml_error(error, cfg%path, 'model', ios, msg)
          return
       end if
-      if (lower(trim(name)) /= 'miller') then
+      if (lower_text(trim(name)) /= 'miller') then
          call fatal_error(error, cfg%path//": &model: name = '"//trim(name)// &
             "' is not known (known: miller)")
          return
       end if
-      units = lower(units)
+      units = lower_text(units)
       if (units == 'mpa') units = 'MPa'
       if (units /= 'ksi' .and. units /= 'MPa') then
          call fatal_error(error, cfg%path//": &model: units = '"//trim(units)// &
@@ -251,7 +251,7 @@ contains
          call nml_error(error, cfg%path, 'solver', ios, msg)
          return
       end if
-      integrator = lower(integrator)
+      integrator = lower_text(integrator)
       if (integrator /= 'cvode' .and. integrator /= 'umat') then
          call fatal_error(error, cfg%path//": &solver: integrator = '"//trim(integrator)// &
             "' is not known (cvode or umat)")
@@ -311,12 +311,26 @@ contains
       type(error_type), allocatable, intent(out) :: error
       character(len=16) :: fitted(max_list)
       character(len=32) :: method, objective
-      real(dp) :: rho, eps
-      integer :: itermax, max_evals, max_failures, ios, i, idx
-      logical :: log_search
+      real(dp) :: rho, eps, lower(max_list), upper(max_list), box_lower(max_list), &
+                  box_upper(max_list), fd_step, anneal_t0, anneal_rt, f
+      integer :: itermax, max_evals, max_failures, ios, i, idx, multistart, seed
+      logical :: log_search, identify
       character(len=512) :: msg
-      namelist /fit/ fitted, method, objective, rho, eps, itermax, max_evals, max_failures, log_search
+      namelist /fit/ fitted, method, objective, rho, eps, itermax, max_evals, max_failures, &
+         log_search, lower, upper, box_lower, box_upper, multistart, seed, fd_step, anneal_t0, &
+         anneal_rt, identify
       fitted = ''
+      lower = unset; upper = unset; box_lower = unset; box_upper = unset
+      multistart = 0; seed = 1; fd_step = cfg%fit%fd_step; anneal_t0 = 0.0_dp
+      anneal_rt = cfg%fit%anneal_rt; identify = .true.
+      ! Defaults: the literature box, and two decades beyond it for the search bounds
+      do i = 1, n_constants
+         f = stress_factor('ksi', cfg%units)**stress_power(i)
+         cfg%fit%box_lower(i) = literature_low(i)*f
+         cfg%fit%box_upper(i) = literature_high(i)*f
+         cfg%fit%lower(i) = 0.01_dp*literature_low(i)*f
+         cfg%fit%upper(i) = 100.0_dp*literature_high(i)*f
+      end do
       method = 'hooke-jeeves'
       objective = 'eq7'
       rho = cfg%fit%rho
@@ -340,14 +354,39 @@ contains
             return
          end if
          cfg%fit%fitted(idx) = .true.
+         ! Bounds in the order of fitted
+         if (lower(i) /= unset) cfg%fit%lower(idx) = lower(i)
+         if (upper(i) /= unset) cfg%fit%upper(idx) = upper(i)
+         if (box_lower(i) /= unset) cfg%fit%box_lower(idx) = box_lower(i)
+         if (box_upper(i) /= unset) cfg%fit%box_upper(idx) = box_upper(i)
+         if (.not. (0.0_dp < cfg%fit%lower(idx) .and. cfg%fit%lower(idx) < cfg%fit%upper(idx) .and. &
+                    0.0_dp < cfg%fit%box_lower(idx) .and. cfg%fit%box_lower(idx) < cfg%fit%box_upper(idx))) then
+            call fatal_error(error, cfg%path//': &fit: the bounds of '//trim(fitted(i))// &
+               ' must satisfy 0 < lower < upper and 0 < box_lower < box_upper')
+            return
+         end if
       end do
-      method = lower(method)
-      if (method /= 'hooke-jeeves') then
+      method = lower_text(method)
+      select case (method)
+      case ('hooke-jeeves', 'lm', 'nelder-mead', 'anneal')
+      case default
          call fatal_error(error, cfg%path//": &fit: method = '"//trim(method)// &
-            "' is not known (known: hooke-jeeves)")
+            "' is not known (hooke-jeeves, lm, nelder-mead, anneal)")
+         return
+      end select
+      if (multistart < 0 .or. .not. (fd_step > 0.0_dp .and. fd_step < 0.1_dp) .or. &
+          .not. (anneal_rt > 0.0_dp .and. anneal_rt < 1.0_dp) .or. anneal_t0 < 0.0_dp) then
+         call fatal_error(error, cfg%path//': &fit: needs multistart >= 0, 0 < fd_step < 0.1, '// &
+            '0 < anneal_rt < 1 and anneal_t0 >= 0')
          return
       end if
-      objective = lower(objective)
+      cfg%fit%multistart = multistart
+      cfg%fit%seed = seed
+      cfg%fit%fd_step = fd_step
+      cfg%fit%anneal_t0 = anneal_t0
+      cfg%fit%anneal_rt = anneal_rt
+      cfg%fit%identify = identify
+      objective = lower_text(objective)
       if (objective /= 'eq7' .and. objective /= 'eq13') then
          call fatal_error(error, cfg%path//": &fit: objective = '"//trim(objective)// &
             "' is not known (eq7 or eq13)")
@@ -370,6 +409,8 @@ contains
       cfg%fit%max_evals = max_evals
       cfg%fit%max_failures = max_failures
       cfg%fit%log_search = log_search
+      ! The methods other than the original's search in log10 of the constants
+      if (method /= 'hooke-jeeves') cfg%fit%log_search = .true.
    end subroutine read_fit
 
    subroutine read_tests(unit, cfg, error)
@@ -472,7 +513,7 @@ contains
             return
          end if
          t%name = trim(name)
-         t%history_kind = lower(trim(history))
+         t%history_kind = lower_text(trim(history))
          if (.not. (dt_out >= 0.0_dp)) then
             call fatal_error(error, 'dt_out must be >= 0 s')
             return
@@ -485,7 +526,7 @@ contains
          t%noise = noise
          t%seed = seed
          t%sig = sig
-         t%weighting = lower(trim(weighting))
+         t%weighting = lower_text(trim(weighting))
          select case (t%weighting)
          case ('none', 'threshold', 'relaxation', 'column')
          case default
@@ -505,7 +546,7 @@ contains
          t%data%weight_col = trim(weight_column)
          t%data%unit = trim(data_unit)
          if (len_trim(data_unit) == 0) t%data%unit = cfg%units
-         if (lower(t%data%unit) == 'mpa') t%data%unit = 'MPa'
+         if (lower_text(t%data%unit) == 'mpa') t%data%unit = 'MPa'
          if (t%data%unit /= 'ksi' .and. t%data%unit /= 'MPa') then
             call fatal_error(error, "data_unit = '"//trim(data_unit)//"' is not known (ksi or MPa)")
             return
@@ -552,7 +593,7 @@ contains
             end if
             call creep_history(stress, ramp_time, duration, t%hist, error)
          case ('file')
-            call file_history(resolve_path(cfg%base_dir, trim(file)), lower(trim(control)), &
+            call file_history(resolve_path(cfg%base_dir, trim(file)), lower_text(trim(control)), &
                               t%hist, error)
          case ('data')
             if (.not. t%has_data) then
@@ -576,7 +617,7 @@ contains
          type(error_type), allocatable, intent(out) :: error
          character(len=64) :: probe
          integer :: ios
-         select case (lower(trim(backend)))
+         select case (lower_text(trim(backend)))
          case ('internal')
             ext%enabled = .false.
          case ('external')
@@ -588,12 +629,12 @@ contains
          ext%command = trim(command)
          ext%output_file = trim(output_file)
          if (len_trim(output_file) == 0) ext%output_file = test_name//'_prvar.txt'
-         ext%output_format = lower(trim(output_format))
+         ext%output_format = lower_text(trim(output_format))
          ext%time_title = trim(output_time)
          ext%stress_title = trim(output_stress)
          ext%unit = trim(output_unit)
          if (len_trim(output_unit) == 0) ext%unit = cfg%units
-         if (lower(ext%unit) == 'mpa') ext%unit = 'MPa'
+         if (lower_text(ext%unit) == 'mpa') ext%unit = 'MPa'
          ext%constants_file = trim(constants_file)
          ext%constants_format = trim(constants_format)
          ext%time_limit = time_limit

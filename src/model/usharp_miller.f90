@@ -24,6 +24,14 @@ module usharp_miller
    !> Names of the constants in the order used for fitting and logs
    character(len=2), parameter :: constant_names(n_constants) = &
       ['A1', 'A2', 'B ', 'C2', 'H1', 'H2', 'n ', 'Q ']
+   !> Literature ranges of the constants for a model in ksi (thesis Table 1); H2, a single value
+   !> there (100), gets 50-200. Multi-start draws its starts from this box by default.
+   real(dp), parameter, public :: literature_low(n_constants) = &
+      [0.8_dp, 7.42e-5_dp, 1.03e14_dp, 0.1_dp, 280.0_dp, 50.0_dp, 1.6_dp, 91000.0_dp]
+   real(dp), parameter, public :: literature_high(n_constants) = &
+      [0.93_dp, 5.94e-3_dp, 1.0e15_dp, 50.0_dp, 10000.0_dp, 200.0_dp, 5.8_dp, 104600.0_dp]
+   !> Power of the stress unit in each constant's unit (A1 1/ksi, A2 1/ksi**3, C2 and H1 ksi)
+   integer, parameter, public :: stress_power(n_constants) = [-1, -3, 0, 1, 1, 0, 0, 0]
    !> Largest argument passed to sinh; beyond it the rates are not representable
    real(dp), parameter :: zmax = 700.0_dp
 

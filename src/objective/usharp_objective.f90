@@ -13,12 +13,15 @@ module usharp_objective
    use usharp_weighting, only: threshold_weights, relaxation_weights
    use usharp_external, only: run_external
    use usharp_filesys, only: join_path
+   use usharp_strings, only: str
    implicit none
    private
 
-   public :: fit_problem, test_target, test_objective, setup_problem
+   public :: fit_problem, test_target, test_objective, test_residuals, setup_problem, message_len
    public :: eval_ok, eval_invalid, eval_failed, penalty_invalid, penalty_failed
 
+   !> Length of the messages of a batch evaluation
+   integer, parameter :: message_len = 1024
    !> Outcome of one evaluation
    integer, parameter :: eval_ok = 0, eval_invalid = 1, eval_failed = 2
    !> The original's penalties per test: invalid constants, failed simulation
@@ -44,6 +47,9 @@ module usharp_objective
       procedure :: evaluate => problem_evaluate
       procedure :: simulate_all => problem_simulate_all
       procedure :: response => problem_response
+      procedure :: residuals => problem_residuals
+      procedure :: nres => problem_nres
+      procedure :: batch => problem_batch
    end type fit_problem
 
 contains
@@ -109,11 +115,7 @@ contains
    pure real(dp) function test_objective(kind, y_ex, y_sim, w, y_ex_max) result(s)
       character(len=*), intent(in) :: kind
       real(dp), intent(in) :: y_ex(:), y_sim(:), w(:), y_ex_max
-      if (kind == 'eq13') then
-         s = sum(w*(y_ex - y_sim)**2)
-      else
-         s = sum(w*(100.0_dp*(y_ex - y_sim)/y_ex_max)**2)/real(size(y_ex), dp)
-      end if
+      s = sum(test_residuals(kind, y_ex, y_sim, w, y_ex_max)**2)
    end function test_objective
 
    !> The starting point: the fitted constants of the input (log10 of them with log_search)
@@ -198,6 +200,29 @@ contains
       end associate
    end subroutine problem_response
 
+   !> Number of residuals: one per output point of every test
+   pure integer function problem_nres(self) result(m)
+      class(fit_problem), intent(in) :: self
+      integer :: i
+      m = 0
+      do i = 1, size(self%targets)
+         m = m + size(self%targets(i)%t)
+      end do
+   end function problem_nres
+
+   !> Weighted residuals of one test whose squares sum to its objective: Eq. 7,
+   !> sqrt(w/N)*100*(y_ex - y_sim)/max|y_ex|, or Eq. 13, sqrt(w)*(y_ex - y_sim)
+   pure function test_residuals(kind, y_ex, y_sim, w, y_ex_max) result(r)
+      character(len=*), intent(in) :: kind
+      real(dp), intent(in) :: y_ex(:), y_sim(:), w(:), y_ex_max
+      real(dp) :: r(size(y_ex))
+      if (kind == 'eq13') then
+         r = sqrt(w)*(y_ex - y_sim)
+      else
+         r = sqrt(w/real(size(y_ex), dp))*100.0_dp*(y_ex - y_sim)/y_ex_max
+      end if
+   end function test_residuals
+
    !> Objective at x: per-test values and their sum (Eq. 8). Invalid constants give the
    !> original's 1e10 per test, a failed simulation 2e10 per test; status and message say why.
    !> tag (the evaluation's number) names the work folders of external tests.
@@ -209,12 +234,32 @@ contains
       integer, intent(out) :: status
       character(len=:), allocatable, intent(out) :: message
       character(len=*), intent(in), optional :: tag
+      real(dp) :: r(self%nres())
+      if (present(tag)) then
+         call self%residuals(x, r, total, per_test, status, message, tag)
+      else
+         call self%residuals(x, r, total, per_test, status, message, 'eval')
+      end if
+   end subroutine problem_evaluate
+
+   !> Residuals at x (test after test, see test_residuals), the per-test objectives and their
+   !> sum; on a failure status says why and r is 0
+   subroutine problem_residuals(self, x, r, total, per_test, status, message, tag)
+      class(fit_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: r(:)
+      real(dp), intent(out) :: total
+      real(dp), intent(out) :: per_test(:)
+      integer, intent(out) :: status
+      character(len=:), allocatable, intent(out) :: message
+      character(len=*), intent(in) :: tag
       type(miller_model) :: model
       type(sim_result) :: res
       type(error_type), allocatable :: error
-      integer :: i
+      integer :: i, k0, n
       status = eval_ok
       message = ''
+      r = 0.0_dp
       call self%model_of(x, model, error)
       if (allocated(error)) then
          status = eval_invalid
@@ -223,21 +268,22 @@ contains
          total = sum(per_test)
          return
       end if
+      k0 = 0
       do i = 1, size(self%targets)
-         if (present(tag)) then
-            call self%response(i, model, tag, res, error)
-         else
-            call self%response(i, model, 'eval', res, error)
-         end if
+         call self%response(i, model, tag, res, error)
          if (allocated(error)) then
             status = eval_failed
             message = error%message
             per_test = penalty_failed
             total = sum(per_test)
+            r = 0.0_dp
             return
          end if
-         per_test(i) = test_objective(self%cfg%fit%objective, self%targets(i)%y_ex, res%stress, &
-                                      self%targets(i)%w, self%targets(i)%y_ex_max)
+         n = size(self%targets(i)%t)
+         r(k0 + 1:k0 + n) = test_residuals(self%cfg%fit%objective, self%targets(i)%y_ex, res%stress, &
+                                           self%targets(i)%w, self%targets(i)%y_ex_max)
+         per_test(i) = sum(r(k0 + 1:k0 + n)**2)
+         k0 = k0 + n
       end do
       total = sum(per_test)
       if (.not. ieee_is_finite(total)) then
@@ -245,6 +291,31 @@ contains
          message = 'objective is not finite'
          per_test = penalty_failed
          total = sum(per_test)
+         r = 0.0_dp
       end if
-   end subroutine problem_evaluate
+   end subroutine problem_residuals
+   !> Residuals at the points xs(:, j) (evaluation numbers k0 + j name the external work
+   !> folders), simulated in parallel with OpenMP; each point is independent of the others
+   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages)
+      class(fit_problem), intent(in) :: self
+      real(dp), intent(in) :: xs(:, :)
+      integer, intent(in) :: k0
+      real(dp), intent(out) :: rs(:, :), fs(:), per_test(:, :)
+      integer, intent(out) :: status(:)
+      character(len=message_len), intent(out) :: messages(:)
+      integer :: j
+      !$omp parallel do schedule(dynamic)
+      do j = 1, size(xs, 2)
+         call one_point(j)
+      end do
+      !$omp end parallel do
+   contains
+      subroutine one_point(j)
+         integer, intent(in) :: j
+         character(len=:), allocatable :: msg
+         call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
+                             str(k0 + j))
+         messages(j) = msg
+      end subroutine one_point
+   end subroutine problem_batch
 end module usharp_objective

@@ -5,7 +5,7 @@ module usharp_optimiser
    implicit none
    private
 
-   public :: objective_type, optimum_type
+   public :: objective_type, optimum_type, least_squares_type
 
    !> A scalar objective of a parameter vector. An error stops the optimiser at once.
    type, abstract :: objective_type
@@ -13,7 +13,33 @@ module usharp_optimiser
       procedure(eval_interface), deferred :: eval
    end type objective_type
 
+   !> An objective that is a sum of squared residuals and can evaluate several points at once
+   !> (independently: in parallel where the implementation can)
+   type, abstract, extends(objective_type) :: least_squares_type
+   contains
+      procedure(residuals_interface), deferred :: residuals
+      procedure(nres_interface), deferred :: nres
+   end type least_squares_type
+
    abstract interface
+      !> Residuals rs(:, j) and objective fs(j) = sum(rs(:, j)**2) at the points xs(:, j);
+      !> ok(j) is .false. where the point was penalised (fs(j) then holds the penalty)
+      subroutine residuals_interface(self, xs, rs, fs, ok, error)
+         import :: least_squares_type, dp, error_type
+         class(least_squares_type), intent(inout) :: self
+         real(dp), intent(in) :: xs(:, :)
+         real(dp), intent(out) :: rs(:, :)
+         real(dp), intent(out) :: fs(:)
+         logical, intent(out) :: ok(:)
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine residuals_interface
+
+      !> Number of residuals
+      pure integer function nres_interface(self)
+         import :: least_squares_type
+         class(least_squares_type), intent(in) :: self
+      end function nres_interface
+
       subroutine eval_interface(self, x, f, error)
          import :: objective_type, dp, error_type
          class(objective_type), intent(inout) :: self

@@ -4,7 +4,7 @@ module usharp_lapack
    implicit none
    private
 
-   public :: dgesv, solve_dense
+   public :: dgesv, solve_dense, dgesvd, svd
 
    interface
       !> Solve A X = B by LU factorisation with partial pivoting (LAPACK)
@@ -16,9 +16,36 @@ module usharp_lapack
          real(dp), intent(inout) :: b(ldb, *)
          integer, intent(out) :: info
       end subroutine dgesv
+      !> Singular value decomposition A = U S V' (LAPACK)
+      pure subroutine dgesvd(jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, info)
+         import :: dp
+         character, intent(in) :: jobu, jobvt
+         integer, intent(in) :: m, n, lda, ldu, ldvt, lwork
+         real(dp), intent(inout) :: a(lda, *)
+         real(dp), intent(out) :: s(*), u(ldu, *), vt(ldvt, *), work(*)
+         integer, intent(out) :: info
+      end subroutine dgesvd
    end interface
 
 contains
+
+   !> Singular values s (descending) and right singular vectors (columns of v) of a (m >= n)
+   pure subroutine svd(a, s, v, info)
+      real(dp), intent(in) :: a(:, :)
+      real(dp), intent(out) :: s(:), v(:, :)
+      integer, intent(out) :: info
+      real(dp) :: acopy(size(a, 1), size(a, 2)), u(1, 1), vt(size(a, 2), size(a, 2)), q(1)
+      real(dp), allocatable :: work(:)
+      integer :: m, n
+      m = size(a, 1)
+      n = size(a, 2)
+      acopy = a
+      call dgesvd('N', 'A', m, n, acopy, m, s, u, 1, vt, n, q, -1, info)
+      allocate (work(max(1, int(q(1)))))
+      call dgesvd('N', 'A', m, n, acopy, m, s, u, 1, vt, n, work, size(work), info)
+      v = transpose(vt)
+   end subroutine svd
+
 
    !> Solve a x = b for several right-hand sides (b is overwritten by x); info /= 0 if singular
    pure subroutine solve_dense(a, b, info)

@@ -1,0 +1,264 @@
+!> Identifiability at a fit's optimum: the Jacobian of the weighted residuals with respect to
+!> log10 of the fitted constants (central differences), its singular values, the parameter
+!> covariance s**2 (J'J)^-1 from the residual variance s**2 = SSR/(m - p), correlations, 95 %
+!> confidence intervals, constants at a bound, and the poorly determined directions in words.
+module usharp_identify
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_failure
+   use usharp_strings, only: str, real_str
+   use usharp_miller, only: constant_names
+   use usharp_objective, only: fit_problem, eval_ok, message_len
+   use usharp_lapack, only: svd
+   implicit none
+   private
+
+   public :: identify_result, identify_at, identify_report, jacobian_log10
+
+   !> A direction is poorly determined when its singular value is below this fraction of the
+   !> largest (a relative change of 1e-3 in the residuals for a unit step in log10)
+   real(dp), parameter :: weak_ratio = 1.0e-3_dp
+
+   type :: identify_result
+      character(len=2), allocatable :: names(:)
+      real(dp), allocatable :: c(:)          !< constants, physical units
+      real(dp), allocatable :: sv(:)         !< singular values of J (log10 columns)
+      real(dp), allocatable :: v(:, :)       !< right singular vectors (columns)
+      real(dp), allocatable :: se(:)         !< standard error of log10 c
+      real(dp), allocatable :: lo95(:), hi95(:)  !< 95 % confidence interval of c
+      real(dp), allocatable :: corr(:, :)
+      logical, allocatable :: at_bound(:), determined(:)
+      character(len=200), allocatable :: words(:)
+      real(dp) :: s2 = 0.0_dp, ssr = 0.0_dp
+      integer :: m = 0, nevals = 0
+   end type identify_result
+
+contains
+
+   !> Central-difference Jacobian of the residuals with respect to x = log10 c (step h); the
+   !> points are simulated as one parallel batch. r0: residuals at x.
+   subroutine jacobian_log10(prob, x, h, r0, jac, f0, nevals, error)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: x(:), h
+      real(dp), allocatable, intent(out) :: r0(:), jac(:, :)
+      real(dp), intent(out) :: f0
+      integer, intent(out) :: nevals
+      type(error_type), allocatable, intent(out) :: error
+      integer :: n, m, j
+      real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), pt(:, :)
+      integer, allocatable :: status(:)
+      character(len=message_len), allocatable :: msg(:)
+      n = size(x)
+      m = prob%nres()
+      allocate (xs(n, 2*n + 1), rs(m, 2*n + 1), fs(2*n + 1), pt(size(prob%targets), 2*n + 1), &
+                status(2*n + 1), msg(2*n + 1))
+      do j = 1, 2*n + 1
+         xs(:, j) = x
+      end do
+      do j = 1, n
+         xs(j, 2*j) = x(j) + h
+         xs(j, 2*j + 1) = x(j) - h
+      end do
+      call prob%batch(xs, 0, rs, fs, pt, status, msg)
+      nevals = 2*n + 1
+      do j = 1, 2*n + 1
+         if (status(j) /= eval_ok) then
+            call fatal_error(error, 'identifiability: simulation failed near the optimum: '// &
+                             trim(msg(j)), stat_failure)
+            return
+         end if
+      end do
+      r0 = rs(:, 1)
+      f0 = fs(1)
+      allocate (jac(m, n))
+      do j = 1, n
+         jac(:, j) = (rs(:, 2*j) - rs(:, 2*j + 1))/(2.0_dp*h)
+      end do
+   end subroutine jacobian_log10
+
+   !> The identifiability of the fitted constants of prob at c (physical units)
+   subroutine identify_at(prob, c, h, res, error)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: c(:), h
+      type(identify_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_problem) :: logprob
+      real(dp), allocatable :: r0(:), jac(:, :), cov(:, :)
+      real(dp) :: f0, t95, lo, hi
+      integer :: n, i, j, info
+      integer :: tied(size(c))
+      n = size(c)
+      tied = 0
+      logprob = prob
+      logprob%cfg%fit%log_search = .true.
+      call jacobian_log10(logprob, log10(c), h, r0, jac, f0, res%nevals, error)
+      if (allocated(error)) return
+      res%names = constant_names(prob%idx)
+      res%c = c
+      res%m = size(r0)
+      res%ssr = f0
+      res%s2 = f0/real(max(res%m - n, 1), dp)
+      allocate (res%sv(n), res%v(n, n))
+      call svd(jac, res%sv, res%v, info)
+      if (info /= 0) then
+         call fatal_error(error, 'identifiability: the SVD of the Jacobian failed (info '// &
+                          str(info)//')', stat_failure)
+         return
+      end if
+      ! cov = s2 V S^-2 V' over the directions that carry information
+      allocate (cov(n, n))
+      cov = 0.0_dp
+      do i = 1, n
+         if (res%sv(i) > weak_ratio*res%sv(1) .and. res%sv(i) > 0.0_dp) then
+            do j = 1, n
+               cov(:, j) = cov(:, j) + res%v(:, i)*res%v(j, i)/res%sv(i)**2
+            end do
+         end if
+      end do
+      cov = res%s2*cov
+      res%se = [(sqrt(max(cov(i, i), 0.0_dp)), i=1, n)]
+      t95 = t_quantile_975(res%m - n)
+      res%lo95 = c*10.0_dp**(-t95*res%se)
+      res%hi95 = c*10.0_dp**(t95*res%se)
+      allocate (res%corr(n, n))
+      do i = 1, n
+         do j = 1, n
+            res%corr(i, j) = cov(i, j)/max(res%se(i)*res%se(j), tiny(1.0_dp))
+         end do
+      end do
+      allocate (res%at_bound(n), res%determined(n))
+      do j = 1, n
+         lo = prob%cfg%fit%lower(prob%idx(j))
+         hi = prob%cfg%fit%upper(prob%idx(j))
+         res%at_bound(j) = abs(log10(c(j)/lo)) < 1.0e-6_dp .or. abs(log10(hi/c(j))) < 1.0e-6_dp
+         ! Determined: no weight in the weak directions, not at a bound
+         res%determined(j) = .not. res%at_bound(j)
+         do i = 1, n
+            if (res%sv(i) <= weak_ratio*res%sv(1) .and. abs(res%v(j, i)) > 0.3_dp) &
+               res%determined(j) = .false.
+         end do
+      end do
+      ! A constant tied to an undetermined one (|correlation| > 0.99) is not determined alone
+      tied = .false.
+      do j = 1, n
+         if (.not. res%determined(j)) cycle
+         do i = 1, n
+            if (i /= j .and. .not. res%determined(i) .and. .not. res%at_bound(i) .and. &
+                abs(res%corr(i, j)) > 0.99_dp) then
+               tied(j) = i
+               exit
+            end if
+         end do
+      end do
+      call describe(res)
+      do j = 1, n
+         if (tied(j) == 0) cycle
+         res%determined(j) = .false.
+         res%words = [character(len=200) :: res%words, trim(res%names(j))//' is tied to '// &
+            trim(res%names(tied(j)))//' (correlation '//real_str(res%corr(j, tied(j)), 'f5.2')// &
+            '): not determined on its own']
+      end do
+   end subroutine identify_at
+
+   !> Words for the weak directions and the bounds
+   subroutine describe(res)
+      type(identify_result), intent(inout) :: res
+      integer :: i, j, k, n, big(size(res%c)), nbig
+      character(len=:), allocatable :: line
+      real(dp) :: e
+      n = size(res%c)
+      allocate (res%words(0))
+      do j = 1, n
+         if (res%at_bound(j)) res%words = [character(len=200) :: res%words, &
+            trim(res%names(j))//' sits at a bound of the search ('//real_str(res%c(j), 'es10.3')// &
+            '): not determined within the bounds']
+      end do
+      do i = 1, n
+         if (res%sv(i) > weak_ratio*res%sv(1)) cycle
+         nbig = 0
+         do j = 1, n
+            if (abs(res%v(j, i)) > 0.3_dp) then
+               nbig = nbig + 1
+               big(nbig) = j
+            end if
+         end do
+         if (nbig == 1) then
+            line = trim(res%names(big(1)))//' has (almost) no effect on these tests'
+         else if (nbig == 2) then
+            ! Invariant along v: only c_j * c_k**e with e = -v_j/v_k is determined
+            j = big(1)
+            k = big(2)
+            e = -res%v(j, i)/res%v(k, i)
+            if (abs(e + 1.0_dp) < 0.15_dp) then
+               line = 'only '//trim(res%names(k))//'/'//trim(res%names(j))//' is determined'
+            else if (abs(e - 1.0_dp) < 0.15_dp) then
+               line = 'only '//trim(res%names(j))//'*'//trim(res%names(k))//' is determined'
+            else
+               line = 'only '//trim(res%names(j))//'*'//trim(res%names(k))//'^'// &
+                      real_str(e, 'f0.2')//' is determined'
+            end if
+         else
+            line = 'only combinations of'
+            do k = 1, nbig
+               line = line//' '//trim(res%names(big(k)))
+            end do
+            line = line//' are determined, not each'
+         end if
+         res%words = [character(len=200) :: res%words, line//' (singular value '// &
+            real_str(res%sv(i)/res%sv(1), 'es8.1')//' of the largest)']
+      end do
+      if (size(res%words) == 0 .and. all(res%determined)) res%words = [character(len=200) :: &
+         'every fitted constant is determined by these tests']
+   end subroutine describe
+
+   !> The report as lines of text
+   function identify_report(res) result(lines)
+      type(identify_result), intent(in) :: res
+      character(len=200), allocatable :: lines(:)
+      character(len=:), allocatable :: line
+      integer :: i, j, n
+      n = size(res%c)
+      lines = [character(len=200) :: 'identifiability at the optimum ('//str(res%m)// &
+         ' residuals, '//str(n)//' constants, s^2 = SSR/(m-p) = '//real_str(res%s2, 'es10.3')//')', &
+         '  singular values of the scaled Jacobian (d residual / d log10 constant), relative:']
+      line = '   '
+      do i = 1, n
+         line = line//' '//real_str(res%sv(i)/res%sv(1), 'es9.2')
+      end do
+      lines = [character(len=200) :: lines, line, &
+         '  constant      value       95 % interval                  status']
+      do j = 1, n
+         line = '  '//res%names(j)//'  '//real_str(res%c(j), 'es13.5')//'  ['// &
+                real_str(res%lo95(j), 'es11.4')//', '//real_str(res%hi95(j), 'es11.4')//']  '
+         if (res%at_bound(j)) then
+            line = line//'at a bound'
+         else if (res%determined(j)) then
+            line = line//'determined'
+         else
+            line = line//'not determined'
+         end if
+         lines = [character(len=200) :: lines, line]
+      end do
+      lines = [character(len=200) :: lines, '  correlations:']
+      do i = 1, n
+         line = '    '//res%names(i)
+         do j = 1, n
+            line = line//' '//real_str(res%corr(i, j), 'f6.2')
+         end do
+         lines = [character(len=200) :: lines, line]
+      end do
+      do i = 1, size(res%words)
+         lines = [character(len=200) :: lines, '  - '//trim(res%words(i))]
+      end do
+   end function identify_report
+
+   !> 97.5 % quantile of Student's t with nu degrees of freedom (Cornish-Fisher expansion,
+   !> better than 1e-3 for nu >= 5)
+   pure real(dp) function t_quantile_975(nu) result(t)
+      integer, intent(in) :: nu
+      real(dp), parameter :: z = 1.959963984540054_dp
+      real(dp) :: v
+      v = real(max(nu, 1), dp)
+      t = z + (z**3 + z)/(4.0_dp*v) + (5.0_dp*z**5 + 16.0_dp*z**3 + 3.0_dp*z)/(96.0_dp*v**2) &
+          + (3.0_dp*z**7 + 19.0_dp*z**5 + 17.0_dp*z**3 - 15.0_dp*z)/(384.0_dp*v**3)
+   end function t_quantile_975
+end module usharp_identify

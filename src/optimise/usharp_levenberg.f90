@@ -1,0 +1,159 @@
+!> Levenberg-Marquardt on a least-squares objective, with bounds by projection. The Jacobian
+!> comes from forward differences whose points are evaluated as one batch (in parallel where
+!> the objective can). Damping after Marquardt (scaled by the diagonal of J'J) with Nielsen's
+!> update of the damping factor from the gain ratio.
+module usharp_levenberg
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_optimiser, only: least_squares_type, optimum_type
+   use usharp_lapack, only: solve_dense
+   implicit none
+   private
+
+   public :: levenberg_marquardt, fd_jacobian
+
+contains
+
+   !> Forward-difference Jacobian at x (residuals r there): step h, taken backwards where a
+   !> forward step would leave the bounds. A column whose point failed is set to 0.
+   subroutine fd_jacobian(obj, x, r, hi, h, jac, error)
+      class(least_squares_type), intent(inout) :: obj
+      real(dp), intent(in) :: x(:), r(:), hi(:), h
+      real(dp), intent(out) :: jac(:, :)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: xs(size(x), size(x)), rs(size(r), size(x)), fs(size(x)), step(size(x))
+      logical :: ok(size(x))
+      integer :: j
+      do j = 1, size(x)
+         step(j) = merge(-h, h, x(j) + h > hi(j))
+         xs(:, j) = x
+         xs(j, j) = x(j) + step(j)
+      end do
+      call obj%residuals(xs, rs, fs, ok, error)
+      if (allocated(error)) return
+      do j = 1, size(x)
+         if (ok(j)) then
+            jac(:, j) = (rs(:, j) - r)/step(j)
+         else
+            jac(:, j) = 0.0_dp
+         end if
+      end do
+   end subroutine fd_jacobian
+
+   !> Minimise sum(r**2) from x0 within [lo, hi]. h: difference step; ftol: stop when an
+   !> accepted step lowers the objective by less than ftol relative and moves x by < 1e-4;
+   !> also after itermax Jacobians or max_evals evaluations.
+   subroutine levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error)
+      class(least_squares_type), intent(inout) :: obj
+      real(dp), intent(in) :: x0(:), lo(:), hi(:), h, ftol
+      integer, intent(in) :: itermax, max_evals
+      type(optimum_type), intent(out) :: opt
+      type(error_type), allocatable, intent(out) :: error
+      integer :: n, m, iter, nevals, info
+      real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
+      real(dp) :: x(size(x0)), xn(size(x0)), dx(size(x0)), g(size(x0)), a(size(x0), size(x0))
+      real(dp) :: dmp(size(x0)), b(size(x0), 1), f, fn(1), lambda, nu, pred, gain, amax
+      logical :: ok(1), done
+      integer :: j
+
+      n = size(x0)
+      m = obj%nres()
+      allocate (jac(m, n), r(m), rn(m, 1))
+      x = min(max(x0, lo), hi)
+      call obj%residuals(reshape(x, [n, 1]), rn, fn, ok, error)
+      if (allocated(error)) return
+      nevals = 1
+      opt%x = x
+      opt%f = fn(1)
+      opt%iterations = 0
+      opt%reason = 'the start point failed'
+      if (.not. ok(1)) then
+         opt%nevals = nevals
+         return
+      end if
+      r = rn(:, 1)
+      f = fn(1)
+      lambda = -1.0_dp
+      nu = 2.0_dp
+      done = .false.
+      opt%reason = 'itermax reached'
+      do iter = 1, itermax
+         if (nevals + n >= max_evals) then
+            opt%reason = 'max_evals reached'
+            exit
+         end if
+         call fd_jacobian(obj, x, r, hi, h, jac, error)
+         if (allocated(error)) return
+         nevals = nevals + n
+         opt%iterations = iter
+         a = matmul(transpose(jac), jac)
+         g = matmul(transpose(jac), r)
+         amax = maxval([(a(j, j), j=1, n)])
+         do j = 1, n
+            dmp(j) = max(a(j, j), 1.0e-12_dp*amax, tiny(1.0_dp))
+         end do
+         if (lambda < 0.0_dp) lambda = 1.0e-3_dp
+         do
+            if (nevals >= max_evals) then
+               opt%reason = 'max_evals reached'
+               done = .true.
+               exit
+            end if
+            b(:, 1) = -g
+            call solve_dense(a + lambda*diag(dmp), b, info)
+            if (info /= 0) then
+               lambda = lambda*nu
+               nu = 2.0_dp*nu
+               cycle
+            end if
+            xn = min(max(x + b(:, 1), lo), hi)
+            dx = xn - x
+            if (maxval(abs(dx)) < 1.0e-12_dp) then
+               opt%reason = 'step too small'
+               done = .true.
+               exit
+            end if
+            call obj%residuals(reshape(xn, [n, 1]), rn, fn, ok, error)
+            if (allocated(error)) return
+            nevals = nevals + 1
+            pred = -(2.0_dp*dot_product(g, dx) + dot_product(dx, matmul(a, dx)))
+            if (ok(1) .and. fn(1) < f .and. pred > 0.0_dp) then
+               gain = (f - fn(1))/pred
+               lambda = lambda*max(1.0_dp/3.0_dp, 1.0_dp - (2.0_dp*gain - 1.0_dp)**3)
+               nu = 2.0_dp
+               if (f - fn(1) < ftol*f .and. maxval(abs(dx)) < 1.0e-4_dp) then
+                  opt%reason = 'relative decrease < eps'
+                  done = .true.
+               end if
+               x = xn
+               r = rn(:, 1)
+               f = fn(1)
+               exit
+            end if
+            lambda = lambda*nu
+            nu = 2.0_dp*nu
+            if (lambda > 1.0e16_dp) then
+               opt%reason = 'no decrease along the damped steps'
+               done = .true.
+               exit
+            end if
+         end do
+         if (done) exit
+      end do
+      opt%x = x
+      opt%f = f
+      opt%nevals = nevals
+
+   contains
+
+      pure function diag(v) result(d)
+         real(dp), intent(in) :: v(:)
+         real(dp) :: d(size(v), size(v))
+         integer :: k
+         d = 0.0_dp
+         do k = 1, size(v)
+            d(k, k) = v(k)
+         end do
+      end function diag
+   end subroutine levenberg_marquardt
+end module usharp_levenberg
