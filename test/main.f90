@@ -10,6 +10,7 @@ program tester
    use test_fit, only: collect_fit
    use test_update, only: collect_update
    use test_external, only: collect_external
+   use test_optimise, only: collect_optimise
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -25,7 +26,8 @@ program tester
       new_testsuite('input', collect_input), &
       new_testsuite('fit', collect_fit), &
       new_testsuite('update', collect_update), &
-      new_testsuite('external', collect_external)]
+      new_testsuite('external', collect_external), &
+      new_testsuite('optimise', collect_optimise)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

@@ -330,7 +330,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       type(run_config) :: cfg
-      character(len=160), allocatable :: summary(:)
+      character(len=200), allocatable :: summary(:)
       character(len=:), allocatable :: fom, log, dir
       integer :: k, n
       call external_config('ext-fail', 'echo noise; echo 9.99 > FOM.TXT; echo bad > GUESS.TXT; '// &
@@ -362,7 +362,7 @@ contains
    subroutine test_standin_fit(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=160), allocatable :: summary(:)
+      character(len=200), allocatable :: summary(:)
       character(len=:), allocatable :: exe, standin, nml, p_int, p_ext, ext
       real(dp), allocatable :: f_int(:), f_ext(:)
       integer :: k

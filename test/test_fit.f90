@@ -207,7 +207,7 @@ contains
    subroutine test_abort(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=160), allocatable :: summary(:)
+      character(len=200), allocatable :: summary(:)
       character(len=:), allocatable :: deck
       ! rho = 0.99 steps H1 and n by 99 %: with max_failures = 1 the first bad point aborts
       deck = fit_deck('abort.nml', 'max_failures=1, rho=0.99', [character(len=200) :: &

@@ -1,12 +1,13 @@
 !> `usharp deck`: write the APDL input deck of one test (or of every test) of an input file,
 !> <out_dir>/<test>.inp, and the constants file the decks read, with the input's constants
 module usharp_cmd_deck
-   use usharp_error, only: error_type, fatal_error, stat_io, stat_input
+   use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
    use usharp_apdl, only: apdl_deck, line_len
    use usharp_external, only: write_constants_file
    use usharp_filesys, only: make_dir, join_path
+   use usharp_output, only: write_lines
    implicit none
    private
 
@@ -22,7 +23,7 @@ contains
       type(run_config) :: cfg
       character(len=line_len), allocatable :: lines(:)
       character(len=:), allocatable :: dir, command, file
-      integer :: i, unit, ios, k, nmatch
+      integer :: i, nmatch
       allocate (written(0))
       call read_config(path, cfg, error)
       if (allocated(error)) return
@@ -55,15 +56,8 @@ contains
          call apdl_deck(cfg, cfg%tests(i), command, lines, error)
          if (allocated(error)) return
          file = join_path(dir, cfg%tests(i)%name//'.inp')
-         open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
-         if (ios /= 0) then
-            call fatal_error(error, file//': cannot write', stat_io)
-            return
-         end if
-         do k = 1, size(lines)
-            write (unit, '(a)') trim(lines(k))
-         end do
-         close (unit)
+         call write_lines(file, lines, error)
+         if (allocated(error)) return
          written = [character(len=256) :: written, file]
          ! The constants file the deck reads, from the input's constants
          file = join_path(dir, cfg%tests(i)%ext%constants_file)

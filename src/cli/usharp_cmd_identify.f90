@@ -2,17 +2,18 @@
 !> constants (or those of a best.nml), written to <out_dir>/identify.txt
 module usharp_cmd_identify
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_io
+   use usharp_error, only: error_type
    use usharp_miller, only: get_constant
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_filesys, only: make_dir, join_path
+   use usharp_output, only: write_lines
    implicit none
    private
 
-   public :: identify_command, write_report
+   public :: identify_command
 
 contains
 
@@ -40,23 +41,7 @@ contains
       lines = identify_report(res)
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return
-      call write_report(join_path(cfg%out_dir, 'identify.txt'), lines, error)
+      call write_lines(join_path(cfg%out_dir, 'identify.txt'), lines, error)
    end subroutine identify_command
 
-   !> Write lines to a file
-   subroutine write_report(file, lines, error)
-      character(len=*), intent(in) :: file
-      character(len=*), intent(in) :: lines(:)
-      type(error_type), allocatable, intent(out) :: error
-      integer :: unit, ios, k
-      open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
-      if (ios /= 0) then
-         call fatal_error(error, file//': cannot write', stat_io)
-         return
-      end if
-      do k = 1, size(lines)
-         write (unit, '(a)') trim(lines(k))
-      end do
-      close (unit)
-   end subroutine write_report
 end module usharp_cmd_identify

@@ -10,11 +10,10 @@ module usharp_cmd_run
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
-   use usharp_output, only: write_sim_file
+   use usharp_output, only: write_sim_file, write_lines
    use usharp_filesys, only: make_dir, join_path
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
-   use usharp_cmd_identify, only: write_report
    implicit none
    private
 
@@ -92,7 +91,7 @@ contains
          call identify_at(prob, out%constants, cfg%fit%fd_step, ident, error)
          if (allocated(error)) return
          report = identify_report(ident)
-         call write_report(join_path(dir, 'identify.txt'), report, error)
+         call write_lines(join_path(dir, 'identify.txt'), report, error)
          if (allocated(error)) return
          summary = [character(len=200) :: summary, report]
       end if
@@ -166,19 +165,4 @@ contains
       end do
    end subroutine write_curves
 
-   subroutine write_lines(file, lines, error)
-      character(len=*), intent(in) :: file
-      character(len=*), intent(in) :: lines(:)
-      type(error_type), allocatable, intent(out) :: error
-      integer :: unit, ios, k
-      open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
-      if (ios /= 0) then
-         call fatal_error(error, file//': cannot write', stat_io)
-         return
-      end if
-      do k = 1, size(lines)
-         write (unit, '(a)') trim(lines(k))
-      end do
-      close (unit)
-   end subroutine write_lines
 end module usharp_cmd_run

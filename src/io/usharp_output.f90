@@ -6,7 +6,7 @@ module usharp_output
    implicit none
    private
 
-   public :: write_sim_file
+   public :: write_sim_file, write_lines
 
 contains
 
@@ -39,4 +39,21 @@ contains
       close (unit)
       if (ios /= 0) call fatal_error(error, path//': write failed', stat_io)
    end subroutine write_sim_file
+
+   !> Write lines of text (trailing blanks trimmed) to a file, replacing it
+   subroutine write_lines(file, lines, error)
+      character(len=*), intent(in) :: file
+      character(len=*), intent(in) :: lines(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: unit, ios, k
+      open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
+      if (ios /= 0) then
+         call fatal_error(error, file//': cannot write', stat_io)
+         return
+      end if
+      do k = 1, size(lines)
+         write (unit, '(a)') trim(lines(k))
+      end do
+      close (unit)
+   end subroutine write_lines
 end module usharp_output

@@ -1,0 +1,219 @@
+!> Tests of the optimisers beyond Hooke-Jeeves, the multi-start sample, the identifiability
+!> report and the independence of a fit from the number of OpenMP threads
+module test_optimise
+   use omp_lib, only: omp_set_num_threads, omp_get_max_threads
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type
+   use usharp_optimiser, only: objective_type, least_squares_type, optimum_type
+   use usharp_levenberg, only: levenberg_marquardt
+   use usharp_nelder_mead, only: nelder_mead
+   use usharp_annealing, only: anneal
+   use usharp_sampling, only: latin_hypercube
+   use usharp_rng, only: rng_type
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config, override_constants
+   use usharp_objective, only: fit_problem, setup_problem
+   use usharp_identify, only: identify_result, identify_at
+   use usharp_miller, only: get_constant
+   use usharp_cmd_run, only: run_command
+   use test_util, only: write_text, read_text, scratch_dir
+   implicit none
+   private
+   public :: collect_optimise
+
+   !> Rosenbrock's function, minimum 0 at (1, 1)
+   type, extends(objective_type) :: rosenbrock
+   contains
+      procedure :: eval => rosen_eval
+   end type rosenbrock
+
+   !> Residuals a*exp(-b*t) - y of data made with a = 2, b = 0.7
+   type, extends(least_squares_type) :: decay
+   contains
+      procedure :: eval => decay_eval
+      procedure :: residuals => decay_residuals
+      procedure :: nres => decay_nres
+   end type decay
+
+   real(dp), parameter :: tdata(6) = [0.0_dp, 0.5_dp, 1.0_dp, 2.0_dp, 3.0_dp, 5.0_dp]
+
+contains
+
+   subroutine collect_optimise(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('levenberg-marquardt-exact-fit', test_lm), &
+         new_unittest('levenberg-marquardt-keeps-bounds', test_lm_bounds), &
+         new_unittest('nelder-mead-rosenbrock', test_nm), &
+         new_unittest('annealing-rosenbrock', test_sa), &
+         new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
+         new_unittest('identify-thesis-lcf-relaxation', test_identify), &
+         new_unittest('fit-independent-of-thread-count', test_threads)]
+   end subroutine collect_optimise
+
+   subroutine rosen_eval(self, x, f, error)
+      class(rosenbrock), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(uerror), allocatable, intent(out) :: error
+      f = 100.0_dp*(x(2) - x(1)**2)**2 + (1.0_dp - x(1))**2
+   end subroutine rosen_eval
+
+   pure integer function decay_nres(self)
+      class(decay), intent(in) :: self
+      decay_nres = size(tdata)
+   end function decay_nres
+
+   subroutine decay_residuals(self, xs, rs, fs, ok, error)
+      class(decay), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      real(dp), intent(out) :: rs(:, :), fs(:)
+      logical, intent(out) :: ok(:)
+      type(uerror), allocatable, intent(out) :: error
+      integer :: j
+      do j = 1, size(xs, 2)
+         rs(:, j) = xs(1, j)*exp(-xs(2, j)*tdata) - 2.0_dp*exp(-0.7_dp*tdata)
+         fs(j) = sum(rs(:, j)**2)
+      end do
+      ok = .true.
+   end subroutine decay_residuals
+
+   subroutine decay_eval(self, x, f, error)
+      class(decay), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(uerror), allocatable, intent(out) :: error
+      f = sum((x(1)*exp(-x(2)*tdata) - 2.0_dp*exp(-0.7_dp*tdata))**2)
+   end subroutine decay_eval
+
+   subroutine test_lm(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(decay) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: e
+      call levenberg_marquardt(obj, [0.5_dp, 3.0_dp], [0.0_dp, 0.0_dp], [10.0_dp, 10.0_dp], &
+                               1.0e-7_dp, 1.0e-14_dp, 100, 1000, opt, e)
+      call check(error, .not. allocated(e), 'no error')
+      if (allocated(error)) return
+      call check(error, abs(opt%x(1) - 2.0_dp) < 1e-6_dp .and. abs(opt%x(2) - 0.7_dp) < 1e-6_dp, &
+                 'a = 2, b = 0.7 recovered')
+      if (allocated(error)) return
+      call check(error, opt%f < 1.0e-12_dp .and. opt%nevals < 200, 'exact fit in few evaluations')
+   end subroutine test_lm
+
+   !> With b capped below its true value the optimum sits on the bound
+   subroutine test_lm_bounds(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(decay) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: e
+      call levenberg_marquardt(obj, [0.5_dp, 0.1_dp], [0.0_dp, 0.0_dp], [10.0_dp, 0.5_dp], &
+                               1.0e-7_dp, 1.0e-14_dp, 100, 1000, opt, e)
+      call check(error, opt%x(2) <= 0.5_dp .and. abs(opt%x(2) - 0.5_dp) < 1e-9_dp, &
+                 'b stops at its upper bound 0.5')
+   end subroutine test_lm_bounds
+
+   subroutine test_nm(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rosenbrock) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: e
+      call nelder_mead(obj, [-1.2_dp, 1.0_dp], [-5.0_dp, -5.0_dp], [5.0_dp, 5.0_dp], 0.5_dp, &
+                       1.0e-14_dp, 5000, opt, e)
+      call check(error, opt%f < 1.0e-10_dp .and. all(abs(opt%x - 1.0_dp) < 1e-4_dp), &
+                 'Rosenbrock minimum (1, 1) found')
+      if (allocated(error)) return
+      call check(error, opt%nevals <= 5000, 'within max_evals')
+   end subroutine test_nm
+
+   subroutine test_sa(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rosenbrock) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: e
+      call anneal(obj, [-1.2_dp, 1.0_dp], [-5.0_dp, -5.0_dp], [5.0_dp, 5.0_dp], 0.0_dp, 0.85_dp, &
+                  3, 1.0e-8_dp, 200000, opt, e)
+      call check(error, opt%f < 1.0e-3_dp .and. all(abs(opt%x - 1.0_dp) < 0.1_dp), &
+                 'annealing reaches the Rosenbrock valley floor near (1, 1)')
+   end subroutine test_sa
+
+   subroutine test_lhs(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      real(dp), allocatable :: u(:, :)
+      integer :: i, k
+      logical :: hit(10)
+      call rng%seed(7)
+      call latin_hypercube(rng, 3, 10, u)
+      do i = 1, 3
+         hit = .false.
+         do k = 1, 10
+            hit(1 + int(u(i, k)*10.0_dp)) = .true.
+         end do
+         call check(error, all(hit), 'every stratum of coordinate holds one point')
+         if (allocated(error)) return
+      end do
+   end subroutine test_lhs
+
+   !> At Table 4 on the thesis's noise-free LCF + relaxation data: A1 and A2 enter only as
+   !> A2/A1 (the thesis found both wrong); B, H1, H2, n are determined
+   subroutine test_identify(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(identify_result) :: res
+      real(dp), allocatable :: c(:)
+      integer :: j
+      call read_config('decks/thesis-run2.nml', cfg, e)
+      if (.not. allocated(e)) call override_constants(cfg, 'decks/thesis-data.nml', e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      c = [(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+      call identify_at(prob, c, 1.0e-3_dp, res, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      call check(error, any(index(res%words, 'only A2/A1 is determined') > 0), 'A2/A1 named')
+      if (allocated(error)) return
+      call check(error, all(res%determined .eqv. [.false., .false., .true., .false., .true., .true., .true.]), &
+                 'determined: B, H1, H2, n')
+      if (allocated(error)) return
+      call check(error, res%sv(7)/res%sv(1) < 1.0e-3_dp .and. res%sv(6)/res%sv(1) > 1.0e-3_dp, &
+                 'one weak direction')
+   end subroutine test_identify
+
+   !> The same Levenberg-Marquardt fit on 1 and on 2 threads writes the same journal
+   subroutine test_threads(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: path, j1, j2
+      integer :: nthreads
+      path = write_text('threads.nml', [character(len=200) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 1.0, a2 = 1.0e-5, b = 1.0e13, c2 = 0.1, h1 = 100.0, h2 = 100.0,", &
+         "  n = 1.0, q = 91000.0 /", &
+         "&fit fitted = 'B', 'H1', 'n', method = 'lm', max_evals = 30, identify = .false. /", &
+         "&test name = 'relax', history = 'relaxation', holds = 60.0, 60.0,", &
+         "  data_file = '../../data/thesis/relax.sim.txt' /"])
+      nthreads = omp_get_max_threads()
+      call omp_set_num_threads(1)
+      call run_command(path, scratch_dir//'/threads-1', '', .false., summary, e)
+      call omp_set_num_threads(2)
+      if (.not. allocated(e)) call run_command(path, scratch_dir//'/threads-2', '', .false., summary, e)
+      call omp_set_num_threads(nthreads)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      j1 = read_text(scratch_dir//'/threads-1/fit.journal')
+      j2 = read_text(scratch_dir//'/threads-2/fit.journal')
+      call check(error, len(j1) > 1000 .and. j1 == j2, 'journals on 1 and 2 threads are identical')
+   end subroutine test_threads
+end module test_optimise
