@@ -17,7 +17,7 @@ run() {  # name threads extra-&fit-settings
   end=$(date +%s.%N)
   rm -f "decks/.bench-$1.nml"
   evals=$(sed -n 's/.*evaluations \([0-9]*\) .*/\1/p' "$tmp/$1.txt")
-  best=$(sed -n 's/.*best \([0-9.E+-]*\).*/\1/p' "$tmp/$1.txt")
+  best=$(sed -n 's/.*, best \([0-9.E+-]*\).*/\1/p' "$tmp/$1.txt")
   first=$(awk -v t="$hj" '$1 + 0 <= t + 0 { print NR; exit }' "$tmp/$1/FOM.TXT")
   awk -v m="$1" -v p="$2" -v b="$best" -v n="$evals" -v s="$start" -v e="$end" -v f="${first:--}" \
     'BEGIN { printf "%-22s %3d %12s %7d %7d %9.2f %10s\n", m, p, b, n, 2 * n, e - s, f }'
