@@ -14,7 +14,7 @@ module test_fit
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir
    implicit none
    private
-   public :: collect_fit
+   public :: collect_fit, rosenbrock
 
    !> Rosenbrock's function (minimum 0 at (1, 1))
    type, extends(objective_type) :: rosenbrock

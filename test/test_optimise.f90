@@ -18,15 +18,10 @@ module test_optimise
    use usharp_miller, only: get_constant
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, read_text, scratch_dir
+   use test_fit, only: rosenbrock
    implicit none
    private
    public :: collect_optimise
-
-   !> Rosenbrock's function, minimum 0 at (1, 1)
-   type, extends(objective_type) :: rosenbrock
-   contains
-      procedure :: eval => rosen_eval
-   end type rosenbrock
 
    !> Residuals a*exp(-b*t) - y of data made with a = 2, b = 0.7
    type, extends(least_squares_type) :: decay
@@ -51,14 +46,6 @@ contains
          new_unittest('identify-thesis-lcf-relaxation', test_identify), &
          new_unittest('fit-independent-of-thread-count', test_threads)]
    end subroutine collect_optimise
-
-   subroutine rosen_eval(self, x, f, error)
-      class(rosenbrock), intent(inout) :: self
-      real(dp), intent(in) :: x(:)
-      real(dp), intent(out) :: f
-      type(uerror), allocatable, intent(out) :: error
-      f = 100.0_dp*(x(2) - x(1)**2)**2 + (1.0_dp - x(1))**2
-   end subroutine rosen_eval
 
    pure integer function decay_nres(self)
       class(decay), intent(in) :: self
