@@ -767,6 +767,8 @@ contains
       end do
       if (b == '.') then
          full = p
+      else if (b == '/') then
+         full = '/'//p
       else
          full = b//'/'//p
       end if

@@ -10,7 +10,7 @@ module usharp_levenberg
    implicit none
    private
 
-   public :: levenberg_marquardt, fd_jacobian
+   public :: levenberg_marquardt
 
 contains
 
