@@ -10,6 +10,7 @@ program usharp_main
    use usharp_cmd_run, only: run_command
    use usharp_cmd_deck, only: deck_command
    use usharp_cmd_identify, only: identify_command
+   use usharp_cmd_design, only: design_command
    implicit none
 
    character(len=:), allocatable :: command, input, out_dir, constants, arg, first, only_test
@@ -37,7 +38,7 @@ program usharp_main
    case ('-V', '--version')
       call print_version()
       stop
-   case ('simulate', 'run', 'deck', 'identify')
+   case ('simulate', 'run', 'deck', 'identify', 'design')
    case default
       call usage_exit(main_usage(), "unknown command '"//command//"'")
    end select
@@ -96,8 +97,12 @@ program usharp_main
             write (output_unit, '(a)') 'wrote '//trim(written(i))
          end do
       end if
-   case ('identify')
-      call identify_command(input, out_dir, constants, summary, error)
+   case ('identify', 'design')
+      if (command == 'identify') then
+         call identify_command(input, out_dir, constants, summary, error)
+      else
+         call design_command(input, out_dir, constants, summary, error)
+      end if
       if (allocated(error)) call error_exit(error)
       do i = 1, size(summary)
          write (output_unit, '(a)') trim(summary(i))
@@ -167,7 +172,8 @@ contains
          '  run        fit the constants of &fit to the data of every &test'//nl// &
          '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl// &
          '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl// &
-         '  identify   identifiability of the &fit constants at the input''s constants'//nl//nl// &
+         '  identify   identifiability of the &fit constants at the input''s constants'//nl// &
+         '  design     rank candidate tests by how well they would determine the constants'//nl//nl// &
          'options:'//nl// &
          '  -h, --help     show this help (after a command: the command''s help)'//nl// &
          '  -V, --version  show the version'//nl//nl// &
@@ -200,6 +206,19 @@ contains
             'options:'//nl// &
             '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
+            '  -h, --help            show this help'//nl// &
+            '  -V, --version         show the version'
+      case ('design')
+         text = 'usage: usharp design [options] <design.nml>'//nl//nl// &
+            'Simulates every &test with the known &constants (or those of --constants FILE) and'//nl// &
+            'predicts, for a stress noise of &design noise, how well the current tests (the'//nl// &
+            'groups without candidate = .true.) and each combination with the candidate tests'//nl// &
+            'determine the constants named in &fit: predicted 95 % intervals, the gain in log'//nl// &
+            'det of the information, and the best matrices of up to &design max_tests tests.'//nl// &
+            'Writes <out_dir>/design.txt.'//nl//nl// &
+            'options:'//nl// &
+            '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
+            '  -c, --constants FILE  use the &constants of FILE as the known constants'//nl// &
             '  -h, --help            show this help'//nl// &
             '  -V, --version         show the version'
       case ('deck')

@@ -7,7 +7,8 @@ module usharp_cmd_run
    use usharp_miller, only: n_constants, constant_names, get_constant, miller_model
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
-   use usharp_objective, only: fit_problem, setup_problem
+   use usharp_objective, only: fit_problem, setup_problem, simulated
+   use usharp_experiment, only: fits_strain, response_name
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines
@@ -138,6 +139,8 @@ contains
       integer :: i, k, unit, ios
       character(len=:), allocatable :: file
       character(len=120) :: header(1)
+      character(len=:), allocatable :: resp
+      real(dp), allocatable :: y(:)
       allocate (res(size(prob%targets)))
       call prob%simulate_all(best, res, error)
       if (allocated(error)) return
@@ -153,13 +156,15 @@ contains
             return
          end if
          write (unit, '(a)') "# best fit of test '"//prob%cfg%tests(i)%name//"' against "//prob%cfg%tests(i)%data%file
-         write (unit, '(a)') '# columns: time (s), strain (-), measured stress ('// &
-            prob%cfg%units//'), simulated stress ('//prob%cfg%units//'), residual ('// &
-            prob%cfg%units//'), weight (-)'
-         write (unit, '(a)') '# time strain stress_exp stress_sim residual weight'
+         resp = response_name(prob%cfg%tests(i), prob%cfg%units)
+         write (unit, '(a)') '# columns: time (s), strain (-), measured '//resp//', simulated '// &
+            resp//', residual, weight (-); stress ('//prob%cfg%units//') of the simulation'
+         write (unit, '(a)') '# time strain '//merge('strain_exp', 'stress_exp', fits_strain(prob%cfg%tests(i)))// &
+            ' '//merge('strain_sim', 'stress_sim', fits_strain(prob%cfg%tests(i)))//' residual weight stress'
+         y = simulated(prob%cfg%tests(i), res(i))
          do k = 1, size(prob%targets(i)%t)
-            write (unit, '(6es20.11e3)') prob%targets(i)%t(k), res(i)%strain(k), prob%targets(i)%y_ex(k), &
-               res(i)%stress(k), prob%targets(i)%y_ex(k) - res(i)%stress(k), prob%targets(i)%w(k)
+            write (unit, '(7es20.11e3)') prob%targets(i)%t(k), res(i)%strain(k), prob%targets(i)%y_ex(k), &
+               y(k), prob%targets(i)%y_ex(k) - y(k), prob%targets(i)%w(k), res(i)%stress(k)
          end do
          close (unit)
       end do

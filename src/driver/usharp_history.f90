@@ -11,6 +11,7 @@ module usharp_history
    public :: history_type, control_strain, control_stress
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
    public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
+   public :: rate_jump_history
 
    !> Control modes
    integer, parameter :: control_strain = 1, control_stress = 2
@@ -257,6 +258,28 @@ contains
       call history_from_points([0.0_dp, final_strain/rate], [0.0_dp, final_strain], &
                                control_strain, hist, error)
    end subroutine tensile_history
+
+   !> Tension with strain-rate jumps: the strain rises by final_strain/size(rates) at each
+   !> rate in turn (1/s), so the flow stress's rate sensitivity shows at fixed hardening
+   pure subroutine rate_jump_history(rates, final_strain, hist, error)
+      real(dp), intent(in) :: rates(:), final_strain
+      type(history_type), intent(out) :: hist
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: t(size(rates) + 1), v(size(rates) + 1), de
+      integer :: k
+      if (size(rates) < 1 .or. any(rates <= 0.0_dp) .or. final_strain <= 0.0_dp) then
+         call fatal_error(error, 'rate_jump needs rates > 0 and final_strain > 0')
+         return
+      end if
+      de = final_strain/real(size(rates), dp)
+      t(1) = 0.0_dp
+      v(1) = 0.0_dp
+      do k = 1, size(rates)
+         t(k + 1) = t(k) + de/rates(k)
+         v(k + 1) = v(k) + de
+      end do
+      call history_from_points(t, v, control_strain, hist, error)
+   end subroutine rate_jump_history
 
    !> Creep: stress ramped to its value in ramp_time, then held to duration (s, from start)
    pure subroutine creep_history(stress, ramp_time, duration, hist, error)

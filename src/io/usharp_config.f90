@@ -7,7 +7,7 @@ module usharp_config
    implicit none
    private
 
-   public :: run_config, test_config, data_spec, fit_config, external_spec, max_list
+   public :: run_config, test_config, data_spec, fit_config, external_spec, design_config, max_list
 
    !> Longest list in a namelist array variable (levels, holds, fit, filter values)
    integer, parameter :: max_list = 64
@@ -53,7 +53,17 @@ module usharp_config
       character(len=:), allocatable :: weighting  !< threshold, relaxation, none, column
       real(dp) :: sig = 0.0_dp              !< threshold stress for 'threshold' weighting
       type(external_spec) :: ext            !< external backend (when ext%enabled)
+      logical :: candidate = .false.        !< a candidate test of `usharp design`
    end type test_config
+
+   !> Test-matrix design settings (&design group)
+   type :: design_config
+      real(dp) :: noise = 0.01_dp     !< sd of the stress data as a fraction of the peak |stress|
+      integer :: max_tests = 3        !< largest test matrix (current tests + candidates)
+      real(dp) :: ci_target = 0.02_dp !< determined: 95 % interval within this fraction
+      real(dp) :: prior_decades = 2.0_dp !< prior sd of log10 c, keeps log det finite
+      integer :: top = 10             !< combinations listed
+   end type design_config
 
    !> Fit settings (&fit group)
    type :: fit_config
@@ -87,6 +97,7 @@ module usharp_config
       type(miller_model) :: model
       type(solver_options) :: solver
       type(fit_config) :: fit
+      type(design_config) :: design
       type(test_config), allocatable :: tests(:)
    end type run_config
 end module usharp_config

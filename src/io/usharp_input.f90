@@ -9,7 +9,7 @@ module usharp_input
                             miller_constants, literature_low, literature_high, stress_power
    use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
                              thesis_lcf_history, relaxation_history, ratchet_history, &
-                             cyclic_history, tensile_history, creep_history
+                             cyclic_history, tensile_history, creep_history, rate_jump_history
    use usharp_table, only: read_columns, merge_repeated_times
    use usharp_units, only: ksi_to_mpa, stress_factor
    use usharp_config, only: run_config, test_config, data_spec, fit_config, external_spec, max_list
@@ -18,8 +18,8 @@ module usharp_input
 
    public :: read_config, resolve_path, known_groups, read_data_columns, override_constants
 
-   character(len=9), parameter :: known_groups(6) = &
-      ['model    ', 'constants', 'solver   ', 'output   ', 'fit      ', 'test     ']
+   character(len=9), parameter :: known_groups(7) = &
+      ['model    ', 'constants', 'solver   ', 'output   ', 'fit      ', 'test     ', 'design   ']
    real(dp), parameter :: unset = -huge(1.0_dp)
    integer, parameter :: name_len = 256
 
@@ -52,6 +52,7 @@ contains
       if (.not. allocated(error)) call read_solver(unit, cfg, error)
       if (.not. allocated(error)) call read_output(unit, cfg, error)
       if (.not. allocated(error)) call read_fit(unit, cfg, error)
+      if (.not. allocated(error)) call read_design(unit, cfg, error)
       if (.not. allocated(error)) call read_tests(unit, cfg, error)
       ! A group without its closing '/' reads as the end of the file
       if (.not. allocated(error)) then
@@ -114,7 +115,7 @@ contains
          if (.not. any(trim(word) == known_groups)) then
             call fatal_error(error, path//':'//str(lineno)//':'//str(col)// &
                ': unknown namelist group &'//trim(word)//' (known: &model, &constants, '// &
-               '&solver, &output, &fit, &test)')
+               '&solver, &output, &fit, &design, &test)')
             return
          end if
       end do
@@ -413,6 +414,45 @@ contains
       if (method /= 'hooke-jeeves') cfg%fit%log_search = .true.
    end subroutine read_fit
 
+   subroutine read_design(unit, cfg, error)
+      integer, intent(in) :: unit
+      type(run_config), intent(inout) :: cfg
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: noise, ci_target, prior_decades
+      integer :: max_tests, top, ios
+      character(len=512) :: msg
+      namelist /design/ noise, max_tests, ci_target, prior_decades, top
+      noise = cfg%design%noise
+      max_tests = cfg%design%max_tests
+      ci_target = cfg%design%ci_target
+      prior_decades = cfg%design%prior_decades
+      top = cfg%design%top
+      rewind (unit)
+      read (unit, nml=design, iostat=ios, iomsg=msg)
+      if (ios /= 0 .and. .not. is_iostat_end(ios)) then
+         call nml_error(error, cfg%path, 'design', ios, msg)
+         return
+      end if
+      if (.not. (noise > 0.0_dp)) then
+         call fatal_error(error, cfg%path//': &design: noise must be > 0 (a fraction of the '// &
+            'peak stress, 0.01 for 1 %)')
+         return
+      end if
+      if (max_tests < 1 .or. top < 1) then
+         call fatal_error(error, cfg%path//': &design: max_tests and top must be >= 1')
+         return
+      end if
+      if (.not. (ci_target > 0.0_dp) .or. .not. (prior_decades > 0.0_dp)) then
+         call fatal_error(error, cfg%path//': &design: ci_target and prior_decades must be > 0')
+         return
+      end if
+      cfg%design%noise = noise
+      cfg%design%max_tests = max_tests
+      cfg%design%ci_target = ci_target
+      cfg%design%prior_decades = prior_decades
+      cfg%design%top = top
+   end subroutine read_design
+
    subroutine read_tests(unit, cfg, error)
       integer, intent(in) :: unit
       type(run_config), intent(inout) :: cfg
@@ -428,7 +468,8 @@ contains
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit
+                  time_limit, rates(max_list)
+      logical :: candidate
       integer :: npeaks, repeats, cycles, seed, ios, ntest
       character(len=512) :: msg
       type(test_config), allocatable :: tests(:)
@@ -440,7 +481,7 @@ contains
          data_file, time_column, stress_column, strain_column, weight_column, data_unit, &
          filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
          output_file, output_format, output_time, output_stress, output_unit, constants_file, &
-         constants_format, time_limit
+         constants_format, time_limit, candidate, rates
 
       allocate (tests(0))
       rewind (unit)
@@ -498,6 +539,7 @@ contains
          backend = 'internal'; command = ''; output_file = ''; output_format = 'prvar'
          output_time = 'TIME'; output_stress = 'STRESS'; output_unit = ''
          constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = 3600.0_dp
+         candidate = .false.; rates = unset
       end subroutine set_defaults
 
       subroutine build_test(t, error)
@@ -513,6 +555,7 @@ contains
             return
          end if
          t%name = trim(name)
+         t%candidate = candidate
          t%history_kind = lower_text(trim(history))
          if (.not. (dt_out >= 0.0_dp)) then
             call fatal_error(error, 'dt_out must be >= 0 s')
@@ -586,6 +629,12 @@ contains
                return
             end if
             call tensile_history(strain_rate, final_strain, t%hist, error)
+         case ('rate_jump')
+            if (final_strain == unset .or. count(rates /= unset) == 0) then
+               call fatal_error(error, "history 'rate_jump' needs rates and final_strain")
+               return
+            end if
+            call rate_jump_history(pack(rates, rates /= unset), final_strain, t%hist, error)
          case ('creep')
             if (stress == unset .or. duration == unset) then
                call fatal_error(error, "history 'creep' needs stress and duration")
@@ -603,10 +652,10 @@ contains
             call data_history(t%data, t%hist, error)
          case ('')
             call fatal_error(error, 'history is not set (thesis_lcf, relaxation, ratchet, '// &
-               'cyclic, tensile, creep, file, data)')
+               'cyclic, tensile, rate_jump, creep, file, data)')
          case default
             call fatal_error(error, "history = '"//trim(history)//"' is not known (thesis_lcf, "// &
-               'relaxation, ratchet, cyclic, tensile, creep, file, data)')
+               'relaxation, ratchet, cyclic, tensile, rate_jump, creep, file, data)')
          end select
       end subroutine build_test
 

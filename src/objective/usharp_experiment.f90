@@ -5,18 +5,20 @@ module usharp_experiment
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, real_str
    use usharp_config, only: test_config
+   use usharp_history, only: control_stress
    use usharp_input, only: read_data_columns
    use usharp_table, only: merge_repeated_times
    use usharp_units, only: stress_factor
    implicit none
    private
 
-   public :: experiment_type, load_experiment, interpolate
+   public :: experiment_type, load_experiment, interpolate, fits_strain, response_name
 
-   !> One test's data: time (s), stress (model unit) and optional user weights
+   !> One test's data: time (s), the measured response and optional user weights. The
+   !> response is the stress (model unit), or the strain (-) of a stress-controlled test
    type :: experiment_type
       real(dp), allocatable :: t(:)
-      real(dp), allocatable :: stress(:)
+      real(dp), allocatable :: y(:)
       real(dp), allocatable :: weight(:)  !< only with weighting = 'column'
       integer :: nmerged = 0              !< rows with a repeated time folded into one
    end type experiment_type
@@ -37,6 +39,7 @@ contains
       end if
       cols(1) = test%data%time_col
       cols(2) = test%data%stress_col
+      if (fits_strain(test)) cols(2) = test%data%strain_col
       cols(3) = ''
       if (test%weighting == 'column') cols(3) = test%data%weight_col
       call read_data_columns(test%data, pack(cols, len_trim(cols) > 0), vals, error)
@@ -44,9 +47,32 @@ contains
       call merge_repeated_times(vals, test%data%file, exp%nmerged, error)
       if (allocated(error)) return
       exp%t = vals(:, 1)
-      exp%stress = vals(:, 2)*stress_factor(test%data%unit, model_units)
+      if (fits_strain(test)) then
+         exp%y = vals(:, 2)
+      else
+         exp%y = vals(:, 2)*stress_factor(test%data%unit, model_units)
+      end if
       if (test%weighting == 'column') exp%weight = vals(:, 3)
    end subroutine load_experiment
+
+   !> A stress-controlled test (creep) is fitted on its strain, the response it measures; an
+   !> external command reports stress only
+   pure logical function fits_strain(test)
+      type(test_config), intent(in) :: test
+      fits_strain = test%hist%control == control_stress .and. .not. test%ext%enabled
+   end function fits_strain
+
+   !> Name and unit of the fitted response of a test
+   pure function response_name(test, model_units) result(text)
+      type(test_config), intent(in) :: test
+      character(len=*), intent(in) :: model_units
+      character(len=:), allocatable :: text
+      if (fits_strain(test)) then
+         text = 'strain (-)'
+      else
+         text = 'stress ('//model_units//')'
+      end if
+   end function response_name
 
    !> Linear interpolation of (x, y) at the points xi; points outside [x(1), x(n)] by more
    !> than a relative 1e-9 are an error (no extrapolation)

@@ -8,8 +8,8 @@ module usharp_objective
    use usharp_history, only: output_times
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test
-   use usharp_config, only: run_config
-   use usharp_experiment, only: experiment_type, load_experiment, interpolate
+   use usharp_config, only: run_config, test_config
+   use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain
    use usharp_weighting, only: threshold_weights, relaxation_weights
    use usharp_external, only: run_external
    use usharp_filesys, only: join_path
@@ -18,6 +18,7 @@ module usharp_objective
    private
 
    public :: fit_problem, test_target, test_objective, test_residuals, setup_problem, message_len
+   public :: simulated
    public :: eval_ok, eval_invalid, eval_failed, penalty_invalid, penalty_failed
 
    !> Length of the messages of a batch evaluation
@@ -54,11 +55,13 @@ module usharp_objective
 
 contains
 
-   !> Load every test's data and precompute its target at the simulation's output times
-   subroutine setup_problem(cfg, prob, error)
+   !> Load every test's data and precompute its target at the simulation's output times.
+   !> experiments: the tests' data given directly (synthetic data), instead of their files
+   subroutine setup_problem(cfg, prob, error, experiments)
       type(run_config), intent(in) :: cfg
       type(fit_problem), intent(out) :: prob
       type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
       integer :: i, k
       logical, allocatable :: in_hold(:)
       prob%cfg = cfg
@@ -69,16 +72,20 @@ contains
       end if
       allocate (prob%targets(size(cfg%tests)))
       do i = 1, size(cfg%tests)
+         if (present(experiments)) then
+            prob%targets(i)%exp = experiments(i)
+         else
             call load_experiment(cfg%tests(i), cfg%units, prob%targets(i)%exp, error)
-         if (allocated(error)) exit
+            if (allocated(error)) exit
+         end if
          prob%targets(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
          allocate (prob%targets(i)%y_ex(size(prob%targets(i)%t)))
-         call interpolate(prob%targets(i)%exp%t, prob%targets(i)%exp%stress, prob%targets(i)%t, prob%targets(i)%y_ex, error)
+         call interpolate(prob%targets(i)%exp%t, prob%targets(i)%exp%y, prob%targets(i)%t, prob%targets(i)%y_ex, error)
          if (allocated(error)) then
             call prefix_error(error, cfg%tests(i)%data%file//': ')
             exit
          end if
-         prob%targets(i)%y_ex_max = maxval(abs(prob%targets(i)%exp%stress))
+         prob%targets(i)%y_ex_max = maxval(abs(prob%targets(i)%exp%y))
          select case (cfg%tests(i)%weighting)
          case ('threshold')
             prob%targets(i)%w = threshold_weights(prob%targets(i)%y_ex, cfg%tests(i)%sig)
@@ -200,6 +207,19 @@ contains
       end associate
    end subroutine problem_response
 
+   !> The simulated response that a test's data are compared with: strain for a stress-
+   !> controlled test, stress otherwise
+   pure function simulated(test, res) result(y)
+      type(test_config), intent(in) :: test
+      type(sim_result), intent(in) :: res
+      real(dp), allocatable :: y(:)
+      if (fits_strain(test)) then
+         y = res%strain
+      else
+         y = res%stress
+      end if
+   end function simulated
+
    !> Number of residuals: one per output point of every test
    pure integer function problem_nres(self) result(m)
       class(fit_problem), intent(in) :: self
@@ -280,7 +300,8 @@ contains
             return
          end if
          n = size(self%targets(i)%t)
-         r(k0 + 1:k0 + n) = test_residuals(self%cfg%fit%objective, self%targets(i)%y_ex, res%stress, &
+         r(k0 + 1:k0 + n) = test_residuals(self%cfg%fit%objective, self%targets(i)%y_ex, &
+                                           simulated(self%cfg%tests(i), res), &
                                            self%targets(i)%w, self%targets(i)%y_ex_max)
          per_test(i) = sum(r(k0 + 1:k0 + n)**2)
          k0 = k0 + n

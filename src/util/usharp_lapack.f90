@@ -4,7 +4,7 @@ module usharp_lapack
    implicit none
    private
 
-   public :: dgesv, solve_dense, dgesvd, svd
+   public :: dgesv, solve_dense, dgesvd, svd, dpotrf, logdet_spd
 
    interface
       !> Solve A X = B by LU factorisation with partial pivoting (LAPACK)
@@ -25,6 +25,14 @@ module usharp_lapack
          real(dp), intent(out) :: s(*), u(ldu, *), vt(ldvt, *), work(*)
          integer, intent(out) :: info
       end subroutine dgesvd
+      !> Cholesky factorisation of a symmetric positive definite matrix (LAPACK)
+      pure subroutine dpotrf(uplo, n, a, lda, info)
+         import :: dp
+         character, intent(in) :: uplo
+         integer, intent(in) :: n, lda
+         real(dp), intent(inout) :: a(lda, *)
+         integer, intent(out) :: info
+      end subroutine dpotrf
    end interface
 
 contains
@@ -60,4 +68,21 @@ contains
       call dgesv(size(a, 1), size(b, 2), lu, size(a, 1), ipiv, x, size(x, 1), info)
       b = x
    end subroutine solve_dense
+
+   !> Natural logarithm of the determinant of a symmetric positive definite matrix (Cholesky);
+   !> info > 0 if it is not positive definite
+   pure subroutine logdet_spd(a, logdet, info)
+      real(dp), intent(in) :: a(:, :)
+      real(dp), intent(out) :: logdet
+      integer, intent(out) :: info
+      real(dp) :: l(size(a, 1), size(a, 2))
+      integer :: i
+      l = a
+      call dpotrf('L', size(a, 1), l, size(a, 1), info)
+      logdet = 0.0_dp
+      if (info /= 0) return
+      do i = 1, size(a, 1)
+         logdet = logdet + 2.0_dp*log(l(i, i))
+      end do
+   end subroutine logdet_spd
 end module usharp_lapack
