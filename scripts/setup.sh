@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Install what usharp needs to build and test, without prompts; a no-op when all is present.
-# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface. PyPI: fpm.
+# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, gnuplot. PyPI: fpm.
 set -euo pipefail
 
 command -v python3 >/dev/null 2>&1 || need_py=1
@@ -10,6 +10,8 @@ command -v gfortran >/dev/null 2>&1 || need_apt+=(gfortran)
 [ -e /usr/include/sundials/fortran/fcvode_mod.mod ] || need_apt+=(libsundials-fortran-dev libsundials-dev)
 ls /usr/lib/x86_64-linux-gnu/liblapack.so* >/dev/null 2>&1 || ls /usr/lib/*/liblapack.so >/dev/null 2>&1 || need_apt+=(liblapack-dev)
 ls /usr/lib/*/libblas.so >/dev/null 2>&1 || need_apt+=(libblas-dev)
+# gnuplot draws the fit plots (scripts/plot-fit.sh); usharp itself runs without it
+command -v gnuplot >/dev/null 2>&1 || need_apt+=(gnuplot-nox)
 
 if [ ${#need_apt[@]} -gt 0 ]; then
   echo "setup: installing Debian packages: ${need_apt[*]}" >&2

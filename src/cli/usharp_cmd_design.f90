@@ -3,7 +3,7 @@
 module usharp_cmd_design
    use usharp_error, only: error_type
    use usharp_config, only: run_config
-   use usharp_input, only: read_config, override_constants
+   use usharp_input, only: read_config_as
    use usharp_design, only: design_result, design_run, design_report
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
@@ -20,13 +20,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(design_result) :: res
-      call read_config(path, cfg, error)
+      call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
-      if (len(constants_file) > 0) then
-         call override_constants(cfg, constants_file, error)
-         if (allocated(error)) return
-      end if
-      if (len(out_dir) > 0) cfg%out_dir = out_dir
       call design_run(cfg, res, error)
       if (allocated(error)) return
       lines = design_report(res)

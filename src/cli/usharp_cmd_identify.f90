@@ -5,7 +5,7 @@ module usharp_cmd_identify
    use usharp_error, only: error_type
    use usharp_miller, only: get_constant
    use usharp_config, only: run_config
-   use usharp_input, only: read_config, override_constants
+   use usharp_input, only: read_config_as
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_filesys, only: make_dir, join_path
@@ -26,13 +26,8 @@ contains
       type(identify_result) :: res
       real(dp), allocatable :: c(:)
       integer :: j
-      call read_config(path, cfg, error)
+      call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
-      if (len(constants_file) > 0) then
-         call override_constants(cfg, constants_file, error)
-         if (allocated(error)) return
-      end if
-      if (len(out_dir) > 0) cfg%out_dir = out_dir
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return
       c = [(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]

@@ -17,6 +17,7 @@ module usharp_input
    private
 
    public :: read_config, resolve_path, known_groups, read_data_columns, override_constants
+   public :: read_config_as
 
    character(len=9), parameter :: known_groups(7) = &
       ['model    ', 'constants', 'solver   ', 'output   ', 'fit      ', 'test     ', 'design   ']
@@ -64,6 +65,21 @@ contains
       call model_setup(cfg%model, error)
       if (allocated(error)) call prefix_error(error, path//': &constants: ')
    end subroutine read_config
+
+   !> read_config, then the command line's choices: the constants of another file (a
+   !> best.nml; '' for none) and another output folder ('' for &output's)
+   subroutine read_config_as(path, constants_file, out_dir, cfg, error)
+      character(len=*), intent(in) :: path, constants_file, out_dir
+      type(run_config), intent(out) :: cfg
+      type(error_type), allocatable, intent(out) :: error
+      call read_config(path, cfg, error)
+      if (allocated(error)) return
+      if (len_trim(constants_file) > 0) then
+         call override_constants(cfg, constants_file, error)
+         if (allocated(error)) return
+      end if
+      if (len_trim(out_dir) > 0) cfg%out_dir = trim(out_dir)
+   end subroutine read_config_as
 
    !> Replace the constants of cfg by the &constants group of another file (a best.nml)
    subroutine override_constants(cfg, path, error)
