@@ -6,7 +6,7 @@ module usharp_cmd_run
    use usharp_strings, only: str, real_str
    use usharp_miller, only: n_constants, constant_names, get_constant, miller_model
    use usharp_config, only: run_config
-   use usharp_input, only: read_config, override_constants
+   use usharp_input, only: read_config_as
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_experiment, only: fits_strain, response_name
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
@@ -41,15 +41,9 @@ contains
       real(dp) :: start(n_constants)
       integer :: i, j
       allocate (summary(0))
-      call read_config(path, cfg, error)
+      call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
-      if (len_trim(constants_file) > 0) then
-         call override_constants(cfg, constants_file, error)
-         if (allocated(error)) return
-      end if
       dir = cfg%out_dir
-      if (len_trim(out_dir) > 0) dir = trim(out_dir)
-      cfg%out_dir = dir
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return
       call make_dir(dir, error)
