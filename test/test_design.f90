@@ -34,6 +34,7 @@ contains
          new_unittest('predicted-intervals-match-identify-on-noisy-data', test_predicted), &
          new_unittest('every-combination-ranked', test_combinations), &
          new_unittest('design-needs-a-candidate', test_no_candidate), &
+         new_unittest('design-rejects-column-weights', test_column_weights), &
          new_unittest('creep-is-fitted-on-strain', test_creep_strain), &
          new_unittest('rate-jump-history', test_rate_jump)]
    end subroutine collect_design
@@ -175,6 +176,19 @@ contains
       if (.not. allocated(e)) call design_run(cfg, res, e)
       call check_message(error, e, 'design needs at least one test with candidate = .true.')
    end subroutine test_no_candidate
+
+   !> Synthetic data have no weight column: a clear error, not a read of unset weights
+   subroutine test_column_weights(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(design_result) :: res
+      call read_config(write_text('design-column.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&test name = 'r', history = 'relaxation', candidate = .true.,", &
+         "  weighting = 'column', weight_column = 'w' /"]), cfg, e)
+      if (.not. allocated(e)) call design_run(cfg, res, e)
+      call check_message(error, e, "&test 'r': weighting = 'column' needs measured weights")
+   end subroutine test_column_weights
 
    !> A creep test (stress control) is compared on strain: zero residual at the constants
    !> that made its data, and a non-zero sensitivity to the flow constants

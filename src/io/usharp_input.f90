@@ -451,7 +451,7 @@ contains
       end if
       if (.not. (noise > 0.0_dp)) then
          call fatal_error(error, cfg%path//': &design: noise must be > 0 (a fraction of the '// &
-            'peak stress, 0.01 for 1 %)')
+            'peak response, 0.01 for 1 %)')
          return
       end if
       if (max_tests < 1 .or. top < 1) then

@@ -68,6 +68,14 @@ contains
                           'candidate = .true.')
          return
       end if
+      ! Synthetic data carry no weight column
+      do i = 1, size(cfg%tests)
+         if (cfg%tests(i)%weighting == 'column') then
+            call fatal_error(error, cfg%path//": &test '"//cfg%tests(i)%name//"': weighting = "// &
+                             "'column' needs measured weights; design uses none, threshold or relaxation")
+            return
+         end if
+      end do
       ncur = count(.not. cfg%tests%candidate)
       ! One test at a time: the Jacobian of a long test is large, and information adds
       do i = 1, size(cfg%tests)

@@ -5,7 +5,7 @@ module usharp_objective
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error
    use usharp_miller, only: miller_model, model_setup, n_constants, get_constant, set_constant
-   use usharp_history, only: output_times
+   use usharp_history, only: output_times, control_stress
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test
    use usharp_config, only: run_config, test_config
@@ -72,6 +72,12 @@ contains
       end if
       allocate (prob%targets(size(cfg%tests)))
       do i = 1, size(cfg%tests)
+         if (cfg%tests(i)%ext%enabled .and. cfg%tests(i)%hist%control == control_stress) then
+            ! The command reports stress only, which the load fixes: nothing to fit
+            call fatal_error(error, 'backend = ''external'' reports stress only, and a '// &
+                             'stress-controlled test has nothing to fit in it')
+            exit
+         end if
          if (present(experiments)) then
             prob%targets(i)%exp = experiments(i)
          else
