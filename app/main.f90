@@ -11,13 +11,14 @@ program usharp_main
    use usharp_cmd_deck, only: deck_command
    use usharp_cmd_identify, only: identify_command
    use usharp_cmd_design, only: design_command
+   use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
    implicit none
 
    character(len=:), allocatable :: command, input, out_dir, constants, arg, first, only_test
    character(len=256), allocatable :: written(:)
    character(len=200), allocatable :: summary(:)
    type(error_type), allocatable :: error
-   logical :: resume, quiet
+   logical :: resume, quiet, selfcheck
    integer :: i, nargs
 
    interface
@@ -38,7 +39,7 @@ program usharp_main
    case ('-V', '--version')
       call print_version()
       stop
-   case ('simulate', 'run', 'deck', 'identify', 'design')
+   case ('simulate', 'run', 'deck', 'identify', 'design', 'diagnose')
    case default
       call usage_exit(main_usage(), "unknown command '"//command//"'")
    end select
@@ -50,6 +51,7 @@ program usharp_main
    constants = ''
    resume = .false.
    quiet = .false.
+   selfcheck = .false.
    i = 2
    do while (i <= nargs)
       arg = get_arg(i)
@@ -72,6 +74,9 @@ program usharp_main
          resume = .true.
       case ('-q', '--quiet')
          quiet = .true.
+      case ('--selfcheck')
+         if (command /= 'diagnose') call usage_exit(command_usage(command), 'unknown option '//arg)
+         selfcheck = .true.
       case default
          if (arg(1:1) == '-') call usage_exit(command_usage(command), 'unknown option '//arg)
          if (len(input) > 0 .and. (command /= 'deck' .or. len(first) > 0)) &
@@ -82,7 +87,7 @@ program usharp_main
       end select
       i = i + 1
    end do
-   if (len(input) == 0) call usage_exit(command_usage(command), 'no input file given')
+   if (len(input) == 0 .and. .not. selfcheck) call usage_exit(command_usage(command), 'no input file given')
 
    select case (command)
    case ('simulate', 'deck')
@@ -97,11 +102,15 @@ program usharp_main
             write (output_unit, '(a)') 'wrote '//trim(written(i))
          end do
       end if
-   case ('identify', 'design')
+   case ('identify', 'design', 'diagnose')
       if (command == 'identify') then
          call identify_command(input, out_dir, constants, summary, error)
-      else
+      else if (command == 'design') then
          call design_command(input, out_dir, constants, summary, error)
+      else if (selfcheck) then
+         call selfcheck_command(input, out_dir, summary, error)
+      else
+         call diagnose_command(input, out_dir, constants, summary, error)
       end if
       if (allocated(error)) call error_exit(error)
       do i = 1, size(summary)
@@ -173,7 +182,9 @@ contains
          '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl// &
          '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl// &
          '  identify   identifiability of the &fit constants at the input''s constants'//nl// &
-         '  design     rank candidate tests by how well they would determine the constants'//nl//nl// &
+         '  design     rank candidate tests by how well they would determine the constants'//nl// &
+         '  diagnose   where a fit falls short, which unmodelled effect causes it, how far'//nl// &
+         '             adding it closes the gap (also on held-out tests)'//nl//nl// &
          'options:'//nl// &
          '  -h, --help     show this help (after a command: the command''s help)'//nl// &
          '  -V, --version  show the version'//nl//nl// &
@@ -219,6 +230,26 @@ contains
             'options:'//nl// &
             '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
             '  -c, --constants FILE  use the &constants of FILE as the known constants'//nl// &
+            '  -h, --help            show this help'//nl// &
+            '  -V, --version         show the version'
+      case ('diagnose')
+         text = 'usage: usharp diagnose [options] <fit.nml>'//nl// &
+            '       usharp diagnose --selfcheck [options] [<selfcheck.nml>]'//nl//nl// &
+            'Diagnoses the fit at the &constants of --constants FILE (the best.nml of a run):'//nl// &
+            'fits the tests not in &diagnose holdout without any effect, splits the residual by'//nl// &
+            'test, history class, cycle and elastic/inelastic points against the noise level of'//nl// &
+            'the data, screens every catalogue effect (score test), refits the leading ones'//nl// &
+            '(AIC/BIC, 95 % intervals) and predicts the held-out tests with them. Writes'//nl// &
+            '<out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv and plots.'//nl// &
+            'Effects: compliance, lag, temperature, scatter, initial, shift, softening,'//nl// &
+            'backstress2.'//nl//nl// &
+            'With --selfcheck: injects each effect into synthetic data (the built-in matrix,'//nl// &
+            'written to <out_dir>/selfcheck.nml, or the given file), fits without it, diagnoses'//nl// &
+            'and prints the confusion table (<out_dir>/selfcheck.md).'//nl//nl// &
+            'options:'//nl// &
+            '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
+            '  -c, --constants FILE  the fitted constants (the best.nml of usharp run)'//nl// &
+            '      --selfcheck       the self-check on synthetic data'//nl// &
             '  -h, --help            show this help'//nl// &
             '  -V, --version         show the version'
       case ('deck')

@@ -16,6 +16,7 @@ module usharp_cvode_driver
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_miller, only: miller_model, uniaxial_rates
+   use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value
    use usharp_history, only: history_type, control_strain
    use usharp_simulation, only: solver_options, sim_result
    implicit none
@@ -23,35 +24,48 @@ module usharp_cvode_driver
 
    public :: simulate_cvode
 
+   !> States of the plain model: eps_in, R, D
    integer(c_int), parameter :: neq = 3
 
-   !> What the callbacks need: the model and the current linear segment of the load
+   !> What the callbacks need: the model and the current linear segment of the load; with
+   !> effects (extended) also the effects, the stiffness seen through the compliance, and
+   !> the control's corners and lagged corner values
    type :: rhs_context
       type(miller_model) :: model
       integer :: control = control_strain
       real(dp) :: t0 = 0.0_dp, v0 = 0.0_dp, slope = 0.0_dp
+      logical :: extended = .false.
+      type(test_effects) :: eff
+      real(dp) :: stiffness = 0.0_dp   !< E/(1 + kappa), model unit
+      integer :: seg = 1
+      real(dp), allocatable :: tc(:), vc(:), yk(:)
    end type rhs_context
 
 contains
 
    !> Simulate the history from the virgin state, writing the response at the output times
-   !> tout (s, increasing, within the history's span).
-   subroutine simulate_cvode(model, hist, tout, opts, res, error)
+   !> tout (s, non-decreasing, within the history's span). With effects, the extended model
+   !> (usharp_effects) is integrated with a difference-quotient Jacobian: the model must then
+   !> carry the effects' temperature and modulus already (effect_model), the initial state
+   !> and the measured strain include R0, the drag offsets and the compliance, and the control
+   !> value passes through the lag. The stress-channel shift is the caller's (output times).
+   subroutine simulate_cvode(model, hist, tout, opts, res, error, effects)
       type(miller_model), intent(in) :: model
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tout(:)
       type(solver_options), intent(in) :: opts
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
+      type(test_effects), intent(in), optional :: effects
 
       type(rhs_context), target :: ctx
       type(c_ptr) :: sunctx, cvode_mem
       type(N_Vector), pointer :: yvec, abstol
       type(SUNMatrix), pointer :: amat
       type(SUNLinearSolver), pointer :: lsol
-      real(c_double), target :: y(neq), atol(neq)
+      real(c_double), allocatable, target :: y(:), atol(:)
       real(c_double) :: tret(1), tnext
-      integer(c_int) :: ierr
+      integer(c_int) :: ierr, n
       integer(c_long) :: counter(1)
       integer :: k, iout, nout, nseg
       real(dp) :: tend
@@ -71,13 +85,29 @@ contains
 
       ctx%model = model
       ctx%control = hist%control
-      y = [0.0_dp, 0.0_dp, model%d0]
-      atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs]
+      ctx%extended = present(effects)
+      if (ctx%extended) then
+         n = n_extended
+         ctx%eff = effects
+         ctx%stiffness = model%youngs/(1.0_dp + effects%compliance)
+         ctx%tc = hist%t
+         ctx%vc = hist%v
+         ctx%yk = lag_corners(hist%t, hist%v, effects%lag)
+         y = [0.0_dp, effects%r0, model%d0*(1.0_dp + effects%strength) + effects%dd0, &
+              0.0_dp, 0.0_dp]
+         atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs, &
+                 opts%atol_strain, opts%atol_strain*model%youngs]
+      else
+         n = neq
+         ctx%stiffness = model%youngs
+         y = [0.0_dp, 0.0_dp, model%d0]
+         atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs]
+      end if
 
       ierr = FSUNContext_Create(c_null_ptr, sunctx)
-      yvec => FN_VMake_Serial(int(neq, c_long), y, sunctx)
-      abstol => FN_VMake_Serial(int(neq, c_long), atol, sunctx)
-      amat => FSUNDenseMatrix(int(neq, c_long), int(neq, c_long), sunctx)
+      yvec => FN_VMake_Serial(int(n, c_long), y, sunctx)
+      abstol => FN_VMake_Serial(int(n, c_long), atol, sunctx)
+      amat => FSUNDenseMatrix(int(n, c_long), int(n, c_long), sunctx)
       lsol => FSUNLinSol_Dense(yvec, amat, sunctx)
       cvode_mem = FCVodeCreate(CV_BDF, sunctx)
       call set_segment(ctx, hist, 1)
@@ -85,7 +115,7 @@ contains
       ierr = ior(ierr, FCVodeSVtolerances(cvode_mem, opts%rtol, abstol))
       ierr = ior(ierr, FCVodeSetUserData(cvode_mem, c_loc(ctx)))
       ierr = ior(ierr, FCVodeSetLinearSolver(cvode_mem, lsol, amat))
-      ierr = ior(ierr, FCVodeSetJacFn(cvode_mem, c_funloc(jac_fn)))
+      if (.not. ctx%extended) ierr = ior(ierr, FCVodeSetJacFn(cvode_mem, c_funloc(jac_fn)))
       ierr = ior(ierr, FCVodeSetMaxNumSteps(cvode_mem, int(opts%max_steps, c_long)))
       if (opts%max_step > 0.0_dp) ierr = ior(ierr, FCVodeSetMaxStep(cvode_mem, opts%max_step))
       ierr = ior(ierr, FCVodeSetErrHandlerFn(cvode_mem, c_funloc(silent_handler), c_null_ptr))
@@ -149,18 +179,24 @@ contains
       subroutine store(i, t)
          integer, intent(in) :: i
          real(dp), intent(in) :: t
-         real(dp) :: load
-         load = hist%value_at(t)
+         real(dp) :: load, rate
+         if (ctx%extended) then
+            call lagged_value(ctx%tc, ctx%vc, ctx%yk, ctx%seg, ctx%eff%lag, t, load, rate)
+         else
+            load = hist%value_at(t)
+         end if
          res%t(i) = tout(i)
          res%eps_in(i) = y(1)
          res%back(i) = y(2)
          res%drag(i) = y(3)
+         if (ctx%extended) res%back(i) = y(2) + y(5)
          if (hist%control == control_strain) then
             res%strain(i) = load
-            res%stress(i) = model%youngs*(load - y(1))
+            res%stress(i) = ctx%stiffness*(load - y(1))
          else
+            ! The measured strain includes the machine's kappa*sigma/E
             res%stress(i) = load
-            res%strain(i) = load/model%youngs + y(1)
+            res%strain(i) = load/ctx%stiffness + y(1)
          end if
       end subroutine store
 
@@ -174,11 +210,25 @@ contains
       end subroutine release
    end subroutine simulate_cvode
 
+   !> Lagged control value at every corner (first-order lag, time constant tau s, at rest on
+   !> the first value); with tau = 0 the corners themselves
+   pure function lag_corners(tc, vc, tau) result(yk)
+      real(dp), intent(in) :: tc(:), vc(:), tau
+      real(dp) :: yk(size(tc))
+      real(dp) :: rate
+      integer :: k
+      yk(1) = vc(1)
+      do k = 1, size(tc) - 1
+         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), rate)
+      end do
+   end function lag_corners
+
    !> Make segment k (from corner k to k+1) the current one
    pure subroutine set_segment(ctx, hist, k)
       type(rhs_context), intent(inout) :: ctx
       type(history_type), intent(in) :: hist
       integer, intent(in) :: k
+      ctx%seg = k
       ctx%t0 = hist%t(k)
       ctx%v0 = hist%v(k)
       ctx%slope = (hist%v(k + 1) - hist%v(k))/(hist%t(k + 1) - hist%t(k))
@@ -187,13 +237,17 @@ contains
    !> Stress and d(stress)/d(eps_in) for the state at time t
    pure subroutine stress_of(ctx, t, y, sigma, dsig)
       type(rhs_context), intent(in) :: ctx
-      real(dp), intent(in) :: t, y(neq)
+      real(dp), intent(in) :: t, y(:)
       real(dp), intent(out) :: sigma, dsig
-      real(dp) :: load
-      load = ctx%v0 + ctx%slope*(t - ctx%t0)
+      real(dp) :: load, rate
+      if (ctx%extended) then
+         call lagged_value(ctx%tc, ctx%vc, ctx%yk, ctx%seg, ctx%eff%lag, t, load, rate)
+      else
+         load = ctx%v0 + ctx%slope*(t - ctx%t0)
+      end if
       if (ctx%control == control_strain) then
-         sigma = ctx%model%youngs*(load - y(1))
-         dsig = -ctx%model%youngs
+         sigma = ctx%stiffness*(load - y(1))
+         dsig = -ctx%stiffness
       else
          sigma = load
          dsig = 0.0_dp
@@ -216,7 +270,11 @@ contains
          return
       end if
       call stress_of(ctx, t, y, sigma, dsig)
-      call uniaxial_rates(ctx%model, sigma, dsig, y, f)
+      if (ctx%extended) then
+         call extended_rates(ctx%model, ctx%eff, sigma, y, f)
+      else
+         call uniaxial_rates(ctx%model, sigma, dsig, y, f)
+      end if
       ierr = merge(0, 1, all(ieee_is_finite(f)))
    end function rhs_fn
 

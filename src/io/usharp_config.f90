@@ -7,7 +7,7 @@ module usharp_config
    implicit none
    private
 
-   public :: run_config, test_config, data_spec, fit_config, external_spec, design_config, max_list
+   public :: run_config, test_config, data_spec, fit_config, external_spec, design_config, diagnose_config, max_list
 
    !> Longest list in a namelist array variable (levels, holds, fit, filter values)
    integer, parameter :: max_list = 64
@@ -65,6 +65,19 @@ module usharp_config
       integer :: top = 10             !< combinations listed
    end type design_config
 
+   !> Diagnosis settings (&diagnose group); names are resolved by the diagnose command
+   type :: diagnose_config
+      character(len=64) :: holdout(max_list) = ''  !< tests held out of the fit
+      character(len=16) :: effects(max_list) = ''  !< effects considered (none given: all)
+      integer :: n_refit = 3                       !< leading candidates refitted
+      real(dp) :: dlnE_dT = -4.0e-4_dp             !< 1/K, temperature slope of ln E
+      real(dp) :: gamma3 = 200.0_dp                !< -, second back stress recovery (screening)
+      real(dp) :: confirm_shrink = 0.5_dp          !< held-out structured gap removed to confirm
+      integer :: reps = 10                         !< self-check repetitions per effect
+      integer :: seed = 1                          !< self-check seed
+      real(dp) :: noise = 0.01_dp                  !< self-check noise, fraction of the peak
+   end type diagnose_config
+
    !> Fit settings (&fit group)
    type :: fit_config
       logical :: fitted(n_constants) = .false.     !< which constants are searched
@@ -98,6 +111,7 @@ module usharp_config
       type(solver_options) :: solver
       type(fit_config) :: fit
       type(design_config) :: design
+      type(diagnose_config) :: diagnose
       type(test_config), allocatable :: tests(:)
    end type run_config
 end module usharp_config

@@ -19,8 +19,8 @@ module usharp_input
    public :: read_config, resolve_path, known_groups, read_data_columns, override_constants
    public :: read_config_as
 
-   character(len=9), parameter :: known_groups(7) = &
-      ['model    ', 'constants', 'solver   ', 'output   ', 'fit      ', 'test     ', 'design   ']
+   character(len=9), parameter :: known_groups(8) = &
+      ['model    ', 'constants', 'solver   ', 'output   ', 'fit      ', 'test     ', 'design   ', 'diagnose ']
    real(dp), parameter :: unset = -huge(1.0_dp)
    integer, parameter :: name_len = 256
 
@@ -54,6 +54,7 @@ contains
       if (.not. allocated(error)) call read_output(unit, cfg, error)
       if (.not. allocated(error)) call read_fit(unit, cfg, error)
       if (.not. allocated(error)) call read_design(unit, cfg, error)
+      if (.not. allocated(error)) call read_diagnose(unit, cfg, error)
       if (.not. allocated(error)) call read_tests(unit, cfg, error)
       ! A group without its closing '/' reads as the end of the file
       if (.not. allocated(error)) then
@@ -131,7 +132,7 @@ contains
          if (.not. any(trim(word) == known_groups)) then
             call fatal_error(error, path//':'//str(lineno)//':'//str(col)// &
                ': unknown namelist group &'//trim(word)//' (known: &model, &constants, '// &
-               '&solver, &output, &fit, &design, &test)')
+               '&solver, &output, &fit, &design, &diagnose, &test)')
             return
          end if
       end do
@@ -429,6 +430,54 @@ contains
       ! The methods other than the original's search in log10 of the constants
       if (method /= 'hooke-jeeves') cfg%fit%log_search = .true.
    end subroutine read_fit
+
+   subroutine read_diagnose(unit, cfg, error)
+      integer, intent(in) :: unit
+      type(run_config), intent(inout) :: cfg
+      type(error_type), allocatable, intent(out) :: error
+      character(len=64) :: holdout(max_list)
+      character(len=16) :: effects(max_list)
+      real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise
+      integer :: n_refit, reps, seed, ios
+      character(len=512) :: msg
+      namelist /diagnose/ holdout, effects, n_refit, dlnE_dT, gamma3, confirm_shrink, reps, seed, noise
+      holdout = cfg%diagnose%holdout
+      effects = cfg%diagnose%effects
+      n_refit = cfg%diagnose%n_refit
+      dlnE_dT = cfg%diagnose%dlnE_dT
+      gamma3 = cfg%diagnose%gamma3
+      confirm_shrink = cfg%diagnose%confirm_shrink
+      reps = cfg%diagnose%reps
+      seed = cfg%diagnose%seed
+      noise = cfg%diagnose%noise
+      rewind (unit)
+      read (unit, nml=diagnose, iostat=ios, iomsg=msg)
+      if (ios /= 0 .and. .not. is_iostat_end(ios)) then
+         call nml_error(error, cfg%path, 'diagnose', ios, msg)
+         return
+      end if
+      if (n_refit < 1 .or. reps < 1) then
+         call fatal_error(error, cfg%path//': &diagnose: n_refit and reps must be >= 1')
+         return
+      end if
+      if (.not. (gamma3 > 0.0_dp) .or. .not. (noise > 0.0_dp)) then
+         call fatal_error(error, cfg%path//': &diagnose: gamma3 and noise must be > 0')
+         return
+      end if
+      if (.not. (confirm_shrink > 0.0_dp .and. confirm_shrink <= 1.0_dp)) then
+         call fatal_error(error, cfg%path//': &diagnose: confirm_shrink must lie in (0, 1]')
+         return
+      end if
+      cfg%diagnose%holdout = holdout
+      cfg%diagnose%effects = effects
+      cfg%diagnose%n_refit = n_refit
+      cfg%diagnose%dlnE_dT = dlnE_dT
+      cfg%diagnose%gamma3 = gamma3
+      cfg%diagnose%confirm_shrink = confirm_shrink
+      cfg%diagnose%reps = reps
+      cfg%diagnose%seed = seed
+      cfg%diagnose%noise = noise
+   end subroutine read_diagnose
 
    subroutine read_design(unit, cfg, error)
       integer, intent(in) :: unit

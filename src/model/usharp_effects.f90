@@ -1,0 +1,201 @@
+!> Effects the Miller model leaves out, for `usharp diagnose`: each is a documented extension
+!> of the simulation or of the measurement with its own parameters, and each is neutral when
+!> its parameters are zero. test_effects holds what one test's simulation sees; the catalogue
+!> names the effects, their parameters (global or one per test) and their scales.
+!>
+!> Units: stresses in the model's unit, times in s, temperatures in K.
+module usharp_effects
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_miller, only: miller_model, flow_rate, back_recovery, drag_recovery, model_setup
+   implicit none
+   private
+
+   public :: test_effects, effect_info, n_effects, effect_catalogue, effect_index
+   public :: effects_of, extended_rates, n_extended, lagged_value, effect_nparams
+   public :: param_global, param_per_test, effect_model
+
+   !> States of the extended model: eps_in, R, D, accumulated inelastic strain p, R2
+   integer, parameter :: n_extended = 5
+   !> How an effect's parameter is shared: one value for all tests, or one per test
+   integer, parameter :: param_global = 1, param_per_test = 2
+   !> Number of effects in the catalogue
+   integer, parameter :: n_effects = 8
+
+   !> What one test's simulation sees (all zero: the plain Miller model)
+   type :: test_effects
+      real(dp) :: compliance = 0.0_dp  !< kappa: machine strain kappa*sigma/E in the measured strain (-)
+      real(dp) :: lag = 0.0_dp         !< s, first-order lag of the applied control value
+      real(dp) :: dtemp = 0.0_dp       !< K, offset of the test temperature
+      real(dp) :: dlnE_dT = 0.0_dp     !< 1/K, d ln E / dT used with dtemp
+      real(dp) :: modulus = 0.0_dp     !< relative change of E (specimen scatter)
+      real(dp) :: strength = 0.0_dp    !< relative change of D0 (specimen scatter)
+      real(dp) :: r0 = 0.0_dp          !< initial back stress, model unit
+      real(dp) :: dd0 = 0.0_dp         !< offset of the initial drag stress, model unit
+      real(dp) :: shift = 0.0_dp       !< s, the stress channel lags the strain channel
+      real(dp) :: soften = 0.0_dp      !< -, drag in the flow law D*exp(-soften*p)
+      real(dp) :: h3 = 0.0_dp          !< model unit, modulus of the second back stress
+      real(dp) :: gamma3 = 0.0_dp      !< -, its dynamic recovery: dR2 = H3 deps_in - gamma3 R2 dp
+   end type test_effects
+
+   !> One catalogue entry
+   type :: effect_info
+      character(len=16) :: name = ''
+      character(len=96) :: what = ''
+      integer :: nparam = 0                  !< parameters per group (global or per test)
+      integer :: sharing = param_global
+      character(len=12) :: pname(2) = ''
+      character(len=12) :: punit(2) = ''
+      real(dp) :: scale(2) = 1.0_dp          !< unit of the search variable (step 1e-3 of it)
+      logical :: nonneg(2) = .false.         !< parameter kept >= 0
+      logical :: screened(2) = .true.        !< has a gradient at zero (used in screening)
+   end type effect_info
+
+contains
+
+   !> The catalogue. Scales are in the model's units where a stress enters (peak: a typical
+   !> stress of the data, model unit).
+   pure function effect_catalogue(peak) result(cat)
+      real(dp), intent(in) :: peak
+      type(effect_info) :: cat(n_effects)
+      cat(1) = effect_info('compliance', 'load-train/extensometer compliance: measured strain '// &
+         'includes kappa*sigma/E', 1, param_global, ['kappa       ', '            '], &
+         ['-           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+      cat(2) = effect_info('lag', 'control tracking error: applied value lags the command, '// &
+         'first order, time constant tau', 1, param_global, ['tau         ', '            '], &
+         ['s           ', '            '], [1.0_dp, 1.0_dp], [.true., .false.], [.true., .true.])
+      cat(3) = effect_info('temperature', 'temperature offset per test: theta(T+dT) and '// &
+         'E(T+dT)', 1, param_per_test, ['dT          ', '            '], &
+         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+      cat(4) = effect_info('scatter', 'specimen-to-specimen scatter: per-test factors on E '// &
+         'and on the initial drag stress', 2, param_per_test, ['dE/E        ', 'dD0/D0      '], &
+         ['-           ', '-           '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+      cat(5) = effect_info('initial', 'initial state other than virgin: back stress R0 and '// &
+         'drag offset dD0', 2, param_global, ['R0          ', 'dD0         '], &
+         ['stress      ', 'stress      '], [peak, peak], [.false., .false.], &
+         [.true., .true.])
+      cat(6) = effect_info('shift', 'time offset: the stress channel lags the strain '// &
+         'channel by delta', 1, param_global, ['delta       ', '            '], &
+         ['s           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+      cat(7) = effect_info('softening', 'cyclic softening/damage: drag in the flow law '// &
+         'reduced as D*exp(-s*p), p accumulated inelastic strain', 1, param_global, &
+         ['s           ', '            '], ['-           ', '            '], [1.0_dp, 1.0_dp], &
+         [.false., .false.], [.true., .true.])
+      cat(8) = effect_info('backstress2', 'second back stress of faster rate: '// &
+         'dR2 = H3 deps_in - gamma3 R2 |deps_in|', 2, param_global, ['H3          ', &
+         'gamma3      '], ['stress      ', '-           '], [peak, 1000.0_dp], &
+         [.true., .true.], [.true., .false.])
+   end function effect_catalogue
+
+   !> Catalogue index of an effect by name, 0 when there is none
+   pure integer function effect_index(name) result(k)
+      character(len=*), intent(in) :: name
+      type(effect_info) :: cat(n_effects)
+      integer :: i
+      cat = effect_catalogue(1.0_dp)
+      k = 0
+      do i = 1, n_effects
+         if (trim(cat(i)%name) == trim(adjustl(name))) k = i
+      end do
+   end function effect_index
+
+   !> Number of parameters of effect k for ntests tests
+   pure integer function effect_nparams(info, ntests) result(np)
+      type(effect_info), intent(in) :: info
+      integer, intent(in) :: ntests
+      np = info%nparam
+      if (info%sharing == param_per_test) np = np*ntests
+   end function effect_nparams
+
+   !> Per-test effects of effect k with parameters p (in physical units; per-test effects
+   !> ordered parameter-major: all tests' first parameter, then the second); eff_base holds
+   !> what is set regardless (dlnE_dT, the fixed gamma3 of screening)
+   pure function effects_of(k, p, ntests, eff_base) result(eff)
+      integer, intent(in) :: k, ntests
+      real(dp), intent(in) :: p(:)
+      type(test_effects), intent(in) :: eff_base
+      type(test_effects) :: eff(ntests)
+      integer :: i
+      eff = eff_base
+      select case (k)
+      case (1)
+         eff%compliance = p(1)
+      case (2)
+         eff%lag = p(1)
+      case (3)
+         do i = 1, ntests
+            eff(i)%dtemp = p(i)
+         end do
+      case (4)
+         do i = 1, ntests
+            eff(i)%modulus = p(i)
+            eff(i)%strength = p(ntests + i)
+         end do
+      case (5)
+         eff%r0 = p(1)
+         eff%dd0 = p(2)
+      case (6)
+         eff%shift = p(1)
+      case (7)
+         eff%soften = p(1)
+      case (8)
+         eff%h3 = p(1)
+         if (size(p) > 1) eff%gamma3 = p(2)
+      end select
+   end function effects_of
+
+   !> The model a test with effects eff sees: temperature T + dT, modulus
+   !> E*(1 + dE/E)*(1 + dlnE_dT*dT), set up again (B*theta and D0 follow the temperature)
+   pure subroutine effect_model(model, eff, out, error)
+      type(miller_model), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      type(miller_model), intent(out) :: out
+      type(error_type), allocatable, intent(out) :: error
+      out = model
+      out%temperature = model%temperature + eff%dtemp
+      out%youngs = model%youngs*(1.0_dp + eff%modulus)*(1.0_dp + eff%dlnE_dT*eff%dtemp)
+      call model_setup(out, error)
+   end subroutine effect_model
+
+   !> Value of a piecewise-linear control (corners tc, vc) seen through a first-order lag of
+   !> time constant tau (s) starting at rest on vc(1), at time t in segment k; yk(k) holds the
+   !> lagged value at corner k (from lag_corners). On a segment of slope s the lag solves to
+   !> y = u - s*tau + (y_k - u_k + s*tau)*exp(-(t - t_k)/tau).
+   pure subroutine lagged_value(tc, vc, yk, k, tau, t, y, ydot)
+      real(dp), intent(in) :: tc(:), vc(:), yk(:), tau, t
+      integer, intent(in) :: k
+      real(dp), intent(out) :: y, ydot
+      real(dp) :: s, u, e
+      s = (vc(k + 1) - vc(k))/(tc(k + 1) - tc(k))
+      u = vc(k) + s*(t - tc(k))
+      if (tau <= 0.0_dp) then
+         y = u
+         ydot = s
+         return
+      end if
+      e = exp(-(t - tc(k))/tau)
+      y = u - s*tau + (yk(k) - vc(k) + s*tau)*e
+      ydot = s - (yk(k) - vc(k) + s*tau)*e/tau
+   end subroutine lagged_value
+
+   !> Rates of the extended state y = (eps_in, R, D, p, R2) at stress sigma: Miller's
+   !> Eqs. 2-4 with the flow driven by sigma - R - R2 and the drag D*exp(-soften*p) in the
+   !> flow law; dp/dt = |deps_in/dt|; dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt.
+   pure subroutine extended_rates(model, eff, sigma, y, ydot)
+      type(miller_model), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(in) :: sigma, y(n_extended)
+      real(dp), intent(out) :: ydot(n_extended)
+      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow
+      s = sigma - y(2) - y(5)
+      d_flow = y(3)*exp(-eff%soften*y(4))
+      call flow_rate(model, abs(s), d_flow, f, f_x, f_d)
+      call back_recovery(model, abs(y(2)), g, g_r)
+      call drag_recovery(model, y(3), h, h_d)
+      ydot(1) = sign(f, s)
+      ydot(2) = model%c%h1*ydot(1) - sign(g, y(2))
+      ydot(3) = model%c%h2*f*(model%c%c2 + abs(y(2)) - model%c%a2/model%c%a1*y(3)**3) - h
+      ydot(4) = f
+      ydot(5) = eff%h3*ydot(1) - eff%gamma3*y(5)*f
+   end subroutine extended_rates
+end module usharp_effects

@@ -1,0 +1,932 @@
+!> `usharp diagnose`: where a fit's gap to the data lies, which catalogue effect explains it
+!> and how far adding the effect closes it, also on tests held out of the fit.
+!>
+!> 1. The fit tests are fitted without any effect (Levenberg-Marquardt from the given
+!>    constants); its residual is split into regions (usharp_regions) and set against the noise
+!>    level estimated from each test's data.
+!> 2. Screening (score or Lagrange-multiplier test): at that fit, the Gauss-Newton decrease of
+!>    the objective that an effect's parameters could give beyond what the constants can
+!>    still give, from the forward-difference Jacobian; its BIC change is predicted.
+!> 3. The leading candidates are refitted with the constants (the effect's magnitude gets a 95 %
+!>    interval from s**2 (J'J)^-1), compared by AIC and BIC, and tried on the held-out tests:
+!>    global parameters carry over, per-test parameters of a held-out test are fitted to it
+!>    with the constants fixed. Significant: BIC falls by more than bic_margin; confirmed: also
+!>    the structured gap of the held-out tests shrinks by at least confirm_shrink.
+module usharp_diagnose
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_input, stat_failure
+   use usharp_strings, only: str, real_str
+   use usharp_miller, only: constant_names, get_constant, set_constant, miller_constants, miller_model
+   use usharp_config, only: run_config
+   use usharp_objective, only: fit_problem, setup_problem, test_residuals
+   use usharp_experiment, only: experiment_type, fits_strain
+   use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
+                             effect_nparams, param_per_test
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_regions, only: region_stat, region_of, point_classes, noise_sd, class_names
+   use usharp_levenberg, only: levenberg_marquardt
+   use usharp_optimiser, only: optimum_type
+   use usharp_lapack, only: svd
+   implicit none
+   private
+
+   public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
+   public :: gn_decrease, diagnose_options_of
+
+   !> BIC must fall by more than this for an effect to be significant (strong evidence)
+   real(dp), parameter :: bic_margin = 10.0_dp
+
+   !> Settings of a diagnosis (&diagnose group)
+   type :: diagnose_options
+      integer, allocatable :: holdout(:)     !< tests held out of the fit
+      integer, allocatable :: effects(:)     !< catalogue effects considered
+      integer :: n_refit = 3                 !< leading candidates refitted
+      real(dp) :: dlnE_dT = -4.0e-4_dp       !< 1/K, temperature slope of ln E
+      real(dp) :: gamma3 = 200.0_dp          !< -, second back stress recovery in screening
+      real(dp) :: confirm_shrink = 0.5_dp    !< held-out structured gap removed to confirm
+      real(dp) :: converged_tol = 0.01_dp    !< largest Gauss-Newton decrease of a converged fit
+      logical :: check_converged = .true.
+      integer :: max_evals = 3000            !< per refit
+   end type diagnose_options
+
+   !> One effect: screening, and the refit when it led
+   type :: effect_outcome
+      integer :: k = 0
+      character(len=16) :: name = ''
+      integer :: q = 0                       !< free parameters in the fit
+      real(dp) :: pred_drop = 0.0_dp         !< screening: predicted fall of the objective
+      real(dp) :: pred_dbic = 0.0_dp         !< screening: predicted BIC change (negative: better)
+      logical :: refitted = .false.
+      real(dp) :: f_after = 0.0_dp
+      real(dp), allocatable :: per_test_after(:)
+      real(dp), allocatable :: p(:), p_lo(:), p_hi(:)  !< fitted parameters, 95 % interval
+      real(dp), allocatable :: x(:)          !< search point after screening
+      character(len=24), allocatable :: pname(:)
+      real(dp), allocatable :: c(:)          !< constants of the refit
+      real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
+      real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
+      real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
+      logical :: significant = .false., confirmed = .false.
+      integer :: nevals = 0
+      type(region_stat), allocatable :: regions(:)
+      real(dp), allocatable :: y(:)          !< responses with the effect, all tests
+   end type effect_outcome
+
+   !> The whole diagnosis
+   type :: diagnose_result
+      character(len=40), allocatable :: names(:)
+      character(len=32), allocatable :: unit(:)   !< response and unit per test
+      logical, allocatable :: held(:)
+      real(dp), allocatable :: noise(:)           !< noise sd per test, response unit
+      real(dp), allocatable :: peak(:)
+      real(dp), allocatable :: c0(:), c(:)        !< constants given and of the baseline fit
+      character(len=2), allocatable :: cnames(:)
+      real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
+      real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)
+      real(dp) :: noise_fit = 0.0_dp, noise_held = 0.0_dp  !< objective the noise explains
+      real(dp) :: gap_fit = 0.0_dp, gap_held = 0.0_dp      !< structured gaps at the baseline
+      integer :: m = 0                            !< residuals of the fit tests
+      type(region_stat), allocatable :: regions(:)
+      type(effect_outcome), allocatable :: effects(:)  !< sorted by pred_dbic
+      integer :: leading = 0                      !< index into effects, 0: none confirmed
+      character(len=:), allocatable :: verdict
+      integer :: nevals = 0
+      ! For the plots: every point of every test
+      integer, allocatable :: test_of(:), cls(:)
+      real(dp), allocatable :: t(:), y_ex(:), y_base(:)
+   end type diagnose_result
+
+contains
+
+   !> The options of cfg's &diagnose group with names resolved: unknown effects or tests are
+   !> errors naming the file, group and variable; no effects given: the whole catalogue
+   subroutine diagnose_options_of(cfg, opts, error)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(out) :: opts
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_info) :: cat(n_effects)
+      integer :: i, j, k
+      cat = effect_catalogue(1.0_dp)
+      allocate (opts%holdout(0), opts%effects(0))
+      do i = 1, size(cfg%diagnose%holdout)
+         if (len_trim(cfg%diagnose%holdout(i)) == 0) cycle
+         k = 0
+         do j = 1, size(cfg%tests)
+            if (cfg%tests(j)%name == trim(cfg%diagnose%holdout(i))) k = j
+         end do
+         if (k == 0) then
+            call fatal_error(error, cfg%path//": &diagnose: holdout: no &test is named '"// &
+               trim(cfg%diagnose%holdout(i))//"'", stat_input)
+            return
+         end if
+         opts%holdout = [opts%holdout, k]
+      end do
+      do i = 1, size(cfg%diagnose%effects)
+         if (len_trim(cfg%diagnose%effects(i)) == 0) cycle
+         k = 0
+         do j = 1, n_effects
+            if (trim(cat(j)%name) == trim(adjustl(cfg%diagnose%effects(i)))) k = j
+         end do
+         if (k == 0) then
+            call fatal_error(error, cfg%path//": &diagnose: effects: no effect is named '"// &
+               trim(cfg%diagnose%effects(i))//"' (known: "//catalogue_names(cat)//')', stat_input)
+            return
+         end if
+         opts%effects = [opts%effects, k]
+      end do
+      if (size(opts%effects) == 0) opts%effects = [(k, k=1, n_effects)]
+      opts%n_refit = cfg%diagnose%n_refit
+      opts%dlnE_dT = cfg%diagnose%dlnE_dT
+      opts%gamma3 = cfg%diagnose%gamma3
+      opts%confirm_shrink = cfg%diagnose%confirm_shrink
+   end subroutine diagnose_options_of
+
+   pure function catalogue_names(cat) result(text)
+      type(effect_info), intent(in) :: cat(:)
+      character(len=:), allocatable :: text
+      integer :: j
+      text = trim(cat(1)%name)
+      do j = 2, size(cat)
+         text = text//', '//trim(cat(j)%name)
+      end do
+   end function catalogue_names
+
+   !> Diagnose the fit of cfg's tests at cfg's constants; experiments: the data given directly
+   subroutine diagnose_run(cfg, opts, res, error, experiments)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(diagnose_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
+      type(fit_problem) :: prob
+      type(effect_problem) :: base_all, base
+      type(optimum_type) :: opt
+      type(test_effects) :: eff_base
+      type(effect_info) :: cat(n_effects)
+      integer, allocatable :: ifit(:), ihold(:)
+      real(dp), allocatable :: lo(:), hi(:), r0(:), jc(:, :), yb(:), nv(:), sc(:)
+      real(dp) :: peak, f
+      integer :: nt, i, j, m
+      logical :: ok
+
+      call setup_problem(cfg, prob, error, experiments)
+      if (allocated(error)) return
+      nt = size(cfg%tests)
+      do i = 1, nt
+         if (cfg%tests(i)%ext%enabled .or. cfg%solver%integrator /= 'cvode') then
+            call fatal_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': diagnose "// &
+               'simulates with the internal CVODE integrator (no external backend, integrator = ''cvode'')', &
+               stat_input)
+            return
+         end if
+      end do
+      allocate (res%held(nt))
+      res%held = .false.
+      res%held(opts%holdout) = .true.
+      ifit = pack([(i, i=1, nt)], .not. res%held)
+      ihold = pack([(i, i=1, nt)], res%held)
+      if (size(ihold) == 0) then
+         call fatal_error(error, cfg%path//': &diagnose: holdout: the held-out set is empty; '// &
+            'name the tests to predict (held out of the fit)', stat_input)
+         return
+      end if
+      if (size(ifit) == 0) then
+         call fatal_error(error, cfg%path//': &diagnose: holdout: every test is held out; '// &
+            'nothing is left to fit', stat_input)
+         return
+      end if
+      allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt))
+      do i = 1, nt
+         res%names(i) = cfg%tests(i)%name
+         res%unit(i) = merge('strain (-)     ', 'stress ('//cfg%units//')   ', fits_strain(cfg%tests(i)))
+         res%noise(i) = noise_sd(prob%targets(i)%exp%y)
+         res%peak(i) = prob%targets(i)%y_ex_max
+      end do
+      peak = maxval(res%peak)
+      eff_base%dlnE_dT = opts%dlnE_dT
+      eff_base%gamma3 = opts%gamma3
+      cat = effect_catalogue(peak)
+      res%cnames = constant_names(prob%idx)
+      res%c0 = [(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+
+      ! The fit must have converged: no Gauss-Newton step may lower it much
+      if (opts%check_converged) then
+         call new_effect_problem(prob, [(i, i=1, nt)], 0, eff_base, peak, base_all)
+         call jacobian(base_all, base_all%start(), cfg%fit%fd_step, r0, jc, ok)
+         if (.not. ok) then
+            call fatal_error(error, cfg%path//': the model fails near the given constants: '// &
+               'is this the fit''s best.nml?', stat_input)
+            return
+         end if
+         call base_all%bounds(lo, hi)
+         f = sum(r0**2)
+         sc = free_step_drop(jc, r0, base_all%start(), lo, hi)
+         if (sc(1) > opts%converged_tol*f) then
+            call fatal_error(error, cfg%path//': the fit has not converged: a Gauss-Newton '// &
+               'step lowers its objective '//real_str(f, 'es10.3')//' by '// &
+               real_str(100.0_dp*sc(1)/f, 'f0.1')//' %; finish it (usharp run) and pass its '// &
+               'best.nml with -c', stat_input)
+            return
+         end if
+         res%nevals = res%nevals + base_all%nevals
+      end if
+
+      ! Baseline: the fit tests without any effect
+      call new_effect_problem(prob, ifit, 0, eff_base, peak, base)
+      call base%bounds(lo, hi)
+      call levenberg_marquardt(base, base%start(), lo, hi, cfg%fit%fd_step, 1.0e-9_dp, 100, &
+                               opts%max_evals, opt, error)
+      if (allocated(error)) return
+      res%nevals = res%nevals + opt%nevals
+      res%c = 10.0_dp**opt%x
+      prob%cfg%model%c = constants_at(prob, opt%x)
+      res%f0 = opt%f
+      res%m = base%nres()
+
+      ! Baseline residuals of every test (held-out ones: the prediction) and their regions
+      call new_effect_problem(prob, [(i, i=1, nt)], 0, eff_base, peak, base_all)
+      m = base_all%nres()
+      allocate (r0(m), yb(m))
+      call base_all%residual_at(base_all%start(), r0, ok, yb)
+      if (.not. ok) then
+         call fatal_error(error, 'the baseline fit fails to simulate a held-out test', stat_failure)
+         return
+      end if
+      call points_of(prob, res)
+      res%y_base = yb
+      nv = noise_variance(prob, res%noise)
+      res%per_test0 = per_test(prob, r0)
+      res%regions = all_regions(prob, res, r0, yb, nv)
+      res%noise_fit = sum(nv, .not. res%held(res%test_of))
+      res%noise_held = sum(nv, res%held(res%test_of))
+      res%gap_fit = max(sum(r0**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
+      res%gap_held = max(sum(r0**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
+
+      call screen(prob, ifit, opts, eff_base, peak, cat, cfg%fit%fd_step, res, error)
+      if (allocated(error)) return
+      do j = 1, min(opts%n_refit, size(res%effects))
+         if (res%effects(j)%pred_drop <= 0.0_dp) cycle
+         call refit(prob, ifit, ihold, opts, eff_base, peak, cfg%fit%fd_step, res, nv, &
+                    res%effects(j), error)
+         if (allocated(error)) return
+      end do
+      call conclude(res)
+   end subroutine diagnose_run
+
+   !> Constants of the model at x (log10 of the fitted constants)
+   pure function constants_at(prob, x) result(c)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: x(:)
+      type(miller_constants) :: c
+      integer :: j
+      c = prob%cfg%model%c
+      do j = 1, size(prob%idx)
+         call set_constant(c, prob%idx(j), 10.0_dp**x(j))
+      end do
+   end function constants_at
+
+   !> Forward-difference Jacobian of ep's residuals at x (step h, backwards at an upper bound)
+   !> and the residuals r0 there, as one parallel batch; ok false if a point failed
+   subroutine jacobian(ep, x, h, r0, jac, ok)
+      type(effect_problem), intent(inout) :: ep
+      real(dp), intent(in) :: x(:), h
+      real(dp), allocatable, intent(out) :: r0(:), jac(:, :)
+      logical, intent(out) :: ok
+      real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), lo(:), hi(:), step(:)
+      logical, allocatable :: oks(:)
+      type(error_type), allocatable :: error
+      integer :: n, j
+      n = size(x)
+      call ep%bounds(lo, hi)
+      allocate (xs(n, n + 1), rs(ep%nres(), n + 1), fs(n + 1), oks(n + 1), step(n))
+      do j = 1, n + 1
+         xs(:, j) = x
+      end do
+      do j = 1, n
+         step(j) = merge(-h, h, x(j) + h > hi(j))
+         xs(j, j + 1) = x(j) + step(j)
+      end do
+      call ep%residuals(xs, rs, fs, oks, error)
+      ok = oks(1) .and. .not. allocated(error)
+      if (ok .and. .not. all(oks)) then
+         ! A step that failed (the model's admissible region ends there) goes the other way
+         do j = 1, n
+            if (oks(j + 1)) cycle
+            step(j) = -step(j)
+            xs(j, j + 1) = x(j) + step(j)
+         end do
+         call ep%residuals(xs, rs, fs, oks, error)
+         ok = all(oks) .and. .not. allocated(error)
+      end if
+      r0 = rs(:, 1)
+      allocate (jac(size(r0), n))
+      do j = 1, n
+         jac(:, j) = (rs(:, j + 1) - r0)/step(j)
+      end do
+   end subroutine jacobian
+
+   !> Gauss-Newton decrease g'(J'J)^+ g (g = J'r) of sum(r**2) in the span of the columns of
+   !> jac, and the step -(J'J)^+ g; columns scaled to unit norm, directions below 1e-10 of the
+   !> largest singular value of the scaled normal matrix dropped
+   pure subroutine gn_decrease(jac, r, drop, step)
+      real(dp), intent(in) :: jac(:, :), r(:)
+      real(dp), intent(out) :: drop
+      real(dp), intent(out), optional :: step(:)
+      real(dp) :: a(size(jac, 2), size(jac, 2)), v(size(jac, 2), size(jac, 2)), s(size(jac, 2))
+      real(dp) :: g(size(jac, 2)), d(size(jac, 2)), c(size(jac, 2))
+      integer :: j, info
+      a = matmul(transpose(jac), jac)
+      g = matmul(transpose(jac), r)
+      do j = 1, size(d)
+         d(j) = sqrt(a(j, j))
+         if (d(j) <= 0.0_dp) d(j) = 1.0_dp
+      end do
+      do j = 1, size(d)
+         a(:, j) = a(:, j)/(d*d(j))
+      end do
+      g = g/d
+      call svd(a, s, v, info)
+      drop = 0.0_dp
+      c = 0.0_dp
+      if (info /= 0) return
+      do j = 1, size(s)
+         if (s(j) <= 1.0e-10_dp*s(1)) exit
+         c = c + v(:, j)*dot_product(v(:, j), g)/s(j)
+         drop = drop + dot_product(v(:, j), g)**2/s(j)
+      end do
+      if (present(step)) step = -c/d
+   end subroutine gn_decrease
+
+   !> Gauss-Newton decrease over the constants not at a bound (a converged fit has none)
+   pure real(dp) function free_step_drop(jac, r, x, lo, hi) result(drop)
+      real(dp), intent(in) :: jac(:, :), r(:), x(:), lo(:), hi(:)
+      logical :: free(size(x))
+      integer :: j, k
+      real(dp), allocatable :: jf(:, :)
+      free = x > lo + 1.0e-6_dp .and. x < hi - 1.0e-6_dp
+      allocate (jf(size(jac, 1), count(free)))
+      k = 0
+      do j = 1, size(x)
+         if (.not. free(j)) cycle
+         k = k + 1
+         jf(:, k) = jac(:, j)
+      end do
+      call gn_decrease(jf, r, drop)
+   end function free_step_drop
+
+   !> Every point of every test in one list: time, data, test, history class
+   subroutine points_of(prob, res)
+      type(fit_problem), intent(in) :: prob
+      type(diagnose_result), intent(inout) :: res
+      integer :: i, n
+      integer, allocatable :: cls(:), cyc(:)
+      logical, allocatable :: el(:)
+      allocate (res%t(0), res%y_ex(0), res%test_of(0), res%cls(0))
+      do i = 1, size(prob%targets)
+         n = size(prob%targets(i)%t)
+         allocate (cls(n), cyc(n), el(n))
+         call point_classes(prob%cfg%tests(i)%hist, prob%targets(i)%t, prob%targets(i)%y_ex, &
+                            1.0_dp, cls, cyc, el)
+         res%t = [res%t, prob%targets(i)%t]
+         res%y_ex = [res%y_ex, prob%targets(i)%y_ex]
+         res%test_of = [res%test_of, spread(i, 1, n)]
+         res%cls = [res%cls, cls]
+         deallocate (cls, cyc, el)
+      end do
+   end subroutine points_of
+
+   !> Noise variance of each weighted residual from the noise sd of its test's data
+   function noise_variance(prob, sd) result(nv)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: sd(:)
+      real(dp), allocatable :: nv(:)
+      integer :: i, n
+      allocate (nv(0))
+      do i = 1, size(prob%targets)
+         associate (tg => prob%targets(i))
+            n = size(tg%t)
+            nv = [nv, (sd(i)*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), &
+                                             spread(0.0_dp, 1, n), tg%w, tg%y_ex_max))**2]
+         end associate
+      end do
+   end function noise_variance
+
+   !> Objective per test from the residuals of all tests
+   function per_test(prob, r) result(pt)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: r(:)
+      real(dp) :: pt(size(prob%targets))
+      integer :: i, k0, n
+      k0 = 0
+      do i = 1, size(prob%targets)
+         n = size(prob%targets(i)%t)
+         pt(i) = sum(r(k0 + 1:k0 + n)**2)
+         k0 = k0 + n
+      end do
+   end function per_test
+
+   !> Regions of every test: the whole test, each history class, each cycle, elastic and
+   !> inelastic points (threshold: the test's weighting threshold, else the model's YS)
+   function all_regions(prob, res, r, ysim, nv) result(regs)
+      type(fit_problem), intent(in) :: prob
+      type(diagnose_result), intent(in) :: res
+      real(dp), intent(in) :: r(:), ysim(:), nv(:)
+      type(region_stat), allocatable :: regs(:)
+      integer, allocatable :: cls(:), cyc(:)
+      logical, allocatable :: el(:)
+      real(dp), allocatable :: e(:)
+      real(dp) :: thr
+      integer :: i, k0, n, c
+      character(len=:), allocatable :: tag
+      allocate (regs(0))
+      k0 = 0
+      do i = 1, size(prob%targets)
+         associate (tg => prob%targets(i), test => prob%cfg%tests(i))
+            n = size(tg%t)
+            thr = prob%cfg%model%d0_yield
+            if (test%weighting == 'threshold' .and. test%sig > 0.0_dp) thr = test%sig
+            if (fits_strain(test)) thr = huge(1.0_dp)
+            allocate (cls(n), cyc(n), el(n))
+            call point_classes(test%hist, tg%t, tg%y_ex, thr, cls, cyc, el)
+            e = tg%y_ex - ysim(k0 + 1:k0 + n)
+            tag = trim(res%names(i))
+            if (res%held(i)) tag = tag//' (held out)'
+            associate (rr => r(k0 + 1:k0 + n), vv => nv(k0 + 1:k0 + n))
+               regs = [regs, region_of(tag, 'whole test', spread(.true., 1, n), rr, e, vv)]
+               do c = 1, size(class_names)
+                  if (any(cls == c)) regs = [regs, region_of(tag, trim(class_names(c)), cls == c, rr, e, vv)]
+               end do
+               if (.not. fits_strain(test)) then
+                  regs = [regs, region_of(tag, 'elastic', el, rr, e, vv)]
+                  regs = [regs, region_of(tag, 'inelastic', .not. el, rr, e, vv)]
+               end if
+               do c = 1, maxval(cyc)
+                  if (any(cyc == c)) regs = [regs, region_of(tag, 'cycle '//str(c), cyc == c, rr, e, vv)]
+               end do
+            end associate
+            deallocate (cls, cyc, el)
+            k0 = k0 + n
+         end associate
+      end do
+   end function all_regions
+
+   !> Which parameters of effect k are free on the tests `tests` (per-test parameters of the
+   !> other tests stay 0); screening leaves the rate of the second back stress fixed
+   pure function free_params(ep, tests, screening) result(free)
+      type(effect_problem), intent(in) :: ep
+      integer, intent(in) :: tests(:)
+      logical, intent(in) :: screening
+      logical :: free(size(ep%p0))
+      type(effect_info) :: cat(n_effects)
+      integer :: nt, j, i
+      cat = effect_catalogue(1.0_dp)
+      nt = size(ep%prob%targets)
+      free = .true.
+      if (cat(ep%k)%sharing == param_per_test) then
+         do j = 1, size(free)
+            i = mod(j - 1, nt) + 1
+            free(j) = any(tests == i)
+         end do
+      else if (screening) then
+         free = free .and. cat(ep%k)%screened(1:size(free))
+      end if
+   end function free_params
+
+   !> Score screening of every considered effect at the baseline fit; effects sorted by the
+   !> predicted change of BIC
+   subroutine screen(prob, ifit, opts, eff_base, peak, cat, h, res, error)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: ifit(:)
+      type(diagnose_options), intent(in) :: opts
+      type(test_effects), intent(in) :: eff_base
+      real(dp), intent(in) :: peak, h
+      type(effect_info), intent(in) :: cat(:)
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_problem) :: base, ep
+      type(optimum_type) :: opt
+      real(dp), allocatable :: r0(:), jc(:, :), je(:, :), rr(:), x(:), step(:), lo(:), hi(:)
+      real(dp) :: d0, d1, s
+      integer :: i, k, nc, q
+      logical :: ok
+      type(effect_outcome) :: tmp
+      call new_effect_problem(prob, ifit, 0, eff_base, peak, base)
+      call jacobian(base, base%start(), h, r0, jc, ok)
+      if (.not. ok) then
+         call fatal_error(error, 'screening: the model fails near the baseline fit', stat_failure)
+         return
+      end if
+      res%nevals = res%nevals + base%nevals
+      call gn_decrease(jc, r0, d0)
+      s = sum(r0**2)
+      nc = size(prob%idx)
+      allocate (res%effects(size(opts%effects)))
+      do i = 1, size(opts%effects)
+         k = opts%effects(i)
+         call new_effect_problem(prob, ifit, k, eff_base, peak, ep)
+         if (k == 8) ep%p0(2) = opts%gamma3
+         ep%pfree = free_params(ep, ifit, .true.)
+         x = ep%start()
+         call jacobian(ep, x, h, rr, je, ok)
+         res%nevals = res%nevals + ep%nevals
+         res%effects(i)%k = k
+         res%effects(i)%name = cat(k)%name
+         q = count(ep%pfree)
+         res%effects(i)%q = q
+         if (.not. ok) cycle
+         allocate (step(nc + q))
+         call gn_decrease(reshape([jc, je(:, nc + 1:)], [size(r0), nc + q]), r0, d1, step)
+         deallocate (step)
+         ! The score test is linear: an effect whose first steps leave the valley of the
+         ! constants shows only after a few nonlinear steps, so a short Levenberg-Marquardt
+         ! run (3 Jacobians) from the baseline screens too; the refit continues from it
+         call effect_fit(prob, ifit, k, opts, eff_base, peak, ep)
+         call ep%bounds(lo, hi)
+         x = ep%start()
+         call levenberg_marquardt(ep, min(max(x, lo), hi), lo, hi, h, 1.0e-9_dp, 3, opts%max_evals, &
+                                  opt, error)
+         if (allocated(error)) return
+         res%nevals = res%nevals + opt%nevals
+         res%effects(i)%x = opt%x
+         res%effects(i)%q = count(ep%pfree)
+         q = res%effects(i)%q
+         res%effects(i)%pred_drop = max(d1 - d0, s - opt%f, 0.0_dp)
+         res%effects(i)%pred_dbic = size(r0)*log(max(s - res%effects(i)%pred_drop, 1.0e-3_dp*s)/s) &
+                                    + q*log(real(size(r0), dp))
+      end do
+      ! Insertion sort by predicted BIC change
+      do i = 2, size(res%effects)
+         tmp = res%effects(i)
+         k = i - 1
+         do while (k >= 1)
+            if (res%effects(k)%pred_dbic <= tmp%pred_dbic) exit
+            res%effects(k + 1) = res%effects(k)
+            k = k - 1
+         end do
+         res%effects(k + 1) = tmp
+      end do
+   end subroutine screen
+
+   !> The fit of the constants with effect k on the fit tests, from the baseline constants
+   !> and zero effect (the second back stress from a small modulus, so that its rate has a
+   !> gradient)
+   subroutine effect_fit(prob, ifit, k, opts, eff_base, peak, ep)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: ifit(:), k
+      type(diagnose_options), intent(in) :: opts
+      type(test_effects), intent(in) :: eff_base
+      real(dp), intent(in) :: peak
+      type(effect_problem), intent(out) :: ep
+      call new_effect_problem(prob, ifit, k, eff_base, peak, ep)
+      ep%pfree = free_params(ep, ifit, .false.)
+      if (k == 8) ep%p0 = [0.01_dp*peak, opts%gamma3]
+   end subroutine effect_fit
+
+   !> Refit of the constants with effect e on, its interval, AIC/BIC and the held-out check
+   subroutine refit(prob, ifit, ihold, opts, eff_base, peak, h, res, nv, e, error)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: ifit(:), ihold(:)
+      type(diagnose_options), intent(in) :: opts
+      type(test_effects), intent(in) :: eff_base
+      real(dp), intent(in) :: peak, h
+      type(diagnose_result), intent(in) :: res
+      real(dp), intent(in) :: nv(:)
+      type(effect_outcome), intent(inout) :: e
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_problem) :: ep, eh, ea
+      type(optimum_type) :: opt
+      type(fit_problem) :: pk
+      type(effect_info) :: cat(n_effects)
+      real(dp), allocatable :: lo(:), hi(:), x0(:), r(:), jac(:, :), cov(:, :), se(:), y(:), p(:)
+      real(dp), allocatable :: pscale(:)
+      real(dp) :: s2, f0
+      integer :: m, nc, j, nt, g, i, n
+      logical :: ok
+      type(miller_model) :: mdl
+      cat = effect_catalogue(peak)
+      nt = size(prob%targets)
+      nc = size(prob%idx)
+      call effect_fit(prob, ifit, e%k, opts, eff_base, peak, ep)
+      call ep%bounds(lo, hi)
+      call levenberg_marquardt(ep, e%x, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
+      if (allocated(error)) return
+      e%refitted = .true.
+      e%nevals = opt%nevals
+      m = ep%nres()
+      e%f_after = opt%f
+      f0 = res%f0
+      e%q = count(ep%pfree)
+      e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
+      e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
+      ! Interval of the effect's parameters: s**2 (J'J)^-1 at the optimum
+      call jacobian(ep, opt%x, h, r, jac, ok)
+      n = size(opt%x)
+      s2 = opt%f/max(m - n, 1)
+      cov = pseudo_inverse(matmul(transpose(jac), jac))*s2
+      allocate (se(n))
+      do j = 1, n
+         se(j) = sqrt(max(cov(j, j), 0.0_dp))
+      end do
+      call ep%unpack(opt%x, mdl, p)
+      e%c = [(get_constant(mdl%c, prob%idx(j)), j=1, nc)]
+      pscale = pack(ep%pscale, ep%pfree)
+      e%p = pack(p, ep%pfree)
+      e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
+      e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
+      allocate (e%pname(0))
+      do j = 1, size(ep%p0)
+         if (.not. ep%pfree(j)) cycle
+         if (cat(e%k)%sharing == param_per_test) then
+            g = (j - 1)/nt + 1
+            i = mod(j - 1, nt) + 1
+            e%pname = [character(len=24) :: e%pname, trim(cat(e%k)%pname(g))//' '//trim(res%names(i))]
+         else
+            e%pname = [character(len=24) :: e%pname, cat(e%k)%pname(j)]
+         end if
+      end do
+
+      ! Held-out tests: constants and global parameters carried over; per-test parameters of
+      ! a held-out test fitted to it with the constants fixed
+      pk = prob
+      pk%cfg%model%c = mdl%c
+      call new_effect_problem(pk, ihold, e%k, eff_base, peak, eh, free_constants=.false., p0=p)
+      eh%pfree = .false.
+      if (cat(e%k)%sharing == param_per_test) eh%pfree = free_params(eh, ihold, .false.)
+      x0 = eh%start()
+      if (size(x0) > 0) then
+         call eh%bounds(lo, hi)
+         call levenberg_marquardt(eh, x0, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
+         if (allocated(error)) return
+         e%nevals = e%nevals + opt%nevals
+         x0 = opt%x
+      end if
+      call eh%unpack(x0, mdl, p)
+      ! Every test with the effect: per-test objectives, regions, curves
+      call new_effect_problem(pk, [(i, i=1, nt)], e%k, eff_base, peak, ea, free_constants=.false., &
+                              p0=p)
+      ea%pfree = .false.
+      if (allocated(r)) deallocate (r)
+      allocate (r(ea%nres()), y(ea%nres()))
+      call ea%residual_at(ea%start(), r, ok, y)
+      e%per_test_after = per_test(prob, r)
+      e%regions = all_regions(prob, res, r, y, nv)
+      e%y = y
+      e%held_gap = max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
+      if (res%gap_held > 0.0_dp) e%shrink_held = 1.0_dp - e%held_gap/res%gap_held
+      if (res%gap_fit > 0.0_dp) e%shrink_fit = 1.0_dp - &
+         max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)/res%gap_fit
+      e%significant = e%dbic < -bic_margin
+      e%confirmed = e%significant .and. e%shrink_held >= opts%confirm_shrink
+   end subroutine refit
+
+   !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
+   !> the largest singular value dropped), after scaling to a unit diagonal
+   pure function pseudo_inverse(a) result(ai)
+      real(dp), intent(in) :: a(:, :)
+      real(dp) :: ai(size(a, 1), size(a, 2))
+      real(dp) :: b(size(a, 1), size(a, 2)), v(size(a, 1), size(a, 2)), s(size(a, 1)), d(size(a, 1))
+      integer :: j, info
+      do j = 1, size(d)
+         d(j) = sqrt(max(a(j, j), tiny(1.0_dp)))
+      end do
+      do j = 1, size(d)
+         b(:, j) = a(:, j)/(d*d(j))
+      end do
+      call svd(b, s, v, info)
+      ai = 0.0_dp
+      if (info /= 0) return
+      do j = 1, size(s)
+         if (s(j) <= 1.0e-12_dp*s(1)) exit
+         ai = ai + spread(v(:, j), 2, size(s))*spread(v(:, j), 1, size(s))/s(j)
+      end do
+      do j = 1, size(d)
+         ai(:, j) = ai(:, j)/(d*d(j))
+      end do
+   end function pseudo_inverse
+
+   !> The leading effect (confirmed, lowest BIC) and the verdict in words
+   subroutine conclude(res)
+      type(diagnose_result), intent(inout) :: res
+      integer :: j, k
+      character(len=:), allocatable :: where
+      res%leading = 0
+      do j = 1, size(res%effects)
+         if (.not. res%effects(j)%confirmed) cycle
+         if (res%leading == 0) then
+            res%leading = j
+         else if (res%effects(j)%dbic < res%effects(res%leading)%dbic) then
+            res%leading = j
+         end if
+      end do
+      if (res%leading > 0) then
+         associate (e => res%effects(res%leading))
+            res%verdict = trim(e%name)//' explains the gap: BIC '//real_str(e%dbic, 'f0.1')// &
+               ', structured gap removed '//real_str(100.0_dp*e%shrink_fit, 'f0.0')// &
+               ' % on the fit tests and '//real_str(100.0_dp*e%shrink_held, 'f0.0')//' % on the held-out tests'
+         end associate
+         return
+      end if
+      k = 0
+      do j = 1, size(res%effects)
+         if (res%effects(j)%significant) k = j
+      end do
+      if (.not. any(res%regions%structured)) then
+         res%verdict = 'no significant effect: the residual is at the noise level'
+         if (k > 0) res%verdict = res%verdict//' (refits that lower BIC do not carry to the held-out tests)'
+         return
+      end if
+      where = ''
+      k = 0
+      do j = 1, size(res%regions)
+         if (.not. res%regions(j)%structured .or. res%regions(j)%label == 'whole test') cycle
+         k = k + 1
+         if (k > 3) exit
+         if (k > 1) where = where//'; '
+         where = where//trim(res%regions(j)%test)//' '//trim(res%regions(j)%label)
+      end do
+      res%verdict = 'no catalogue effect is confirmed; the structured residual lies in: '//where
+   end subroutine conclude
+
+   !> The report in Markdown (also what `diagnose` prints)
+   function diagnose_report(res, opts) result(lines)
+      type(diagnose_result), intent(in) :: res
+      type(diagnose_options), intent(in) :: opts
+      character(len=200), allocatable :: lines(:)
+      integer, allocatable :: order(:)
+      integer :: i, j, k, nl
+      character(len=200) :: ln
+      allocate (lines(0))
+      call add('# usharp diagnose')
+      call add('')
+      call add('**Verdict:** '//res%verdict)
+      call add('')
+      call add('## 1. Where the gap lies')
+      call add('')
+      call add('Baseline: the model without any effect fitted to the fit tests (objective '// &
+               real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals); held-out tests predicted.')
+      call add('Noise: estimated from each test''s data (second differences, robust); the objective it')
+      call add('explains is set against the residual. Structured gap = objective - noise part.')
+      call add('')
+      call add('| test | role | response | noise sd | % of peak | objective | noise part | structured gap |')
+      call add('|---|---|---|---|---|---|---|---|')
+      do i = 1, size(res%names)
+         call add('| '//trim(res%names(i))//' | '//trim(merge('held out', 'fit     ', res%held(i)))// &
+            ' | '//trim(res%unit(i))//' | '//real_str(res%noise(i), 'es10.3')//' | '// &
+            real_str(100.0_dp*res%noise(i)/res%peak(i), 'f0.2')//' | '// &
+            real_str(res%per_test0(i), 'es10.3')//' | '//real_str(region_noise(i), 'es10.3')//' | '// &
+            real_str(max(res%per_test0(i) - region_noise(i), 0.0_dp), 'es10.3')//' |')
+      end do
+      call add('')
+      call add('Regions ranked by structured gap (share: of the objective of the test set the region')
+      call add('belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')
+      call add('')
+      call add('| rank | test | region | points | share % | RMS | bias | runs z | residual/noise | |')
+      call add('|---|---|---|---|---|---|---|---|---|---|')
+      order = rank_regions(res%regions)
+      k = 0
+      do j = 1, size(order)
+         i = order(j)
+         if (res%regions(i)%label == 'whole test') cycle
+         k = k + 1
+         if (k > 15) exit
+         call add('| '//str(k)//' | '//trim(res%regions(i)%test)//' | '//trim(res%regions(i)%label)// &
+            ' | '//str(res%regions(i)%n)//' | '//real_str(100.0_dp*res%regions(i)%ssr/set_total(i), 'f0.1')// &
+            ' | '//real_str(res%regions(i)%rms, 'es9.2')//' | '//real_str(res%regions(i)%bias, 'es9.2')// &
+            ' | '//real_str(res%regions(i)%z, 'f0.1')//' | '//real_str(res%regions(i)%ratio, 'f0.2')//' | '// &
+            trim(merge('structured', 'noise     ', res%regions(i)%structured))//' |')
+      end do
+      call add('')
+      call add('## 2. Which unmodelled effect causes it')
+      call add('')
+      call add('Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
+      call add('step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
+      call add('')
+      call add('| rank | effect | parameters | predicted fall | % of objective | predicted dBIC |')
+      call add('|---|---|---|---|---|---|')
+      do j = 1, size(res%effects)
+         associate (e => res%effects(j))
+            call add('| '//str(j)//' | '//trim(e%name)//' | '//str(e%q)//' | '// &
+               real_str(e%pred_drop, 'es10.3')//' | '//real_str(100.0_dp*e%pred_drop/res%f0, 'f0.1')// &
+               ' | '//real_str(e%pred_dbic, 'f0.1')//' |')
+         end associate
+      end do
+      call add('')
+      call add('Refits of the leading '//str(opts%n_refit)//' (constants and the effect''s parameters;'// &
+               ' dAIC, dBIC < 0: better; significant: dBIC < -'//real_str(bic_margin, 'f0.0')//'):')
+      call add('')
+      call add('| effect | objective before | after | dAIC | dBIC | gap removed, fit % | held-out % | verdict |')
+      call add('|---|---|---|---|---|---|---|---|')
+      do j = 1, size(res%effects)
+         associate (e => res%effects(j))
+            if (.not. e%refitted) cycle
+            call add('| '//trim(e%name)//' | '//real_str(res%f0, 'es10.3')//' | '// &
+               real_str(e%f_after, 'es10.3')//' | '//real_str(e%daic, 'f0.1')//' | '// &
+               real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' | '// &
+               real_str(100.0_dp*e%shrink_held, 'f0.1')//' | '//trim(verdict_of(e))//' |')
+         end associate
+      end do
+      do j = 1, size(res%effects)
+         associate (e => res%effects(j))
+            if (.not. e%refitted) cycle
+            call add('')
+            call add('**'//trim(e%name)//'** fitted magnitude (95 % interval):')
+            do k = 1, size(e%p)
+               call add('- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
+                  real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']')
+            end do
+            ln = '- objective per test, before -> after:'
+            call add(ln)
+            do k = 1, size(res%names)
+               call add('  - '//trim(res%names(k))//trim(merge(' (held out)', '           ', res%held(k)))// &
+                  ': '//real_str(res%per_test0(k), 'es10.3')//' -> '//real_str(e%per_test_after(k), 'es10.3'))
+            end do
+            ln = '- top regions, structured gap before -> after:'
+            call add(ln)
+            nl = 0
+            do k = 1, size(order)
+               i = order(k)
+               if (res%regions(i)%label == 'whole test') cycle
+               nl = nl + 1
+               if (nl > 5) exit
+               call add('  - '//trim(res%regions(i)%test)//' '//trim(res%regions(i)%label)//': '// &
+                  real_str(res%regions(i)%gap, 'es10.3')//' -> '//real_str(e%regions(i)%gap, 'es10.3'))
+            end do
+         end associate
+      end do
+      call add('')
+      call add('## 3. How far the gap shrinks')
+      call add('')
+      call add('Structured gap at the baseline: fit tests '//real_str(res%gap_fit, 'es10.3')// &
+               ', held-out tests '//real_str(res%gap_held, 'es10.3')//'.')
+      if (res%leading > 0) then
+         associate (e => res%effects(res%leading))
+            call add('With '//trim(e%name)//': fit tests '//real_str(100.0_dp*e%shrink_fit, 'f0.1')// &
+               ' % removed, held-out tests '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % removed.')
+         end associate
+      else
+         call add('No effect is confirmed (significant and removing at least '// &
+            real_str(100.0_dp*opts%confirm_shrink, 'f0.0')//' % of the held-out structured gap).')
+      end if
+      call add('')
+      call add(str(res%nevals)//' simulations of the test set.')
+
+   contains
+
+      subroutine add(text)
+         character(len=*), intent(in) :: text
+         lines = [lines, text]
+      end subroutine add
+
+      real(dp) function region_noise(i) result(v)
+         integer, intent(in) :: i
+         integer :: j
+         v = 0.0_dp
+         do j = 1, size(res%regions)
+            if (res%regions(j)%label /= 'whole test') cycle
+            if (res%regions(j)%test(1:len_trim(res%names(i))) /= trim(res%names(i))) cycle
+            v = res%regions(j)%noise
+            exit
+         end do
+      end function region_noise
+
+      !> Objective of the set (fit or held-out) that region i belongs to
+      real(dp) function set_total(i) result(v)
+         integer, intent(in) :: i
+         if (index(res%regions(i)%test, '(held out)') > 0) then
+            v = max(sum(res%per_test0, res%held), tiny(1.0_dp))
+         else
+            v = max(sum(res%per_test0, .not. res%held), tiny(1.0_dp))
+         end if
+      end function set_total
+   end function diagnose_report
+
+   !> Regions ordered by structured gap, largest first
+   pure function rank_regions(regs) result(order)
+      type(region_stat), intent(in) :: regs(:)
+      integer :: order(size(regs))
+      integer :: i, j, tmp
+      order = [(i, i=1, size(regs))]
+      do i = 2, size(regs)
+         tmp = order(i)
+         j = i - 1
+         do while (j >= 1)
+            if (regs(order(j))%gap >= regs(tmp)%gap) exit
+            order(j + 1) = order(j)
+            j = j - 1
+         end do
+         order(j + 1) = tmp
+      end do
+   end function rank_regions
+
+   pure function verdict_of(e) result(text)
+      type(effect_outcome), intent(in) :: e
+      character(len=:), allocatable :: text
+      if (e%confirmed) then
+         text = 'confirmed'
+      else if (e%significant) then
+         text = 'significant, not confirmed on held-out'
+      else
+         text = 'not significant'
+      end if
+   end function verdict_of
+end module usharp_diagnose

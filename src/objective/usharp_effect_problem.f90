@@ -1,0 +1,226 @@
+!> A fit problem with one catalogue effect switched on: the weighted residuals of a chosen set
+!> of tests as a function of x = (log10 of the fitted constants, when they are free; the free
+!> effect parameters divided by their scale). With effect 0 it is the plain model through the
+!> extended integrator, so that fits with and without an effect differ only by the effect.
+module usharp_effect_problem
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_failure
+   use usharp_miller, only: miller_model, model_setup, set_constant, get_constant, constant_names
+   use usharp_effects, only: test_effects, effect_info, effect_catalogue, effects_of, &
+                             effect_model, effect_nparams, n_effects, param_per_test
+   use usharp_objective, only: fit_problem, test_residuals, simulated
+   use usharp_optimiser, only: least_squares_type
+   use usharp_simulation, only: sim_result
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_strings, only: str
+   implicit none
+   private
+
+   public :: effect_problem, new_effect_problem
+
+   !> Residuals of the tests `tests` with effect k (0: none)
+   type, extends(least_squares_type) :: effect_problem
+      type(fit_problem) :: prob                !< tests, targets, model, solver
+      integer, allocatable :: tests(:)         !< indices of the tests in the residual
+      integer :: k = 0                         !< catalogue effect (0: none)
+      logical :: free_constants = .true.       !< the fitted constants are in x
+      real(dp), allocatable :: p0(:)           !< effect parameters (physical units, all tests)
+      logical, allocatable :: pfree(:)         !< which of them are in x
+      real(dp), allocatable :: pscale(:)       !< unit of x for each parameter
+      logical, allocatable :: pnonneg(:)
+      type(test_effects) :: base               !< dlnE_dT, gamma3 held fixed
+      integer :: nevals = 0
+   contains
+      procedure :: residuals => ep_residuals
+      procedure :: nres => ep_nres
+      procedure :: eval => ep_eval
+      procedure :: nx => ep_nx
+      procedure :: start => ep_start
+      procedure :: bounds => ep_bounds
+      procedure :: unpack => ep_unpack
+      procedure :: residual_at => ep_residual_at
+   end type effect_problem
+
+contains
+
+   !> Problem for effect k on the tests `tests` of prob; the effect's parameters start at p0
+   !> (zero when absent), all free; constants free unless free_constants is false
+   subroutine new_effect_problem(prob, tests, k, base, peak, ep, free_constants, p0)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: tests(:), k
+      type(test_effects), intent(in) :: base
+      real(dp), intent(in) :: peak
+      type(effect_problem), intent(out) :: ep
+      logical, intent(in), optional :: free_constants
+      real(dp), intent(in), optional :: p0(:)
+      type(effect_info) :: cat(n_effects)
+      integer :: np, nt, j, g
+      ep%prob = prob
+      ep%tests = tests
+      ep%k = k
+      ep%base = base
+      if (present(free_constants)) ep%free_constants = free_constants
+      nt = size(prob%targets)
+      np = 0
+      if (k > 0) then
+         cat = effect_catalogue(peak)
+         np = effect_nparams(cat(k), nt)
+      end if
+      allocate (ep%p0(np), ep%pfree(np), ep%pscale(np), ep%pnonneg(np))
+      ep%p0 = 0.0_dp
+      if (present(p0)) ep%p0 = p0
+      ep%pfree = .true.
+      do j = 1, np
+         ! per-test parameters are ordered parameter-major: group g holds nt values
+         g = 1
+         if (cat(k)%sharing == param_per_test) then
+            g = (j - 1)/nt + 1
+         else
+            g = j
+         end if
+         ep%pscale(j) = cat(k)%scale(g)
+         ep%pnonneg(j) = cat(k)%nonneg(g)
+      end do
+   end subroutine new_effect_problem
+
+   pure integer function ep_nx(self) result(n)
+      class(effect_problem), intent(in) :: self
+      n = count(self%pfree)
+      if (self%free_constants) n = n + size(self%prob%idx)
+   end function ep_nx
+
+   pure integer function ep_nres(self) result(m)
+      class(effect_problem), intent(in) :: self
+      integer :: i
+      m = 0
+      do i = 1, size(self%tests)
+         m = m + size(self%prob%targets(self%tests(i))%t)
+      end do
+   end function ep_nres
+
+   !> x of the problem's starting point
+   pure function ep_start(self) result(x)
+      class(effect_problem), intent(in) :: self
+      real(dp), allocatable :: x(:)
+      integer :: j
+      allocate (x(0))
+      if (self%free_constants) then
+         do j = 1, size(self%prob%idx)
+            x = [x, log10(get_constant(self%prob%cfg%model%c, self%prob%idx(j)))]
+         end do
+      end if
+      x = [x, pack(self%p0/self%pscale, self%pfree)]
+   end function ep_start
+
+   !> Bounds of x: the &fit bounds for the constants, sign limits for the parameters
+   pure subroutine ep_bounds(self, lo, hi)
+      class(effect_problem), intent(in) :: self
+      real(dp), allocatable, intent(out) :: lo(:), hi(:)
+      real(dp), allocatable :: plo(:), phi(:)
+      plo = merge(0.0_dp, -1.0e3_dp, self%pnonneg)
+      phi = spread(1.0e3_dp, 1, size(self%p0))
+      allocate (lo(0), hi(0))
+      if (self%free_constants) then
+         lo = log10(self%prob%cfg%fit%lower(self%prob%idx))
+         hi = log10(self%prob%cfg%fit%upper(self%prob%idx))
+      end if
+      lo = [lo, pack(plo, self%pfree)]
+      hi = [hi, pack(phi, self%pfree)]
+   end subroutine ep_bounds
+
+   !> Model constants and effect parameters (physical units) of x
+   pure subroutine ep_unpack(self, x, model, p)
+      class(effect_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      type(miller_model), intent(out) :: model
+      real(dp), allocatable, intent(out) :: p(:)
+      integer :: j, k0
+      model = self%prob%cfg%model
+      k0 = 0
+      if (self%free_constants) then
+         do j = 1, size(self%prob%idx)
+            call set_constant(model%c, self%prob%idx(j), 10.0_dp**x(j))
+         end do
+         k0 = size(self%prob%idx)
+      end if
+      p = self%p0
+      p = unpack(x(k0 + 1:)*pack(self%pscale, self%pfree), self%pfree, p)
+   end subroutine ep_unpack
+
+   !> Residuals of the problem's tests at x (test after test); ok false on a failure
+   subroutine ep_residual_at(self, x, r, ok, fitted)
+      class(effect_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: r(:)
+      logical, intent(out) :: ok
+      real(dp), intent(out), optional :: fitted(:)  !< the simulated responses
+      type(miller_model) :: model, mt
+      type(test_effects), allocatable :: eff(:)
+      type(error_type), allocatable :: error
+      type(sim_result) :: res
+      real(dp), allocatable :: p(:), tout(:), ysim(:)
+      integer :: i, it, k0, n, nt
+      ok = .false.
+      r = 0.0_dp
+      call self%unpack(x, model, p)
+      call model_setup(model, error)
+      if (allocated(error)) return
+      nt = size(self%prob%targets)
+      if (self%k > 0) then
+         eff = effects_of(self%k, p, nt, self%base)
+      else
+         allocate (eff(nt))
+         eff = self%base
+      end if
+      k0 = 0
+      do it = 1, size(self%tests)
+         i = self%tests(it)
+         associate (tg => self%prob%targets(i), test => self%prob%cfg%tests(i))
+            call effect_model(model, eff(i), mt, error)
+            if (allocated(error)) return
+            ! The stress channel lags by shift: the data at t saw the response at t - shift
+            tout = min(max(tg%t - eff(i)%shift, test%hist%t(1)), test%hist%end_time())
+            call simulate_cvode(mt, test%hist, tout, self%prob%cfg%solver, res, error, eff(i))
+            if (allocated(error)) return
+            n = size(tg%t)
+            ysim = simulated(test, res)
+            r(k0 + 1:k0 + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
+                                              tg%y_ex_max)
+            if (present(fitted)) fitted(k0 + 1:k0 + n) = ysim
+            k0 = k0 + n
+         end associate
+      end do
+      ok = all(abs(r) < huge(1.0_dp))
+   end subroutine ep_residual_at
+
+   !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty
+   subroutine ep_residuals(self, xs, rs, fs, ok, error)
+      class(effect_problem), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      real(dp), intent(out) :: rs(:, :)
+      real(dp), intent(out) :: fs(:)
+      logical, intent(out) :: ok(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: j
+      !$omp parallel do schedule(dynamic)
+      do j = 1, size(xs, 2)
+         call self%residual_at(xs(:, j), rs(:, j), ok(j))
+      end do
+      !$omp end parallel do
+      do j = 1, size(xs, 2)
+         fs(j) = merge(sum(rs(:, j)**2), 2.0e10_dp, ok(j))
+      end do
+      self%nevals = self%nevals + size(xs, 2)
+   end subroutine ep_residuals
+
+   subroutine ep_eval(self, x, f, error)
+      class(effect_problem), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: rs(self%nres(), 1), fs(1)
+      logical :: ok(1)
+      call self%residuals(reshape(x, [size(x), 1]), rs, fs, ok, error)
+      f = fs(1)
+   end subroutine ep_eval
+end module usharp_effect_problem

@@ -1,0 +1,303 @@
+!> `usharp diagnose --selfcheck`: data are generated from the model with one catalogue effect
+!> injected at a realistic magnitude (drawn at random) plus Gaussian noise, the model is
+!> fitted without it and diagnosed; the confusion table counts which effect came out first.
+!> Clean data (noise only) must come out as "no significant effect".
+module usharp_selfcheck
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: str, real_str
+   use usharp_config, only: run_config
+   use usharp_history, only: output_times
+   use usharp_objective, only: fit_problem, setup_problem
+   use usharp_experiment, only: experiment_type
+   use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
+                             effect_nparams
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, diagnose_report
+   use usharp_rng, only: rng_type
+   implicit none
+   private
+
+   public :: selfcheck_result, selfcheck_run, selfcheck_report, selfcheck_deck, inject
+
+   !> Outcome of the self-check
+   type :: selfcheck_result
+      integer, allocatable :: injected(:)      !< effects injected (0: clean), rows of the table
+      integer, allocatable :: confusion(:, :)  !< (row, 0:n_effects) ranked first (0: none)
+      real(dp), allocatable :: shrink(:, :)    !< held-out gap removed by the injected effect (row, rep)
+      integer :: reps = 0
+      real(dp) :: seconds = 0.0_dp
+      integer :: nevals = 0
+      integer :: failed = 0                          !< diagnoses that stopped with an error
+      character(len=200), allocatable :: misses(:)  !< the reports of the wrong answers
+   end type selfcheck_result
+
+contains
+
+   !> Parameters of effect k (physical units, all nt tests) at a realistic magnitude drawn
+   !> at random: signs at random where the effect has both; peak: the tests' peak stress
+   function inject(k, nt, peak, rng) result(p)
+      integer, intent(in) :: k, nt
+      real(dp), intent(in) :: peak
+      type(rng_type), intent(inout) :: rng
+      real(dp), allocatable :: p(:)
+      integer :: i
+      real(dp) :: sat
+      select case (k)
+      case (1)
+         p = [draw(0.05_dp, 0.15_dp, .false.)]        ! kappa
+      case (2)
+         p = [draw(0.1_dp, 0.3_dp, .false.)]          ! tau, s
+      case (3)
+         p = [(draw(3.0_dp, 8.0_dp, .true.), i=1, nt)]  ! dT per test, K
+      case (4)
+         p = [(draw(0.02_dp, 0.05_dp, .true.), i=1, nt), (draw(0.03_dp, 0.08_dp, .true.), i=1, nt)]
+      case (5)
+         p = [draw(0.02_dp, 0.06_dp, .true.)*peak, draw(0.02_dp, 0.05_dp, .true.)*peak]
+      case (6)
+         p = [draw(0.2_dp, 0.5_dp, .true.)]           ! delta, s
+      case (7)
+         p = [draw(0.5_dp, 1.5_dp, .false.)]          ! s
+      case (8)
+         sat = draw(0.05_dp, 0.12_dp, .false.)*peak
+         p = [0.0_dp, draw(150.0_dp, 400.0_dp, .false.)]
+         p(1) = sat*p(2)                               ! H3 = saturation * gamma3
+      case default
+         allocate (p(0))
+      end select
+   contains
+      real(dp) function draw(lo, hi, signed) result(v)
+         real(dp), intent(in) :: lo, hi
+         logical, intent(in) :: signed
+         v = lo + (hi - lo)*rng%uniform()
+         if (signed) then
+            if (rng%uniform() < 0.5_dp) v = -v
+         end if
+      end function draw
+   end function inject
+
+   !> Synthetic data of cfg's tests at cfg's constants with effect k (parameters p) and
+   !> Gaussian noise of sd noise*max|response| per test
+   subroutine synthetic_data(cfg, k, p, noise, rng, exps, error)
+      type(run_config), intent(in) :: cfg
+      integer, intent(in) :: k
+      real(dp), intent(in) :: p(:), noise
+      type(rng_type), intent(inout) :: rng
+      type(experiment_type), allocatable, intent(out) :: exps(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(test_effects) :: base
+      real(dp), allocatable :: r(:), y(:)
+      integer :: i, k0, n, j
+      real(dp) :: sd
+      logical :: ok
+      allocate (exps(size(cfg%tests)))
+      do i = 1, size(cfg%tests)
+         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
+      end do
+      call setup_problem(cfg, prob, error, exps)
+      if (allocated(error)) return
+      base%dlnE_dT = cfg%diagnose%dlnE_dT
+      base%gamma3 = cfg%diagnose%gamma3
+      call new_effect_problem(prob, [(i, i=1, size(cfg%tests))], k, base, 1.0_dp, ep, &
+                              free_constants=.false., p0=p)
+      ep%pfree = .false.
+      allocate (r(ep%nres()), y(ep%nres()))
+      call ep%residual_at(ep%start(), r, ok, y)
+      if (.not. ok) then
+         call fatal_error(error, 'self-check: the model with the injected effect fails to simulate')
+         return
+      end if
+      k0 = 0
+      do i = 1, size(cfg%tests)
+         n = size(exps(i)%t)
+         exps(i)%y = y(k0 + 1:k0 + n)
+         sd = noise*maxval(abs(exps(i)%y))
+         do j = 1, n
+            exps(i)%y(j) = exps(i)%y(j) + sd*rng%normal()
+         end do
+         k0 = k0 + n
+      end do
+   end subroutine synthetic_data
+
+   !> Run reps repetitions for the clean data and for every considered effect
+   subroutine selfcheck_run(cfg, opts, sc, error)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(selfcheck_result), intent(out) :: sc
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_options) :: o
+      type(diagnose_result) :: res
+      type(experiment_type), allocatable :: exps(:)
+      type(rng_type) :: rng
+      real(dp), allocatable :: p(:)
+      real(dp) :: peak
+      integer :: row, rep, k, first, j, c0, c1, rate
+      call system_clock(c0, rate)
+      o = opts
+      o%check_converged = .false.
+      sc%reps = cfg%diagnose%reps
+      sc%injected = [0, opts%effects]
+      allocate (sc%confusion(size(sc%injected), 0:n_effects), sc%shrink(size(sc%injected), sc%reps))
+      sc%confusion = 0
+      allocate (sc%misses(0))
+      sc%shrink = 0.0_dp
+      ! A peak for the stress-like magnitudes: that of the clean data
+      call rng%seed(cfg%diagnose%seed)
+      call synthetic_data(cfg, 0, [real(dp) ::], 0.0_dp, rng, exps, error)
+      if (allocated(error)) return
+      peak = 0.0_dp
+      do j = 1, size(exps)
+         peak = max(peak, maxval(abs(exps(j)%y)))
+      end do
+      do row = 1, size(sc%injected)
+         k = sc%injected(row)
+         do rep = 1, sc%reps
+            call rng%seed(cfg%diagnose%seed + 1000*k + rep)
+            p = inject(k, size(cfg%tests), peak, rng)
+            call synthetic_data(cfg, k, p, cfg%diagnose%noise, rng, exps, error)
+            if (allocated(error)) return
+            call diagnose_run(cfg, o, res, error, exps)
+            if (allocated(error)) then
+               ! A diagnosis that fails counts as a wrong answer, with its message
+               sc%failed = sc%failed + 1
+               sc%misses = [character(len=200) :: sc%misses, '', '# failed: injected '//str(k)// &
+                  ', repetition '//str(rep)//': '//error%message(1:min(len(error%message), 150))]
+               deallocate (error)
+               cycle
+            end if
+            sc%nevals = sc%nevals + res%nevals
+            first = 0
+            if (res%leading > 0) first = res%effects(res%leading)%k
+            sc%confusion(row, first) = sc%confusion(row, first) + 1
+            if (first /= k) sc%misses = [character(len=200) :: sc%misses, '', '---', '', &
+               '# miss: injected '//str(k)//', repetition '//str(rep)//', parameters '// &
+               real_list(p), diagnose_report(res, o)]
+            do j = 1, size(res%effects)
+               if (res%effects(j)%k == k .and. res%effects(j)%refitted) sc%shrink(row, rep) = &
+                  res%effects(j)%shrink_held
+            end do
+         end do
+      end do
+      call system_clock(c1)
+      sc%seconds = real(c1 - c0, dp)/real(rate, dp)
+   end subroutine selfcheck_run
+
+   !> The confusion table (rows: injected, columns: ranked first) in Markdown
+   function selfcheck_report(sc) result(lines)
+      type(selfcheck_result), intent(in) :: sc
+      character(len=200), allocatable :: lines(:)
+      type(effect_info) :: cat(n_effects)
+      character(len=200) :: ln
+      integer :: row, j
+      cat = effect_catalogue(1.0_dp)
+      allocate (lines(0))
+      lines = [character(len=200) :: lines, '# usharp diagnose --selfcheck', '', &
+               str(sc%reps)//' repetitions per row, effects injected at random realistic '// &
+               'magnitudes with noise; rows: injected, columns: ranked first', '']
+      ln = '| injected |'
+      do j = 1, size(sc%injected)
+         ln = trim(ln)//' '//trim(name_of(sc%injected(j)))//' |'
+      end do
+      lines = [lines, ln]
+      ln = '|---|'
+      do j = 1, size(sc%injected)
+         ln = trim(ln)//'---|'
+      end do
+      lines = [lines, ln]
+      do row = 1, size(sc%injected)
+         ln = '| '//trim(name_of(sc%injected(row)))//' |'
+         do j = 1, size(sc%injected)
+            ln = trim(ln)//' '//str(sc%confusion(row, sc%injected(j)))//' |'
+         end do
+         lines = [lines, ln]
+      end do
+      lines = [character(len=200) :: lines, '', 'Held-out structured gap removed by the injected '// &
+               'effect (min / median over repetitions):', '']
+      do row = 2, size(sc%injected)
+         lines = [character(len=200) :: lines, '- '//trim(name_of(sc%injected(row)))//': '// &
+                  real_str(100.0_dp*minval(sc%shrink(row, :)), 'f0.1')//' % / '// &
+                  real_str(100.0_dp*median_of(sc%shrink(row, :)), 'f0.1')//' %']
+      end do
+      lines = [character(len=200) :: lines, '', 'correct: '//str(correct())//' of '// &
+               str(size(sc%injected)*sc%reps)//' ('//str(sc%failed)//' failed, not in the table); '// &
+               str(sc%nevals)//' simulations of the test set in '// &
+               real_str(sc%seconds, 'f0.1')//' s']
+      if (size(sc%misses) > 0) lines = [character(len=200) :: lines, '', &
+         'The reports of the wrong answers follow.', sc%misses]
+   contains
+      function name_of(k) result(text)
+         integer, intent(in) :: k
+         character(len=:), allocatable :: text
+         if (k == 0) then
+            text = 'none'
+         else
+            text = trim(cat(k)%name)
+         end if
+      end function name_of
+      integer function correct() result(n)
+         integer :: r
+         n = 0
+         do r = 1, size(sc%injected)
+            n = n + sc%confusion(r, sc%injected(r))
+         end do
+      end function correct
+   end function selfcheck_report
+
+   pure function real_list(p) result(text)
+      real(dp), intent(in) :: p(:)
+      character(len=:), allocatable :: text
+      integer :: j
+      text = ''
+      do j = 1, size(p)
+         text = text//' '//real_str(p(j), 'es10.3')
+      end do
+   end function real_list
+
+   pure real(dp) function median_of(a) result(m)
+      real(dp), intent(in) :: a(:)
+      real(dp) :: b(size(a)), t
+      integer :: i, j
+      b = a
+      do i = 2, size(b)
+         t = b(i)
+         j = i - 1
+         do while (j >= 1)
+            if (b(j) <= t) exit
+            b(j + 1) = b(j)
+            j = j - 1
+         end do
+         b(j + 1) = t
+      end do
+      m = b((size(b) + 1)/2)
+   end function median_of
+
+   !> The built-in self-check matrix (Type 304 at 593 C, Table 4): three fit tests and one
+   !> held out, 1 % noise
+   function selfcheck_deck() result(lines)
+      character(len=120), allocatable :: lines(:)
+      lines = [character(len=120) :: &
+         '! usharp diagnose --selfcheck: the matrix on which every catalogue effect is injected', &
+         '! (Table 4 constants, Type 304 stainless steel at 593 C, stresses in ksi)', &
+         '&model', "  name = 'miller', units = 'ksi', temperature = 866.15, tm = 1800.0, youngs = 22.5e3", &
+         '/', '&constants', &
+         '  a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0, n = 5.8, q = 91000.0', &
+         '/', '&fit', "  fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n'", "  method = 'lm', objective = 'eq7'", &
+         '/', '&diagnose', "  holdout = 'cyc1.5-slow'", '  reps = 10, seed = 1, noise = 0.01, n_refit = 4', '/', &
+         '&output', "  out_dir = 'selfcheck'", '/', &
+         "&test   ! 1 % range at 1e-3/s, 20 cycles", &
+         "  name = 'cyc1', history = 'cyclic', dt_out = 0.2", &
+         '  strain_range = 0.01, strain_rate = 1.0e-3, cycles = 20', '/', &
+         "&test   ! 2 % range at 1e-3/s, 3 cycles, 5-minute hold at peak tension", &
+         "  name = 'cyc2-hold', history = 'cyclic', dt_out = 0.2", &
+         '  strain_range = 0.02, strain_rate = 1.0e-3, cycles = 3, hold_max = 300.0', '/', &
+         "&test   ! relaxation at 0.5 % and 1 %, 10 minutes each", &
+         "  name = 'relax', history = 'relaxation', dt_out = 0.5", &
+         '  levels = 0.005, 0.01, ramp_time = 5.0, holds = 600.0, 600.0', '/', &
+         "&test   ! held out: 1.5 % range at 1e-4/s, 2 cycles", &
+         "  name = 'cyc1.5-slow', history = 'cyclic', dt_out = 1.0", &
+         '  strain_range = 0.015, strain_rate = 1.0e-4, cycles = 2', '/']
+   end function selfcheck_deck
+end module usharp_selfcheck
