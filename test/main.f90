@@ -12,6 +12,7 @@ program tester
    use test_external, only: collect_external
    use test_optimise, only: collect_optimise
    use test_design, only: collect_design
+   use test_diagnose, only: collect_diagnose
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -29,7 +30,8 @@ program tester
       new_testsuite('update', collect_update), &
       new_testsuite('external', collect_external), &
       new_testsuite('optimise', collect_optimise), &
-      new_testsuite('design', collect_design)]
+      new_testsuite('design', collect_design), &
+      new_testsuite('diagnose', collect_diagnose)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

@@ -164,8 +164,8 @@ contains
       type(test_effects) :: eff_base
       type(effect_info) :: cat(n_effects)
       integer, allocatable :: ifit(:), ihold(:)
-      real(dp), allocatable :: lo(:), hi(:), r0(:), jc(:, :), yb(:), nv(:), sc(:)
-      real(dp) :: peak, f
+      real(dp), allocatable :: lo(:), hi(:), r0(:), jc(:, :), yb(:), nv(:)
+      real(dp) :: peak, f, gn
       integer :: nt, i, j, m
       logical :: ok
 
@@ -220,11 +220,11 @@ contains
          end if
          call base_all%bounds(lo, hi)
          f = sum(r0**2)
-         sc = free_step_drop(jc, r0, base_all%start(), lo, hi)
-         if (sc(1) > opts%converged_tol*f) then
+         gn = free_step_drop(jc, r0, base_all%start(), lo, hi)
+         if (gn > opts%converged_tol*f) then
             call fatal_error(error, cfg%path//': the fit has not converged: a Gauss-Newton '// &
                'step lowers its objective '//real_str(f, 'es10.3')//' by '// &
-               real_str(100.0_dp*sc(1)/f, 'f0.1')//' %; finish it (usharp run) and pass its '// &
+               real_str(100.0_dp*gn/f, 'f0.1')//' %; finish it (usharp run) and pass its '// &
                'best.nml with -c', stat_input)
             return
          end if

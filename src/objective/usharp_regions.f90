@@ -38,7 +38,7 @@ module usharp_regions
 
 contains
 
-   !> Class, cycle (1-based, a cycle is two turns) of the points t of a test with control
+   !> Class, cycle (1-based, two turns each) of the points t of a test with control
    !> history hist; elastic where |y| < threshold
    pure subroutine point_classes(hist, t, y, threshold, cls, cycle, elastic)
       type(history_type), intent(in) :: hist
@@ -81,7 +81,8 @@ contains
             if (hist%t(k + 1) > t(i)) exit
             k = k + 1
          end do
-         cycle(i) = nturn/2 + 1
+         ! A cycle holds two turns; the rise before a cycle's first turn counts with the last
+         cycle(i) = max(1, (nturn + 1)/2)
          slope = (hist%v(k + 1) - hist%v(k))
          v = hist%v(k) + slope*(t(i) - hist%t(k))/(hist%t(k + 1) - hist%t(k))
          near_turn = .false.

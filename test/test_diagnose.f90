@@ -1,0 +1,318 @@
+!> Tests of the diagnosis: the extended model is the plain one at zero effect, the effects
+!> do what their documentation says, the statistics behave on known inputs, bad inputs are
+!> clear errors, and a small self-check finds injected effects and no false alarm
+module test_diagnose
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config
+   use usharp_history, only: history_type, cyclic_history, output_times
+   use usharp_miller, only: miller_model, model_setup
+   use usharp_simulation, only: sim_result, solver_options
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_effects, only: test_effects, lagged_value, effect_model
+   use usharp_regions, only: runs_z, noise_sd, point_classes, class_loading, class_unloading, &
+                             class_reversal, class_hold
+   use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
+                              diagnose_options_of, gn_decrease
+   use usharp_selfcheck, only: selfcheck_result, selfcheck_run
+   use usharp_rng, only: rng_type
+   use test_util, only: write_text, check_message
+   implicit none
+   private
+   public :: collect_diagnose
+
+   character(len=*), parameter :: model_groups(3) = [character(len=100) :: &
+      "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+      "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+      "  n = 5.8, q = 91000.0 /"]
+
+   !> A small matrix for the self-check test: two fit tests and one held out
+   character(len=*), parameter :: small_matrix(9) = [character(len=100) :: &
+      "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm' /", &
+      "&test name = 'cyc1', history = 'cyclic', dt_out = 0.5, strain_range = 0.01,", &
+      "  strain_rate = 1.0e-3, cycles = 6 /", &
+      "&test name = 'cyc2-hold', history = 'cyclic', dt_out = 0.5, strain_range = 0.02,", &
+      "  strain_rate = 1.0e-3, cycles = 2, hold_max = 200.0 /", &
+      "&test name = 'held', history = 'cyclic', dt_out = 1.0, strain_range = 0.015,", &
+      "  strain_rate = 1.0e-4, cycles = 1 /", &
+      "&diagnose holdout = 'held', effects = 'compliance', 'lag', 'shift', n_refit = 2,", &
+      "  reps = 1, seed = 3, noise = 0.01 /"]
+
+contains
+
+   subroutine collect_diagnose(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('extended-model-at-zero-is-the-plain-model', test_zero_effect), &
+         new_unittest('compliance-is-a-softer-machine', test_compliance), &
+         new_unittest('lag-solution-against-differences', test_lag), &
+         new_unittest('runs-test-on-known-sequences', test_runs), &
+         new_unittest('noise-estimate-from-second-differences', test_noise), &
+         new_unittest('score-test-on-a-linear-model', test_score), &
+         new_unittest('history-classes-and-cycles', test_classes), &
+         new_unittest('diagnose-bad-inputs', test_bad_inputs), &
+         new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
+   end subroutine collect_diagnose
+
+   !> A thesis model, set up
+   subroutine thesis_model(model)
+      type(miller_model), intent(out) :: model
+      type(uerror), allocatable :: e
+      call model_setup(model, e)
+   end subroutine thesis_model
+
+   subroutine cycles(hist, e)
+      type(history_type), intent(out) :: hist
+      type(uerror), allocatable, intent(out) :: e
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 60.0_dp, 0.0_dp, hist, e)
+   end subroutine cycles
+
+   !> With every effect zero the extended (5-state, difference-quotient Jacobian) model gives
+   !> the plain model's stress to the integration tolerance
+   subroutine test_zero_effect(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(miller_model) :: model
+      type(history_type) :: hist
+      type(solver_options) :: opts
+      type(sim_result) :: a, b
+      type(test_effects) :: none
+      call thesis_model(model)
+      call cycles(hist, e)
+      opts%rtol = 1.0e-10_dp
+      opts%atol_strain = 1.0e-14_dp
+      call simulate_cvode(model, hist, output_times(hist, 1.0_dp), opts, a, e)
+      if (.not. allocated(e)) call simulate_cvode(model, hist, output_times(hist, 1.0_dp), opts, b, e, none)
+      call check(error, .not. allocated(e), 'simulation failed')
+      if (allocated(error)) return
+      call check(error, maxval(abs(a%stress - b%stress)) < 1.0e-6_dp*maxval(abs(a%stress)), &
+                 'extended model at zero differs from the plain one')
+   end subroutine test_zero_effect
+
+   !> Under strain control a compliance kappa acts as the modulus E/(1 + kappa)
+   subroutine test_compliance(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(miller_model) :: model, soft
+      type(history_type) :: hist
+      type(solver_options) :: opts
+      type(sim_result) :: a, b
+      type(test_effects) :: eff, none
+      call thesis_model(model)
+      call cycles(hist, e)
+      opts%rtol = 1.0e-10_dp
+      opts%atol_strain = 1.0e-14_dp
+      eff%compliance = 0.1_dp
+      soft = model
+      soft%youngs = model%youngs/1.1_dp
+      call simulate_cvode(model, hist, output_times(hist, 1.0_dp), opts, a, e, eff)
+      if (.not. allocated(e)) call simulate_cvode(soft, hist, output_times(hist, 1.0_dp), opts, b, e, none)
+      call check(error, .not. allocated(e), 'simulation failed')
+      if (allocated(error)) return
+      call check(error, maxval(abs(a%stress - b%stress)) < 1.0e-6_dp*maxval(abs(a%stress)), &
+                 'compliance is not the softer modulus')
+      if (allocated(error)) return
+      ! and it changes the answer by far more than that
+      call simulate_cvode(model, hist, output_times(hist, 1.0_dp), opts, b, e, none)
+      call check(error, maxval(abs(a%stress - b%stress)) > 1.0e-2_dp*maxval(abs(a%stress)), &
+                 'compliance has no effect')
+   end subroutine test_compliance
+
+   !> The closed-form lag solves dy/dt = (u - y)/tau: its rate against central differences of
+   !> its value, and the ODE residual; a vanishing tau returns the command
+   subroutine test_lag(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), parameter :: tc(3) = [0.0_dp, 10.0_dp, 30.0_dp], vc(3) = [0.0_dp, 0.01_dp, -0.01_dp]
+      real(dp), parameter :: tau = 0.7_dp, h = 1.0e-5_dp
+      real(dp) :: yk(3), y, yd, yp, ym, dum, t, u
+      integer :: k
+      yk(1) = 0.0_dp
+      do k = 1, 2
+         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), dum)
+      end do
+      do k = 1, 2
+         t = tc(k) + 0.37_dp*(tc(k + 1) - tc(k))
+         call lagged_value(tc, vc, yk, k, tau, t, y, yd)
+         call lagged_value(tc, vc, yk, k, tau, t + h, yp, dum)
+         call lagged_value(tc, vc, yk, k, tau, t - h, ym, dum)
+         call check(error, abs(yd - (yp - ym)/(2.0_dp*h)) < 1.0e-7_dp*abs(yd) + 1.0e-12_dp, &
+                    'lag rate differs from differences')
+         if (allocated(error)) return
+         u = vc(k) + (vc(k + 1) - vc(k))*(t - tc(k))/(tc(k + 1) - tc(k))
+         call check(error, abs(yd - (u - y)/tau) < 1.0e-10_dp, 'lag does not solve its ODE')
+         if (allocated(error)) return
+      end do
+      call lagged_value(tc, vc, yk, 2, 1.0e-9_dp, 20.0_dp, y, yd)
+      call check(error, abs(y) < 1.0e-8_dp, 'a vanishing lag does not return the command')
+   end subroutine test_lag
+
+   subroutine test_runs(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: e(400)
+      type(rng_type) :: rng
+      integer :: i
+      e = [(merge(1.0_dp, -1.0_dp, mod(i, 2) == 0), i=1, 400)]
+      call check(error, runs_z(e) > 10.0_dp, 'alternating signs: too many runs not seen')
+      if (allocated(error)) return
+      e = [(merge(1.0_dp, -1.0_dp, mod(i/50, 2) == 0), i=1, 400)]
+      call check(error, runs_z(e) < -10.0_dp, 'blocks: too few runs not seen')
+      if (allocated(error)) return
+      call rng%seed(5)
+      do i = 1, 400
+         e(i) = rng%normal()
+      end do
+      call check(error, abs(runs_z(e)) < 3.0_dp, 'white noise flagged')
+   end subroutine test_runs
+
+   !> A smooth signal sampled densely plus white noise of sd 0.1: the estimate within 5 %
+   subroutine test_noise(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: y(20000), sd
+      type(rng_type) :: rng
+      integer :: i
+      call rng%seed(7)
+      do i = 1, size(y)
+         y(i) = 40.0_dp*sin(real(i, dp)*1.0e-3_dp) + 0.1_dp*rng%normal()
+      end do
+      sd = noise_sd(y)
+      call check(error, abs(sd/0.1_dp - 1.0_dp) < 0.05_dp, 'noise estimate off')
+   end subroutine test_noise
+
+   !> For residuals r = J a + n with n orthogonal to J, the Gauss-Newton fall is |J a|**2 and
+   !> the step is -a, also with badly scaled columns
+   subroutine test_score(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: jac(50, 3), r(50), a(3), step(3), drop, nvec(50)
+      type(rng_type) :: rng
+      integer :: i, j
+      call rng%seed(11)
+      do j = 1, 3
+         do i = 1, 50
+            jac(i, j) = rng%normal()*10.0_dp**(2*j)
+         end do
+      end do
+      a = [0.3_dp, -0.002_dp, 1.0e-5_dp]
+      do i = 1, 50
+         nvec(i) = rng%normal()
+      end do
+      ! Remove from the noise its part in the span of J (normal equations, small system)
+      call gn_decrease(jac, nvec, drop, step)
+      nvec = nvec + matmul(jac, step)
+      r = matmul(jac, a) + nvec
+      call gn_decrease(jac, r, drop, step)
+      call check(error, abs(drop/sum(matmul(jac, a)**2) - 1.0_dp) < 1.0e-8_dp, 'fall wrong')
+      if (allocated(error)) return
+      call check(error, maxval(abs(step + a)/abs(a)) < 1.0e-6_dp, 'step wrong')
+   end subroutine test_score
+
+   !> 1 % cycles with a hold at the peak: hold, loading, unloading and reversal points where
+   !> the history says, and the cycle count
+   subroutine test_classes(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(history_type) :: hist
+      real(dp), allocatable :: t(:), y(:)
+      integer, allocatable :: cls(:), cyc(:)
+      logical, allocatable :: el(:)
+      call cycles(hist, e)
+      ! Quarter cycle: 5 s to +0.5 %, hold 60 s, 10 s to -0.5 %, 10 s back...
+      t = [2.0_dp, 30.0_dp, 65.5_dp, 68.0_dp, 72.0_dp, 76.0_dp, hist%end_time() - 1.0_dp]
+      y = [1.0_dp, 50.0_dp, 50.0_dp, 10.0_dp, -30.0_dp, -50.0_dp, 20.0_dp]
+      allocate (cls(size(t)), cyc(size(t)), el(size(t)))
+      call point_classes(hist, t, y, 15.0_dp, cls, cyc, el)
+      call check(error, cls(1) == class_loading .and. cls(2) == class_hold .and. &
+                 cls(3) == class_reversal .and. cls(5) == class_loading .and. cls(4) == class_unloading, &
+                 'classes wrong')
+      if (allocated(error)) return
+      call check(error, cyc(1) == 1 .and. cyc(7) == 3, 'cycle count wrong')
+      if (allocated(error)) return
+      call check(error, el(1) .and. el(4) .and. .not. el(2), 'elastic points wrong')
+   end subroutine test_classes
+
+   subroutine test_bad_inputs(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_result) :: res
+      character(len=100), parameter :: tests(2) = [character(len=100) :: &
+         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
+         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]
+      call read_config(write_text('diag-effect.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose effects = 'creep-fatigue' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      call check_message(error, e, "&diagnose: effects: no effect is named 'creep-fatigue'")
+      if (allocated(error)) return
+      call read_config(write_text('diag-holdout.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose holdout = 'c' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      call check_message(error, e, "&diagnose: holdout: no &test is named 'c'")
+      if (allocated(error)) return
+      call write_relaxation_data()
+      call read_config(write_text('diag-empty.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
+      call check_message(error, e, '&diagnose: holdout: the held-out set is empty')
+      if (allocated(error)) return
+      call read_config(write_text('diag-all.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose holdout = 'a', 'b' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
+      call check_message(error, e, 'every test is held out')
+      if (allocated(error)) return
+      ! The data were made with B = 1e15; at B = 3e15 the fit has clearly not converged
+      call read_config(write_text('diag-unconverged.nml', [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 3.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /", "&fit fitted = 'B', method = 'lm' /", &
+         "&diagnose holdout = 'b' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
+      call check_message(error, e, 'the fit has not converged')
+   contains
+      subroutine write_relaxation_data()
+         type(run_config) :: c
+         type(sim_result) :: sim
+         character(len=100), allocatable :: rows(:)
+         character(len=:), allocatable :: path
+         integer :: i
+         call read_config(write_text('diag-gen.nml', [character(len=100) :: model_groups, &
+            "&test name = 'a', history = 'relaxation' /"]), c, e)
+         if (allocated(e)) return
+         call simulate_cvode(c%model, c%tests(1)%hist, output_times(c%tests(1)%hist, 1.0_dp), &
+                             c%solver, sim, e)
+         if (allocated(e)) return
+         allocate (rows(size(sim%t) + 1))
+         rows(1) = 'time stress'
+         do i = 1, size(sim%t)
+            write (rows(i + 1), '(2es24.15)') sim%t(i), sim%stress(i)
+         end do
+         path = write_text('a.txt', rows)
+      end subroutine write_relaxation_data
+   end subroutine test_bad_inputs
+
+   !> One noisy repetition each of clean data, compliance, lag and shift on a small
+   !> matrix: every injected effect ranks first and clean data give no effect
+   subroutine test_selfcheck(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(selfcheck_result) :: sc
+      integer :: row
+      call read_config(write_text('diag-selfcheck.nml', [character(len=100) :: model_groups, &
+         small_matrix]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call selfcheck_run(cfg, opts, sc, e)
+      call check(error, .not. allocated(e), 'self-check failed to run')
+      if (allocated(error)) return
+      do row = 1, size(sc%injected)
+         call check(error, sc%confusion(row, sc%injected(row)) == 1, 'injected effect '// &
+                    char(48 + sc%injected(row))//' not ranked first')
+         if (allocated(error)) return
+      end do
+   end subroutine test_selfcheck
+end module test_diagnose
