@@ -133,12 +133,13 @@ contains
          end do
       end if
       allocate (rows(size(res%t) + 1))
-      rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect'
+      rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id'
       do i = 1, size(res%t)
          rows(i + 1) = trim(res%names(res%test_of(i)))//','// &
             trim(merge('yes', 'no ', res%held(res%test_of(i))))//','//real_str(res%t(i), 'es14.7')//','// &
             trim(class_names(res%cls(i)))//','//real_str(res%y_ex(i), 'es14.7')//','// &
-            real_str(res%y_base(i), 'es14.7')//','//real_str(effect_curve(i), 'es14.7')
+            real_str(res%y_base(i), 'es14.7')//','//real_str(effect_curve(i), 'es14.7')//','// &
+            str(res%cls(i))
       end do
       call write_lines(join_path(dir, 'residuals.csv'), rows, error)
    contains
@@ -160,13 +161,16 @@ contains
       integer :: stat, cmdstat, i, nt
       nt = size(res%names)
       allocate (gp(0))
-      gp = [character(len=512) :: gp, "set datafile separator ','", 'set terminal pngcairo size 1200,'// &
+      gp = [character(len=512) :: gp, "set datafile separator ','", &
+            "set linetype 1 lc rgb '#c03030'", "set linetype 2 lc rgb '#3050c0'", &
+            "set linetype 3 lc rgb '#30a040'", "set linetype 4 lc rgb 'black'", 'set terminal pngcairo size 1200,'// &
             str(300*nt)//' font ",9"', "set output '"//join_path(dir, 'residuals.png')//"'", &
             'set multiplot layout '//str(nt)//',1', 'set key off', 'set xlabel "time (s)"']
       do i = 1, nt
          gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
-               trim(res%unit(i))//'"', "plot '"//join_path(dir, 'residuals.csv')// &
-               "' every ::1 using 3:(strcol(1) eq '"//trim(res%names(i))//"' ? $5-$6 : 1/0) with dots lc rgb '#b03030'"]
+               trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
+               "plot '"//join_path(dir, 'residuals.csv')//"' every ::1 using 3:(strcol(1) eq '"// &
+               trim(res%names(i))//"' ? $5-$6 : 1/0):8 with points pt 7 ps 0.3 lc variable"]
       end do
       gp = [character(len=512) :: gp, 'unset multiplot', "set output '"//join_path(dir, 'fit.png')//"'", &
             'set multiplot layout '//str(nt)//',1', 'set key top right']
