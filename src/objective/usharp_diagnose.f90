@@ -27,6 +27,7 @@ module usharp_diagnose
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_lapack, only: svd
+   use usharp_sort, only: order_of
    implicit none
    private
 
@@ -499,7 +500,6 @@ contains
       real(dp) :: d0, d1, s
       integer :: i, k, nc, q
       logical :: ok
-      type(effect_outcome) :: tmp
       call new_effect_problem(prob, ifit, 0, eff_base, peak, base)
       call jacobian(base, base%start(), h, r0, jc, ok)
       if (.not. ok) then
@@ -544,17 +544,8 @@ contains
          res%effects(i)%pred_dbic = size(r0)*log(max(s - res%effects(i)%pred_drop, 1.0e-3_dp*s)/s) &
                                     + q*log(real(size(r0), dp))
       end do
-      ! Insertion sort by predicted BIC change
-      do i = 2, size(res%effects)
-         tmp = res%effects(i)
-         k = i - 1
-         do while (k >= 1)
-            if (res%effects(k)%pred_dbic <= tmp%pred_dbic) exit
-            res%effects(k + 1) = res%effects(k)
-            k = k - 1
-         end do
-         res%effects(k + 1) = tmp
-      end do
+      ! By predicted BIC change, best first
+      res%effects = res%effects(order_of(res%effects%pred_dbic))
    end subroutine screen
 
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
@@ -743,7 +734,7 @@ contains
       type(diagnose_options), intent(in) :: opts
       character(len=200), allocatable :: lines(:)
       integer, allocatable :: order(:)
-      integer :: i, j, k, nl
+      integer :: i, j, k
       character(len=200) :: ln
       allocate (lines(0))
       call add('# usharp diagnose')
@@ -772,13 +763,9 @@ contains
       call add('')
       call add('| rank | test | region | points | share % | RMS | bias | runs z | residual/noise | |')
       call add('|---|---|---|---|---|---|---|---|---|---|')
-      order = rank_regions(res%regions)
-      k = 0
-      do j = 1, size(order)
-         i = order(j)
-         if (res%regions(i)%label == 'whole test') cycle
-         k = k + 1
-         if (k > 15) exit
+      order = top_regions(res%regions, 15)
+      do k = 1, size(order)
+         i = order(k)
          call add('| '//str(k)//' | '//trim(res%regions(i)%test)//' | '//trim(res%regions(i)%label)// &
             ' | '//str(res%regions(i)%n)//' | '//real_str(100.0_dp*res%regions(i)%ssr/set_total(i), 'f0.1')// &
             ' | '//real_str(res%regions(i)%rms, 'es9.2')//' | '//real_str(res%regions(i)%bias, 'es9.2')// &
@@ -832,12 +819,8 @@ contains
             end do
             ln = '- top regions, structured gap before -> after:'
             call add(ln)
-            nl = 0
-            do k = 1, size(order)
+            do k = 1, min(5, size(order))
                i = order(k)
-               if (res%regions(i)%label == 'whole test') cycle
-               nl = nl + 1
-               if (nl > 5) exit
                call add('  - '//trim(res%regions(i)%test)//' '//trim(res%regions(i)%label)//': '// &
                   real_str(res%regions(i)%gap, 'es10.3')//' -> '//real_str(e%regions(i)%gap, 'es10.3'))
             end do
@@ -890,23 +873,15 @@ contains
       end function set_total
    end function diagnose_report
 
-   !> Regions ordered by structured gap, largest first
-   pure function rank_regions(regs) result(order)
+   !> Regions other than whole tests, by structured gap, largest first; at most nmax
+   pure function top_regions(regs, nmax) result(idx)
       type(region_stat), intent(in) :: regs(:)
-      integer :: order(size(regs))
-      integer :: i, j, tmp
-      order = [(i, i=1, size(regs))]
-      do i = 2, size(regs)
-         tmp = order(i)
-         j = i - 1
-         do while (j >= 1)
-            if (regs(order(j))%gap >= regs(tmp)%gap) exit
-            order(j + 1) = order(j)
-            j = j - 1
-         end do
-         order(j + 1) = tmp
-      end do
-   end function rank_regions
+      integer, intent(in) :: nmax
+      integer, allocatable :: idx(:)
+      idx = order_of(-regs%gap)
+      idx = pack(idx, regs(idx)%label /= 'whole test')
+      idx = idx(1:min(nmax, size(idx)))
+   end function top_regions
 
    pure function verdict_of(e) result(text)
       type(effect_outcome), intent(in) :: e

@@ -15,6 +15,7 @@ module usharp_selfcheck
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, diagnose_report
    use usharp_rng, only: rng_type
+   use usharp_sort, only: order_of
    implicit none
    private
 
@@ -258,20 +259,9 @@ contains
 
    pure real(dp) function median_of(a) result(m)
       real(dp), intent(in) :: a(:)
-      real(dp) :: b(size(a)), t
-      integer :: i, j
-      b = a
-      do i = 2, size(b)
-         t = b(i)
-         j = i - 1
-         do while (j >= 1)
-            if (b(j) <= t) exit
-            b(j + 1) = b(j)
-            j = j - 1
-         end do
-         b(j + 1) = t
-      end do
-      m = b((size(b) + 1)/2)
+      integer :: order(size(a))
+      order = order_of(a)
+      m = a(order((size(a) + 1)/2))
    end function median_of
 
    !> The built-in self-check matrix (Type 304 at 593 C, Table 4): three fit tests and one
