@@ -49,6 +49,9 @@ module usharp_effects
       real(dp) :: scale(2) = 1.0_dp          !< unit of the search variable (step 1e-3 of it)
       logical :: nonneg(2) = .false.         !< parameter kept >= 0
       logical :: screened(2) = .true.        !< has a gradient at zero (used in screening)
+      !> Largest magnitude the effect can physically have; a fit beyond it stands for
+      !> something else (huge: no limit)
+      real(dp) :: plausible(2) = huge(1.0_dp)
    end type effect_info
 
 contains
@@ -60,31 +63,31 @@ contains
       type(effect_info) :: cat(n_effects)
       cat(1) = effect_info('compliance', 'load-train/extensometer compliance: measured strain '// &
          'includes kappa*sigma/E', 1, param_global, ['kappa       ', '            '], &
-         ['-           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+         ['-           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [0.5_dp, 0.0_dp])
       cat(2) = effect_info('lag', 'control tracking error: applied value lags the command, '// &
          'first order, time constant tau', 1, param_global, ['tau         ', '            '], &
-         ['s           ', '            '], [1.0_dp, 1.0_dp], [.true., .false.], [.true., .true.])
+         ['s           ', '            '], [1.0_dp, 1.0_dp], [.true., .false.], [.true., .true.], [2.0_dp, 0.0_dp])
       cat(3) = effect_info('temperature', 'temperature offset per test: theta(T+dT) and '// &
          'E(T+dT)', 1, param_per_test, ['dT          ', '            '], &
-         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [25.0_dp, 0.0_dp])
       cat(4) = effect_info('scatter', 'specimen-to-specimen scatter: per-test factors on E '// &
          'and on the initial drag stress', 2, param_per_test, ['dE/E        ', 'dD0/D0      '], &
-         ['-           ', '-           '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+         ['-           ', '-           '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [0.2_dp, 0.4_dp])
       cat(5) = effect_info('initial', 'initial state other than virgin: back stress R0 and '// &
          'drag offset dD0', 2, param_global, ['R0          ', 'dD0         '], &
          ['stress      ', 'stress      '], [peak, peak], [.false., .false.], &
-         [.true., .true.])
+         [.true., .true.], [0.5_dp*peak, 0.5_dp*peak])
       cat(6) = effect_info('shift', 'time offset: the stress channel lags the strain '// &
          'channel by delta', 1, param_global, ['delta       ', '            '], &
-         ['s           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.])
+         ['s           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [5.0_dp, 0.0_dp])
       cat(7) = effect_info('softening', 'cyclic softening/damage: drag in the flow law '// &
          'reduced as D*exp(-s*p), p accumulated inelastic strain', 1, param_global, &
          ['s           ', '            '], ['-           ', '            '], [1.0_dp, 1.0_dp], &
-         [.false., .false.], [.true., .true.])
+         [.false., .false.], [.true., .true.], [20.0_dp, 0.0_dp])
       cat(8) = effect_info('backstress2', 'second back stress of faster rate: '// &
          'dR2 = H3 deps_in - gamma3 R2 |deps_in|', 2, param_global, ['H3          ', &
          'gamma3      '], ['stress      ', '-           '], [peak, 1000.0_dp], &
-         [.true., .true.], [.true., .false.])
+         [.true., .true.], [.true., .false.], [huge(1.0_dp), huge(1.0_dp)])
    end function effect_catalogue
 
    !> Catalogue index of an effect by name, 0 when there is none

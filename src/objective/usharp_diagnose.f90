@@ -68,6 +68,8 @@ module usharp_diagnose
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
       logical :: significant = .false., confirmed = .false.
+      logical :: plausible = .true.          !< every magnitude within the effect's physical limit
+      real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
       integer :: nevals = 0
       type(region_stat), allocatable :: regions(:)
       real(dp), allocatable :: y(:)          !< responses with the effect, all tests
@@ -615,6 +617,7 @@ contains
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
       allocate (e%pname(0))
+      e%worst = 0.0_dp
       do j = 1, size(ep%p0)
          if (.not. ep%pfree(j)) cycle
          if (cat(e%k)%sharing == param_per_test) then
@@ -622,9 +625,12 @@ contains
             i = mod(j - 1, nt) + 1
             e%pname = [character(len=24) :: e%pname, trim(cat(e%k)%pname(g))//' '//trim(res%names(i))]
          else
+            g = j
             e%pname = [character(len=24) :: e%pname, cat(e%k)%pname(j)]
          end if
+         e%worst = max(e%worst, abs(p(j))/cat(e%k)%plausible(g))
       end do
+      e%plausible = e%worst <= 1.0_dp
 
       ! Held-out tests: constants and global parameters carried over; per-test parameters of
       ! a held-out test fitted to it with the constants fixed
@@ -657,7 +663,7 @@ contains
       if (res%gap_fit > 0.0_dp) e%shrink_fit = 1.0_dp - &
          max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)/res%gap_fit
       e%significant = e%dbic < -bic_margin
-      e%confirmed = e%significant .and. e%shrink_held >= opts%confirm_shrink
+      e%confirmed = e%significant .and. e%plausible .and. e%shrink_held >= opts%confirm_shrink
    end subroutine refit
 
    !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
@@ -726,6 +732,10 @@ contains
          where = where//trim(res%regions(j)%test)//' '//trim(res%regions(j)%label)
       end do
       res%verdict = 'no catalogue effect is confirmed; the structured residual lies in: '//where
+      do j = 1, size(res%effects)
+         if (res%effects(j)%significant .and. .not. res%effects(j)%plausible) res%verdict = &
+            res%verdict//'; '//trim(res%effects(j)%name)//' lowers BIC only at an implausible magnitude'
+      end do
    end subroutine conclude
 
    !> The report in Markdown (also what `diagnose` prints)
@@ -806,7 +816,8 @@ contains
          associate (e => res%effects(j))
             if (.not. e%refitted) cycle
             call add('')
-            call add('**'//trim(e%name)//'** fitted magnitude (95 % interval):')
+            call add('**'//trim(e%name)//'** fitted magnitude (95 % interval; largest |value| is '// &
+               real_str(e%worst, 'f0.2')//' of the physical limit of the catalogue):')
             do k = 1, size(e%p)
                call add('- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
                   real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']')
@@ -888,6 +899,9 @@ contains
       character(len=:), allocatable :: text
       if (e%confirmed) then
          text = 'confirmed'
+      else if (e%significant .and. .not. e%plausible) then
+         text = 'significant, but the magnitude is '//real_str(e%worst, 'f0.1')// &
+                'x its physical limit: stands in for something else'
       else if (e%significant) then
          text = 'significant, not confirmed on held-out'
       else
