@@ -695,6 +695,7 @@ contains
    subroutine conclude(res)
       type(diagnose_result), intent(inout) :: res
       integer :: j, k
+      integer, allocatable :: top(:)
       character(len=:), allocatable :: where
       res%leading = 0
       do j = 1, size(res%effects)
@@ -723,18 +724,17 @@ contains
          return
       end if
       where = ''
-      k = 0
-      do j = 1, size(res%regions)
-         if (.not. res%regions(j)%structured .or. res%regions(j)%label == 'whole test') cycle
-         k = k + 1
-         if (k > 3) exit
-         if (k > 1) where = where//'; '
-         where = where//trim(res%regions(j)%test)//' '//trim(res%regions(j)%label)
+      top = top_regions(res%regions, size(res%regions))
+      top = pack(top, res%regions(top)%structured)
+      do j = 1, min(3, size(top))
+         if (j > 1) where = where//'; '
+         where = where//trim(res%regions(top(j))%test)//' '//trim(res%regions(top(j))%label)
       end do
       res%verdict = 'no catalogue effect is confirmed; the structured residual lies in: '//where
       do j = 1, size(res%effects)
          if (res%effects(j)%significant .and. .not. res%effects(j)%plausible) res%verdict = &
             res%verdict//'; '//trim(res%effects(j)%name)//' lowers BIC only at an implausible magnitude'
+
       end do
    end subroutine conclude
 
