@@ -95,7 +95,8 @@ module usharp_diagnose
       character(len=:), allocatable :: verdict
       integer :: nevals = 0
       ! For the plots: every point of every test
-      integer, allocatable :: test_of(:), cls(:)
+      integer, allocatable :: test_of(:), cls(:), cycle(:)
+      logical, allocatable :: elastic(:)
       real(dp), allocatable :: t(:), y_ex(:), y_base(:)
    end type diagnose_result
 
@@ -374,17 +375,26 @@ contains
       integer :: i, n
       integer, allocatable :: cls(:), cyc(:)
       logical, allocatable :: el(:)
-      allocate (res%t(0), res%y_ex(0), res%test_of(0), res%cls(0))
+      real(dp) :: thr
+      allocate (res%t(0), res%y_ex(0), res%test_of(0), res%cls(0), res%cycle(0), res%elastic(0))
       do i = 1, size(prob%targets)
-         n = size(prob%targets(i)%t)
-         allocate (cls(n), cyc(n), el(n))
-         call point_classes(prob%cfg%tests(i)%hist, prob%targets(i)%t, prob%targets(i)%y_ex, &
-                            1.0_dp, cls, cyc, el)
-         res%t = [res%t, prob%targets(i)%t]
-         res%y_ex = [res%y_ex, prob%targets(i)%y_ex]
-         res%test_of = [res%test_of, spread(i, 1, n)]
-         res%cls = [res%cls, cls]
-         deallocate (cls, cyc, el)
+         associate (tg => prob%targets(i), test => prob%cfg%tests(i))
+            n = size(tg%t)
+            ! Elastic below the weighting threshold, else below the model's YS; a strain
+            ! response has no elastic part
+            thr = prob%cfg%model%d0_yield
+            if (test%weighting == 'threshold' .and. test%sig > 0.0_dp) thr = test%sig
+            if (fits_strain(test)) thr = -1.0_dp
+            allocate (cls(n), cyc(n), el(n))
+            call point_classes(test%hist, tg%t, tg%y_ex, thr, cls, cyc, el)
+            res%t = [res%t, tg%t]
+            res%y_ex = [res%y_ex, tg%y_ex]
+            res%test_of = [res%test_of, spread(i, 1, n)]
+            res%cls = [res%cls, cls]
+            res%cycle = [res%cycle, cyc]
+            res%elastic = [res%elastic, el]
+            deallocate (cls, cyc, el)
+         end associate
       end do
    end subroutine points_of
 
@@ -425,41 +435,31 @@ contains
       type(diagnose_result), intent(in) :: res
       real(dp), intent(in) :: r(:), ysim(:), nv(:)
       type(region_stat), allocatable :: regs(:)
-      integer, allocatable :: cls(:), cyc(:)
-      logical, allocatable :: el(:)
       real(dp), allocatable :: e(:)
-      real(dp) :: thr
       integer :: i, k0, n, c
       character(len=:), allocatable :: tag
       allocate (regs(0))
       k0 = 0
       do i = 1, size(prob%targets)
-         associate (tg => prob%targets(i), test => prob%cfg%tests(i))
-            n = size(tg%t)
-            thr = prob%cfg%model%d0_yield
-            if (test%weighting == 'threshold' .and. test%sig > 0.0_dp) thr = test%sig
-            if (fits_strain(test)) thr = huge(1.0_dp)
-            allocate (cls(n), cyc(n), el(n))
-            call point_classes(test%hist, tg%t, tg%y_ex, thr, cls, cyc, el)
-            e = tg%y_ex - ysim(k0 + 1:k0 + n)
-            tag = trim(res%names(i))
-            if (res%held(i)) tag = tag//' (held out)'
-            associate (rr => r(k0 + 1:k0 + n), vv => nv(k0 + 1:k0 + n))
-               regs = [regs, region_of(tag, 'whole test', spread(.true., 1, n), rr, e, vv)]
-               do c = 1, size(class_names)
-                  if (any(cls == c)) regs = [regs, region_of(tag, trim(class_names(c)), cls == c, rr, e, vv)]
-               end do
-               if (.not. fits_strain(test)) then
-                  regs = [regs, region_of(tag, 'elastic', el, rr, e, vv)]
-                  regs = [regs, region_of(tag, 'inelastic', .not. el, rr, e, vv)]
-               end if
-               do c = 1, maxval(cyc)
-                  if (any(cyc == c)) regs = [regs, region_of(tag, 'cycle '//str(c), cyc == c, rr, e, vv)]
-               end do
-            end associate
-            deallocate (cls, cyc, el)
-            k0 = k0 + n
+         n = size(prob%targets(i)%t)
+         e = prob%targets(i)%y_ex - ysim(k0 + 1:k0 + n)
+         tag = trim(res%names(i))
+         if (res%held(i)) tag = tag//' (held out)'
+         associate (rr => r(k0 + 1:k0 + n), vv => nv(k0 + 1:k0 + n), cls => res%cls(k0 + 1:k0 + n), &
+                    cyc => res%cycle(k0 + 1:k0 + n), el => res%elastic(k0 + 1:k0 + n))
+            regs = [regs, region_of(tag, 'whole test', spread(.true., 1, n), rr, e, vv)]
+            do c = 1, size(class_names)
+               if (any(cls == c)) regs = [regs, region_of(tag, trim(class_names(c)), cls == c, rr, e, vv)]
+            end do
+            if (.not. fits_strain(prob%cfg%tests(i))) then
+               regs = [regs, region_of(tag, 'elastic', el, rr, e, vv)]
+               regs = [regs, region_of(tag, 'inelastic', .not. el, rr, e, vv)]
+            end if
+            do c = 1, maxval(cyc)
+               if (any(cyc == c)) regs = [regs, region_of(tag, 'cycle '//str(c), cyc == c, rr, e, vv)]
+            end do
          end associate
+         k0 = k0 + n
       end do
    end function all_regions
 
@@ -856,9 +856,18 @@ contains
 
    contains
 
-      subroutine add(text)
+      !> One line, wrapped at a space when longer than the lines hold
+      recursive subroutine add(text)
          character(len=*), intent(in) :: text
-         lines = [lines, text]
+         integer :: cut
+         if (len(text) <= len(lines)) then
+            lines = [lines, text]
+            return
+         end if
+         cut = index(text(1:len(lines)), ' ', back=.true.)
+         if (cut <= 1) cut = len(lines)
+         lines = [lines, text(1:cut)]
+         call add('  '//text(cut + 1:))
       end subroutine add
 
       real(dp) function region_noise(i) result(v)

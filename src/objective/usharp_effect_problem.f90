@@ -4,15 +4,14 @@
 !> extended integrator, so that fits with and without an effect differ only by the effect.
 module usharp_effect_problem
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_failure
-   use usharp_miller, only: miller_model, model_setup, set_constant, get_constant, constant_names
+   use usharp_error, only: error_type
+   use usharp_miller, only: miller_model, model_setup, set_constant, get_constant
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, effects_of, &
                              effect_model, effect_nparams, n_effects, param_per_test
    use usharp_objective, only: fit_problem, test_residuals, simulated
    use usharp_optimiser, only: least_squares_type
    use usharp_simulation, only: sim_result
    use usharp_cvode_driver, only: simulate_cvode
-   use usharp_strings, only: str
    implicit none
    private
 
@@ -72,7 +71,6 @@ contains
       ep%pfree = .true.
       do j = 1, np
          ! per-test parameters are ordered parameter-major: group g holds nt values
-         g = 1
          if (cat(k)%sharing == param_per_test) then
             g = (j - 1)/nt + 1
          else
@@ -218,8 +216,10 @@ contains
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: f
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: rs(self%nres(), 1), fs(1)
+      real(dp), allocatable :: rs(:, :)
+      real(dp) :: fs(1)
       logical :: ok(1)
+      allocate (rs(self%nres(), 1))
       call self%residuals(reshape(x, [size(x), 1]), rs, fs, ok, error)
       f = fs(1)
    end subroutine ep_eval
