@@ -14,7 +14,7 @@ module test_optimise
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
    use usharp_objective, only: fit_problem, setup_problem
-   use usharp_identify, only: identify_result, identify_at
+   use usharp_identify, only: identify_result, identify_at, robust_covariance
    use usharp_miller, only: get_constant
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, read_text, scratch_dir
@@ -44,6 +44,8 @@ contains
          new_unittest('annealing-rosenbrock', test_sa), &
          new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
          new_unittest('identify-thesis-lcf-relaxation', test_identify), &
+         new_unittest('sandwich-covariance-heteroscedastic', test_sandwich), &
+         new_unittest('rng-skip-decorrelates-nearby-seeds', test_rng_skip), &
          new_unittest('fit-independent-of-thread-count', test_threads)]
    end subroutine collect_optimise
 
@@ -203,4 +205,63 @@ contains
       j2 = read_text(scratch_dir//'/threads-2/fit.journal')
       call check(error, len(j1) > 1000 .and. j1 == j2, 'journals on 1 and 2 threads are identical')
    end subroutine test_threads
+   !> A straight line y = a + b x fitted by least squares to points whose noise is largest at
+   !> both ends (where the slope is decided): the sandwich estimate from the residuals matches the exact covariance
+   !> (X'X)^-1 X' diag(sd**2) X (X'X)^-1 within 5 %, while s**2 (X'X)^-1 misses it by far
+   subroutine test_sandwich(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer, parameter :: m = 40000
+      real(dp) :: x(m, 2), sd(m), r(m), xtx(2, 2), pinv(2, 2), exact(2, 2), meat(2, 2)
+      real(dp) :: cov(2, 2), naive(2, 2), det
+      type(rng_type) :: rng
+      integer :: k, i, j
+      call rng%seed(3)
+      do k = 1, m
+         x(k, 1) = 1.0_dp
+         x(k, 2) = real(k - 1, dp)/real(m - 1, dp)
+         sd(k) = 0.02_dp + (2.0_dp*abs(x(k, 2) - 0.5_dp))**3
+         r(k) = sd(k)*rng%normal()
+      end do
+      xtx = matmul(transpose(x), x)
+      det = xtx(1, 1)*xtx(2, 2) - xtx(1, 2)**2
+      pinv = reshape([xtx(2, 2), -xtx(1, 2), -xtx(2, 1), xtx(1, 1)], [2, 2])/det
+      do j = 1, 2
+         do i = 1, 2
+            meat(i, j) = sum(sd**2*x(:, i)*x(:, j))
+         end do
+      end do
+      exact = matmul(pinv, matmul(meat, pinv))
+      ! Residuals at the least-squares estimate, not at the truth
+      r = r - matmul(x, matmul(pinv, matmul(transpose(x), r)))
+      cov = robust_covariance(x, r, pinv)
+      naive = sum(r**2)/real(m - 2, dp)*pinv
+      do i = 1, 2
+         call check(error, abs(sqrt(cov(i, i)/exact(i, i)) - 1.0_dp) < 0.05_dp, &
+                    'sandwich sd off by more than 5 %')
+         if (allocated(error)) return
+      end do
+      ! The slope's sd: the pooled variance understates it (noise is largest at large x)
+      call check(error, sqrt(naive(2, 2)/exact(2, 2)) < 0.8_dp, &
+                 'the test data are not heteroscedastic enough to tell the estimates apart')
+   end subroutine test_sandwich
+
+   !> Seeds 1 to 20 after skip(64): their first uniform draws spread over (0, 1) (without the
+   !> skip, nearby seeds start from nearly the same value)
+   subroutine test_rng_skip(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      real(dp) :: u(20), u0(20)
+      integer :: i
+      do i = 1, 20
+         call rng%seed(i)
+         u0(i) = rng%uniform()
+         call rng%seed(i)
+         call rng%skip(64)
+         u(i) = rng%uniform()
+      end do
+      call check(error, maxval(u0) - minval(u0) < 0.01_dp, 'expected close first draws without skip')
+      if (allocated(error)) return
+      call check(error, maxval(u) - minval(u) > 0.5_dp .and. count(u < 0.5_dp) >= 5 .and. &
+                 count(u >= 0.5_dp) >= 5, 'first draws after skip(64) do not spread')
+   end subroutine test_rng_skip
 end module test_optimise

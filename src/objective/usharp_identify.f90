@@ -1,7 +1,7 @@
 !> Identifiability at a fit's optimum: the Jacobian of the weighted residuals with respect to
 !> log10 of the fitted constants (central differences), its singular values, the parameter
-!> covariance s**2 (J'J)^-1 from the residual variance s**2 = SSR/(m - p), correlations, 95 %
-!> confidence intervals, constants at a bound, and the poorly determined directions in words.
+!> covariance (heteroscedasticity-consistent sandwich (J'J)^-1 J' diag(r**2) J (J'J)^-1), 
+!> correlations, 95 % confidence intervals, constants at a bound, and the poorly determined directions in words.
 module usharp_identify
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
@@ -12,7 +12,7 @@ module usharp_identify
    implicit none
    private
 
-   public :: identify_result, identify_at, identify_report, jacobian_log10
+   public :: identify_result, identify_at, identify_report, jacobian_log10, robust_covariance
 
    !> A direction is poorly determined when its singular value is below this fraction of the
    !> largest (a relative change of 1e-3 in the residuals for a unit step in log10)
@@ -75,6 +75,25 @@ contains
       end do
    end subroutine jacobian_log10
 
+   !> Heteroscedasticity-consistent covariance of least-squares estimates (the sandwich
+   !> (J'J)^+ J' diag(r**2) J (J'J)^+, with the small-sample factor m/(m - p)): jac (m x p)
+   !> of the residuals r, pinv = (J'J)^+
+   pure function robust_covariance(jac, r, pinv) result(cov)
+      real(dp), intent(in) :: jac(:, :), r(:), pinv(:, :)
+      real(dp) :: cov(size(pinv, 1), size(pinv, 2))
+      real(dp) :: meat(size(jac, 2), size(jac, 2))
+      integer :: i, j, m, p
+      m = size(jac, 1)
+      p = size(jac, 2)
+      do j = 1, p
+         do i = 1, j
+            meat(i, j) = sum((r*jac(:, i))*(r*jac(:, j)))
+            meat(j, i) = meat(i, j)
+         end do
+      end do
+      cov = matmul(pinv, matmul(meat, pinv))*real(m, dp)/real(max(m - p, 1), dp)
+   end function robust_covariance
+
    !> The identifiability of the fitted constants of prob at c (physical units)
    subroutine identify_at(prob, c, h, res, error)
       type(fit_problem), intent(in) :: prob
@@ -82,7 +101,7 @@ contains
       type(identify_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(fit_problem) :: logprob
-      real(dp), allocatable :: r0(:), jac(:, :), cov(:, :)
+      real(dp), allocatable :: r0(:), jac(:, :), cov(:, :), pinv(:, :)
       real(dp) :: f0, t95, lo, hi
       integer :: n, i, j, info
       integer :: tied(size(c))
@@ -104,17 +123,21 @@ contains
                           str(info)//')', stat_failure)
          return
       end if
-      ! cov = s2 V S^-2 V' over the directions that carry information
-      allocate (cov(n, n))
-      cov = 0.0_dp
+      ! (J'J)^+ = V S^-2 V' over the directions that carry information
+      allocate (pinv(n, n))
+      pinv = 0.0_dp
       do i = 1, n
          if (res%sv(i) > weak_ratio*res%sv(1) .and. res%sv(i) > 0.0_dp) then
             do j = 1, n
-               cov(:, j) = cov(:, j) + res%v(:, i)*res%v(j, i)/res%sv(i)**2
+               pinv(:, j) = pinv(:, j) + res%v(:, i)*res%v(j, i)/res%sv(i)**2
             end do
          end if
       end do
-      cov = res%s2*cov
+      ! The weighted residuals of Eq. 7 do not share one variance (1/n per test, w = 2.5 above
+      ! SIG), so s2 (J'J)^-1 would be too narrow for constants set by the tests with the
+      ! noisier residuals: the sandwich (J'J)^+ J' diag(r**2) J (J'J)^+ m/(m - p) holds
+      ! whatever the variance of each residual
+      cov = robust_covariance(jac, r0, pinv)
       res%se = [(sqrt(max(cov(i, i), 0.0_dp)), i=1, n)]
       t95 = t_quantile_975(res%m - n)
       res%lo95 = c*10.0_dp**(-t95*res%se)

@@ -12,6 +12,7 @@ module usharp_rng
       integer(i8) :: state = 0_i8
    contains
       procedure :: seed => rng_seed
+      procedure :: skip => rng_skip
       procedure :: uniform => rng_uniform
       procedure :: normal => rng_normal
    end type rng_type
@@ -26,6 +27,19 @@ contains
       self%state = ieor(int(z'2545F4914F6CDD1D', i8), int(seed, i8))
       if (self%state == 0_i8) self%state = 1_i8
    end subroutine rng_seed
+
+   !> Pass over n outputs. Seeds that differ in a few low bits start from states that differ
+   !> in those bits only, so their first draws are nearly equal; after some 64 steps of the
+   !> shift-xor recurrence the difference has spread over all 64 bits.
+   impure subroutine rng_skip(self, n)
+      class(rng_type), intent(inout) :: self
+      integer, intent(in) :: n
+      integer(i8) :: z
+      integer :: i
+      do i = 1, n
+         z = next_bits(self)
+      end do
+   end subroutine rng_skip
 
    !> Next 64-bit output of Marsaglia's xorshift64 (13, 7, 17): shifts and exclusive ors only,
    !> so no integer overflow and the same bits on every platform
