@@ -1,10 +1,11 @@
 !> Tests of the CVODE driver: accuracy against a tight-tolerance reference, the thesis's
-!> figures, stress control against strain control, and failures that name test and time
+!> figures, stress control against strain control, failures that name test and time, and
+!> the CVODES sensitivities against central differences
 module test_driver
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
-   use usharp_miller, only: miller_model, model_setup
+   use usharp_miller, only: miller_model, model_setup, get_constant, set_constant
    use usharp_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
@@ -22,7 +23,8 @@ contains
          new_unittest('accuracy-vs-tight-reference', test_accuracy), &
          new_unittest('thesis-sanity-figures', test_thesis_figures), &
          new_unittest('stress-control-matches-strain-control', test_stress_control), &
-         new_unittest('failure-names-test-and-time', test_failure)]
+         new_unittest('failure-names-test-and-time', test_failure), &
+         new_unittest('sensitivities-vs-central-differences', test_sensitivities)]
    end subroutine collect_driver
 
    !> The thesis's three tests: 1 LCF ramp, 2 relaxation, 3 ratcheting
@@ -134,4 +136,60 @@ contains
       if (allocated(error)) return
       call check(error, index(uerr%message, "test 'lcf': integration failed at t = ") == 1, uerr%message)
    end subroutine test_failure
+   !> For each thesis test and each of the seven fitted constants, the stress sensitivity
+   !> d sigma / d ln c = -E c d eps_in/dc from CVODES at the default tolerances against
+   !> central differences (relative step 1e-4: smaller steps meet the reference's own
+   !> integration noise) of tight-tolerance simulations (rtol 1e-11):
+   !> the largest difference over the history below 1e-3 of the largest |d sigma / d ln c|
+   subroutine test_sensitivities(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m, mp, mm
+      type(history_type) :: h
+      type(sim_result) :: r, rp, rm
+      type(solver_options) :: def, tight
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: tout(:), deps(:, :), fd(:), an(:)
+      real(dp) :: c, step, dev, worst
+      integer :: k, j
+      character(len=100) :: buf
+      call model_setup(m, uerr)
+      tight%rtol = 1.0e-11_dp
+      tight%atol_strain = 1.0e-15_dp
+      worst = 0.0_dp
+      do k = 1, 3
+         call thesis_test(k, h)
+         tout = output_times(h, 0.5_dp)
+         call simulate_cvode(m, h, tout, def, r, uerr, sens=[1, 2, 3, 4, 5, 6, 7], deps_in=deps)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         do j = 1, 7
+            c = get_constant(m%c, j)
+            step = 1.0e-4_dp*c
+            mp = m
+            mm = m
+            call set_constant(mp%c, j, c + step)
+            call set_constant(mm%c, j, c - step)
+            call model_setup(mp, uerr)
+            call model_setup(mm, uerr)
+            call simulate_cvode(mp, h, tout, tight, rp, uerr)
+            call simulate_cvode(mm, h, tout, tight, rm, uerr)
+            if (allocated(uerr)) then
+               call test_failed(error, uerr%message)
+               return
+            end if
+            fd = (rp%stress - rm%stress)/(2.0_dp*step)*c
+            an = -m%youngs*deps(:, j)*c
+            dev = maxval(abs(an - fd))/max(maxval(abs(fd)), tiny(1.0_dp))
+            worst = max(worst, dev)
+            write (buf, '(a,i0,a,i0,a,es10.3)') 'test ', k, ', constant ', j, &
+               ': max |sensitivity - difference| / max |difference| = ', dev
+            call check(error, dev <= 1.0e-3_dp, trim(buf))
+            if (allocated(error)) return
+         end do
+      end do
+      write (buf, '(a,es10.3)') 'worst relative difference ', worst
+      print '(6x,a)', trim(buf)
+   end subroutine test_sensitivities
 end module test_driver

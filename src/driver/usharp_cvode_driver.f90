@@ -1,10 +1,13 @@
 !> Uniaxial simulation of the Miller model with CVODE (BDF, Newton, dense linear solver,
 !> analytic Jacobian). The integration restarts at every corner of the load history, so no
-!> step straddles a kink, and stops exactly at each corner.
+!> step straddles a kink, and stops exactly at each corner. Optionally CVODES integrates the
+!> forward sensitivities of the state to chosen constants alongside (staggered corrector,
+!> sensitivities in the error test; their right-hand side is the analytic Jacobian times the
+!> sensitivity plus the rates' derivative in the constant by central differences).
 module usharp_cvode_driver
    use, intrinsic :: iso_c_binding
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-   use fcvode_mod
+   use fcvodes_mod
    use fsundials_context_mod
    use fsundials_nvector_mod
    use fsundials_matrix_mod
@@ -15,7 +18,7 @@ module usharp_cvode_driver
    use usharp_kinds, only: dp, i8
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: miller_model, uniaxial_rates
+   use usharp_miller, only: miller_model, uniaxial_rates, get_constant, set_constant, model_setup
    use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value
    use usharp_history, only: history_type, control_strain
    use usharp_simulation, only: solver_options, sim_result
@@ -39,6 +42,11 @@ module usharp_cvode_driver
       real(dp) :: stiffness = 0.0_dp   !< E/(1 + kappa), model unit
       integer :: seg = 1
       real(dp), allocatable :: tc(:), vc(:), yk(:)
+      !> With sensitivities: the constants (physical units), their indices (usharp_miller
+      !> order) and theta(T), so that B*theta follows B
+      real(dp), allocatable :: p(:)
+      integer, allocatable :: pidx(:)
+      real(dp) :: theta = 0.0_dp
    end type rhs_context
 
 contains
@@ -49,7 +57,9 @@ contains
    !> carry the effects' temperature and modulus already (effect_model), the initial state
    !> and the measured strain include R0, the drag offsets and the compliance, and the control
    !> value passes through the lag. The stress-channel shift is the caller's (output times).
-   subroutine simulate_cvode(model, hist, tout, opts, res, error, effects)
+   !> With sens (indices of constants, plain model only), deps_in(i, j) = d eps_in(tout(i)) /
+   !> d c_sens(j) in 1/(unit of that constant); the drag stress's start D0 follows the constants.
+   subroutine simulate_cvode(model, hist, tout, opts, res, error, effects, sens, deps_in)
       type(miller_model), intent(in) :: model
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tout(:)
@@ -57,6 +67,8 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(test_effects), intent(in), optional :: effects
+      integer, intent(in), optional :: sens(:)
+      real(dp), allocatable, intent(out), optional :: deps_in(:, :)
 
       type(rhs_context), target :: ctx
       type(c_ptr) :: sunctx, cvode_mem
@@ -67,8 +79,13 @@ contains
       real(c_double) :: tret(1), tnext
       integer(c_int) :: ierr, n
       integer(c_long) :: counter(1)
-      integer :: k, iout, nout, nseg
+      integer :: k, iout, nout, nseg, j
       real(dp) :: tend
+      integer(c_int) :: ns
+      type(c_ptr) :: ys
+      real(c_double), allocatable, target :: pbar(:)
+      integer(c_int), allocatable, target :: plist(:)
+      logical :: with_sens
 
       nout = size(tout)
       call res%allocate(nout)
@@ -119,6 +136,23 @@ contains
       ierr = ior(ierr, FCVodeSetMaxNumSteps(cvode_mem, int(opts%max_steps, c_long)))
       if (opts%max_step > 0.0_dp) ierr = ior(ierr, FCVodeSetMaxStep(cvode_mem, opts%max_step))
       ierr = ior(ierr, FCVodeSetErrHandlerFn(cvode_mem, c_funloc(silent_handler), c_null_ptr))
+      with_sens = present(sens) .and. present(deps_in) .and. .not. ctx%extended
+      ns = 0
+      if (with_sens) then
+         ns = size(sens)
+         allocate (deps_in(nout, ns))
+         ctx%pidx = sens
+         ctx%p = [(get_constant(model%c, sens(j)), j=1, ns)]
+         ctx%theta = model%btheta/model%c%b
+         pbar = abs(ctx%p)
+         plist = [(int(j - 1, c_int), j=1, ns)]
+         ys = FN_VCloneVectorArray(ns, yvec)
+         call initial_sensitivities(model, sens, ys)
+         ierr = ior(ierr, FCVodeSensInit1(cvode_mem, ns, CV_STAGGERED, c_funloc(sens_rhs), ys))
+         ierr = ior(ierr, FCVodeSensEEtolerances(cvode_mem))
+         ierr = ior(ierr, FCVodeSetSensErrCon(cvode_mem, 1_c_int))
+         ierr = ior(ierr, FCVodeSetSensParams(cvode_mem, ctx%p, pbar, plist))
+      end if
       if (ierr /= 0) then
          call fatal_error(error, 'CVODE could not be set up', stat_failure)
          call release()
@@ -137,6 +171,8 @@ contains
             call add_counts()
             call set_segment(ctx, hist, k)
             ierr = FCVodeReInit(cvode_mem, hist%t(k), yvec)
+            ! The sensitivities are continuous across the corner: go on from their values
+            if (with_sens) ierr = FCVodeSensReInit(cvode_mem, CV_STAGGERED, ys)
          end if
          ierr = FCVodeSetStopTime(cvode_mem, hist%t(k + 1))
          ! Outputs inside this segment, then the corner itself
@@ -153,6 +189,7 @@ contains
                call release()
                return
             end if
+            if (with_sens) ierr = FCVodeGetSens(cvode_mem, tret, ys)
             do while (iout <= nout)
                if (tout(iout) > tret(1) + 1.0e-12_dp*max(1.0_dp, abs(tret(1)))) exit
                call store(iout, tout(iout))
@@ -190,6 +227,11 @@ contains
          res%back(i) = y(2)
          res%drag(i) = y(3)
          if (ctx%extended) res%back(i) = y(2) + y(5)
+         if (with_sens) then
+            do j = 1, ns
+               deps_in(i, j) = sens_value(ys, j, 1)
+            end do
+         end if
          if (hist%control == control_strain) then
             res%strain(i) = load
             res%stress(i) = ctx%stiffness*(load - y(1))
@@ -201,6 +243,7 @@ contains
       end subroutine store
 
       subroutine release()
+         if (with_sens) call FN_VDestroyVectorArray(ys, ns)
          call FCVodeFree(cvode_mem)
          ierr = FSUNLinSolFree(lsol)
          call FSUNMatDestroy(amat)
@@ -209,6 +252,48 @@ contains
          ierr = FSUNContext_Free(sunctx)
       end subroutine release
    end subroutine simulate_cvode
+
+   !> Start of the sensitivities: eps_in and R start at 0 whatever the constants; D starts at
+   !> D0, which the constants set unless it is fixed (central differences of the D0 formula)
+   subroutine initial_sensitivities(model, sens, ys)
+      type(miller_model), intent(in) :: model
+      integer, intent(in) :: sens(:)
+      type(c_ptr), intent(in) :: ys
+      type(N_Vector), pointer :: v
+      real(c_double), pointer :: d(:)
+      type(miller_model) :: mp, mm
+      type(error_type), allocatable :: err
+      real(dp) :: c, h
+      integer :: j
+      do j = 1, size(sens)
+         v => FN_VGetVecAtIndexVectorArray(ys, int(j - 1, c_int))
+         d => FN_VGetArrayPointer(v)
+         d = 0.0_dp
+         if (model%d0_fixed > 0.0_dp) cycle
+         c = get_constant(model%c, sens(j))
+         h = 1.0e-6_dp*abs(c)
+         mp = model
+         mm = model
+         call set_constant(mp%c, sens(j), c + h)
+         call set_constant(mm%c, sens(j), c - h)
+         call model_setup(mp, err)
+         if (allocated(err)) cycle
+         call model_setup(mm, err)
+         if (allocated(err)) cycle
+         d(3) = (mp%d0 - mm%d0)/(2.0_dp*h)
+      end do
+   end subroutine initial_sensitivities
+
+   !> Component i of sensitivity vector j (1-based) of the vector array ys
+   real(dp) function sens_value(ys, j, i) result(v)
+      type(c_ptr), intent(in) :: ys
+      integer, intent(in) :: j, i
+      type(N_Vector), pointer :: nv
+      real(c_double), pointer :: d(:)
+      nv => FN_VGetVecAtIndexVectorArray(ys, int(j - 1, c_int))
+      d => FN_VGetArrayPointer(nv)
+      v = d(i)
+   end function sens_value
 
    !> Lagged control value at every corner (first-order lag, time constant tau s, at rest on
    !> the first value); with tau = 0 the corners themselves
@@ -295,6 +380,41 @@ contains
       call uniaxial_rates(ctx%model, sigma, dsig, y, ydot, jac)
       ierr = merge(0, 1, all(ieee_is_finite(jac)))
    end function jac_fn
+
+   !> Right-hand side of sensitivity is (0-based): J s + df/dc, with the rates' derivative in
+   !> the constant by central differences (relative step 1e-6; the rates are smooth in the
+   !> constants, so its error is far below the integration's)
+   integer(c_int) function sens_rhs(ns, t, yv, fv, is, ysv, ysdotv, udata, tmp1, tmp2) &
+      result(ierr) bind(C)
+      integer(c_int), value :: ns, is
+      real(c_double), value :: t
+      type(N_Vector) :: yv, fv, ysv, ysdotv, tmp1, tmp2
+      type(c_ptr), value :: udata
+      type(rhs_context), pointer :: ctx
+      real(c_double), pointer :: y(:), sv(:), sd(:)
+      real(dp) :: sigma, dsig, f0(neq), fp(neq), fm(neq), jac(neq, neq), c, h
+      type(miller_model) :: mp, mm
+      integer :: j
+      call c_f_pointer(udata, ctx)
+      y => FN_VGetArrayPointer(yv)
+      sv => FN_VGetArrayPointer(ysv)
+      sd => FN_VGetArrayPointer(ysdotv)
+      j = is + 1
+      call stress_of(ctx, t, y, sigma, dsig)
+      call uniaxial_rates(ctx%model, sigma, dsig, y, f0, jac)
+      c = ctx%p(j)
+      h = 1.0e-6_dp*abs(c)
+      mp = ctx%model
+      mm = ctx%model
+      call set_constant(mp%c, ctx%pidx(j), c + h)
+      call set_constant(mm%c, ctx%pidx(j), c - h)
+      mp%btheta = mp%c%b*ctx%theta
+      mm%btheta = mm%c%b*ctx%theta
+      call uniaxial_rates(mp, sigma, dsig, y, fp)
+      call uniaxial_rates(mm, sigma, dsig, y, fm)
+      sd = matmul(jac, sv) + (fp - fm)/(2.0_dp*h)
+      ierr = merge(0, 1, all(ieee_is_finite(sd)))
+   end function sens_rhs
 
    !> Keep CVODE quiet: failures come back as an error_type, printed once by the program
    subroutine silent_handler(error_code, module, function, msg, udata) bind(C)
