@@ -96,6 +96,9 @@ module usharp_config
       integer :: multistart = 0                    !< number of Latin-hypercube starts (0: none)
       integer :: seed = 1                          !< seed of multi-start and annealing
       real(dp) :: fd_step = 1.0e-3_dp              !< forward-difference step in log10 of a constant
+      !> Jacobian of Levenberg-Marquardt: 'difference' (forward differences, one simulation
+      !> per constant) or 'sensitivity' (CVODES forward sensitivities, one simulation)
+      character(len=16) :: jacobian = 'difference'
       real(dp) :: anneal_t0 = 0.0_dp               !< initial temperature (0: the start objective)
       real(dp) :: anneal_rt = 0.85_dp              !< temperature reduction factor
       logical :: identify = .true.                 !< identifiability report after the fit

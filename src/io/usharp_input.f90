@@ -328,7 +328,7 @@ contains
       type(run_config), intent(inout) :: cfg
       type(error_type), allocatable, intent(out) :: error
       character(len=16) :: fitted(max_list)
-      character(len=32) :: method, objective
+      character(len=32) :: method, objective, jacobian
       real(dp) :: rho, eps, lower(max_list), upper(max_list), box_lower(max_list), &
                   box_upper(max_list), fd_step, anneal_t0, anneal_rt, f
       integer :: itermax, max_evals, max_failures, ios, i, idx, multistart, seed
@@ -336,8 +336,9 @@ contains
       character(len=512) :: msg
       namelist /fit/ fitted, method, objective, rho, eps, itermax, max_evals, max_failures, &
          log_search, lower, upper, box_lower, box_upper, multistart, seed, fd_step, anneal_t0, &
-         anneal_rt, identify
+         anneal_rt, identify, jacobian
       fitted = ''
+      jacobian = cfg%fit%jacobian
       lower = unset; upper = unset; box_lower = unset; box_upper = unset
       multistart = 0; seed = 1; fd_step = cfg%fit%fd_step; anneal_t0 = 0.0_dp
       anneal_rt = cfg%fit%anneal_rt; identify = .true.
@@ -392,6 +393,13 @@ contains
             "' is not known (hooke-jeeves, lm, nelder-mead, anneal)")
          return
       end select
+      jacobian = lower_text(jacobian)
+      if (jacobian /= 'difference' .and. jacobian /= 'sensitivity') then
+         call fatal_error(error, cfg%path//": &fit: jacobian = '"//trim(jacobian)// &
+            "' is not known (difference, sensitivity)")
+         return
+      end if
+      cfg%fit%jacobian = trim(jacobian)
       if (multistart < 0 .or. .not. (fd_step > 0.0_dp .and. fd_step < 0.1_dp) .or. &
           .not. (anneal_rt > 0.0_dp .and. anneal_rt < 1.0_dp) .or. anneal_t0 < 0.0_dp) then
          call fatal_error(error, cfg%path//': &fit: needs multistart >= 0, 0 < fd_step < 0.1, '// &

@@ -8,6 +8,7 @@ module usharp_objective
    use usharp_history, only: output_times, control_stress
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test
+   use usharp_cvode_driver, only: simulate_cvode
    use usharp_config, only: run_config, test_config
    use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain
    use usharp_weighting, only: threshold_weights, relaxation_weights
@@ -51,6 +52,7 @@ module usharp_objective
       procedure :: residuals => problem_residuals
       procedure :: nres => problem_nres
       procedure :: batch => problem_batch
+      procedure :: jacobian => problem_jacobian
    end type fit_problem
 
 contains
@@ -321,6 +323,75 @@ contains
          r = 0.0_dp
       end if
    end subroutine problem_residuals
+   !> Jacobian of the residuals with respect to x from CVODES forward sensitivities (one
+   !> simulation per test, tests in parallel); ok false where that is not available (the
+   !> umat integrator, an external backend) or a simulation failed
+   subroutine problem_jacobian(self, x, jac, ok)
+      class(fit_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: jac(:, :)
+      logical, intent(out) :: ok
+      type(miller_model) :: model
+      type(error_type), allocatable :: error
+      integer :: i, j, n
+      integer, allocatable :: k0(:)
+      logical :: oks(size(self%targets))
+      real(dp) :: dcdx(size(x))
+      jac = 0.0_dp
+      ok = self%cfg%solver%integrator == 'cvode' .and. .not. any(self%cfg%tests%ext%enabled)
+      if (.not. ok) return
+      call self%model_of(x, model, error)
+      if (allocated(error)) then
+         ok = .false.
+         return
+      end if
+      do j = 1, size(x)
+         dcdx(j) = 1.0_dp
+         if (self%cfg%fit%log_search) dcdx(j) = get_constant(model%c, self%idx(j))*log(10.0_dp)
+      end do
+      allocate (k0(size(self%targets)))
+      k0(1) = 0
+      do i = 2, size(self%targets)
+         k0(i) = k0(i - 1) + size(self%targets(i - 1)%t)
+      end do
+      !$omp parallel do schedule(dynamic) private(n)
+      do i = 1, size(self%targets)
+         n = size(self%targets(i)%t)
+         call one_test(i, jac(k0(i) + 1:k0(i) + n, :), oks(i))
+      end do
+      !$omp end parallel do
+      ok = all(oks)
+   contains
+      subroutine one_test(i, jt, oki)
+         integer, intent(in) :: i
+         real(dp), intent(out) :: jt(:, :)
+         logical, intent(out) :: oki
+         type(sim_result) :: res
+         type(error_type), allocatable :: err
+         real(dp), allocatable :: deps(:, :), drdy(:), unit(:)
+         integer :: jj
+         associate (test => self%cfg%tests(i), tg => self%targets(i))
+            call simulate_cvode(model, test%hist, tg%t, self%cfg%solver, res, err, &
+                                sens=self%idx, deps_in=deps)
+            oki = .not. allocated(err)
+            if (.not. oki) return
+            ! d y_sim / d eps_in: -E under strain control (stress), 1 under stress control
+            if (fits_strain(test)) then
+               unit = spread(1.0_dp, 1, size(tg%t))
+            else
+               unit = spread(-model%youngs, 1, size(tg%t))
+            end if
+            ! d r / d y_sim: the residuals are linear in y_sim
+            drdy = -test_residuals(self%cfg%fit%objective, spread(1.0_dp, 1, size(tg%t)), &
+                                   spread(0.0_dp, 1, size(tg%t)), tg%w, tg%y_ex_max)
+            do jj = 1, size(x)
+               jt(:, jj) = drdy*unit*deps(:, jj)*dcdx(jj)
+            end do
+            oki = all(ieee_is_finite(jt))
+         end associate
+      end subroutine one_test
+   end subroutine problem_jacobian
+
    !> Residuals at the points xs(:, j) (evaluation numbers k0 + j name the external work
    !> folders), simulated in parallel with OpenMP; each point is independent of the others
    subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages)

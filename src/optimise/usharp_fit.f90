@@ -38,6 +38,7 @@ module usharp_fit
       type(fit_log) :: log
       type(journal_record), allocatable :: replay(:)
       integer :: nevals = 0
+      integer :: nsens = 0              !< sensitivity Jacobians (one simulation each)
       integer :: nfail_row = 0          !< failures in a row
       integer :: nfail_total = 0
       integer :: ninvalid_total = 0
@@ -50,6 +51,7 @@ module usharp_fit
    contains
       procedure :: eval => fit_eval
       procedure :: residuals => fit_residuals
+      procedure :: jacobian => fit_jacobian
       procedure :: nres => fit_nres
       procedure :: constants_of => fit_constants_of
       procedure :: record => fit_record
@@ -104,6 +106,20 @@ contains
       end if
       call self%record(x, f, per_test, status, message, error)
    end subroutine fit_eval
+
+   !> The sensitivity Jacobian when &fit jacobian = 'sensitivity' and the tests allow it
+   !> (not logged: it is not an evaluation of the objective)
+   subroutine fit_jacobian(self, x, jac, done, error)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: jac(:, :)
+      logical, intent(out) :: done
+      type(error_type), allocatable, intent(out) :: error
+      done = .false.
+      if (self%prob%cfg%fit%jacobian /= 'sensitivity') return
+      call self%prob%jacobian(x, jac, done)
+      if (done) self%nsens = self%nsens + 1
+   end subroutine fit_jacobian
 
    !> Residuals at several points, simulated in parallel (OpenMP) and then logged in order,
    !> so the logs and the result do not depend on the number of threads

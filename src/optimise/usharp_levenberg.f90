@@ -53,7 +53,7 @@ contains
       real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
       real(dp) :: x(size(x0)), xn(size(x0)), dx(size(x0)), g(size(x0)), a(size(x0), size(x0))
       real(dp) :: dmp(size(x0)), b(size(x0), 1), f, fn(1), lambda, nu, pred, gain, amax
-      logical :: ok(1), done
+      logical :: ok(1), done, by_sens
       integer :: j
 
       n = size(x0)
@@ -82,9 +82,15 @@ contains
             opt%reason = 'max_evals reached'
             exit
          end if
-         call fd_jacobian(obj, x, r, hi, h, jac, error)
+         call obj%jacobian(x, jac, by_sens, error)
          if (allocated(error)) return
-         nevals = nevals + n
+         if (by_sens) then
+            nevals = nevals + 1
+         else
+            call fd_jacobian(obj, x, r, hi, h, jac, error)
+            if (allocated(error)) return
+            nevals = nevals + n
+         end if
          opt%iterations = iter
          a = matmul(transpose(jac), jac)
          g = matmul(transpose(jac), r)

@@ -19,6 +19,7 @@ module usharp_optimiser
    contains
       procedure(residuals_interface), deferred :: residuals
       procedure(nres_interface), deferred :: nres
+      procedure :: jacobian => no_jacobian
    end type least_squares_type
 
    abstract interface
@@ -57,4 +58,18 @@ module usharp_optimiser
       integer :: iterations = 0
       character(len=:), allocatable :: reason  !< why it stopped
    end type optimum_type
+contains
+
+   !> The Jacobian d r / d x at x, where an objective can give it directly (done); by
+   !> default it cannot, and the optimiser differences the residuals
+   subroutine no_jacobian(self, x, jac, done, error)
+      class(least_squares_type), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: jac(:, :)
+      logical, intent(out) :: done
+      type(error_type), allocatable, intent(out) :: error
+      jac = 0.0_dp
+      done = .false.
+   end subroutine no_jacobian
+
 end module usharp_optimiser
