@@ -551,8 +551,9 @@ contains
          xs = screening_starts(ep, cat(k))
          best%f = huge(1.0_dp)
          do j = 1, size(xs, 2)
-            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 3, &
-                                     opts%max_evals, opt, error)
+            ! From a start away from zero the constants first have to come back: 5 steps
+            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, &
+                                     merge(3, 5, j == 1), opts%max_evals, opt, error)
             if (allocated(error)) then
                ! A start where the model fails is passed over; the zero start must work
                if (j == 1) return
@@ -586,6 +587,15 @@ contains
       x0 = ep%start()
       nc = size(x0) - count(ep%pfree)
       np = count(ep%pfree)
+      if (ep%k == 8 .and. np == 2) then
+         ! The second back stress starts near zero (saturation H3/gamma3 of 5e-5 of the peak
+         ! at gamma3 = 200); also from saturations of 3 % and 10 % of the peak
+         allocate (xs(size(x0), 3))
+         xs = spread(x0, 2, 3)
+         xs(nc + 1, 2) = 0.03_dp*ep%p0(2)
+         xs(nc + 1, 3) = 0.10_dp*ep%p0(2)
+         return
+      end if
       if (info%sharing /= param_global .or. np /= size(ep%p0) .or. np > 2 .or. &
           any(info%plausible(1:np) >= huge(1.0_dp))) then
          xs = reshape(x0, [size(x0), 1])
