@@ -509,7 +509,7 @@ contains
       type(effect_problem) :: base, ep
       type(optimum_type) :: opt, best
       real(dp), allocatable :: r0(:), jc(:, :), je(:, :), rr(:), x(:), step(:), lo(:), hi(:)
-      real(dp), allocatable :: xs(:, :)
+      real(dp), allocatable :: xs(:, :), keys(:)
       real(dp) :: d0, d1, s
       integer :: i, j, k, nc, q
       logical :: ok
@@ -571,8 +571,10 @@ contains
          res%effects(i)%pred_dbic = size(r0)*log(max(s - res%effects(i)%pred_drop, 1.0e-3_dp*s)/s) &
                                     + q*log(real(size(r0), dp))
       end do
-      ! By predicted BIC change, best first
-      res%effects = res%effects(order_of(res%effects%pred_dbic))
+      ! By predicted BIC change, best first (the keys copied: a component of an array of
+      ! derived type is not contiguous)
+      keys = res%effects%pred_dbic
+      res%effects = res%effects(order_of(keys))
    end subroutine screen
 
    !> Starts of the screening runs of a global effect with a physical limit: zero, then every
