@@ -29,8 +29,11 @@ program bench_jacobian
       call read_config('decks/thesis-run2.nml', cfg, e)
       if (start == 2) call override_constants(cfg, 'decks/thesis-data.nml', e)
       cfg%fit%log_search = .true.
-      call setup_problem(cfg, prob, e)
-      if (allocated(e)) error stop 'set-up failed'
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      if (allocated(e)) then
+         write (output_unit, '(a)') 'bench_jacobian: '//e%message
+         error stop 1
+      end if
       tight = cfg
       tight%solver%rtol = 1.0e-10_dp
       tight%solver%atol_strain = 1.0e-14_dp

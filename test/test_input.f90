@@ -25,6 +25,7 @@ contains
          new_unittest('misspelled-variable', test_misspelled), &
          new_unittest('unknown-group-line-and-column', test_unknown_group), &
          new_unittest('unknown-history', test_unknown_history), &
+         new_unittest('unknown-jacobian', test_unknown_jacobian), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -90,6 +91,14 @@ contains
       call expect_config_error(error, 'history.nml', [character(len=80) :: &
          "&test name='x', history='sawtooth' /"], "&test #1 'x': history = 'sawtooth' is not known")
    end subroutine test_unknown_history
+
+   subroutine test_unknown_jacobian(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'jacobian.nml', [character(len=80) :: &
+         "&fit fitted='B', method='lm', jacobian='exact' /", &
+         "&test name='x', history='thesis_lcf' /"], &
+         "&fit: jacobian = 'exact' is not known (difference, sensitivity)")
+   end subroutine test_unknown_jacobian
 
    subroutine test_backend_settings(error)
       type(error_type), allocatable, intent(out) :: error

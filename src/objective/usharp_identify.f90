@@ -248,7 +248,7 @@ contains
          line = line//' '//real_str(res%sv(i)/res%sv(1), 'es9.2')
       end do
       lines = [character(len=200) :: lines, line, &
-         '  constant      value       95 % interval                  status']
+         '  constant      value       95 % interval (sandwich)       status']
       do j = 1, n
          line = '  '//res%names(j)//'  '//real_str(res%c(j), 'es13.5')//'  ['// &
                 real_str(res%lo95(j), 'es11.4')//', '//real_str(res%hi95(j), 'es11.4')//']  '
