@@ -14,8 +14,10 @@ module test_optimise
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
    use usharp_objective, only: fit_problem, setup_problem
-   use usharp_identify, only: identify_result, identify_at, robust_covariance, jacobian_log10
+   use usharp_identify, only: identify_result, identify_at, robust_covariance, jacobian_log10, &
+                              chi2_quantile_95
    use usharp_miller, only: get_constant
+   use usharp_lapack, only: dgesv
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, read_text, scratch_dir
    use test_fit, only: rosenbrock
@@ -45,6 +47,7 @@ contains
          new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
          new_unittest('identify-thesis-lcf-relaxation', test_identify), &
          new_unittest('sandwich-covariance-heteroscedastic', test_sandwich), &
+         new_unittest('simultaneous-intervals-cover-jointly', test_joint_intervals), &
          new_unittest('sensitivity-jacobian-vs-differences', test_sens_jacobian), &
          new_unittest('rng-skip-decorrelates-nearby-seeds', test_rng_skip), &
          new_unittest('fit-independent-of-thread-count', test_threads)]
@@ -245,6 +248,57 @@ contains
       call check(error, sqrt(naive(2, 2)/exact(2, 2)) < 0.8_dp, &
                  'the test data are not heteroscedastic enough to tell the estimates apart')
    end subroutine test_sandwich
+
+   !> Seven parameters of a linear model with random design columns, 600 noise draws: the
+   !> seven marginal 95 % intervals all contain the truth in about 0.95**7 = 70 % of the
+   !> draws, the simultaneous ones (sqrt of the chi-square quantile) in at least 95 %. Also
+   !> the chi-square table against Wilson-Hilferty at nu = 10.
+   subroutine test_joint_intervals(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer, parameter :: m = 60, p = 7, ndraw = 600
+      real(dp) :: x(m, p), xtx(p, p), pinv(p, p), cov(p, p), beta(p), r(m), y(m), se(p)
+      real(dp) :: v, q, wh
+      type(rng_type) :: rng
+      integer :: k, i, j, all_marg, all_joint, info
+      integer :: ipiv(p)
+      call rng%seed(11)
+      do j = 1, p
+         do k = 1, m
+            x(k, j) = rng%normal()
+         end do
+      end do
+      xtx = matmul(transpose(x), x)
+      pinv = 0.0_dp
+      do j = 1, p
+         pinv(j, j) = 1.0_dp
+      end do
+      call dgesv(p, p, xtx, p, ipiv, pinv, p, info)
+      call check(error, info == 0, 'singular normal matrix')
+      if (allocated(error)) return
+      q = sqrt(chi2_quantile_95(p))
+      all_marg = 0
+      all_joint = 0
+      do i = 1, ndraw
+         y = [(0.1_dp*rng%normal(), k=1, m)]   ! the truth is beta = 0
+         beta = matmul(pinv, matmul(transpose(x), y))
+         r = y - matmul(x, beta)
+         cov = sum(r**2)/real(m - p, dp)*pinv
+         se = [(sqrt(cov(j, j)), j=1, p)]
+         if (all(abs(beta) <= 1.959964_dp*se)) all_marg = all_marg + 1
+         if (all(abs(beta) <= q*se)) all_joint = all_joint + 1
+      end do
+      call check(error, real(all_joint, dp)/ndraw >= 0.95_dp, 'simultaneous intervals covered '// &
+                 'all seven in fewer than 95 % of the draws')
+      if (allocated(error)) return
+      call check(error, real(all_marg, dp)/ndraw < 0.9_dp, 'marginal intervals covered all seven '// &
+                 'in 90 % of the draws or more: the example does not tell the two apart')
+      if (allocated(error)) return
+      v = 2.0_dp/90.0_dp
+      wh = 10.0_dp*(1.0_dp - v + 1.644853626951472_dp*sqrt(v))**3
+      call check(error, abs(chi2_quantile_95(10)/wh - 1.0_dp) < 2.0e-3_dp .and. &
+                 abs(chi2_quantile_95(11)/chi2_quantile_95(10) - 19.675_dp/18.307_dp) < 1.0e-3_dp, &
+                 'chi-square quantile table off')
+   end subroutine test_joint_intervals
 
    !> Seeds 1 to 20 after skip(64): their first uniform draws spread over (0, 1) (without the
    !> skip, nearby seeds start from nearly the same value)

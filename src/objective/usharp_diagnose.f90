@@ -30,6 +30,7 @@ module usharp_diagnose
    use usharp_optimiser, only: optimum_type
    use usharp_lapack, only: svd
    use usharp_sort, only: order_of
+   use usharp_identify, only: robust_covariance
    implicit none
    private
 
@@ -551,9 +552,13 @@ contains
          xs = screening_starts(ep, cat(k))
          best%f = huge(1.0_dp)
          do j = 1, size(xs, 2)
-            ! From a start away from zero the constants first have to come back: 5 steps
-            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, &
-                                     merge(3, 5, j == 1), opts%max_evals, opt, error)
+            x = min(max(xs(:, j), lo), hi)
+            ! From a start away from zero the bent constants first come back with the effect
+            ! held there (2 steps), then both move (3 steps): joint steps from the bent
+            ! constants lead straight back to zero effect (measured: an injected initial state
+            ! of -2.1, -1.9 ksi was missed from a start of -2.3, -2.3 ksi)
+            if (j > 1) call profile_start(ep, x, h, opts%max_evals, res%nevals)
+            call levenberg_marquardt(ep, x, lo, hi, h, 1.0e-9_dp, 3, opts%max_evals, opt, error)
             if (allocated(error)) then
                ! A start where the model fails is passed over; the zero start must work
                if (j == 1) return
@@ -576,6 +581,32 @@ contains
       keys = res%effects%pred_dbic
       res%effects = res%effects(order_of(keys))
    end subroutine screen
+
+   !> The constants of x fitted (two Levenberg-Marquardt steps) with the effect's parameters
+   !> held at their values in x; x returns with the new constants. A failure leaves x as it was.
+   subroutine profile_start(ep, x, h, max_evals, nevals)
+      type(effect_problem), intent(in) :: ep
+      real(dp), intent(inout) :: x(:)
+      real(dp), intent(in) :: h
+      integer, intent(in) :: max_evals
+      integer, intent(inout) :: nevals
+      type(effect_problem) :: held
+      type(miller_model) :: mdl
+      type(optimum_type) :: opt
+      type(error_type), allocatable :: error
+      real(dp), allocatable :: lo(:), hi(:), p(:)
+      integer :: nc
+      nc = size(ep%prob%idx)
+      held = ep
+      call ep%unpack(x, mdl, p)
+      held%p0 = p
+      held%pfree = .false.
+      call held%bounds(lo, hi)
+      call levenberg_marquardt(held, x(1:nc), lo, hi, h, 1.0e-9_dp, 2, max_evals, opt, error)
+      if (allocated(error)) return
+      nevals = nevals + opt%nevals
+      x(1:nc) = opt%x
+   end subroutine profile_start
 
    !> Starts of the screening runs of a global effect with a physical limit: zero, then every
    !> sign combination of a tenth of the limit (non-negative parameters only positive); other
@@ -651,7 +682,7 @@ contains
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), x0(:), r(:), jac(:, :), cov(:, :), se(:), y(:), p(:)
       real(dp), allocatable :: pscale(:)
-      real(dp) :: s2, f0
+      real(dp) :: f0
       integer :: m, nc, j, nt, g, i, n
       logical :: ok
       type(miller_model) :: mdl
@@ -670,11 +701,11 @@ contains
       e%q = count(ep%pfree)
       e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
       e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
-      ! Interval of the effect's parameters: s**2 (J'J)^-1 at the optimum
+      ! Interval of the effect's parameters: the sandwich covariance at the optimum, as in the
+      ! identifiability report (Eq. 7's residuals do not share one variance)
       call jacobian(ep, opt%x, h, r, jac, ok)
       n = size(opt%x)
-      s2 = opt%f/max(m - n, 1)
-      cov = pseudo_inverse(matmul(transpose(jac), jac))*s2
+      cov = robust_covariance(jac, r, pseudo_inverse(matmul(transpose(jac), jac)))
       allocate (se(n))
       do j = 1, n
          se(j) = sqrt(max(cov(j, j), 0.0_dp))
