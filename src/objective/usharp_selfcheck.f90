@@ -233,7 +233,8 @@ contains
                         ': no repetition had a held-out gap']
             else
                ln = '- '//trim(name_of(sc%injected(row)))//': '//real_str(100.0_dp*minval(v), 'f0.1')// &
-                    ' % / '//real_str(100.0_dp*median_of(v), 'f0.1')//' %'
+                    ' % / '//real_str(100.0_dp*median_of(v), 'f0.1')//' %; at least 80 % in '// &
+                    str(count(v >= 0.8_dp))//' of '//str(size(v))
                if (size(v) < sc%reps) ln = trim(ln)//' ('//str(sc%reps - size(v))// &
                   ' repetitions without a held-out gap)'
                lines = [character(len=200) :: lines, ln]
