@@ -107,7 +107,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(fit_problem) :: logprob
       real(dp), allocatable :: r0(:), jac(:, :), cov(:, :), pinv(:, :)
-      real(dp) :: f0, t95, lo, hi
+      real(dp) :: f0, t95, q95, lo, hi
       integer :: n, i, j, info
       integer :: tied(size(c))
       n = size(c)
@@ -150,9 +150,9 @@ contains
       ! Marginal intervals each miss with 5 %; for a statement about all constants at once
       ! (the A2-B-n valley makes their errors move together) the ellipsoid's shadow is needed
       res%rank = count(res%sv > weak_ratio*res%sv(1) .and. res%sv > 0.0_dp)
-      t95 = sqrt(chi2_quantile_95(max(res%rank, 1)))
-      res%lo_joint = c*10.0_dp**(-t95*res%se)
-      res%hi_joint = c*10.0_dp**(t95*res%se)
+      q95 = sqrt(chi2_quantile_95(max(res%rank, 1)))
+      res%lo_joint = c*10.0_dp**(-q95*res%se)
+      res%hi_joint = c*10.0_dp**(q95*res%se)
       allocate (res%corr(n, n))
       do i = 1, n
          do j = 1, n
