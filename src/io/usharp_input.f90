@@ -446,12 +446,13 @@ contains
       character(len=64) :: holdout(max_list)
       character(len=16) :: effects(max_list)
       real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise
-      integer :: n_refit, reps, seed, ios
+      integer :: n_refit, refit_starts, reps, seed, ios
       character(len=512) :: msg
-      namelist /diagnose/ holdout, effects, n_refit, dlnE_dT, gamma3, confirm_shrink, reps, seed, noise
+      namelist /diagnose/ holdout, effects, n_refit, refit_starts, dlnE_dT, gamma3, confirm_shrink, reps, seed, noise
       holdout = cfg%diagnose%holdout
       effects = cfg%diagnose%effects
       n_refit = cfg%diagnose%n_refit
+      refit_starts = cfg%diagnose%refit_starts
       dlnE_dT = cfg%diagnose%dlnE_dT
       gamma3 = cfg%diagnose%gamma3
       confirm_shrink = cfg%diagnose%confirm_shrink
@@ -464,8 +465,8 @@ contains
          call nml_error(error, cfg%path, 'diagnose', ios, msg)
          return
       end if
-      if (n_refit < 1 .or. reps < 1) then
-         call fatal_error(error, cfg%path//': &diagnose: n_refit and reps must be >= 1')
+      if (n_refit < 1 .or. refit_starts < 1 .or. reps < 1) then
+         call fatal_error(error, cfg%path//': &diagnose: n_refit, refit_starts and reps must be >= 1')
          return
       end if
       if (.not. (gamma3 > 0.0_dp) .or. .not. (noise > 0.0_dp)) then
@@ -479,6 +480,7 @@ contains
       cfg%diagnose%holdout = holdout
       cfg%diagnose%effects = effects
       cfg%diagnose%n_refit = n_refit
+      cfg%diagnose%refit_starts = refit_starts
       cfg%diagnose%dlnE_dT = dlnE_dT
       cfg%diagnose%gamma3 = gamma3
       cfg%diagnose%confirm_shrink = confirm_shrink

@@ -54,6 +54,7 @@ module usharp_diagnose
       real(dp) :: converged_tol = 0.01_dp    !< largest Gauss-Newton decrease of a converged fit
       logical :: check_converged = .true.
       integer :: max_evals = 3000            !< per refit
+      integer :: refit_starts = 2            !< screening end points a refit starts from
    end type diagnose_options
 
    !> One effect: screening, and the refit when it led
@@ -68,6 +69,7 @@ module usharp_diagnose
       real(dp), allocatable :: per_test_after(:)
       real(dp), allocatable :: p(:), p_lo(:), p_hi(:)  !< fitted parameters, 95 % interval
       real(dp), allocatable :: x(:)          !< search point after screening
+      real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
       character(len=24), allocatable :: pname(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
@@ -146,6 +148,7 @@ contains
       end do
       if (size(opts%effects) == 0) opts%effects = [(k, k=1, n_effects)]
       opts%n_refit = cfg%diagnose%n_refit
+      opts%refit_starts = cfg%diagnose%refit_starts
       opts%dlnE_dT = cfg%diagnose%dlnE_dT
       opts%gamma3 = cfg%diagnose%gamma3
       opts%confirm_shrink = cfg%diagnose%confirm_shrink
@@ -510,7 +513,7 @@ contains
       type(effect_problem) :: base, ep
       type(optimum_type) :: opt, best
       real(dp), allocatable :: r0(:), jc(:, :), je(:, :), rr(:), x(:), step(:), lo(:), hi(:)
-      real(dp), allocatable :: xs(:, :), keys(:)
+      real(dp), allocatable :: xs(:, :), keys(:), xe(:, :), fe(:)
       real(dp) :: d0, d1, s
       integer :: i, j, k, nc, q
       logical :: ok
@@ -551,6 +554,7 @@ contains
          ! physical limit with every sign, and the lowest end point is kept
          xs = screening_starts(ep, cat(k))
          best%f = huge(1.0_dp)
+         allocate (xe(size(xs, 1), 0), fe(0))
          do j = 1, size(xs, 2)
             ! From a start away from zero the constants first have to come back: 5 steps
             ! (measured: holding the effect at the start while the constants alone move
@@ -565,9 +569,16 @@ contains
             end if
             res%nevals = res%nevals + opt%nevals
             if (opt%f < best%f) best = opt
+            xe = reshape([xe, opt%x], [size(xs, 1), size(fe) + 1])
+            fe = [fe, opt%f]
          end do
          opt = best
          res%effects(i)%x = opt%x
+         ! The other end points, best first: a refit from the best one alone can stay in the
+         ! basin of the baseline constants (measured: the initial state, self-check rep. 7)
+         res%effects(i)%x_alt = xe(:, order_of(fe))
+         res%effects(i)%x_alt = res%effects(i)%x_alt(:, 2:)
+         deallocate (xe, fe)
          res%effects(i)%q = count(ep%pfree)
          q = res%effects(i)%q
          res%effects(i)%pred_drop = max(d1 - d0, s - opt%f, 0.0_dp)
@@ -649,7 +660,7 @@ contains
       type(effect_outcome), intent(inout) :: e
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: ep, eh, ea
-      type(optimum_type) :: opt
+      type(optimum_type) :: opt, alt
       type(fit_problem) :: pk
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), x0(:), r(:), jac(:, :), cov(:, :), se(:), y(:), p(:)
@@ -665,8 +676,21 @@ contains
       call ep%bounds(lo, hi)
       call levenberg_marquardt(ep, e%x, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
       if (allocated(error)) return
-      e%refitted = .true.
       e%nevals = opt%nevals
+      ! Also from the next screening end points; the lowest objective is kept
+      if (allocated(e%x_alt)) then
+         do j = 1, min(opts%refit_starts - 1, size(e%x_alt, 2))
+            call levenberg_marquardt(ep, e%x_alt(:, j), lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, &
+                                     alt, error)
+            if (allocated(error)) then
+               deallocate (error)
+               cycle
+            end if
+            e%nevals = e%nevals + alt%nevals
+            if (alt%f < opt%f) opt = alt
+         end do
+      end if
+      e%refitted = .true.
       m = ep%nres()
       e%f_after = opt%f
       f0 = res%f0
