@@ -289,6 +289,7 @@ contains
          call refit(prob, ifit, ihold, opts, eff_base, peak, cfg%fit%fd_step, res, nv, &
                     res%effects(j), error)
          if (allocated(error)) return
+         res%nevals = res%nevals + res%effects(j)%nevals
       end do
       call conclude(res)
    end subroutine diagnose_run

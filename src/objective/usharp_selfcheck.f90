@@ -28,6 +28,7 @@ module usharp_selfcheck
       integer, allocatable :: injected(:)      !< effects injected (0: clean), rows of the table
       integer, allocatable :: confusion(:, :)  !< (row, 0:n_effects) ranked first (0: none)
       real(dp), allocatable :: shrink(:, :)    !< held-out gap removed by the injected effect (row, rep)
+      logical, allocatable :: first(:, :)      !< the injected effect ranked first (row, rep)
       integer :: reps = 0
       real(dp) :: seconds = 0.0_dp
       integer :: nevals = 0
@@ -151,6 +152,8 @@ contains
       sc%confusion = 0
       allocate (sc%misses(0))
       sc%shrink = 0.0_dp
+      allocate (sc%first(size(sc%injected), sc%reps))
+      sc%first = .false.
       ! A peak for the stress-like magnitudes: that of the clean data
       call rng%seed(cfg%diagnose%seed)
       call synthetic_data(cfg, 0, [real(dp) ::], 0.0_dp, rng, exps, error)
@@ -180,6 +183,7 @@ contains
             first = 0
             if (res%leading > 0) first = res%effects(res%leading)%k
             sc%confusion(row, first) = sc%confusion(row, first) + 1
+            sc%first(row, rep) = first == k
             if (first /= k) sc%misses = [character(len=200) :: sc%misses, '', '---', '', &
                '# miss: injected '//str(k)//', repetition '//str(rep)//', parameters '// &
                real_list(p), diagnose_report(res, o)]
@@ -234,7 +238,10 @@ contains
             else
                ln = '- '//trim(name_of(sc%injected(row)))//': '//real_str(100.0_dp*minval(v), 'f0.1')// &
                     ' % / '//real_str(100.0_dp*median_of(v), 'f0.1')//' %; at least 80 % in '// &
-                    str(count(v >= 0.8_dp))//' of '//str(size(v))
+                    str(count(v >= 0.8_dp))//' of '//str(size(v))//' ('// &
+                    str(count(sc%shrink(row, :) >= 0.8_dp .and. sc%first(row, :)))//' of the '// &
+                    str(count(sc%first(row, :) .and. .not. ieee_is_nan(sc%shrink(row, :))))// &
+                    ' ranked first)'
                if (size(v) < sc%reps) ln = trim(ln)//' ('//str(sc%reps - size(v))// &
                   ' repetitions without a held-out gap)'
                lines = [character(len=200) :: lines, ln]
