@@ -70,7 +70,7 @@ module usharp_config
       character(len=64) :: holdout(max_list) = ''  !< tests held out of the fit
       character(len=16) :: effects(max_list) = ''  !< effects considered (none given: all)
       integer :: n_refit = 3                       !< leading candidates refitted
-      integer :: refit_starts = 2                  !< screening end points each refit starts from
+      integer :: refit_starts = 1                  !< screening end points each refit starts from
       real(dp) :: dlnE_dT = -4.0e-4_dp             !< 1/K, temperature slope of ln E
       real(dp) :: gamma3 = 200.0_dp                !< -, second back stress recovery (screening)
       real(dp) :: confirm_shrink = 0.5_dp          !< held-out structured gap removed to confirm
