@@ -123,8 +123,6 @@ contains
 
       ierr = FSUNContext_Create(c_null_ptr, sunctx)
       yvec => FN_VMake_Serial(int(n, c_long), y, sunctx)
-      ! Fused vector operations: fewer calls per step, CVODE's clones inherit them
-      ierr = FN_VEnableFusedOps_Serial(yvec, 1_c_int)
       abstol => FN_VMake_Serial(int(n, c_long), atol, sunctx)
       amat => FSUNDenseMatrix(int(n, c_long), int(n, c_long), sunctx)
       lsol => FSUNLinSol_Dense(yvec, amat, sunctx)
