@@ -247,7 +247,7 @@ contains
       if (allocated(error)) return
       call read_config(write_text('diag-starts.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", "&diagnose refit_starts = 0 /", tests]), cfg, e)
-      call check_message(error, e, '&diagnose: n_refit, refit_starts and reps must be >= 1')
+      call check_message(error, e, '&diagnose: refit_starts must be >= 1')
       if (allocated(error)) return
       call read_config(write_text('diag-holdout.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", "&diagnose holdout = 'c' /", tests]), cfg, e)

@@ -465,10 +465,14 @@ contains
          call nml_error(error, cfg%path, 'diagnose', ios, msg)
          return
       end if
-      if (n_refit < 1 .or. refit_starts < 1 .or. reps < 1) then
-         call fatal_error(error, cfg%path//': &diagnose: n_refit, refit_starts and reps must be >= 1')
-         return
+      if (n_refit < 1) then
+         call fatal_error(error, cfg%path//': &diagnose: n_refit must be >= 1')
+      else if (refit_starts < 1) then
+         call fatal_error(error, cfg%path//': &diagnose: refit_starts must be >= 1')
+      else if (reps < 1) then
+         call fatal_error(error, cfg%path//': &diagnose: reps must be >= 1')
       end if
+      if (allocated(error)) return
       if (.not. (gamma3 > 0.0_dp) .or. .not. (noise > 0.0_dp)) then
          call fatal_error(error, cfg%path//': &diagnose: gamma3 and noise must be > 0')
          return

@@ -512,9 +512,10 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: base, ep
-      type(optimum_type) :: opt, best
+      type(optimum_type) :: opt
       real(dp), allocatable :: r0(:), jc(:, :), je(:, :), rr(:), x(:), step(:), lo(:), hi(:)
       real(dp), allocatable :: xs(:, :), keys(:), xe(:, :), fe(:)
+      integer, allocatable :: idx(:)
       real(dp) :: d0, d1, s
       integer :: i, j, k, nc, q
       logical :: ok
@@ -554,7 +555,6 @@ contains
          ! local minimum of a global effect: its short runs also start from a tenth of the
          ! physical limit with every sign, and the lowest end point is kept
          xs = screening_starts(ep, cat(k))
-         best%f = huge(1.0_dp)
          allocate (xe(size(xs, 1), 0), fe(0))
          do j = 1, size(xs, 2)
             ! From a start away from zero the constants first have to come back: 5 steps
@@ -569,20 +569,19 @@ contains
                cycle
             end if
             res%nevals = res%nevals + opt%nevals
-            if (opt%f < best%f) best = opt
             xe = reshape([xe, opt%x], [size(xs, 1), size(fe) + 1])
             fe = [fe, opt%f]
          end do
-         opt = best
-         res%effects(i)%x = opt%x
-         ! The other end points, best first, for refits from several (refit_starts > 1;
-         ! measured with 2: the same self-check table at 1.5 times the cost, so 1 by default)
-         res%effects(i)%x_alt = xe(:, order_of(fe))
-         res%effects(i)%x_alt = res%effects(i)%x_alt(:, 2:)
-         deallocate (xe, fe)
+         ! The lowest end point leads; the others, best first, are kept for refits from
+         ! several (refit_starts > 1; measured with 2: the same self-check table at 1.5 times
+         ! the cost, so 1 by default)
+         idx = order_of(fe)
+         res%effects(i)%x = xe(:, idx(1))
+         res%effects(i)%x_alt = xe(:, idx(2:))
          res%effects(i)%q = count(ep%pfree)
          q = res%effects(i)%q
-         res%effects(i)%pred_drop = max(d1 - d0, s - opt%f, 0.0_dp)
+         res%effects(i)%pred_drop = max(d1 - d0, s - fe(idx(1)), 0.0_dp)
+         deallocate (xe, fe)
          res%effects(i)%pred_dbic = size(r0)*log(max(s - res%effects(i)%pred_drop, 1.0e-3_dp*s)/s) &
                                     + q*log(real(size(r0), dp))
       end do
@@ -684,6 +683,7 @@ contains
             call levenberg_marquardt(ep, e%x_alt(:, j), lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, &
                                      alt, error)
             if (allocated(error)) then
+               ! A start where the model fails is passed over: the first refit stands
                deallocate (error)
                cycle
             end if
