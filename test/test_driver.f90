@@ -1,6 +1,6 @@
-!> Tests of the CVODE driver: accuracy against a tight-tolerance reference, the thesis's
-!> figures, stress control against strain control, failures that name test and time, and
-!> the CVODES sensitivities against central differences
+!> Tests of the CVODE and RODAS4 drivers: accuracy against a tight-tolerance reference, the
+!> thesis's figures, stress control against strain control, failures that name test and
+!> time, and the CVODES sensitivities against central differences
 module test_driver
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
@@ -9,6 +9,7 @@ module test_driver
    use usharp_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_config, only: test_config
    use usharp_simulate, only: simulate_test
    implicit none
@@ -21,6 +22,8 @@ contains
       type(unittest_type), allocatable, intent(out) :: testsuite(:)
       testsuite = [ &
          new_unittest('accuracy-vs-tight-reference', test_accuracy), &
+         new_unittest('rodas4-accuracy-vs-tight-reference', test_rodas_accuracy), &
+         new_unittest('rodas4-stress-control-and-failure', test_rodas_control), &
          new_unittest('thesis-sanity-figures', test_thesis_figures), &
          new_unittest('stress-control-matches-strain-control', test_stress_control), &
          new_unittest('failure-names-test-and-time', test_failure), &
@@ -64,6 +67,88 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_accuracy
+
+   !> RODAS4 on the thesis tests against the tight CVODE reference (an independent method):
+   !> at the default tolerances within 1e-5 of the peak, at rtol 1e-5, atol 1e-8 (its bench
+   !> setting) within 1e-4; and the error falls as the tolerance tightens
+   subroutine test_rodas_accuracy(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(history_type) :: h
+      type(sim_result) :: r, ref
+      type(solver_options) :: def, loose, tight
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: tout(:)
+      real(dp) :: dev(2)
+      integer :: k
+      character(len=100) :: buf
+      call model_setup(m, uerr)
+      tight%rtol = 1.0e-11_dp
+      tight%atol_strain = 1.0e-15_dp
+      loose%rtol = 1.0e-5_dp
+      loose%atol_strain = 1.0e-8_dp
+      do k = 1, 3
+         call thesis_test(k, h)
+         tout = output_times(h, 0.5_dp)
+         call simulate_cvode(m, h, tout, tight, ref, uerr)
+         if (.not. allocated(uerr)) call simulate_rosenbrock(m, h, tout, def, r, uerr)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         dev(1) = maxval(abs(r%stress - ref%stress))/maxval(abs(ref%stress))
+         call simulate_rosenbrock(m, h, tout, loose, r, uerr)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         dev(2) = maxval(abs(r%stress - ref%stress))/maxval(abs(ref%stress))
+         write (buf, '(a,i0,a,2es10.3)') 'test ', k, ': max |stress - reference| / peak, default, loose = ', dev
+         call check(error, dev(1) <= 1.0e-5_dp .and. dev(2) <= 1.0e-4_dp .and. dev(1) < dev(2), trim(buf))
+         if (allocated(error)) return
+      end do
+   end subroutine test_rodas_accuracy
+
+   !> RODAS4 under stress control against CVODE under strain control on the same path (the
+   !> relaxation's stress history imposed), and a failure that names the test and the time
+   subroutine test_rodas_control(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(history_type) :: h, hs
+      type(sim_result) :: r, rs
+      type(solver_options) :: opts
+      type(test_config) :: tc
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: tout(:)
+      real(dp) :: dev
+      character(len=80) :: buf
+      call model_setup(m, uerr)
+      opts%rtol = 1.0e-9_dp
+      opts%atol_strain = 1.0e-13_dp
+      call relaxation_history([0.00075_dp], 1.0_dp, [100.0_dp], h, uerr)
+      tout = output_times(h, 0.02_dp)
+      call simulate_cvode(m, h, tout, opts, r, uerr)
+      call history_from_points(r%t, r%stress, control_stress, hs, uerr)
+      call simulate_rosenbrock(m, hs, tout, opts, rs, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      dev = maxval(abs(rs%strain - r%strain))/0.00075_dp
+      write (buf, '(a,es10.3)') 'max |strain(rodas4, stress control) - strain| / 0.075 % = ', dev
+      call check(error, dev <= 2.0e-3_dp, trim(buf))
+      if (allocated(error)) return
+      opts = solver_options()
+      opts%integrator = 'rodas4'
+      opts%max_steps = 3
+      tc%name = 'lcf'
+      tc%dt_out = 5.0_dp
+      call thesis_test(1, tc%hist)
+      call simulate_test(m, opts, tc, r, uerr)
+      call check(error, allocated(uerr), 'too few steps must fail')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, "test 'lcf': integration failed at t = ") == 1, uerr%message)
+   end subroutine test_rodas_control
 
    subroutine test_thesis_figures(error)
       type(error_type), allocatable, intent(out) :: error

@@ -249,7 +249,7 @@ contains
       if (allocated(error)) return
       call expect_config_error(error, 'badint.nml', [character(len=80) :: "&solver integrator='rk4' /", &
          "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002 /"], &
-         "&solver: integrator = 'rk4' is not known (cvode or umat)")
+         "&solver: integrator = 'rk4' is not known (cvode, rodas4 or umat)")
    end subroutine test_integrator_choice
 
    !> data/thesis and data/thesis-noise1 come back byte for byte from their decks (the

@@ -6,6 +6,7 @@ module usharp_simulate
    use usharp_history, only: output_times
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_umat_driver, only: simulate_umat
    use usharp_config, only: test_config
    use usharp_rng, only: rng_type
@@ -25,6 +26,9 @@ contains
       type(error_type), allocatable, intent(out) :: error
       if (solver%integrator == 'umat') then
          call simulate_umat(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+      else if (solver%integrator == 'rodas4') then
+         call simulate_rosenbrock(model, test%hist, output_times(test%hist, test%dt_out), solver, res, &
+                                  error)
       else
          call simulate_cvode(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
       end if

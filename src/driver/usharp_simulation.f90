@@ -8,7 +8,8 @@ module usharp_simulation
 
    !> Integrator settings
    type :: solver_options
-      character(len=8) :: integrator = 'cvode'  !< 'cvode' or 'umat' (implicit stress update)
+      !> 'cvode' (BDF), 'rodas4' (Rosenbrock, one step) or 'umat' (implicit stress update)
+      character(len=8) :: integrator = 'cvode'
       real(dp) :: rtol = 1.0e-7_dp         !< relative tolerance
       real(dp) :: atol_strain = 1.0e-10_dp !< absolute tolerance on strain; stresses get E times it
       real(dp) :: max_step = 0.0_dp        !< largest step, s (0: no limit)

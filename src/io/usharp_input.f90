@@ -270,9 +270,9 @@ contains
          return
       end if
       integrator = lower_text(integrator)
-      if (integrator /= 'cvode' .and. integrator /= 'umat') then
+      if (integrator /= 'cvode' .and. integrator /= 'rodas4' .and. integrator /= 'umat') then
          call fatal_error(error, cfg%path//": &solver: integrator = '"//trim(integrator)// &
-            "' is not known (cvode or umat)")
+            "' is not known (cvode, rodas4 or umat)")
          return
       end if
       if (.not. (dt_min > 0.0_dp .and. dt_min <= dt_init .and. dt_init <= dt_max)) then
