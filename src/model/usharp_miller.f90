@@ -209,43 +209,50 @@ contains
       end do
    end function constant_index
 
-   !> sinh(z)**n and its derivative for z >= 0; non-finite beyond zmax
+   !> sinh(z)**n and (when asked) its derivative for z >= 0; non-finite beyond zmax. The
+   !> rates alone skip the derivative's power and cosh: they are most of a simulation's time.
    elemental subroutine sinh_power(z, n, p, dp_dz)
       real(dp), intent(in) :: z, n
-      real(dp), intent(out) :: p, dp_dz
+      real(dp), intent(out) :: p
+      real(dp), intent(out), optional :: dp_dz
       real(dp) :: s
       if (z <= 0.0_dp) then
          p = 0.0_dp
-         dp_dz = merge(1.0_dp, 0.0_dp, abs(n - 1.0_dp) < epsilon(1.0_dp))
+         if (present(dp_dz)) dp_dz = merge(1.0_dp, 0.0_dp, abs(n - 1.0_dp) < epsilon(1.0_dp))
       else if (z > zmax) then
          p = ieee_value(1.0_dp, ieee_positive_inf)
-         dp_dz = p
+         if (present(dp_dz)) dp_dz = p
       else
-         ! One power per call: s**(n-1) = p/s and cosh = sqrt(1 + sinh**2) (s > 0 for z > 0);
-         ! the rates are most of a simulation's time
          s = sinh(z)
          p = s**n
-         dp_dz = n*(p/s)*sqrt(1.0_dp + s*s)
+         if (present(dp_dz)) dp_dz = n*s**(n - 1.0_dp)*cosh(z)
       end if
    end subroutine sinh_power
 
    !> Equivalent inelastic strain rate f = B*theta*sinh((x/D)**1.5)**n (1/s) for the
-   !> equivalent overstress x >= 0 and drag stress D > 0, with df/dx and df/dD.
+   !> equivalent overstress x >= 0 and drag stress D > 0, with df/dx and df/dD if asked
+   !> (both or neither).
    elemental subroutine flow_rate(model, x, d, f, f_x, f_d)
       type(miller_model), intent(in) :: model
       real(dp), intent(in) :: x, d
-      real(dp), intent(out) :: f, f_x, f_d
-      real(dp) :: z, p, pz, q, sq
+      real(dp), intent(out) :: f
+      real(dp), intent(out), optional :: f_x, f_d
+      real(dp) :: z, p, pz
       if (x <= 0.0_dp) then
-         f = 0.0_dp; f_x = 0.0_dp; f_d = 0.0_dp
+         f = 0.0_dp
+         if (present(f_x)) f_x = 0.0_dp
+         if (present(f_d)) f_d = 0.0_dp
          return
       end if
-      q = x/d
-      sq = sqrt(q)
-      z = q*sq
+      z = (x/d)**1.5_dp
+      if (.not. present(f_x)) then
+         call sinh_power(z, model%c%n, p)
+         f = model%btheta*p
+         return
+      end if
       call sinh_power(z, model%c%n, p, pz)
       f = model%btheta*p
-      f_x = model%btheta*pz*1.5_dp*sq/d
+      f_x = model%btheta*pz*1.5_dp*sqrt(x/d)/d
       f_d = -model%btheta*pz*1.5_dp*z/d
    end subroutine flow_rate
 
@@ -253,8 +260,14 @@ contains
    elemental subroutine back_recovery(model, r, g, g_r)
       type(miller_model), intent(in) :: model
       real(dp), intent(in) :: r
-      real(dp), intent(out) :: g, g_r
+      real(dp), intent(out) :: g
+      real(dp), intent(out), optional :: g_r
       real(dp) :: p, pz
+      if (.not. present(g_r)) then
+         call sinh_power(model%c%a1*r, model%c%n, p)
+         g = model%c%h1*model%btheta*p
+         return
+      end if
       call sinh_power(model%c%a1*r, model%c%n, p, pz)
       g = model%c%h1*model%btheta*p
       g_r = model%c%h1*model%btheta*pz*model%c%a1
@@ -264,23 +277,39 @@ contains
    elemental subroutine drag_recovery(model, d, h, h_d)
       type(miller_model), intent(in) :: model
       real(dp), intent(in) :: d
-      real(dp), intent(out) :: h, h_d
+      real(dp), intent(out) :: h
+      real(dp), intent(out), optional :: h_d
       real(dp) :: p, pz
+      if (.not. present(h_d)) then
+         call sinh_power(model%c%a2*d**3, model%c%n, p)
+         h = model%c%h2*model%c%c2*model%btheta*p
+         return
+      end if
       call sinh_power(model%c%a2*d**3, model%c%n, p, pz)
       h = model%c%h2*model%c%c2*model%btheta*p
       h_d = model%c%h2*model%c%c2*model%btheta*pz*3.0_dp*model%c%a2*d**2
    end subroutine drag_recovery
 
-   !> Evaluate the shared scalar terms
-   elemental function rate_terms_at(model, x, r, d) result(t)
+   !> Evaluate the shared scalar terms; with values_only the derivatives are left at zero
+   !> (the values are the same bit for bit)
+   elemental function rate_terms_at(model, x, r, d, values_only) result(t)
       type(miller_model), intent(in) :: model
       real(dp), intent(in) :: x, r, d
+      logical, intent(in), optional :: values_only
       type(rate_terms) :: t
       t%a = model%c%a2/model%c%a1
+      t%w = model%c%c2 + r - t%a*d**3
+      if (present(values_only)) then
+         if (values_only) then
+            call flow_rate(model, x, d, t%f)
+            call back_recovery(model, r, t%g)
+            call drag_recovery(model, d, t%h)
+            return
+         end if
+      end if
       call flow_rate(model, x, d, t%f, t%f_x, t%f_d)
       call back_recovery(model, r, t%g, t%g_r)
       call drag_recovery(model, d, t%h, t%h_d)
-      t%w = model%c%c2 + r - t%a*d**3
    end function rate_terms_at
 
    !> Uniaxial Miller rates (Eqs. 2-4) of the state y = (eps_in, R, D) at stress sigma,
@@ -299,7 +328,7 @@ contains
       sg = sign(1.0_dp, s)
       sgr = sign(1.0_dp, y(2))
       d = y(3)
-      t = rate_terms_at(model, abs(s), abs(y(2)), d)
+      t = rate_terms_at(model, abs(s), abs(y(2)), d, values_only=.not. present(jac))
       ydot(1) = t%f*sg
       ydot(2) = model%c%h1*ydot(1) - t%g*sgr
       ydot(3) = model%c%h2*t%f*t%w - t%h
