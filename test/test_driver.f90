@@ -9,7 +9,7 @@ module test_driver
    use usharp_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
-   use usharp_rosenbrock_driver, only: simulate_rosenbrock
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock, segment_type, rates, rates_jacobian
    use usharp_config, only: test_config
    use usharp_simulate, only: simulate_test
    implicit none
@@ -24,6 +24,7 @@ contains
          new_unittest('accuracy-vs-tight-reference', test_accuracy), &
          new_unittest('rodas4-accuracy-vs-tight-reference', test_rodas_accuracy), &
          new_unittest('rodas4-stress-control-and-failure', test_rodas_control), &
+         new_unittest('rodas4-jacobian-and-time-derivative-vs-differences', test_rodas_jacobian), &
          new_unittest('thesis-sanity-figures', test_thesis_figures), &
          new_unittest('stress-control-matches-strain-control', test_stress_control), &
          new_unittest('failure-names-test-and-time', test_failure), &
@@ -149,6 +150,60 @@ contains
       if (allocated(error)) return
       call check(error, index(uerr%message, "test 'lcf': integration failed at t = ") == 1, uerr%message)
    end subroutine test_rodas_control
+
+   !> RODAS4's Jacobian in the state and the rates' time derivative through the load against
+   !> central differences (relative step 1e-6), in the elastic range and in strong inelastic
+   !> flow, under strain control (slope 1e-3/s) and stress control (slope 1 ksi/s)
+   subroutine test_rodas_jacobian(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(segment_type) :: seg
+      type(uerror), allocatable :: uerr
+      real(dp) :: y(3), yp(3), ym(3), jac(3, 3), dfdt(3), fp(3), fm(3), fd(3), t, hstep, dev, worst
+      real(dp), parameter :: states(3, 2) = reshape([2.0e-4_dp, 1.0_dp, 11.0_dp, &
+                                                     2.0e-3_dp, 3.0_dp, 11.5_dp], [3, 2])
+      real(dp), parameter :: loads(2, 2) = reshape([5.0e-4_dp, 1.0e-3_dp, 20.0_dp, 1.0_dp], [2, 2])
+      integer :: ic, is, j
+      logical :: ok
+      character(len=100) :: buf
+      call model_setup(m, uerr)
+      t = 10.0_dp
+      worst = 0.0_dp
+      do ic = 1, 2
+         seg%control = merge(control_strain, control_stress, ic == 1)
+         do is = 1, 2
+            y = states(:, is)
+            ! Strain: the stress is E*(v0 - eps_in); in flow for the second state
+            seg%t0 = 0.0_dp
+            seg%v0 = loads(1, ic) + merge(0.0_dp, 1.3e-3_dp, is == 1 .or. ic == 2)
+            if (ic == 2) seg%v0 = loads(1, ic) + merge(0.0_dp, 5.0_dp, is == 1) - 10.0_dp*loads(2, ic)
+            seg%slope = loads(2, ic)
+            call rates_jacobian(m, seg, t, y, jac, dfdt)
+            do j = 1, 3
+               hstep = 1.0e-6_dp*max(abs(y(j)), 1.0e-4_dp)
+               yp = y
+               ym = y
+               yp(j) = y(j) + hstep
+               ym(j) = y(j) - hstep
+               call rates(m, seg, t, yp, fp, ok)
+               call rates(m, seg, t, ym, fm, ok)
+               fd = (fp - fm)/(2.0_dp*hstep)
+               dev = maxval(abs(jac(:, j) - fd))/max(maxval(abs(fd)), maxval(abs(jac)), tiny(1.0_dp))
+               worst = max(worst, dev)
+            end do
+            hstep = 1.0e-6_dp*t
+            call rates(m, seg, t + hstep, y, fp, ok)
+            call rates(m, seg, t - hstep, y, fm, ok)
+            fd = (fp - fm)/(2.0_dp*hstep)
+            dev = maxval(abs(dfdt - fd))/max(maxval(abs(fd)), tiny(1.0_dp))
+            write (buf, '(a,i0,a,i0,a,2es10.2)') 'control ', ic, ', state ', is, &
+               ': |df/dt - difference| / max, worst Jacobian column ', dev, worst
+            call check(error, dev <= 1.0e-5_dp .and. worst <= 1.0e-5_dp .and. maxval(abs(fd)) > 0.0_dp, &
+                       trim(buf))
+            if (allocated(error)) return
+         end do
+      end do
+   end subroutine test_rodas_jacobian
 
    subroutine test_thesis_figures(error)
       type(error_type), allocatable, intent(out) :: error

@@ -15,7 +15,7 @@ module usharp_rosenbrock_driver
    implicit none
    private
 
-   public :: simulate_rosenbrock
+   public :: simulate_rosenbrock, rates, rates_jacobian
 
    integer, parameter :: neq = 3, ns = 6
 
@@ -44,8 +44,9 @@ module usharp_rosenbrock_driver
    !> Step-size control: safety factor, bounds of the change, and the order of the estimate
    real(dp), parameter :: safety = 0.9_dp, fac_min = 0.2_dp, fac_max = 6.0_dp, elo = 4.0_dp
 
-   !> The current linear segment of the load
-   type :: segment_type
+   !> The current linear segment of the load: control, start time (s), start value and slope
+   !> (per s) of the strain (-) or stress (model unit)
+   type, public :: segment_type
       integer :: control = control_strain
       real(dp) :: t0 = 0.0_dp, v0 = 0.0_dp, slope = 0.0_dp
    end type segment_type
@@ -189,7 +190,7 @@ contains
       logical, intent(out) :: ok
       real(dp) :: jac(neq, neq), g(neq, neq), dfdt(neq), kst(neq, ns), ys(neq), rhs(neq), fs(neq)
       integer :: piv(neq), i, j, ij
-      call jacobian(model, seg, t, y, jac, dfdt)
+      call rates_jacobian(model, seg, t, y, jac, dfdt)
       g = -jac
       do i = 1, neq
          g(i, i) = g(i, i) + 1.0_dp/(gam*h)
@@ -256,7 +257,8 @@ contains
       end if
    end subroutine stress_of
 
-   !> The rates; ok false outside the model (D <= 0) or when not finite
+   !> The rates (1/s, unit/s) at time t (s) and state y on segment seg; ok false outside the
+   !> model (D <= 0) or when not finite
    pure subroutine rates(model, seg, t, y, f, ok)
       type(miller_model), intent(in) :: model
       type(segment_type), intent(in) :: seg
@@ -275,7 +277,7 @@ contains
    !> Jacobian in the state and the rates' time derivative (through the load), both from
    !> the analytic derivative in the stress: uniaxial_rates with d sigma/d eps_in = 1 gives
    !> d f/d sigma as its first column
-   pure subroutine jacobian(model, seg, t, y, jac, dfdt)
+   pure subroutine rates_jacobian(model, seg, t, y, jac, dfdt)
       type(miller_model), intent(in) :: model
       type(segment_type), intent(in) :: seg
       real(dp), intent(in) :: t, y(neq)
@@ -285,7 +287,7 @@ contains
       call uniaxial_rates(model, sigma, 1.0_dp, y, f, jac)
       dfdt = jac(:, 1)*dsig_dt
       jac(:, 1) = jac(:, 1)*dsig
-   end subroutine jacobian
+   end subroutine rates_jacobian
 
    !> Cubic Hermite interpolation at time s in [t, t + h] from the states and rates at both ends
    pure function hermite(t, h, y0, f0, y1, f1, s) result(ys)
