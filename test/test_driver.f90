@@ -9,7 +9,7 @@ module test_driver
    use usharp_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
-   use usharp_rosenbrock_driver, only: simulate_rosenbrock, segment_type, rates, rates_jacobian
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock, rates, rates_jacobian
    use usharp_config, only: test_config
    use usharp_simulate, only: simulate_test
    implicit none

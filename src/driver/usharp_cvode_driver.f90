@@ -20,8 +20,8 @@ module usharp_cvode_driver
    use usharp_strings, only: str, real_str
    use usharp_miller, only: miller_model, uniaxial_rates, get_constant, set_constant, model_setup
    use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value
-   use usharp_history, only: history_type, control_strain
-   use usharp_simulation, only: solver_options, sim_result
+   use usharp_history, only: history_type, control_strain, segment_type
+   use usharp_simulation, only: solver_options, sim_result, check_output_times
    implicit none
    private
 
@@ -35,8 +35,7 @@ module usharp_cvode_driver
    !> the control's corners and lagged corner values
    type :: rhs_context
       type(miller_model) :: model
-      integer :: control = control_strain
-      real(dp) :: t0 = 0.0_dp, v0 = 0.0_dp, slope = 0.0_dp
+      type(segment_type) :: line  !< the current segment of the load
       logical :: extended = .false.
       type(test_effects) :: eff
       real(dp) :: stiffness = 0.0_dp   !< E/(1 + kappa), model unit
@@ -80,7 +79,6 @@ contains
       integer(c_int) :: ierr, n
       integer(c_long) :: counter(1)
       integer :: k, iout, nout, nseg, j
-      real(dp) :: tend
       integer(c_int) :: ns
       type(c_ptr) :: ys
       real(c_double), allocatable, target :: pbar(:)
@@ -90,18 +88,10 @@ contains
       nout = size(tout)
       call res%allocate(nout)
       nseg = size(hist%t) - 1
-      tend = hist%end_time()
-      if (nout > 0) then
-         if (tout(1) < hist%t(1) - 1.0e-9_dp*max(1.0_dp, abs(tend)) .or. &
-             tout(nout) > tend*(1.0_dp + 1.0e-12_dp) + 1.0e-12_dp) then
-            call fatal_error(error, 'output times lie outside the history [' // &
-               str(hist%t(1))//', '//str(tend)//'] s', stat_failure)
-            return
-         end if
-      end if
+      call check_output_times(hist, tout, error)
+      if (allocated(error)) return
 
       ctx%model = model
-      ctx%control = hist%control
       ctx%extended = present(effects)
       if (ctx%extended) then
          n = n_extended
@@ -127,7 +117,8 @@ contains
       amat => FSUNDenseMatrix(int(n, c_long), int(n, c_long), sunctx)
       lsol => FSUNLinSol_Dense(yvec, amat, sunctx)
       cvode_mem = FCVodeCreate(CV_BDF, sunctx)
-      call set_segment(ctx, hist, 1)
+      ctx%line = hist%segment(1)
+      ctx%seg = 1
       ierr = FCVodeInit(cvode_mem, c_funloc(rhs_fn), hist%t(1), yvec)
       ierr = ior(ierr, FCVodeSVtolerances(cvode_mem, opts%rtol, abstol))
       ierr = ior(ierr, FCVodeSetUserData(cvode_mem, c_loc(ctx)))
@@ -169,7 +160,8 @@ contains
       do k = 1, nseg
          if (k > 1) then
             call add_counts()
-            call set_segment(ctx, hist, k)
+            ctx%line = hist%segment(k)
+            ctx%seg = k
             ierr = FCVodeReInit(cvode_mem, hist%t(k), yvec)
             ! The sensitivities are continuous across the corner: go on from their values
             if (with_sens) ierr = FCVodeSensReInit(cvode_mem, CV_STAGGERED, ys)
@@ -222,23 +214,13 @@ contains
          else
             load = hist%value_at(t)
          end if
-         res%t(i) = tout(i)
-         res%eps_in(i) = y(1)
-         res%back(i) = y(2)
-         res%drag(i) = y(3)
-         if (ctx%extended) res%back(i) = y(2) + y(5)
+         ! The measured strain includes the machine's kappa*sigma/E (the stiffness seen)
+         call res%store(i, tout(i), hist%control, load, ctx%stiffness, y(1), &
+                        merge(y(2) + y(n), y(2), ctx%extended), y(3))
          if (with_sens) then
             do j = 1, ns
                deps_in(i, j) = sens_value(ys, j, 1)
             end do
-         end if
-         if (hist%control == control_strain) then
-            res%strain(i) = load
-            res%stress(i) = ctx%stiffness*(load - y(1))
-         else
-            ! The measured strain includes the machine's kappa*sigma/E
-            res%stress(i) = load
-            res%strain(i) = load/ctx%stiffness + y(1)
          end if
       end subroutine store
 
@@ -308,17 +290,6 @@ contains
       end do
    end function lag_corners
 
-   !> Make segment k (from corner k to k+1) the current one
-   pure subroutine set_segment(ctx, hist, k)
-      type(rhs_context), intent(inout) :: ctx
-      type(history_type), intent(in) :: hist
-      integer, intent(in) :: k
-      ctx%seg = k
-      ctx%t0 = hist%t(k)
-      ctx%v0 = hist%v(k)
-      ctx%slope = (hist%v(k + 1) - hist%v(k))/(hist%t(k + 1) - hist%t(k))
-   end subroutine set_segment
-
    !> Stress and d(stress)/d(eps_in) for the state at time t
    pure subroutine stress_of(ctx, t, y, sigma, dsig)
       type(rhs_context), intent(in) :: ctx
@@ -328,9 +299,9 @@ contains
       if (ctx%extended) then
          call lagged_value(ctx%tc, ctx%vc, ctx%yk, ctx%seg, ctx%eff%lag, t, load, rate)
       else
-         load = ctx%v0 + ctx%slope*(t - ctx%t0)
+         load = ctx%line%value(t)
       end if
-      if (ctx%control == control_strain) then
+      if (ctx%line%control == control_strain) then
          sigma = ctx%stiffness*(load - y(1))
          dsig = -ctx%stiffness
       else

@@ -8,7 +8,7 @@ module usharp_history
    implicit none
    private
 
-   public :: history_type, control_strain, control_stress
+   public :: history_type, control_strain, control_stress, segment_type
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
    public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
    public :: rate_jump_history
@@ -24,7 +24,17 @@ module usharp_history
    contains
       procedure :: value_at => history_value_at
       procedure :: end_time => history_end_time
+      procedure :: segment => history_segment
    end type history_type
+
+   !> One linear piece of a history: control, start time (s), start value and slope (per s)
+   !> of the strain (-) or stress (model unit)
+   type :: segment_type
+      integer :: control = control_strain
+      real(dp) :: t0 = 0.0_dp, v0 = 0.0_dp, slope = 0.0_dp
+   contains
+      procedure :: value => segment_value
+   end type segment_type
 
 contains
 
@@ -75,6 +85,23 @@ contains
          val = self%v(k) + (self%v(k + 1) - self%v(k))*(t - self%t(k))/(self%t(k + 1) - self%t(k))
       end if
    end function history_value_at
+
+   !> Segment k of the history, from corner k to corner k+1
+   pure type(segment_type) function history_segment(self, k) result(seg)
+      class(history_type), intent(in) :: self
+      integer, intent(in) :: k
+      seg%control = self%control
+      seg%t0 = self%t(k)
+      seg%v0 = self%v(k)
+      seg%slope = (self%v(k + 1) - self%v(k))/(self%t(k + 1) - self%t(k))
+   end function history_segment
+
+   !> Value of a segment at time t (s), extended linearly
+   elemental real(dp) function segment_value(self, t) result(v)
+      class(segment_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      v = self%v0 + self%slope*(t - self%t0)
+   end function segment_value
 
    !> End time of the history, s
    pure real(dp) function history_end_time(self) result(t)

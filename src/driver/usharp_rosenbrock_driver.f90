@@ -10,8 +10,8 @@ module usharp_rosenbrock_driver
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_miller, only: miller_model, uniaxial_rates
-   use usharp_history, only: history_type, control_strain
-   use usharp_simulation, only: solver_options, sim_result
+   use usharp_history, only: history_type, control_strain, segment_type
+   use usharp_simulation, only: solver_options, sim_result, check_output_times
    implicit none
    private
 
@@ -44,13 +44,6 @@ module usharp_rosenbrock_driver
    !> Step-size control: safety factor, bounds of the change, and the order of the estimate
    real(dp), parameter :: safety = 0.9_dp, fac_min = 0.2_dp, fac_max = 6.0_dp, elo = 4.0_dp
 
-   !> The current linear segment of the load: control, start time (s), start value and slope
-   !> (per s) of the strain (-) or stress (model unit)
-   type, public :: segment_type
-      integer :: control = control_strain
-      real(dp) :: t0 = 0.0_dp, v0 = 0.0_dp, slope = 0.0_dp
-   end type segment_type
-
 contains
 
    !> Simulate the history from the virgin state, writing the response at the output times
@@ -63,25 +56,17 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(segment_type) :: seg
-      real(dp) :: y(neq), f0(neq), y1(neq), f1(neq), atol(neq), t, h, t1, tend, err, fac, hacc, erracc
+      real(dp) :: y(neq), f0(neq), y1(neq), f1(neq), atol(neq), t, h, t1, err, fac, hacc, erracc
       integer :: k, iout, nout, nseg, nstep, nacc
       logical :: ok, rejected
 
       nout = size(tout)
       call res%allocate(nout)
       nseg = size(hist%t) - 1
-      tend = hist%end_time()
-      if (nout > 0) then
-         if (tout(1) < hist%t(1) - 1.0e-9_dp*max(1.0_dp, abs(tend)) .or. &
-             tout(nout) > tend*(1.0_dp + 1.0e-12_dp) + 1.0e-12_dp) then
-            call fatal_error(error, 'output times lie outside the history [' // &
-               str(hist%t(1))//', '//str(tend)//'] s', stat_failure)
-            return
-         end if
-      end if
+      call check_output_times(hist, tout, error)
+      if (allocated(error)) return
       y = [0.0_dp, 0.0_dp, model%d0]
       atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs]
-      seg%control = hist%control
       t = hist%t(1)
       iout = 1
       do while (iout <= nout)
@@ -89,7 +74,7 @@ contains
          call store(iout, y)
          iout = iout + 1
       end do
-      call set_segment(seg, hist, 1)
+      seg = hist%segment(1)
       call rates(model, seg, t, y, f0, ok)
       res%nrhs = res%nrhs + 1
       if (.not. ok) then
@@ -101,7 +86,7 @@ contains
       h = 1.0e-4_dp*(hist%t(2) - hist%t(1))
       nstep = 0
       do k = 1, nseg
-         call set_segment(seg, hist, k)
+         seg = hist%segment(k)
          t1 = hist%t(k + 1)
          rejected = .false.
          nacc = 0
@@ -124,6 +109,7 @@ contains
             if (ok .and. err <= 1.0_dp) then
                call rates(model, seg, t + h, y1, f1, ok)
                res%nrhs = res%nrhs + 1
+               if (.not. ok) fac = 0.25_dp
             end if
             if (ok .and. err <= 1.0_dp) then
                res%nsteps = res%nsteps + 1
@@ -163,19 +149,7 @@ contains
       subroutine store(i, ys)
          integer, intent(in) :: i
          real(dp), intent(in) :: ys(neq)
-         real(dp) :: load
-         load = hist%value_at(tout(i))
-         res%t(i) = tout(i)
-         res%eps_in(i) = ys(1)
-         res%back(i) = ys(2)
-         res%drag(i) = ys(3)
-         if (hist%control == control_strain) then
-            res%strain(i) = load
-            res%stress(i) = model%youngs*(load - ys(1))
-         else
-            res%stress(i) = load
-            res%strain(i) = load/model%youngs + ys(1)
-         end if
+         call res%store(i, tout(i), hist%control, hist%value_at(tout(i)), model%youngs, ys(1), ys(2), ys(3))
       end subroutine store
    end subroutine simulate_rosenbrock
 
@@ -228,16 +202,6 @@ contains
       err = sqrt(sum((kst(:, ns)/(atol + rtol*max(abs(y), abs(y1))))**2)/neq)
    end subroutine rodas_step
 
-   !> Make segment k (from corner k to k+1) the current one
-   pure subroutine set_segment(seg, hist, k)
-      type(segment_type), intent(inout) :: seg
-      type(history_type), intent(in) :: hist
-      integer, intent(in) :: k
-      seg%t0 = hist%t(k)
-      seg%v0 = hist%v(k)
-      seg%slope = (hist%v(k + 1) - hist%v(k))/(hist%t(k + 1) - hist%t(k))
-   end subroutine set_segment
-
    !> Stress, its derivative in eps_in and in time at (t, y)
    pure subroutine stress_of(model, seg, t, y, sigma, dsig, dsig_dt)
       type(miller_model), intent(in) :: model
@@ -245,7 +209,7 @@ contains
       real(dp), intent(in) :: t, y(neq)
       real(dp), intent(out) :: sigma, dsig, dsig_dt
       real(dp) :: load
-      load = seg%v0 + seg%slope*(t - seg%t0)
+      load = seg%value(t)
       if (seg%control == control_strain) then
          sigma = model%youngs*(load - y(1))
          dsig = -model%youngs

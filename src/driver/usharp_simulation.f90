@@ -1,10 +1,13 @@
 !> Solver settings and simulation results shared by the integrators
 module usharp_simulation
    use usharp_kinds, only: dp, i8
+   use usharp_error, only: error_type, fatal_error, stat_failure
+   use usharp_strings, only: str
+   use usharp_history, only: history_type, control_strain
    implicit none
    private
 
-   public :: solver_options, sim_result
+   public :: solver_options, sim_result, check_output_times
 
    !> Integrator settings
    type :: solver_options
@@ -29,6 +32,7 @@ module usharp_simulation
       integer(i8) :: nsteps = 0, nrhs = 0, njac = 0
    contains
       procedure :: allocate => result_allocate
+      procedure :: store => result_store
    end type sim_result
 
 contains
@@ -42,4 +46,38 @@ contains
       allocate (self%t(n), self%strain(n), self%stress(n), self%eps_in(n), self%back(n), &
                 self%drag(n))
    end subroutine result_allocate
+
+   !> Record output i: time (s), control value (strain, or stress in model unit) and state;
+   !> the other of strain and stress follows through the stiffness seen (model unit)
+   pure subroutine result_store(self, i, t, control, load, stiffness, eps_in, back, drag)
+      class(sim_result), intent(inout) :: self
+      integer, intent(in) :: i, control
+      real(dp), intent(in) :: t, load, stiffness, eps_in, back, drag
+      self%t(i) = t
+      self%eps_in(i) = eps_in
+      self%back(i) = back
+      self%drag(i) = drag
+      if (control == control_strain) then
+         self%strain(i) = load
+         self%stress(i) = stiffness*(load - eps_in)
+      else
+         self%stress(i) = load
+         self%strain(i) = load/stiffness + eps_in
+      end if
+   end subroutine result_store
+
+   !> Output times must lie within the history's span (s)
+   subroutine check_output_times(hist, tout, error)
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: tout(:)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: tend
+      if (size(tout) == 0) return
+      tend = hist%end_time()
+      if (tout(1) < hist%t(1) - 1.0e-9_dp*max(1.0_dp, abs(tend)) .or. &
+          tout(size(tout)) > tend*(1.0_dp + 1.0e-12_dp) + 1.0e-12_dp) then
+         call fatal_error(error, 'output times lie outside the history ['// &
+            str(hist%t(1))//', '//str(tend)//'] s', stat_failure)
+      end if
+   end subroutine check_output_times
 end module usharp_simulation
