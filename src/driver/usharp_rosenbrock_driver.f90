@@ -58,7 +58,7 @@ contains
       type(segment_type) :: seg
       real(dp) :: y(neq), f0(neq), y1(neq), f1(neq), atol(neq), t, h, t1, err, fac, hacc, erracc
       integer :: k, iout, nout, nseg, nstep, nacc
-      logical :: ok, rejected
+      logical :: ok, accept, rejected
 
       nout = size(tout)
       call res%allocate(nout)
@@ -97,21 +97,28 @@ contains
             call rodas_step(model, seg, t, y, f0, h, atol, opts%rtol, y1, err, ok)
             res%njac = res%njac + 1
             res%nrhs = res%nrhs + 5
-            if (ok) then
-               fac = min(fac_max, max(fac_min, safety*max(err, 1.0e-10_dp)**(-1.0_dp/elo)))
+            accept = ok .and. err <= 1.0_dp
+            if (accept) then
+               ! The rates at the end: Hermite output and the next step's first stage
+               call rates(model, seg, t + h, y1, f1, accept)
+               res%nrhs = res%nrhs + 1
+            end if
+            if (.not. ok) then
+               ! A stage left the model: shrink hard
+               fac = 0.25_dp
+            else if (accept) then
                ! Gustafsson's predictive control: where the error grows from step to step
                ! (entering the knee of a loop) shorten ahead of a rejection
-               if (ok .and. err <= 1.0_dp .and. nacc > 0) fac = min(fac, min(fac_max, max(fac_min, &
+               fac = step_factor(err)
+               if (nacc > 0) fac = min(fac, min(fac_max, max(fac_min, &
                   (h/hacc)*safety*(erracc/max(err, 1.0e-10_dp)**2)**(1.0_dp/elo))))
-            else
+            else if (err <= 1.0_dp) then
+               ! The end point's rates failed
                fac = 0.25_dp
+            else
+               fac = step_factor(err)
             end if
-            if (ok .and. err <= 1.0_dp) then
-               call rates(model, seg, t + h, y1, f1, ok)
-               res%nrhs = res%nrhs + 1
-               if (.not. ok) fac = 0.25_dp
-            end if
-            if (ok .and. err <= 1.0_dp) then
+            if (accept) then
                res%nsteps = res%nsteps + 1
                do while (iout <= nout)
                   if (tout(iout) > t + h*(1.0_dp + 1.0e-12_dp)) exit
@@ -145,6 +152,12 @@ contains
       end do
 
    contains
+
+      !> Standard step-size factor from the error norm
+      pure real(dp) function step_factor(e) result(f)
+         real(dp), intent(in) :: e
+         f = min(fac_max, max(fac_min, safety*max(e, 1.0e-10_dp)**(-1.0_dp/elo)))
+      end function step_factor
 
       subroutine store(i, ys)
          integer, intent(in) :: i
