@@ -124,6 +124,8 @@ contains
                   if (tout(iout) > t + h*(1.0_dp + 1.0e-12_dp)) exit
                   call store(iout, hermite(t, h, y, f0, y1, f1, tout(iout)))
                   iout = iout + 1
+                  ! max_steps counts the step attempts between two outputs, as for CVODE
+                  nstep = 0
                end do
                if (h == t1 - t) then
                   t = t1
