@@ -177,8 +177,12 @@ contains
       call check(error, all(res%determined .eqv. [.false., .false., .true., .false., .true., .true., .true.]), &
                  'determined: B, H1, H2, n')
       if (allocated(error)) return
-      call check(error, res%sv(7)/res%sv(1) < 1.0e-3_dp .and. res%sv(6)/res%sv(1) > 1.0e-3_dp, &
-                 'one weak direction')
+      ! A tight-tolerance reference (CVODE rtol 1e-10, or RODAS4 rtol 1e-9) gives 3.95e-4 and
+      ! 6.6e-6: combinations of A1, A2, C2, and A2/A1 alone. CVODE at its default tolerance
+      ! blurred them to 1.3e-3 and 4.8e-4 (difference noise); RODAS4's default keeps them.
+      call check(error, res%sv(6)/res%sv(1) > 2.0e-4_dp .and. res%sv(6)/res%sv(1) < 8.0e-4_dp &
+                 .and. res%sv(7)/res%sv(1) < 2.0e-5_dp .and. res%sv(5)/res%sv(1) > 1.0e-3_dp, &
+                 'two weak directions, as the tight reference')
    end subroutine test_identify
 
    !> The same Levenberg-Marquardt fit on 1 and on 2 threads writes the same journal

@@ -75,7 +75,7 @@ contains
       type(SUNMatrix), pointer :: amat
       type(SUNLinearSolver), pointer :: lsol
       real(c_double), allocatable, target :: y(:), atol(:)
-      real(c_double) :: tret(1), tnext
+      real(c_double) :: tret(1), tnext, rtol, atol_strain
       integer(c_int) :: ierr, n
       integer(c_long) :: counter(1)
       integer :: k, iout, nout, nseg, j
@@ -90,6 +90,7 @@ contains
       nseg = size(hist%t) - 1
       call check_output_times(hist, tout, error)
       if (allocated(error)) return
+      call opts%tolerances('cvode', rtol, atol_strain)
 
       ctx%model = model
       ctx%extended = present(effects)
@@ -102,13 +103,13 @@ contains
          ctx%yk = lag_corners(hist%t, hist%v, effects%lag)
          y = [0.0_dp, effects%r0, model%d0*(1.0_dp + effects%strength) + effects%dd0, &
               0.0_dp, 0.0_dp]
-         atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs, &
-                 opts%atol_strain, opts%atol_strain*model%youngs]
+         atol = [atol_strain, atol_strain*model%youngs, atol_strain*model%youngs, &
+                 atol_strain, atol_strain*model%youngs]
       else
          n = neq
          ctx%stiffness = model%youngs
          y = [0.0_dp, 0.0_dp, model%d0]
-         atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs]
+         atol = [atol_strain, atol_strain*model%youngs, atol_strain*model%youngs]
       end if
 
       ierr = FSUNContext_Create(c_null_ptr, sunctx)
@@ -120,7 +121,7 @@ contains
       ctx%line = hist%segment(1)
       ctx%seg = 1
       ierr = FCVodeInit(cvode_mem, c_funloc(rhs_fn), hist%t(1), yvec)
-      ierr = ior(ierr, FCVodeSVtolerances(cvode_mem, opts%rtol, abstol))
+      ierr = ior(ierr, FCVodeSVtolerances(cvode_mem, rtol, abstol))
       ierr = ior(ierr, FCVodeSetUserData(cvode_mem, c_loc(ctx)))
       ierr = ior(ierr, FCVodeSetLinearSolver(cvode_mem, lsol, amat))
       if (.not. ctx%extended) ierr = ior(ierr, FCVodeSetJacFn(cvode_mem, c_funloc(jac_fn)))

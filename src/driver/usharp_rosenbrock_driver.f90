@@ -57,6 +57,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(segment_type) :: seg
       real(dp) :: y(neq), f0(neq), y1(neq), f1(neq), atol(neq), t, h, t1, err, fac, hacc, erracc
+      real(dp) :: rtol, atol_strain
       integer :: k, iout, nout, nseg, nstep, nacc
       logical :: ok, accept, rejected
 
@@ -66,7 +67,8 @@ contains
       call check_output_times(hist, tout, error)
       if (allocated(error)) return
       y = [0.0_dp, 0.0_dp, model%d0]
-      atol = [opts%atol_strain, opts%atol_strain*model%youngs, opts%atol_strain*model%youngs]
+      call opts%tolerances('rodas4', rtol, atol_strain)
+      atol = [atol_strain, atol_strain*model%youngs, atol_strain*model%youngs]
       t = hist%t(1)
       iout = 1
       do while (iout <= nout)
@@ -94,7 +96,7 @@ contains
             if (opts%max_step > 0.0_dp) h = min(h, opts%max_step)
             ! Land on the corner; avoid a sliver of a step just before it
             if (t + 1.05_dp*h >= t1) h = t1 - t
-            call rodas_step(model, seg, t, y, f0, h, atol, opts%rtol, y1, err, ok)
+            call rodas_step(model, seg, t, y, f0, h, atol, rtol, y1, err, ok)
             res%njac = res%njac + 1
             res%nrhs = res%nrhs + 5
             accept = ok .and. err <= 1.0_dp

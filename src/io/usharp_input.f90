@@ -255,7 +255,7 @@ contains
       integer :: max_steps, ios
       character(len=512) :: msg
       namelist /solver/ integrator, rtol, atol_strain, max_step, max_steps, dt_init, dt_min, dt_max
-      integrator = 'cvode'
+      integrator = cfg%solver%integrator
       dt_init = cfg%solver%dt_init
       dt_min = cfg%solver%dt_min
       dt_max = cfg%solver%dt_max
@@ -283,12 +283,13 @@ contains
       cfg%solver%dt_init = dt_init
       cfg%solver%dt_min = dt_min
       cfg%solver%dt_max = dt_max
-      if (.not. (rtol > 0.0_dp .and. rtol < 1.0_dp)) then
-         call fatal_error(error, cfg%path//': &solver: rtol must lie in (0, 1)')
+      ! 0 (the default) stands for the integrator's own default
+      if (.not. (rtol >= 0.0_dp .and. rtol < 1.0_dp)) then
+         call fatal_error(error, cfg%path//': &solver: rtol must lie in (0, 1), or 0 for the default')
          return
       end if
-      if (.not. (atol_strain > 0.0_dp)) then
-         call fatal_error(error, cfg%path//': &solver: atol_strain must be > 0')
+      if (.not. (atol_strain >= 0.0_dp)) then
+         call fatal_error(error, cfg%path//': &solver: atol_strain must be > 0, or 0 for the default')
          return
       end if
       if (max_step < 0.0_dp .or. max_steps < 1) then

@@ -223,9 +223,11 @@ contains
          p = ieee_value(1.0_dp, ieee_positive_inf)
          if (present(dp_dz)) dp_dz = p
       else
+         ! exp(n*log(s)) rather than s**n: the same to rounding and half the cost of pow,
+         ! which was a third of a simulation's time
          s = sinh(z)
-         p = s**n
-         if (present(dp_dz)) dp_dz = n*s**(n - 1.0_dp)*cosh(z)
+         p = exp(n*log(s))
+         if (present(dp_dz)) dp_dz = n*(p/s)*cosh(z)
       end if
    end subroutine sinh_power
 
@@ -244,7 +246,8 @@ contains
          if (present(f_d)) f_d = 0.0_dp
          return
       end if
-      z = (x/d)**1.5_dp
+      ! (x/d)**1.5 without pow
+      z = (x/d)*sqrt(x/d)
       if (.not. present(f_x)) then
          call sinh_power(z, model%c%n, p)
          f = model%btheta*p
