@@ -30,8 +30,29 @@ contains
          new_unittest('thesis-sanity-figures', test_thesis_figures), &
          new_unittest('stress-control-matches-strain-control', test_stress_control), &
          new_unittest('failure-names-test-and-time', test_failure), &
-         new_unittest('sensitivities-vs-central-differences', test_sensitivities)]
+         new_unittest('sensitivities-vs-central-differences', test_sensitivities), &
+         new_unittest('default-tolerances-per-integrator', test_default_tolerances)]
    end subroutine collect_driver
+
+   !> Unset tolerances take the running integrator's defaults (RODAS4 1e-5, 1e-8; CVODE 1e-7,
+   !> 1e-10), so the CVODE runs of a RODAS4 deck (effects, sensitivities) keep CVODE's
+   !> accuracy; tolerances that are set apply to both; RODAS4 is the default integrator
+   subroutine test_default_tolerances(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(solver_options) :: opts
+      real(dp) :: rtol, atol
+      call check(error, opts%integrator == 'rodas4', 'rodas4 is the default integrator')
+      if (allocated(error)) return
+      call opts%tolerances('rodas4', rtol, atol)
+      call check(error, rtol == 1.0e-5_dp .and. atol == 1.0e-8_dp, 'rodas4 defaults 1e-5, 1e-8')
+      if (allocated(error)) return
+      call opts%tolerances('cvode', rtol, atol)
+      call check(error, rtol == 1.0e-7_dp .and. atol == 1.0e-10_dp, 'cvode defaults 1e-7, 1e-10')
+      if (allocated(error)) return
+      opts%rtol = 3.0e-6_dp
+      call opts%tolerances('cvode', rtol, atol)
+      call check(error, rtol == 3.0e-6_dp .and. atol == 1.0e-10_dp, 'a set rtol applies, atol stays default')
+   end subroutine test_default_tolerances
 
    !> The thesis's three tests: 1 LCF ramp, 2 relaxation, 3 ratcheting
    subroutine thesis_test(k, h)
