@@ -308,12 +308,14 @@ contains
    end function constants_at
 
    !> Forward-difference Jacobian of ep's residuals at x (step h, backwards at an upper bound)
-   !> and the residuals r0 there, as one parallel batch; ok false if a point failed
-   subroutine jacobian(ep, x, h, r0, jac, ok)
+   !> and the residuals r0 there, as one parallel batch; ok false if a point failed. With
+   !> hold_failed, a column whose every step fails is left at zero (that parameter held).
+   subroutine jacobian(ep, x, h, r0, jac, ok, hold_failed)
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: x(:), h
       real(dp), allocatable, intent(out) :: r0(:), jac(:, :)
       logical, intent(out) :: ok
+      logical, intent(in), optional :: hold_failed
       real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), lo(:), hi(:), step(:)
       logical, allocatable :: oks(:)
       type(error_type), allocatable :: error
@@ -344,12 +346,16 @@ contains
          call ep%residuals(xs, rs, fs, oks, error)
          ok = oks(1) .and. .not. allocated(error)
       end do
-      ok = ok .and. all(oks)
       r0 = rs(:, 1)
       allocate (jac(size(r0), n))
+      jac = 0.0_dp
       do j = 1, n
-         jac(:, j) = (rs(:, j + 1) - r0)/step(j)
+         if (oks(j + 1)) jac(:, j) = (rs(:, j + 1) - r0)/step(j)
       end do
+      if (present(hold_failed)) then
+         if (hold_failed) return
+      end if
+      ok = ok .and. all(oks)
    end subroutine jacobian
 
    !> Gauss-Newton decrease g'(J'J)^+ g (g = J'r) of sum(r**2) in the span of the columns of
@@ -521,7 +527,9 @@ contains
       integer :: i, j, k, nc, q
       logical :: ok
       call new_effect_problem(prob, ifit, 0, eff_base, peak, base)
-      call jacobian(base, base%start(), h, r0, jc, ok)
+      ! The baseline may lie at the edge of the model's admissible region for a constant (every
+      ! step of it fails): screen with that constant held rather than give up the diagnosis
+      call jacobian(base, base%start(), h, r0, jc, ok, hold_failed=.true.)
       if (.not. ok) then
          call fatal_error(error, 'screening: the model fails near the baseline fit', stat_failure)
          return
