@@ -11,6 +11,7 @@ module test_diagnose
    use usharp_miller, only: miller_model, model_setup
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_effects, only: test_effects, lagged_value, effect_model
    use usharp_regions, only: runs_z, noise_sd, point_classes, class_loading, class_unloading, &
                              class_reversal, class_hold
@@ -46,6 +47,7 @@ contains
       type(unittest_type), allocatable, intent(out) :: testsuite(:)
       testsuite = [ &
          new_unittest('extended-model-at-zero-is-the-plain-model', test_zero_effect), &
+         new_unittest('extended-rodas4-vs-tight-reference', test_extended_rodas4), &
          new_unittest('compliance-is-a-softer-machine', test_compliance), &
          new_unittest('lag-solution-against-differences', test_lag), &
          new_unittest('runs-test-on-known-sequences', test_runs), &
@@ -90,6 +92,49 @@ contains
       call check(error, maxval(abs(a%stress - b%stress)) < 1.0e-6_dp*maxval(abs(a%stress)), &
                  'extended model at zero differs from the plain one')
    end subroutine test_zero_effect
+
+   !> RODAS4 on the extended model with every effect of the simulation on (compliance, lag,
+   !> initial state, specimen factors, softening, second back stress), three cycles with a
+   !> one-minute hold: at its default tolerances within 1e-4 of the peak of CVODE at rtol
+   !> 1e-10, at rtol 1e-9 within 1e-6 (it converges to the same solution)
+   subroutine test_extended_rodas4(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(miller_model) :: model
+      type(history_type) :: hist
+      type(solver_options) :: tight, def, fine
+      type(sim_result) :: ref, a, b
+      type(test_effects) :: eff
+      real(dp) :: peak, dev_def, dev_fine
+      character(len=100) :: buf
+      call thesis_model(model)
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 60.0_dp, 0.0_dp, hist, e)
+      eff%compliance = 0.05_dp
+      eff%lag = 0.2_dp
+      eff%r0 = 1.0_dp
+      eff%dd0 = -0.5_dp
+      eff%strength = 0.04_dp
+      eff%soften = 1.0_dp
+      eff%h3 = 1500.0_dp
+      eff%gamma3 = 300.0_dp
+      tight%integrator = 'cvode'
+      tight%rtol = 1.0e-10_dp
+      tight%atol_strain = 1.0e-14_dp
+      fine%rtol = 1.0e-9_dp
+      fine%atol_strain = 1.0e-13_dp
+      call simulate_cvode(model, hist, output_times(hist, 0.5_dp), tight, ref, e, eff)
+      if (.not. allocated(e)) call simulate_rosenbrock(model, hist, output_times(hist, 0.5_dp), &
+                                                       def, a, e, eff)
+      if (.not. allocated(e)) call simulate_rosenbrock(model, hist, output_times(hist, 0.5_dp), &
+                                                       fine, b, e, eff)
+      call check(error, .not. allocated(e), 'simulation failed')
+      if (allocated(error)) return
+      peak = maxval(abs(ref%stress))
+      dev_def = maxval(abs(a%stress - ref%stress))/peak
+      dev_fine = maxval(abs(b%stress - ref%stress))/peak
+      write (buf, '(a,2es10.2)') 'RODAS4 default, rtol 1e-9: max |dsig|/peak ', dev_def, dev_fine
+      call check(error, dev_def <= 1.0e-4_dp .and. dev_fine <= 1.0e-6_dp .and. dev_fine < dev_def, trim(buf))
+   end subroutine test_extended_rodas4
 
    !> Under strain control a compliance kappa acts as the modulus E/(1 + kappa)
    subroutine test_compliance(error)

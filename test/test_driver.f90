@@ -9,7 +9,8 @@ module test_driver
    use usharp_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
-   use usharp_rosenbrock_driver, only: simulate_rosenbrock, rates, rates_jacobian
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock, rates, rates_jacobian, rate_system
+   use usharp_effects, only: n_extended, lag_corners
    use usharp_config, only: test_config
    use usharp_simulate, only: simulate_test
    implicit none
@@ -150,55 +151,81 @@ contains
 
    !> RODAS4's Jacobian in the state and the rates' time derivative through the load against
    !> central differences (relative step 1e-6), in the elastic range and in strong inelastic
-   !> flow, under strain control (slope 1e-3/s) and stress control (slope 1 ksi/s)
+   !> flow, under strain control (slope 1e-3/s) and stress control (slope 1 ksi/s), for the
+   !> plain model and for the extended model with every effect that enters the rates on
+   !> (compliance, lag, softening, second back stress)
    subroutine test_rodas_jacobian(error)
       type(error_type), allocatable, intent(out) :: error
       type(miller_model) :: m
-      type(segment_type) :: seg
+      type(rate_system) :: sys
       type(uerror), allocatable :: uerr
-      real(dp) :: y(3), yp(3), ym(3), jac(3, 3), dfdt(3), fp(3), fm(3), fd(3), t, hstep, dev, worst
-      real(dp), parameter :: states(3, 2) = reshape([2.0e-4_dp, 1.0_dp, 11.0_dp, &
-                                                     2.0e-3_dp, 3.0_dp, 11.5_dp], [3, 2])
+      real(dp), allocatable :: y(:), yp(:), ym(:), jac(:, :), dfdt(:), fp(:), fm(:), fd(:)
+      real(dp) :: t, hstep, dev, worst
+      real(dp), parameter :: states(5, 2) = reshape([2.0e-4_dp, 1.0_dp, 11.0_dp, 1.0e-3_dp, 0.5_dp, &
+                                                     2.0e-3_dp, 3.0_dp, 11.5_dp, 2.0e-2_dp, -0.8_dp], [5, 2])
       real(dp), parameter :: loads(2, 2) = reshape([5.0e-4_dp, 1.0e-3_dp, 20.0_dp, 1.0_dp], [2, 2])
-      integer :: ic, is, j
+      integer :: ic, is, j, n, iext
       logical :: ok
-      character(len=100) :: buf
+      character(len=120) :: buf
       call model_setup(m, uerr)
       t = 10.0_dp
-      worst = 0.0_dp
-      do ic = 1, 2
-         seg%control = merge(control_strain, control_stress, ic == 1)
-         do is = 1, 2
-            y = states(:, is)
-            ! Strain: the stress is E*(v0 - eps_in); in flow for the second state
-            seg%t0 = 0.0_dp
-            seg%v0 = loads(1, ic) + merge(0.0_dp, 1.3e-3_dp, is == 1 .or. ic == 2)
-            if (ic == 2) seg%v0 = loads(1, ic) + merge(0.0_dp, 5.0_dp, is == 1) - 10.0_dp*loads(2, ic)
-            seg%slope = loads(2, ic)
-            call rates_jacobian(m, seg, t, y, jac, dfdt)
-            do j = 1, 3
-               hstep = 1.0e-6_dp*max(abs(y(j)), 1.0e-4_dp)
-               yp = y
-               ym = y
-               yp(j) = y(j) + hstep
-               ym(j) = y(j) - hstep
-               call rates(m, seg, t, yp, fp, ok)
-               call rates(m, seg, t, ym, fm, ok)
+      do iext = 1, 2
+         sys = rate_system()
+         sys%model = m
+         sys%stiffness = m%youngs
+         n = 3
+         if (iext == 2) then
+            n = n_extended
+            sys%extended = .true.
+            sys%eff%compliance = 0.05_dp
+            sys%eff%lag = 0.5_dp
+            sys%eff%soften = 1.5_dp
+            sys%eff%h3 = 4000.0_dp
+            sys%eff%gamma3 = 300.0_dp
+            sys%stiffness = m%youngs/(1.0_dp + sys%eff%compliance)
+         end if
+         allocate (jac(n, n), dfdt(n), fp(n), fm(n), fd(n))
+         worst = 0.0_dp
+         do ic = 1, 2
+            sys%seg%control = merge(control_strain, control_stress, ic == 1)
+            do is = 1, 2
+               y = states(:n, is)
+               ! Strain: the stress is E*(v0 - eps_in); in flow for the second state
+               sys%seg%t0 = 0.0_dp
+               sys%seg%v0 = loads(1, ic) + merge(0.0_dp, 1.3e-3_dp, is == 1 .or. ic == 2)
+               if (ic == 2) sys%seg%v0 = loads(1, ic) + merge(0.0_dp, 5.0_dp, is == 1) - 10.0_dp*loads(2, ic)
+               sys%seg%slope = loads(2, ic)
+               ! The lag's control: the segment's line from t = 0 to 100 s (lag at rest at 0)
+               sys%tc = [0.0_dp, 100.0_dp]
+               sys%vc = [sys%seg%value(0.0_dp), sys%seg%value(100.0_dp)]
+               sys%yk = lag_corners(sys%tc, sys%vc, sys%eff%lag)
+               sys%k = 1
+               call rates_jacobian(sys, t, y, jac, dfdt)
+               do j = 1, n
+                  hstep = 1.0e-6_dp*max(abs(y(j)), 1.0e-4_dp)
+                  yp = y
+                  ym = y
+                  yp(j) = y(j) + hstep
+                  ym(j) = y(j) - hstep
+                  call rates(sys, t, yp, fp, ok)
+                  call rates(sys, t, ym, fm, ok)
+                  fd = (fp - fm)/(2.0_dp*hstep)
+                  dev = maxval(abs(jac(:, j) - fd))/max(maxval(abs(fd)), maxval(abs(jac)), tiny(1.0_dp))
+                  worst = max(worst, dev)
+               end do
+               hstep = 1.0e-6_dp*t
+               call rates(sys, t + hstep, y, fp, ok)
+               call rates(sys, t - hstep, y, fm, ok)
                fd = (fp - fm)/(2.0_dp*hstep)
-               dev = maxval(abs(jac(:, j) - fd))/max(maxval(abs(fd)), maxval(abs(jac)), tiny(1.0_dp))
-               worst = max(worst, dev)
+               dev = maxval(abs(dfdt - fd))/max(maxval(abs(fd)), tiny(1.0_dp))
+               write (buf, '(a,l1,a,i0,a,i0,a,2es10.2)') 'extended ', iext == 2, ', control ', ic, &
+                  ', state ', is, ': |df/dt - difference| / max, worst Jacobian column ', dev, worst
+               call check(error, dev <= 1.0e-5_dp .and. worst <= 1.0e-5_dp .and. &
+                          maxval(abs(fd)) > 0.0_dp, trim(buf))
+               if (allocated(error)) return
             end do
-            hstep = 1.0e-6_dp*t
-            call rates(m, seg, t + hstep, y, fp, ok)
-            call rates(m, seg, t - hstep, y, fm, ok)
-            fd = (fp - fm)/(2.0_dp*hstep)
-            dev = maxval(abs(dfdt - fd))/max(maxval(abs(fd)), tiny(1.0_dp))
-            write (buf, '(a,i0,a,i0,a,2es10.2)') 'control ', ic, ', state ', is, &
-               ': |df/dt - difference| / max, worst Jacobian column ', dev, worst
-            call check(error, dev <= 1.0e-5_dp .and. worst <= 1.0e-5_dp .and. maxval(abs(fd)) > 0.0_dp, &
-                       trim(buf))
-            if (allocated(error)) return
          end do
+         deallocate (jac, dfdt, fp, fm, fd)
       end do
    end subroutine test_rodas_jacobian
 

@@ -19,7 +19,7 @@ module usharp_cvode_driver
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_miller, only: miller_model, uniaxial_rates, get_constant, set_constant, model_setup
-   use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value
+   use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value, lag_corners
    use usharp_history, only: history_type, control_strain, segment_type
    use usharp_simulation, only: solver_options, sim_result, check_output_times
    implicit none
@@ -277,19 +277,6 @@ contains
       d => FN_VGetArrayPointer(nv)
       v = d(i)
    end function sens_value
-
-   !> Lagged control value at every corner (first-order lag, time constant tau s, at rest on
-   !> the first value); with tau = 0 the corners themselves
-   pure function lag_corners(tc, vc, tau) result(yk)
-      real(dp), intent(in) :: tc(:), vc(:), tau
-      real(dp) :: yk(size(tc))
-      real(dp) :: rate
-      integer :: k
-      yk(1) = vc(1)
-      do k = 1, size(tc) - 1
-         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), rate)
-      end do
-   end function lag_corners
 
    !> Stress and d(stress)/d(eps_in) for the state at time t
    pure subroutine stress_of(ctx, t, y, sigma, dsig)

@@ -12,7 +12,7 @@ module usharp_effects
    private
 
    public :: test_effects, effect_info, n_effects, effect_catalogue, effect_index
-   public :: effects_of, extended_rates, n_extended, lagged_value, effect_nparams
+   public :: effects_of, extended_rates, n_extended, lagged_value, lag_corners, effect_nparams
    public :: param_global, param_per_test, effect_model
 
    !> States of the extended model: eps_in, R, D, accumulated inelastic strain p, R2
@@ -181,24 +181,63 @@ contains
       ydot = s - (yk(k) - vc(k) + s*tau)*e/tau
    end subroutine lagged_value
 
+   !> Lagged control value at every corner (first-order lag, time constant tau s, at rest on
+   !> the first value); with tau = 0 the corners themselves
+   pure function lag_corners(tc, vc, tau) result(yk)
+      real(dp), intent(in) :: tc(:), vc(:), tau
+      real(dp) :: yk(size(tc))
+      real(dp) :: rate
+      integer :: k
+      yk(1) = vc(1)
+      do k = 1, size(tc) - 1
+         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), rate)
+      end do
+   end function lag_corners
+
    !> Rates of the extended state y = (eps_in, R, D, p, R2) at stress sigma: Miller's
    !> Eqs. 2-4 with the flow driven by sigma - R - R2 and the drag D*exp(-soften*p) in the
-   !> flow law; dp/dt = |deps_in/dt|; dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt.
-   pure subroutine extended_rates(model, eff, sigma, y, ydot)
+   !> flow law; dp/dt = |deps_in/dt|; dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. With jac,
+   !> also jac(i, j) = d ydot_i / d y_j, sigma depending on eps_in through dsig_depsin
+   !> (the values are the same bit for bit with and without it).
+   pure subroutine extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
       type(miller_model), intent(in) :: model
       type(test_effects), intent(in) :: eff
       real(dp), intent(in) :: sigma, y(n_extended)
       real(dp), intent(out) :: ydot(n_extended)
-      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow
+      real(dp), intent(in), optional :: dsig_depsin
+      real(dp), intent(out), optional :: jac(n_extended, n_extended)
+      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, sg, sgr, w, df(n_extended)
       s = sigma - y(2) - y(5)
-      d_flow = y(3)*exp(-eff%soften*y(4))
-      call flow_rate(model, abs(s), d_flow, f, f_x, f_d)
-      call back_recovery(model, abs(y(2)), g, g_r)
-      call drag_recovery(model, y(3), h, h_d)
+      e = exp(-eff%soften*y(4))
+      d_flow = y(3)*e
+      if (present(jac)) then
+         call flow_rate(model, abs(s), d_flow, f, f_x, f_d)
+         call back_recovery(model, abs(y(2)), g, g_r)
+         call drag_recovery(model, y(3), h, h_d)
+      else
+         call flow_rate(model, abs(s), d_flow, f)
+         call back_recovery(model, abs(y(2)), g)
+         call drag_recovery(model, y(3), h)
+      end if
+      w = model%c%c2 + abs(y(2)) - model%c%a2/model%c%a1*y(3)**3
       ydot(1) = sign(f, s)
       ydot(2) = model%c%h1*ydot(1) - sign(g, y(2))
-      ydot(3) = model%c%h2*f*(model%c%c2 + abs(y(2)) - model%c%a2/model%c%a1*y(3)**3) - h
+      ydot(3) = model%c%h2*f*w - h
       ydot(4) = f
       ydot(5) = eff%h3*ydot(1) - eff%gamma3*y(5)*f
+      if (.not. present(jac)) return
+      ! df/dy through x = |s| and the flow's drag D*exp(-soften*p)
+      sg = sign(1.0_dp, s)
+      sgr = sign(1.0_dp, y(2))
+      df = [f_x*sg*dsig_depsin, -f_x*sg, f_d*e, -f_d*eff%soften*d_flow, -f_x*sg]
+      jac(1, :) = sg*df
+      jac(2, :) = model%c%h1*jac(1, :)
+      jac(2, 2) = jac(2, 2) - g_r
+      jac(3, :) = model%c%h2*w*df
+      jac(3, 2) = jac(3, 2) + model%c%h2*f*sgr
+      jac(3, 3) = jac(3, 3) - 3.0_dp*model%c%h2*f*model%c%a2/model%c%a1*y(3)**2 - h_d
+      jac(4, :) = df
+      jac(5, :) = eff%h3*jac(1, :) - eff%gamma3*y(5)*df
+      jac(5, 5) = jac(5, 5) - eff%gamma3*f
    end subroutine extended_rates
 end module usharp_effects

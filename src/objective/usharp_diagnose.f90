@@ -188,10 +188,10 @@ contains
       if (allocated(error)) return
       nt = size(cfg%tests)
       do i = 1, nt
-         ! The effects live in CVODE's extended model, whichever plain integrator is chosen
+         ! The effects live in the internal integrators' extended model
          if (cfg%tests(i)%ext%enabled .or. cfg%solver%integrator == 'umat') then
             call fatal_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': diagnose "// &
-               'simulates with the internal CVODE integrator (no external backend, integrator '// &
+               'simulates with an internal integrator (no external backend, integrator '// &
                '''cvode'' or ''rodas4'')', stat_input)
             return
          end if

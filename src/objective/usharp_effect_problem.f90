@@ -12,6 +12,7 @@ module usharp_effect_problem
    use usharp_optimiser, only: least_squares_type
    use usharp_simulation, only: sim_result
    use usharp_cvode_driver, only: simulate_cvode
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
    implicit none
    private
 
@@ -178,7 +179,11 @@ contains
             if (allocated(error)) return
             ! The stress channel lags by shift: the data at t saw the response at t - shift
             tout = min(max(tg%t - eff(i)%shift, test%hist%t(1)), test%hist%end_time())
-            call simulate_cvode(mt, test%hist, tout, self%prob%cfg%solver, res, error, eff(i))
+            if (self%prob%cfg%solver%integrator == 'cvode') then
+               call simulate_cvode(mt, test%hist, tout, self%prob%cfg%solver, res, error, eff(i))
+            else
+               call simulate_rosenbrock(mt, test%hist, tout, self%prob%cfg%solver, res, error, eff(i))
+            end if
             if (allocated(error)) return
             n = size(tg%t)
             ysim = simulated(test, res)
