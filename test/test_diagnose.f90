@@ -294,6 +294,15 @@ contains
          "&fit fitted = 'B' /", "&diagnose refit_starts = 0 /", tests]), cfg, e)
       call check_message(error, e, '&diagnose: refit_starts must be >= 1')
       if (allocated(error)) return
+      call read_config(write_text('diag-global.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose global_starts = -1 /", tests]), cfg, e)
+      call check_message(error, e, '&diagnose: global_starts must be >= 0')
+      if (allocated(error)) return
+      call read_config(write_text('diag-rows.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose rows = 'none', 'creep' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      call check_message(error, e, "&diagnose: rows: no effect is named 'creep'")
+      if (allocated(error)) return
       call read_config(write_text('diag-holdout.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", "&diagnose holdout = 'c' /", tests]), cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)

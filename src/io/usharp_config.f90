@@ -69,8 +69,10 @@ module usharp_config
    type :: diagnose_config
       character(len=64) :: holdout(max_list) = ''  !< tests held out of the fit
       character(len=16) :: effects(max_list) = ''  !< effects considered (none given: all)
+      character(len=16) :: rows(max_list) = ''     !< self-check rows: injected effects, 'none' clean
       integer :: n_refit = 3                       !< leading candidates refitted
       integer :: refit_starts = 1                  !< screening end points each refit starts from
+      integer :: global_starts = 0                 !< Latin-hypercube starts of the constants (baseline and refits)
       real(dp) :: dlnE_dT = -4.0e-4_dp             !< 1/K, temperature slope of ln E
       real(dp) :: gamma3 = 200.0_dp                !< -, second back stress recovery (screening)
       real(dp) :: confirm_shrink = 0.5_dp          !< held-out structured gap removed to confirm

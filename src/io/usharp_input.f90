@@ -445,15 +445,18 @@ contains
       type(run_config), intent(inout) :: cfg
       type(error_type), allocatable, intent(out) :: error
       character(len=64) :: holdout(max_list)
-      character(len=16) :: effects(max_list)
+      character(len=16) :: effects(max_list), rows(max_list)
       real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise
-      integer :: n_refit, refit_starts, reps, seed, ios
+      integer :: n_refit, refit_starts, global_starts, reps, seed, ios
       character(len=512) :: msg
-      namelist /diagnose/ holdout, effects, n_refit, refit_starts, dlnE_dT, gamma3, confirm_shrink, reps, seed, noise
+      namelist /diagnose/ holdout, effects, rows, n_refit, refit_starts, global_starts, dlnE_dT, gamma3, &
+         confirm_shrink, reps, seed, noise
       holdout = cfg%diagnose%holdout
       effects = cfg%diagnose%effects
+      rows = cfg%diagnose%rows
       n_refit = cfg%diagnose%n_refit
       refit_starts = cfg%diagnose%refit_starts
+      global_starts = cfg%diagnose%global_starts
       dlnE_dT = cfg%diagnose%dlnE_dT
       gamma3 = cfg%diagnose%gamma3
       confirm_shrink = cfg%diagnose%confirm_shrink
@@ -470,6 +473,8 @@ contains
          call fatal_error(error, cfg%path//': &diagnose: n_refit must be >= 1')
       else if (refit_starts < 1) then
          call fatal_error(error, cfg%path//': &diagnose: refit_starts must be >= 1')
+      else if (global_starts < 0) then
+         call fatal_error(error, cfg%path//': &diagnose: global_starts must be >= 0')
       else if (reps < 1) then
          call fatal_error(error, cfg%path//': &diagnose: reps must be >= 1')
       end if
@@ -484,8 +489,10 @@ contains
       end if
       cfg%diagnose%holdout = holdout
       cfg%diagnose%effects = effects
+      cfg%diagnose%rows = rows
       cfg%diagnose%n_refit = n_refit
       cfg%diagnose%refit_starts = refit_starts
+      cfg%diagnose%global_starts = global_starts
       cfg%diagnose%dlnE_dT = dlnE_dT
       cfg%diagnose%gamma3 = gamma3
       cfg%diagnose%confirm_shrink = confirm_shrink

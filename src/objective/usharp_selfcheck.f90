@@ -26,6 +26,7 @@ module usharp_selfcheck
    !> Outcome of the self-check
    type :: selfcheck_result
       integer, allocatable :: injected(:)      !< effects injected (0: clean), rows of the table
+      integer, allocatable :: columns(:)       !< effects that can rank first (0: none), columns
       integer, allocatable :: confusion(:, :)  !< (row, 0:n_effects) ranked first (0: none)
       real(dp), allocatable :: shrink(:, :)    !< held-out gap removed by the injected effect (row, rep)
       logical, allocatable :: first(:, :)      !< the injected effect ranked first (row, rep)
@@ -147,7 +148,8 @@ contains
       o = opts
       o%check_converged = .false.
       sc%reps = cfg%diagnose%reps
-      sc%injected = [0, opts%effects]
+      sc%injected = opts%rows
+      sc%columns = [0, opts%effects]
       allocate (sc%confusion(size(sc%injected), 0:n_effects), sc%shrink(size(sc%injected), sc%reps))
       sc%confusion = 0
       allocate (sc%misses(0))
@@ -212,25 +214,26 @@ contains
                str(sc%reps)//' repetitions per row, effects injected at random realistic '// &
                'magnitudes with noise; rows: injected, columns: ranked first', '']
       ln = '| injected |'
-      do j = 1, size(sc%injected)
-         ln = trim(ln)//' '//trim(name_of(sc%injected(j)))//' |'
+      do j = 1, size(sc%columns)
+         ln = trim(ln)//' '//trim(name_of(sc%columns(j)))//' |'
       end do
       lines = [lines, ln]
       ln = '|---|'
-      do j = 1, size(sc%injected)
+      do j = 1, size(sc%columns)
          ln = trim(ln)//'---|'
       end do
       lines = [lines, ln]
       do row = 1, size(sc%injected)
          ln = '| '//trim(name_of(sc%injected(row)))//' |'
-         do j = 1, size(sc%injected)
-            ln = trim(ln)//' '//str(sc%confusion(row, sc%injected(j)))//' |'
+         do j = 1, size(sc%columns)
+            ln = trim(ln)//' '//str(sc%confusion(row, sc%columns(j)))//' |'
          end do
          lines = [lines, ln]
       end do
       lines = [character(len=200) :: lines, '', 'Held-out structured gap removed by the injected '// &
                'effect (min / median over repetitions):', '']
-      do row = 2, size(sc%injected)
+      do row = 1, size(sc%injected)
+         if (sc%injected(row) == 0) cycle
          associate (v => pack(sc%shrink(row, :), .not. ieee_is_nan(sc%shrink(row, :))))
             if (size(v) == 0) then
                lines = [character(len=200) :: lines, '- '//trim(name_of(sc%injected(row)))// &
