@@ -73,6 +73,7 @@ module usharp_config
       integer :: n_refit = 3                       !< leading candidates refitted
       integer :: refit_starts = 1                  !< screening end points each refit starts from
       integer :: global_starts = 0                 !< Latin-hypercube starts of the constants (baseline and refits)
+      logical :: cross_starts = .true.             !< a refit ending above another reruns from its constants
       real(dp) :: dlnE_dT = -4.0e-4_dp             !< 1/K, temperature slope of ln E
       real(dp) :: gamma3 = 200.0_dp                !< -, second back stress recovery (screening)
       real(dp) :: confirm_shrink = 0.5_dp          !< held-out structured gap removed to confirm

@@ -448,15 +448,17 @@ contains
       character(len=16) :: effects(max_list), rows(max_list)
       real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise
       integer :: n_refit, refit_starts, global_starts, reps, seed, ios
+      logical :: cross_starts
       character(len=512) :: msg
       namelist /diagnose/ holdout, effects, rows, n_refit, refit_starts, global_starts, dlnE_dT, gamma3, &
-         confirm_shrink, reps, seed, noise
+         cross_starts, confirm_shrink, reps, seed, noise
       holdout = cfg%diagnose%holdout
       effects = cfg%diagnose%effects
       rows = cfg%diagnose%rows
       n_refit = cfg%diagnose%n_refit
       refit_starts = cfg%diagnose%refit_starts
       global_starts = cfg%diagnose%global_starts
+      cross_starts = cfg%diagnose%cross_starts
       dlnE_dT = cfg%diagnose%dlnE_dT
       gamma3 = cfg%diagnose%gamma3
       confirm_shrink = cfg%diagnose%confirm_shrink
@@ -493,6 +495,7 @@ contains
       cfg%diagnose%n_refit = n_refit
       cfg%diagnose%refit_starts = refit_starts
       cfg%diagnose%global_starts = global_starts
+      cfg%diagnose%cross_starts = cross_starts
       cfg%diagnose%dlnE_dT = dlnE_dT
       cfg%diagnose%gamma3 = gamma3
       cfg%diagnose%confirm_shrink = confirm_shrink

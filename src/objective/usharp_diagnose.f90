@@ -61,6 +61,8 @@ module usharp_diagnose
       !> Latin-hypercube starts of the constants over the &fit multi-start box, run for the
       !> baseline and for every refit besides their local starts (0: local only)
       integer :: global_starts = 0
+      !> A refit that ends above another runs again from that one's constants
+      logical :: cross_starts = .true.
    end type diagnose_options
 
    !> One effect: screening, and the refit when it led
@@ -78,6 +80,7 @@ module usharp_diagnose
       real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
       character(len=24), allocatable :: pname(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
+      real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
@@ -150,6 +153,7 @@ contains
       opts%n_refit = cfg%diagnose%n_refit
       opts%refit_starts = cfg%diagnose%refit_starts
       opts%global_starts = cfg%diagnose%global_starts
+      opts%cross_starts = cfg%diagnose%cross_starts
       opts%dlnE_dT = cfg%diagnose%dlnE_dT
       opts%gamma3 = cfg%diagnose%gamma3
       opts%confirm_shrink = cfg%diagnose%confirm_shrink
@@ -207,9 +211,10 @@ contains
       real(dp) :: peak, f1(1)
       real(dp), allocatable :: r1(:, :)
       logical :: ok1(1)
-      integer :: nt, i, j, m
+      integer :: nt, i, j, m, counted
       logical :: ok
 
+      counted = 0
       call setup_problem(cfg, prob, error, experiments)
       if (allocated(error)) return
       nt = size(cfg%tests)
@@ -316,27 +321,48 @@ contains
 
       call screen(prob, ifit, opts, eff_base, peak, cat, cfg%fit%fd_step, res, error)
       if (allocated(error)) return
-      do j = 1, min(opts%n_refit, size(res%effects))
-         if (res%effects(j)%pred_drop <= 0.0_dp) cycle
-         call refit(prob, ifit, ihold, opts, eff_base, peak, cfg%fit%fd_step, res, nv, &
-                    res%effects(j), error)
-         if (allocated(error)) return
-         res%nevals = res%nevals + res%effects(j)%nevals
-      end do
-      call conclude(res)
+      call refit_range(1, min(opts%n_refit, size(res%effects)))
+      if (allocated(error)) return
       ! Before the report says that nothing in the catalogue explains a structured gap,
       ! the candidates the screening ranked lower are refitted too: the score test can miss
       ! an effect whose fit first has to leave the baseline's basin of the constants
-      if (res%leading == 0 .and. res%gap_fit > quiet*res%noise_fit) then
-         do j = opts%n_refit + 1, size(res%effects)
+      if (res%leading == 0 .and. res%gap_fit > quiet*res%noise_fit) &
+         call refit_range(opts%n_refit + 1, size(res%effects))
+   contains
+      !> Refit the screening's candidates j1..j2, then every refit that ended above another
+      !> again from the constants of those lower ones (a basin of the constants can be
+      !> shared: per-test strength factors and a common drag offset, say), and conclude
+      subroutine refit_range(j1, j2)
+         integer, intent(in) :: j1, j2
+         integer :: j, o
+         real(dp), allocatable :: xc(:, :)
+         integer, allocatable :: lower(:)
+         do j = j1, j2
             if (res%effects(j)%pred_drop <= 0.0_dp) cycle
             call refit(prob, ifit, ihold, opts, eff_base, peak, cfg%fit%fd_step, res, nv, &
                        res%effects(j), error)
             if (allocated(error)) return
-            res%nevals = res%nevals + res%effects(j)%nevals
          end do
+         if (opts%cross_starts) then
+            do j = 1, size(res%effects)
+               if (.not. res%effects(j)%refitted) cycle
+               lower = pack([(o, o=1, size(res%effects))], res%effects%refitted .and. &
+                            res%effects%f_after < res%effects(j)%f_after)
+               if (size(lower) == 0) cycle
+               allocate (xc(size(prob%idx), size(lower)))
+               do o = 1, size(lower)
+                  xc(:, o) = log10(res%effects(lower(o))%c)
+               end do
+               call refit(prob, ifit, ihold, opts, eff_base, peak, cfg%fit%fd_step, res, nv, &
+                          res%effects(j), error, xc)
+               deallocate (xc)
+               if (allocated(error)) return
+            end do
+         end if
+         res%nevals = res%nevals + sum(res%effects%nevals) - counted
+         counted = sum(res%effects%nevals)
          call conclude(res)
-      end if
+      end subroutine refit_range
    end subroutine diagnose_run
 
    !> Constants of the model at x (log10 of the fitted constants)
@@ -702,7 +728,7 @@ contains
    end subroutine effect_fit
 
    !> Refit of the constants with effect e on, its interval, AIC/BIC and the held-out check
-   subroutine refit(prob, ifit, ihold, opts, eff_base, peak, h, res, nv, e, error)
+   subroutine refit(prob, ifit, ihold, opts, eff_base, peak, h, res, nv, e, error, starts)
       type(fit_problem), intent(in) :: prob
       integer, intent(in) :: ifit(:), ihold(:)
       type(diagnose_options), intent(in) :: opts
@@ -712,6 +738,9 @@ contains
       real(dp), intent(in) :: nv(:)
       type(effect_outcome), intent(inout) :: e
       type(error_type), allocatable, intent(out) :: error
+      !> Further starts of the constants (log10, columns), the effect's parameters at their
+      !> screening values
+      real(dp), intent(in), optional :: starts(:, :)
       type(effect_problem) :: ep, eh, ea
       type(optimum_type) :: opt
       type(fit_problem) :: pk
@@ -727,17 +756,24 @@ contains
       nc = size(prob%idx)
       call effect_fit(prob, ifit, e%k, opts, eff_base, peak, ep)
       call ep%bounds(lo, hi)
-      call levenberg_marquardt(ep, e%x, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
-      if (allocated(error)) return
-      e%nevals = opt%nevals
-      ! Also from the next screening end points and the global starts (the effect's
-      ! parameters at the screening's); the lowest objective is kept
-      if (allocated(e%x_alt)) call best_of_starts(ep, e%x_alt(:, :min(opts%refit_starts - 1, &
-         size(e%x_alt, 2))), lo, hi, h, opts%max_evals, opt, e%nevals)
-      call best_of_starts(ep, reshape([(res%x_global(:, j), e%x(nc + 1:), j=1, size(res%x_global, 2))], &
-                                      [size(e%x), size(res%x_global, 2)]), lo, hi, h, opts%max_evals, &
-                          opt, e%nevals)
+      if (e%refitted .and. present(starts)) then
+         ! A refit again from further starts: its own end point stands unless one is lower
+         call levenberg_marquardt(ep, e%x_fit, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
+         if (allocated(error)) return
+         e%nevals = e%nevals + opt%nevals
+         call best_of_starts(ep, with_params(starts), lo, hi, h, opts%max_evals, opt, e%nevals)
+      else
+         call levenberg_marquardt(ep, e%x, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
+         if (allocated(error)) return
+         e%nevals = opt%nevals
+         ! Also from the next screening end points and the global starts; the lowest
+         ! objective is kept
+         if (allocated(e%x_alt)) call best_of_starts(ep, e%x_alt(:, :min(opts%refit_starts - 1, &
+            size(e%x_alt, 2))), lo, hi, h, opts%max_evals, opt, e%nevals)
+         call best_of_starts(ep, with_params(res%x_global), lo, hi, h, opts%max_evals, opt, e%nevals)
+      end if
       e%refitted = .true.
+      e%x_fit = opt%x
       m = ep%nres()
       e%f_after = opt%f
       f0 = res%f0
@@ -759,6 +795,7 @@ contains
       e%p = pack(p, ep%pfree)
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
+      if (allocated(e%pname)) deallocate (e%pname)
       allocate (e%pname(0))
       e%worst = 0.0_dp
       do j = 1, size(ep%p0)
@@ -812,6 +849,16 @@ contains
       else
          e%confirmed = e%confirmed .and. e%shrink_held >= opts%confirm_shrink
       end if
+   contains
+      !> Search points of the constants' columns xc with the effect's screening parameters
+      pure function with_params(xc) result(xs)
+         real(dp), intent(in) :: xc(:, :)
+         real(dp) :: xs(size(e%x), size(xc, 2))
+         integer :: k
+         do k = 1, size(xc, 2)
+            xs(:, k) = [xc(:, k), e%x(size(xc, 1) + 1:)]
+         end do
+      end function with_params
    end subroutine refit
 
    !> n Latin-hypercube points of the constants (log10) over the &fit multi-start box,
