@@ -72,7 +72,8 @@ module usharp_config
       character(len=16) :: rows(max_list) = ''     !< self-check rows: injected effects, 'none' clean
       integer :: n_refit = 3                       !< leading candidates refitted
       integer :: refit_starts = 1                  !< screening end points each refit starts from
-      integer :: global_starts = 0                 !< Latin-hypercube starts of the constants (baseline and refits)
+      integer :: global_starts = 4                 !< Latin-hypercube starts of the constants (baseline and refits)
+      real(dp) :: global_below = 0.95_dp           !< ... used when no refit removes this much of the fit gap
       logical :: cross_starts = .true.             !< a refit ending above another reruns from its constants
       real(dp) :: dlnE_dT = -4.0e-4_dp             !< 1/K, temperature slope of ln E
       real(dp) :: gamma3 = 200.0_dp                !< -, second back stress recovery (screening)
