@@ -195,6 +195,11 @@ contains
                if (res%effects(j)%k == k .and. res%effects(j)%refitted .and. .not. held_quiet(res)) &
                   sc%shrink(row, rep) = res%effects(j)%shrink_held
             end do
+            ! A right answer that removes less than 80 % of the held-out gap is shown too
+            if (first == k .and. k > 0 .and. sc%shrink(row, rep) < 0.8_dp) sc%misses = &
+               [character(len=200) :: sc%misses, '', '---', '', '# short: injected '//str(k)// &
+               ', repetition '//str(rep)//', parameters '//real_list(p)//': held-out gap removed '// &
+               real_str(100.0_dp*sc%shrink(row, rep), 'f0.1')//' %', diagnose_report(res, o)]
          end do
       end do
       call system_clock(c1)
@@ -256,7 +261,8 @@ contains
                str(sc%nevals)//' simulations of the test set in '// &
                real_str(sc%seconds, 'f0.1')//' s']
       if (size(sc%misses) > 0) lines = [character(len=200) :: lines, '', &
-         'The reports of the wrong answers follow.', sc%misses]
+         'The reports of the wrong answers (and of right ones that remove less than 80 % of the '// &
+         'held-out gap) follow.', sc%misses]
    contains
       function name_of(k) result(text)
          integer, intent(in) :: k
