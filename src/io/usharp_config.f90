@@ -73,7 +73,7 @@ module usharp_config
       integer :: n_refit = 3                       !< leading candidates refitted
       integer :: refit_starts = 1                  !< screening end points each refit starts from
       integer :: global_starts = 4                 !< Latin-hypercube starts of the constants (baseline and refits)
-      real(dp) :: global_below = 0.95_dp           !< ... used when no refit removes this much of the fit gap
+                                                   !< when no local refit reaches the noise level
       logical :: cross_starts = .true.             !< a refit ending above another reruns from its constants
       real(dp) :: dlnE_dT = -4.0e-4_dp             !< 1/K, temperature slope of ln E
       real(dp) :: gamma3 = 200.0_dp                !< -, second back stress recovery (screening)

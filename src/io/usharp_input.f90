@@ -446,19 +446,18 @@ contains
       type(error_type), allocatable, intent(out) :: error
       character(len=64) :: holdout(max_list)
       character(len=16) :: effects(max_list), rows(max_list)
-      real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise, global_below
+      real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise
       integer :: n_refit, refit_starts, global_starts, reps, seed, ios
       logical :: cross_starts
       character(len=512) :: msg
       namelist /diagnose/ holdout, effects, rows, n_refit, refit_starts, global_starts, dlnE_dT, gamma3, &
-         cross_starts, global_below, confirm_shrink, reps, seed, noise
+         cross_starts, confirm_shrink, reps, seed, noise
       holdout = cfg%diagnose%holdout
       effects = cfg%diagnose%effects
       rows = cfg%diagnose%rows
       n_refit = cfg%diagnose%n_refit
       refit_starts = cfg%diagnose%refit_starts
       global_starts = cfg%diagnose%global_starts
-      global_below = cfg%diagnose%global_below
       cross_starts = cfg%diagnose%cross_starts
       dlnE_dT = cfg%diagnose%dlnE_dT
       gamma3 = cfg%diagnose%gamma3
@@ -486,10 +485,6 @@ contains
          call fatal_error(error, cfg%path//': &diagnose: gamma3 and noise must be > 0')
          return
       end if
-      if (.not. (global_below >= 0.0_dp .and. global_below <= 1.0_dp)) then
-         call fatal_error(error, cfg%path//': &diagnose: global_below must lie in [0, 1]')
-         return
-      end if
       if (.not. (confirm_shrink > 0.0_dp .and. confirm_shrink <= 1.0_dp)) then
          call fatal_error(error, cfg%path//': &diagnose: confirm_shrink must lie in (0, 1]')
          return
@@ -500,7 +495,6 @@ contains
       cfg%diagnose%n_refit = n_refit
       cfg%diagnose%refit_starts = refit_starts
       cfg%diagnose%global_starts = global_starts
-      cfg%diagnose%global_below = global_below
       cfg%diagnose%cross_starts = cross_starts
       cfg%diagnose%dlnE_dT = dlnE_dT
       cfg%diagnose%gamma3 = gamma3

@@ -25,7 +25,7 @@ module usharp_diagnose
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
                              effect_nparams, param_per_test, param_global, effect_index
    use usharp_effect_problem, only: effect_problem, new_effect_problem
-   use usharp_regions, only: region_stat, region_of, point_classes, noise_sd, class_names
+   use usharp_regions, only: region_stat, region_of, point_classes, noise_sd, class_names, gap_se
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_lapack, only: svd
@@ -41,9 +41,10 @@ module usharp_diagnose
 
    !> BIC must fall by more than this for an effect to be significant (strong evidence)
    real(dp), parameter :: bic_margin = 10.0_dp
-   !> A structured gap below this fraction of the objective the noise explains is no gap:
-   !> the noise estimate itself is good to a few per cent
-   real(dp), parameter :: quiet = 0.05_dp
+   !> A set of tests has a structured gap only above this many standard errors of the gap
+   !> that noise alone leaves (on a 600-point test that standard error is 10 % of the noise
+   !> part: a fixed fraction of the noise part is no measure of it)
+   real(dp), parameter :: gap_z = 3.0_dp
 
    !> Settings of a diagnosis (&diagnose group)
    type :: diagnose_options
@@ -59,10 +60,9 @@ module usharp_diagnose
       integer :: max_evals = 3000            !< per refit
       integer :: refit_starts = 1            !< screening end points a refit starts from
       !> Latin-hypercube starts of the constants over the &fit multi-start box, run for the
-      !> baseline and for every refit when no local refit removes global_below of the fit
-      !> tests' structured gap (0: local only)
+      !> baseline and for every refit when no significant local refit brings the fit tests'
+      !> structured gap down to the noise level (0: local only)
       integer :: global_starts = 4
-      real(dp) :: global_below = 0.95_dp
       !> A refit that ends above another runs again from that one's constants
       logical :: cross_starts = .true.
    end type diagnose_options
@@ -107,6 +107,8 @@ module usharp_diagnose
       real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)
       real(dp) :: noise_fit = 0.0_dp, noise_held = 0.0_dp  !< objective the noise explains
       real(dp) :: gap_fit = 0.0_dp, gap_held = 0.0_dp      !< structured gaps at the baseline
+      !> Gaps up to these are noise: gap_z standard errors of the gap noise alone leaves
+      real(dp) :: floor_fit = 0.0_dp, floor_held = 0.0_dp
       integer :: m = 0                            !< residuals of the fit tests
       type(region_stat), allocatable :: regions(:)
       type(effect_outcome), allocatable :: effects(:)  !< sorted by pred_dbic
@@ -157,7 +159,6 @@ contains
       opts%n_refit = cfg%diagnose%n_refit
       opts%refit_starts = cfg%diagnose%refit_starts
       opts%global_starts = cfg%diagnose%global_starts
-      opts%global_below = cfg%diagnose%global_below
       opts%cross_starts = cfg%diagnose%cross_starts
       opts%dlnE_dT = cfg%diagnose%dlnE_dT
       opts%gamma3 = cfg%diagnose%gamma3
@@ -211,7 +212,7 @@ contains
       type(optimum_type) :: opt
       type(test_effects) :: eff_base
       type(effect_info) :: cat(n_effects)
-      integer, allocatable :: ifit(:), ihold(:)
+      integer, allocatable :: ifit(:), ihold(:), npts(:)
       real(dp), allocatable :: lo(:), hi(:), r0(:), jc(:, :), yb(:), nv(:)
       real(dp) :: peak, f1(1)
       real(dp), allocatable :: r1(:, :)
@@ -320,6 +321,9 @@ contains
       res%noise_held = sum(nv, res%held(res%test_of))
       res%gap_fit = max(sum(r0**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
       res%gap_held = max(sum(r0**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
+      npts = [(size(prob%targets(i)%exp%y), i=1, nt)]
+      res%floor_fit = gap_z*gap_se(nv, res%test_of, npts, .not. res%held)
+      res%floor_held = gap_z*gap_se(nv, res%test_of, npts, res%held)
 
       call screen(prob, ifit, opts, eff_base, peak, cat, cfg%fit%fd_step, res, error)
       if (allocated(error)) return
@@ -328,18 +332,18 @@ contains
       ! Before the report says that nothing in the catalogue explains a structured gap,
       ! the candidates the screening ranked lower are refitted too: the score test can miss
       ! an effect whose fit first has to leave the baseline's basin of the constants
-      if (res%leading == 0 .and. res%gap_fit > quiet*res%noise_fit) &
+      if (res%leading == 0 .and. res%gap_fit > res%floor_fit) &
          call refit_range(opts%n_refit + 1, size(res%effects))
       if (allocated(error)) return
-      ! When no refit removes global_below of the fit tests' structured gap, the refits may
-      ! all sit in the baseline's basin of the constants (data made with an initial state
-      ! other than the virgin one: every refit ends at 83-86 %, the injected effect from
-      ! other constants near 100 %): the baseline and every refit run again from
-      ! Latin-hypercube starts of the constants. The baseline first, so that an effect
-      ! cannot win by a better basin alone: its lower objective becomes the reference.
-      if (opts%global_starts > 0 .and. res%gap_fit > quiet*res%noise_fit .and. &
-          maxval(res%effects%shrink_fit, mask=res%effects%refitted .and. res%effects%significant) &
-          < opts%global_below) then
+      ! When no significant refit brings the fit tests' structured gap down to the noise
+      ! level, the refits may all sit in the baseline's basin of the constants (data made
+      ! with an initial state other than the virgin one: refits end at 83-97 % of the gap,
+      ! the injected effect from other constants at 100 %): the baseline and every refit run
+      ! again from Latin-hypercube starts of the constants. The baseline first, so that an
+      ! effect cannot win by a better basin alone: its lower objective becomes the reference.
+      if (opts%global_starts > 0 .and. res%gap_fit > res%floor_fit .and. &
+          .not. any(res%effects%refitted .and. res%effects%significant .and. &
+                    (1.0_dp - res%effects%shrink_fit)*res%gap_fit <= res%floor_fit)) then
          res%x_global = global_points(cfg, prob, opts%global_starts)
          res%global = .true.
          call new_effect_problem(prob, ifit, 0, eff_base, peak, base)
@@ -776,8 +780,7 @@ contains
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), x0(:), r(:), jac(:, :), cov(:, :), se(:), y(:), p(:)
       real(dp), allocatable :: pscale(:)
-      real(dp) :: f0
-      integer :: m, nc, j, nt, g, i, n
+      integer :: nc, j, nt, g, i, n
       logical :: ok
       type(miller_model) :: mdl
       cat = effect_catalogue(peak)
@@ -786,11 +789,15 @@ contains
       call effect_fit(prob, ifit, e%k, opts, eff_base, peak, ep)
       call ep%bounds(lo, hi)
       if (e%refitted .and. present(starts)) then
-         ! A refit again from further starts: its own end point stands unless one is lower
-         call levenberg_marquardt(ep, e%x_fit, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
-         if (allocated(error)) return
-         e%nevals = e%nevals + opt%nevals
+         ! A refit again from further starts: its own end point stands unless one is lower;
+         ! then only the verdict is redone (the reference objective may have fallen)
+         opt%x = e%x_fit
+         opt%f = e%f_after
          call best_of_starts(ep, with_params(starts), lo, hi, h, opts%max_evals, opt, e%nevals)
+         if (.not. opt%f < e%f_after) then
+            call judge()
+            return
+         end if
       else
          call levenberg_marquardt(ep, e%x, lo, hi, h, 1.0e-9_dp, 100, opts%max_evals, opt, error)
          if (allocated(error)) return
@@ -803,13 +810,8 @@ contains
       end if
       e%refitted = .true.
       e%x_fit = opt%x
-      m = ep%nres()
       e%f_after = opt%f
-      f0 = res%f0
-      if (res%global) f0 = min(res%f0, res%f0_global)
       e%q = count(ep%pfree)
-      e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
-      e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
       ! Interval of the effect's parameters: the sandwich covariance at the optimum, as in the
       ! identifiability report (Eq. 7's residuals do not share one variance)
       call jacobian(ep, opt%x, h, r, jac, ok)
@@ -872,14 +874,26 @@ contains
       if (res%gap_held > 0.0_dp) e%shrink_held = 1.0_dp - e%held_gap/res%gap_held
       if (res%gap_fit > 0.0_dp) e%shrink_fit = 1.0_dp - &
          max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)/res%gap_fit
-      e%significant = e%dbic < -bic_margin
-      e%confirmed = e%significant .and. e%plausible .and. res%gap_fit > quiet*res%noise_fit
-      if (held_quiet(res)) then
-         e%confirmed = e%confirmed .and. e%held_gap <= quiet*res%noise_held
-      else
-         e%confirmed = e%confirmed .and. e%shrink_held >= opts%confirm_shrink
-      end if
+      call judge()
    contains
+      !> AIC, BIC against the baseline's (lowest) objective, and the verdict
+      subroutine judge()
+         integer :: m
+         real(dp) :: f0
+         m = ep%nres()
+         f0 = res%f0
+         if (res%global) f0 = min(res%f0, res%f0_global)
+         e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
+         e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
+         e%significant = e%dbic < -bic_margin
+         e%confirmed = e%significant .and. e%plausible .and. res%gap_fit > res%floor_fit
+         if (held_quiet(res)) then
+            e%confirmed = e%confirmed .and. e%held_gap <= res%floor_held
+         else
+            e%confirmed = e%confirmed .and. e%shrink_held >= opts%confirm_shrink
+         end if
+      end subroutine judge
+
       !> Search points of the constants' columns xc with the effect's screening parameters
       pure function with_params(xc) result(xs)
          real(dp), intent(in) :: xc(:, :)
@@ -939,7 +953,7 @@ contains
    !> for an effect to shrink there, only a gap it must not open
    pure logical function held_quiet(res)
       type(diagnose_result), intent(in) :: res
-      held_quiet = res%gap_held <= quiet*res%noise_held
+      held_quiet = res%gap_held <= res%floor_held
    end function held_quiet
 
    !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
@@ -1049,6 +1063,12 @@ contains
             real_str(max(res%per_test0(i) - region_noise(i), 0.0_dp), 'es10.3')//' |')
       end do
       call add('')
+      call add('A set of tests has a structured gap only above '//real_str(gap_z, 'f0.0')// &
+               ' standard errors of the gap noise alone leaves (the scatter of the noise')
+      call add('estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &
+               real_str(res%floor_fit, 'es10.3')//', held-out tests '//real_str(res%gap_held, 'es10.3')// &
+               ' against '//real_str(res%floor_held, 'es10.3')//'.')
+      call add('')
       call add('Regions ranked by structured gap (share: of the objective of the test set the region')
       call add('belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')
       call add('')
@@ -1084,8 +1104,8 @@ contains
                real_str(bic_margin, 'f0.0')//'):')
       if (count(res%effects%refitted) > opts%n_refit) call add('(beyond the leading '// &
          str(opts%n_refit)//': none of those was confirmed while a structured gap remained)')
-      if (res%global) call add('(no local refit removed '//real_str(100.0_dp*opts%global_below, 'f0.0')// &
-         ' % of the fit tests'' structured gap: the baseline and the refits also ran from '// &
+      if (res%global) call add('(no significant local refit brought the fit tests'' structured gap '// &
+         'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
          str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them '// &
          real_str(res%f0_global, 'es10.3')//', the lower of the two is the reference of dAIC, dBIC)')
       call add('')

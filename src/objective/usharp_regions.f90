@@ -10,7 +10,8 @@ module usharp_regions
    implicit none
    private
 
-   public :: point_classes, region_stat, region_of, noise_sd, runs_z, class_names
+   public :: point_classes, region_stat, region_of, noise_sd, runs_z, class_names, gap_se
+   public :: noise_var_rse
    public :: class_loading, class_unloading, class_reversal, class_hold
 
    integer, parameter :: class_loading = 1, class_unloading = 2, class_reversal = 3, class_hold = 4
@@ -20,6 +21,16 @@ module usharp_regions
    !> noise of a measured control does not make turns); a point is in the reversal while
    !> the control is within reversal_span of the range from the turn
    real(dp), parameter :: turn_hysteresis = 0.05_dp, reversal_span = 0.1_dp
+
+   !> Relative standard error of noise_sd(y)**2, times sqrt(size(y)), for Gaussian white
+   !> noise on a smooth response. Monte Carlo, 6000 draws each: 2.88, 2.83, 2.81 at 300, 600,
+   !> 3000 points (above the 2.33 of the MAD of independent values: the second differences
+   !> are correlated)
+   real(dp), parameter :: noise_var_rse = 2.83_dp
+   !> size(y) times the covariance of noise_sd(y)**2 and of one squared noise value, both
+   !> over the true variance: the estimate and the objective rise together (Monte Carlo as
+   !> above: 2.13, 2.01, 2.06)
+   real(dp), parameter :: noise_cov = 2.05_dp
 
    !> Statistics of one region of the residual
    type :: region_stat
@@ -156,6 +167,24 @@ contains
       d = abs(y(3:n) - 2.0_dp*y(2:n - 1) + y(1:n - 2))
       sd = 1.4826_dp*median(d)/sqrt(6.0_dp)
    end function noise_sd
+
+   !> Standard error of a set's structured gap (objective - noise part) when its residual is
+   !> noise alone: the chi-square scatter of the objective, the scatter of each test's noise
+   !> estimate (noise_var_rse) less their covariance (noise_cov); tests independent
+   pure real(dp) function gap_se(nv, test_of, npts, in_set) result(se)
+      real(dp), intent(in) :: nv(:)        !< noise variance of each weighted residual
+      integer, intent(in) :: test_of(:)    !< test of each residual
+      integer, intent(in) :: npts(:)       !< points each test's noise sd was estimated from
+      logical, intent(in) :: in_set(:)     !< the tests of the set
+      real(dp) :: v
+      integer :: i
+      v = 2.0_dp*sum(nv**2, in_set(test_of))
+      do i = 1, size(npts)
+         if (in_set(i) .and. npts(i) > 0) &
+            v = v + (noise_var_rse**2 - 2.0_dp*noise_cov)*sum(nv, test_of == i)**2/npts(i)
+      end do
+      se = sqrt(v)
+   end function gap_se
 
    !> Median (selection by partial sorting of a copy)
    pure real(dp) function median(a) result(med)
