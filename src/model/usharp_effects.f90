@@ -52,6 +52,9 @@ module usharp_effects
       !> Largest magnitude the effect can physically have; a fit beyond it stands for
       !> something else (huge: no limit)
       real(dp) :: plausible(2) = huge(1.0_dp)
+      !> Per-test parameters whose common part the constants take up (a dT shared by every
+      !> test is a factor on B theta): the magnitude is their spread about the fit tests' mean
+      logical :: relative = .false.
    end type effect_info
 
 contains
@@ -69,7 +72,8 @@ contains
          ['s           ', '            '], [1.0_dp, 1.0_dp], [.true., .false.], [.true., .true.], [2.0_dp, 0.0_dp])
       cat(3) = effect_info('temperature', 'temperature offset per test: theta(T+dT) and '// &
          'E(T+dT)', 1, param_per_test, ['dT          ', '            '], &
-         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [25.0_dp, 0.0_dp])
+         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [25.0_dp, 0.0_dp], &
+         .true.)
       cat(4) = effect_info('scatter', 'specimen-to-specimen scatter: per-test factors on E '// &
          'and on the initial drag stress', 2, param_per_test, ['dE/E        ', 'dD0/D0      '], &
          ['-           ', '-           '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [0.2_dp, 0.4_dp])

@@ -780,6 +780,7 @@ contains
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), x0(:), r(:), jac(:, :), cov(:, :), se(:), y(:), p(:)
       real(dp), allocatable :: pscale(:)
+      real(dp) :: pmean(2)
       integer :: nc, j, nt, g, i, n
       logical :: ok
       type(miller_model) :: mdl
@@ -830,6 +831,14 @@ contains
       if (allocated(e%pname)) deallocate (e%pname)
       allocate (e%pname(0))
       e%worst = 0.0_dp
+      pmean = 0.0_dp
+      if (cat(e%k)%relative) then
+         do g = 1, cat(e%k)%nparam
+            associate (pg => p((g - 1)*nt + 1:g*nt), fg => ep%pfree((g - 1)*nt + 1:g*nt))
+               pmean(g) = sum(pg, fg)/max(count(fg), 1)
+            end associate
+         end do
+      end if
       do j = 1, size(ep%p0)
          if (.not. ep%pfree(j)) cycle
          if (cat(e%k)%sharing == param_per_test) then
@@ -840,7 +849,7 @@ contains
             g = j
             e%pname = [character(len=24) :: e%pname, cat(e%k)%pname(j)]
          end if
-         e%worst = max(e%worst, abs(p(j))/cat(e%k)%plausible(g))
+         e%worst = max(e%worst, abs(p(j) - pmean(g))/cat(e%k)%plausible(g))
       end do
       e%plausible = e%worst <= 1.0_dp
 
@@ -886,7 +895,12 @@ contains
          e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
          e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
          e%significant = e%dbic < -bic_margin
-         e%confirmed = e%significant .and. e%plausible .and. res%gap_fit > res%floor_fit
+         ! Something to explain: a structured gap in the fit tests, or in the held-out ones
+         ! when the noise estimate of the fit tests runs high (a curved response lifts
+         ! the second differences: the fit tests' gap can hide under their floor while
+         ! BIC, free of the noise estimate, shows the effect)
+         e%confirmed = e%significant .and. e%plausible .and. &
+                       (res%gap_fit > res%floor_fit .or. .not. held_quiet(res))
          if (held_quiet(res)) then
             e%confirmed = e%confirmed .and. e%held_gap <= res%floor_held
          else
@@ -1041,6 +1055,9 @@ contains
       integer, allocatable :: order(:)
       integer :: i, j, k
       character(len=200) :: ln
+      character(len=:), allocatable :: what
+      type(effect_info) :: cat1(n_effects)
+      cat1 = effect_catalogue(1.0_dp)
       allocate (lines(0))
       call add('# usharp diagnose')
       call add('')
@@ -1124,7 +1141,9 @@ contains
          associate (e => res%effects(j))
             if (.not. e%refitted) cycle
             call add('')
-            call add('**'//trim(e%name)//'** fitted magnitude (95 % interval; largest |value| is '// &
+            what = '|value|'
+            if (cat1(e%k)%relative) what = '|value - mean of the fit tests|'
+            call add('**'//trim(e%name)//'** fitted magnitude (95 % interval; largest '//what//' is '// &
                real_str(e%worst, 'f0.2')//' of the physical limit of the catalogue):')
             do k = 1, size(e%p)
                call add('- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
