@@ -2,7 +2,7 @@
 # Wall time of a full diagnosis (release build, 2 threads): the thesis matrix (LCF and
 # relaxation fitted, ratcheting held out, 1 % noise data) and the Alloy 617 matrix at 950 C
 # (five LCF tests fitted, two held out; needs ../shared/realdata). With --selfcheck also the
-# whole self-check (9 rows x 10 repetitions; about 16 minutes).
+# whole self-check (9 rows x 10 repetitions; about 20 minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FLAGS="-I/usr/include/sundials/fortran"
