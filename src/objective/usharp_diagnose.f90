@@ -332,7 +332,7 @@ contains
       ! Before the report says that nothing in the catalogue explains a structured gap,
       ! the candidates the screening ranked lower are refitted too: the score test can miss
       ! an effect whose fit first has to leave the baseline's basin of the constants
-      if (res%leading == 0 .and. res%gap_fit > res%floor_fit) &
+      if (res%leading == 0 .and. fit_structured(res)) &
          call refit_range(opts%n_refit + 1, size(res%effects))
       if (allocated(error)) return
       ! When no significant refit brings the fit tests' structured gap down to the noise
@@ -341,7 +341,7 @@ contains
       ! the injected effect from other constants at 100 %): the baseline and every refit run
       ! again from Latin-hypercube starts of the constants. The baseline first, so that an
       ! effect cannot win by a better basin alone: its lower objective becomes the reference.
-      if (opts%global_starts > 0 .and. res%gap_fit > res%floor_fit .and. &
+      if (opts%global_starts > 0 .and. fit_structured(res) .and. &
           .not. any(res%effects%refitted .and. res%effects%significant .and. &
                     (1.0_dp - res%effects%shrink_fit)*res%gap_fit <= res%floor_fit)) then
          res%x_global = global_points(cfg, prob, opts%global_starts)
@@ -903,7 +903,7 @@ contains
          ! the second differences: the fit tests' gap can hide under their floor while
          ! BIC, free of the noise estimate, shows the effect)
          e%confirmed = e%significant .and. e%plausible .and. &
-                       (res%gap_fit > res%floor_fit .or. .not. held_quiet(res))
+                       (fit_structured(res) .or. .not. held_quiet(res))
          if (held_quiet(res)) then
             e%confirmed = e%confirmed .and. e%held_gap <= res%floor_held
          else
@@ -965,6 +965,12 @@ contains
          if (alt%f < opt%f) opt = alt
       end do
    end subroutine best_of_starts
+
+   !> True when the fit tests had a structured gap at the baseline (above their floor)
+   pure logical function fit_structured(res)
+      type(diagnose_result), intent(in) :: res
+      fit_structured = res%gap_fit > res%floor_fit
+   end function fit_structured
 
    !> True when the held-out tests had no structured gap at the baseline: there is nothing
    !> for an effect to shrink there, only a gap it must not open
@@ -1083,7 +1089,7 @@ contains
             real_str(max(res%per_test0(i) - region_noise(i), 0.0_dp), 'es10.3')//' |')
       end do
       call add('')
-      call add('A set of tests has a structured gap only above '//real_str(gap_z, 'f0.0')// &
+      call add('A set of tests has a structured gap only above '//str(nint(gap_z))// &
                ' standard errors of the gap noise alone leaves (the scatter of the noise')
       call add('estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &
                real_str(res%floor_fit, 'es10.3')//', held-out tests '//real_str(res%gap_held, 'es10.3')// &
@@ -1243,7 +1249,7 @@ contains
       else if (e%significant .and. .not. e%plausible) then
          text = 'significant, but the magnitude is '//real_str(e%worst, 'f0.1')// &
                 'x its physical limit: stands in for something else'
-      else if (e%significant .and. res%gap_fit <= res%floor_fit .and. held_quiet(res)) then
+      else if (e%significant .and. .not. fit_structured(res) .and. held_quiet(res)) then
          text = 'significant, but no structured gap to explain'
       else if (e%significant) then
          text = 'significant, not confirmed on held-out'
