@@ -10,7 +10,7 @@ out="${1:?usage: build-umat.sh OUTDIR [NAME]}"
 name="${2:-MILLER}"
 mkdir -p "$out"
 # The drop-in sources, in dependency order
-srcs=(src/usharp_kinds.f90 src/usharp_error.f90 src/util/usharp_strings.f90
+srcs=(src/util/usharp_kinds.f90 src/util/usharp_error.f90 src/util/usharp_strings.f90
       src/util/usharp_lapack.f90 src/model/usharp_miller.f90 src/model/usharp_miller_update.f90
       src/upf/usharp_upf.f90 src/upf/usermat_miller.f90 src/upf/umat_miller.f90)
 cd "$here"
