@@ -13,6 +13,7 @@ program tester
    use test_optimise, only: collect_optimise
    use test_design, only: collect_design
    use test_diagnose, only: collect_diagnose
+   use test_cli, only: collect_cli
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -31,7 +32,8 @@ program tester
       new_testsuite('external', collect_external), &
       new_testsuite('optimise', collect_optimise), &
       new_testsuite('design', collect_design), &
-      new_testsuite('diagnose', collect_diagnose)]
+      new_testsuite('diagnose', collect_diagnose), &
+      new_testsuite('cli', collect_cli)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

@@ -1,0 +1,67 @@
+!> The commands behind one entry point: a parsed command line is executed here and the lines
+!> to show the user come back; the program prints them and exits with the error's code.
+module usharp_cli
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_fit, only: progress_interface
+   use usharp_cli_args, only: cli_command, arg_string, parse_arguments, command_names
+   use usharp_cli_help, only: main_help, command_help, version_text
+   use usharp_cmd_simulate, only: simulate_command
+   use usharp_cmd_run, only: run_command
+   use usharp_cmd_deck, only: deck_command
+   use usharp_cmd_identify, only: identify_command
+   use usharp_cmd_design, only: design_command
+   use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
+   implicit none
+   private
+
+   public :: cli_command, arg_string, parse_arguments, command_names
+   public :: main_help, command_help, version_text
+   public :: execute_command, progress_interface
+
+contains
+
+   !> Execute a parsed command. lines returns what to show on stdout; progress, when given,
+   !> is called after every evaluation of a fit.
+   subroutine execute_command(cmd, lines, error, progress)
+      !> the parsed command line
+      type(cli_command), intent(in) :: cmd
+      !> lines for the user (files written, summaries)
+      character(len=1024), allocatable, intent(out) :: lines(:)
+      !> what went wrong; its stat is the exit code
+      type(error_type), allocatable, intent(out) :: error
+      !> called with (evaluations, best objective, seconds) during a fit
+      procedure(progress_interface), optional :: progress
+      character(len=256), allocatable :: written(:)
+      character(len=200), allocatable :: summary(:)
+      integer :: k
+
+      select case (cmd%name)
+      case ('simulate', 'deck')
+         if (cmd%name == 'simulate') then
+            call simulate_command(cmd%input, cmd%out_dir, written, error, cmd%constants, cmd%only_test)
+         else
+            call deck_command(cmd%input, cmd%test_name, cmd%out_dir, cmd%constants, written, error)
+         end if
+         if (allocated(error)) return
+         allocate (lines(0))
+         if (cmd%quiet) return
+         lines = [character(len=1024) :: ('wrote '//trim(written(k)), k=1, size(written))]
+         return
+      case ('identify')
+         call identify_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+      case ('design')
+         call design_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+      case ('diagnose')
+         if (cmd%selfcheck) then
+            call selfcheck_command(cmd%input, cmd%out_dir, summary, error)
+         else
+            call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+         end if
+      case ('run')
+         call run_command(cmd%input, cmd%out_dir, cmd%constants, cmd%resume, summary, error, progress)
+      end select
+      if (allocated(error)) return
+      lines = [character(len=1024) :: summary]
+   end subroutine execute_command
+end module usharp_cli

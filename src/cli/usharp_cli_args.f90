@@ -1,0 +1,198 @@
+!> The command line parsed into a typed command: which command, its input file and its
+!> options. Parsing is pure and reads no global state, so it is tested on argument lists.
+module usharp_cli_args
+   use usharp_error, only: error_type, fatal_error, stat_usage
+   implicit none
+   private
+
+   public :: cli_command, arg_string, parse_arguments, command_names, accepts_option
+
+   !> One command-line argument
+   type :: arg_string
+      character(len=:), allocatable :: s
+   end type arg_string
+
+   !> The commands, in the order the help lists them
+   character(len=*), parameter :: command_list(*) = [character(len=8) :: &
+      'run', 'simulate', 'deck', 'identify', 'design', 'diagnose']
+
+   !> A parsed command line
+   type :: cli_command
+      !> The command (one of command_names()), empty for `usharp --help` / `--version`
+      character(len=:), allocatable :: name
+      !> The input namelist file (empty only for `diagnose --selfcheck`)
+      character(len=:), allocatable :: input
+      !> `deck`: the test named before the input file (empty: every test)
+      character(len=:), allocatable :: test_name
+      !> -o, --out-dir: output folder overriding &output out_dir (empty: none given)
+      character(len=:), allocatable :: out_dir
+      !> -c, --constants: a namelist file whose &constants replace the input's
+      character(len=:), allocatable :: constants
+      !> -t, --test: `simulate` only this test
+      character(len=:), allocatable :: only_test
+      !> --resume: `run` continues a stopped run from its journal
+      logical :: resume = .false.
+      !> -q, --quiet: no progress line, no list of files written
+      logical :: quiet = .false.
+      !> --selfcheck: `diagnose` on synthetic data with injected effects
+      logical :: selfcheck = .false.
+      !> -h, --help was given (after a command: that command's help)
+      logical :: help = .false.
+      !> -V, --version was given
+      logical :: version = .false.
+   end type cli_command
+
+contains
+
+   !> The names of the commands
+   pure function command_names() result(names)
+      character(len=len(command_list)) :: names(size(command_list))
+      names = command_list
+   end function command_names
+
+   !> Whether a command takes an option (given by its long name, e.g. '--resume')
+   pure logical function accepts_option(command, option) result(ok)
+      !> the command
+      character(len=*), intent(in) :: command
+      !> the option's long name
+      character(len=*), intent(in) :: option
+      select case (option)
+      case ('--help', '--version', '--out-dir', '--quiet', '--constants')
+         ok = .true.
+      case ('--test')
+         ok = command == 'simulate'
+      case ('--resume')
+         ok = command == 'run'
+      case ('--selfcheck')
+         ok = command == 'diagnose'
+      case default
+         ok = .false.
+      end select
+   end function accepts_option
+
+   !> Parse the arguments (without the program name) into a command. A usage error (exit
+   !> code 2) names the argument; `--help` and `--version` end the parsing.
+   pure subroutine parse_arguments(args, cmd, error)
+      !> the command-line arguments
+      type(arg_string), intent(in) :: args(:)
+      !> the parsed command
+      type(cli_command), intent(out) :: cmd
+      !> usage error
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: arg, long
+      type(arg_string), allocatable :: positional(:)
+      integer :: i, npos
+
+      cmd%name = ''
+      cmd%input = ''
+      cmd%test_name = ''
+      cmd%out_dir = ''
+      cmd%constants = ''
+      cmd%only_test = ''
+      if (size(args) == 0) then
+         call fatal_error(error, 'no command given', stat_usage)
+         return
+      end if
+      select case (args(1)%s)
+      case ('-h', '--help')
+         cmd%help = .true.
+         return
+      case ('-V', '--version')
+         cmd%version = .true.
+         return
+      end select
+      if (.not. any(command_list == args(1)%s)) then
+         call fatal_error(error, "unknown command '"//args(1)%s//"'", stat_usage)
+         return
+      end if
+      cmd%name = args(1)%s
+
+      npos = 0
+      allocate (positional(0))
+      i = 2
+      do while (i <= size(args))
+         arg = args(i)%s
+         long = long_name(arg)
+         if (len(arg) > 0) then
+            if (arg(1:1) == '-' .and. len(long) == 0) then
+               call fatal_error(error, 'unknown option '//arg, stat_usage)
+               return
+            end if
+         end if
+         if (len(long) > 0) then
+            if (.not. accepts_option(cmd%name, long)) then
+               call fatal_error(error, 'unknown option '//arg, stat_usage)
+               return
+            end if
+         end if
+         select case (long)
+         case ('--help')
+            cmd%help = .true.
+            return
+         case ('--version')
+            cmd%version = .true.
+            return
+         case ('--out-dir', '--constants', '--test')
+            if (i == size(args)) then
+               call fatal_error(error, arg//' needs a value', stat_usage)
+               return
+            end if
+            i = i + 1
+            select case (long)
+            case ('--out-dir')
+               cmd%out_dir = args(i)%s
+            case ('--constants')
+               cmd%constants = args(i)%s
+            case default
+               cmd%only_test = args(i)%s
+            end select
+         case ('--resume')
+            cmd%resume = .true.
+         case ('--quiet')
+            cmd%quiet = .true.
+         case ('--selfcheck')
+            cmd%selfcheck = .true.
+         case default
+            npos = npos + 1
+            positional = [positional, arg_string(arg)]
+         end select
+         i = i + 1
+      end do
+
+      ! deck takes an optional test name before the input file; the others one input file
+      if (npos > 1 .and. .not. (cmd%name == 'deck' .and. npos == 2)) then
+         call fatal_error(error, 'more than one input file', stat_usage)
+      else if (npos == 2) then
+         cmd%test_name = positional(1)%s
+         cmd%input = positional(2)%s
+      else if (npos == 1) then
+         cmd%input = positional(1)%s
+      else if (.not. cmd%selfcheck) then
+         call fatal_error(error, 'no input file given', stat_usage)
+      end if
+   end subroutine parse_arguments
+
+   !> The long name of an option given in its short or long form; empty when arg is none
+   pure function long_name(arg) result(long)
+      character(len=*), intent(in) :: arg
+      character(len=:), allocatable :: long
+      select case (arg)
+      case ('-h', '--help')
+         long = '--help'
+      case ('-V', '--version')
+         long = '--version'
+      case ('-o', '--out-dir')
+         long = '--out-dir'
+      case ('-c', '--constants')
+         long = '--constants'
+      case ('-t', '--test')
+         long = '--test'
+      case ('-q', '--quiet')
+         long = '--quiet'
+      case ('--resume', '--selfcheck')
+         long = arg
+      case default
+         long = ''
+      end select
+   end function long_name
+end module usharp_cli_args

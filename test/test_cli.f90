@@ -1,0 +1,133 @@
+!> Tests of the command line (parsing into a typed command, help, version) and of the
+!> source tree's layers
+module test_cli
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
+   use usharp_error, only: uerror => error_type, stat_usage
+   use usharp_cli, only: cli_command, arg_string, parse_arguments, command_names, command_help, &
+                         version_text
+   use test_util, only: usharp_exe, read_text, scratch_dir
+   use usharp_filesys, only: make_dir
+   implicit none
+   private
+   public :: collect_cli
+
+contains
+
+   subroutine collect_cli(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('arguments-into-command', test_parse), &
+         new_unittest('usage-errors-name-the-argument', test_usage_errors), &
+         new_unittest('every-command-has-help', test_help), &
+         new_unittest('version-names-the-build', test_version), &
+         new_unittest('folders-import-only-downward', test_layers)]
+   end subroutine collect_cli
+
+   !> The argument list of a command line given as one string split at blanks
+   function argv(line) result(args)
+      character(len=*), intent(in) :: line
+      type(arg_string), allocatable :: args(:)
+      integer :: i, j
+      allocate (args(0))
+      i = 1
+      do while (i <= len(line))
+         if (line(i:i) == ' ') then
+            i = i + 1
+            cycle
+         end if
+         j = index(line(i:), ' ')
+         if (j == 0) j = len(line) - i + 2
+         args = [args, arg_string(line(i:i + j - 2))]
+         i = i + j
+      end do
+   end function argv
+
+   subroutine test_parse(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(cli_command) :: cmd
+      type(uerror), allocatable :: e
+      call parse_arguments(argv('run -o out2 --constants best.nml --resume -q fit.nml'), cmd, e)
+      call check(error, .not. allocated(e), 'run parses')
+      if (allocated(error)) return
+      call check(error, cmd%name == 'run' .and. cmd%input == 'fit.nml' .and. cmd%out_dir == 'out2' &
+                 .and. cmd%constants == 'best.nml' .and. cmd%resume .and. cmd%quiet, 'run fields')
+      if (allocated(error)) return
+      call parse_arguments(argv('deck lcf decks/x.nml'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%test_name == 'lcf' .and. cmd%input == 'decks/x.nml', &
+                 'deck takes a test before the input')
+      if (allocated(error)) return
+      call parse_arguments(argv('diagnose --selfcheck'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%selfcheck .and. cmd%input == '', &
+                 'selfcheck needs no input')
+      if (allocated(error)) return
+      call parse_arguments(argv('simulate -t relax x.nml'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%only_test == 'relax', 'simulate -t')
+      if (allocated(error)) return
+      call parse_arguments(argv('identify --help --bogus'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%help .and. cmd%name == 'identify', &
+                 'help ends the parsing')
+   end subroutine test_parse
+
+   subroutine test_usage_errors(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: lines(*) = [character(len=40) :: &
+         'frobnicate x.nml', 'run --resum x.nml', 'simulate --resume x.nml', 'run', &
+         'run a.nml b.nml', 'deck a b c', 'run x.nml -o', 'identify --selfcheck x.nml']
+      character(len=*), parameter :: expect(*) = [character(len=30) :: &
+         "unknown command 'frobnicate'", 'unknown option --resum', 'unknown option --resume', &
+         'no input file given', 'more than one input file', 'more than one input file', &
+         '-o needs a value', 'unknown option --selfcheck']
+      type(cli_command) :: cmd
+      type(uerror), allocatable :: e
+      integer :: k
+      do k = 1, size(lines)
+         call parse_arguments(argv(trim(lines(k))), cmd, e)
+         if (.not. allocated(e)) then
+            call test_failed(error, trim(lines(k))//': no usage error')
+            return
+         end if
+         call check(error, e%stat == stat_usage .and. e%message == trim(expect(k)), &
+                    trim(lines(k))//': '//e%message)
+         if (allocated(error)) return
+      end do
+   end subroutine test_usage_errors
+
+   subroutine test_help(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=8) :: names(size(command_names()))
+      integer :: k
+      names = command_names()
+      do k = 1, size(names)
+         call check(error, index(command_help(trim(names(k))), 'usage: usharp '//trim(names(k))) == 1 &
+                    .and. index(command_help(trim(names(k))), 'docs/reference/namelist.md') > 0, &
+                    trim(names(k))//' help')
+         if (allocated(error)) return
+      end do
+   end subroutine test_help
+
+   subroutine test_version(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: text
+      text = version_text()
+      call check(error, index(text, 'compiler: GCC') > 0 .and. index(text, 'SUNDIALS: 6.') > 0 &
+                 .and. index(text, 'OpenMP: ') > 0, 'version text: '//text)
+   end subroutine test_version
+
+   !> scripts/import-graph.py --check: no folder of src/ uses a module of a folder above it
+   subroutine test_layers(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: log
+      integer :: stat, cmdstat
+      call execute_command_line('command -v python3 > /dev/null 2>&1', exitstat=stat, cmdstat=cmdstat)
+      if (cmdstat /= 0 .or. stat /= 0) then
+         call skip_test(error, 'python3 is not installed: the import graph script needs it')
+         return
+      end if
+      call make_dir(scratch_dir, e)
+      call execute_command_line('python3 scripts/import-graph.py --check > '//scratch_dir// &
+                                '/import-graph.txt 2>&1', exitstat=stat, cmdstat=cmdstat)
+      log = read_text(scratch_dir//'/import-graph.txt')
+      call check(error, cmdstat == 0 .and. stat == 0, 'scripts/import-graph.py --check: '//log)
+   end subroutine test_layers
+end module test_cli
