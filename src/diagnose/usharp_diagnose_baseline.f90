@@ -1,0 +1,215 @@
+!> The baseline of a diagnosis: the model without any effect fitted to the fit tests, its
+!> residual on every test (held-out ones: the prediction) split into regions, the noise
+!> level of each test's data, and the floors below which a set's structured gap is noise
+module usharp_diagnose_baseline
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_input, stat_failure
+   use usharp_strings, only: str, real_str
+   use usharp_objective, only: fit_problem, test_residuals
+   use usharp_experiment, only: fits_strain
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se
+   use usharp_levenberg, only: levenberg_marquardt
+   use usharp_optimiser, only: optimum_type
+   use usharp_diagnose_options, only: gap_z
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result
+   use usharp_diagnose_numerics, only: constants_at
+   implicit none
+   private
+
+   public :: check_converged, fit_baseline, baseline_regions, per_test, all_regions
+
+contains
+
+   !> The fit must have converged: three Levenberg-Marquardt steps from it on all its tests
+   !> may not lower it by more than converged_tol (a Gauss-Newton prediction alone is not
+   !> trusted: along the weak directions of a fit it promises falls that do not come)
+   subroutine check_converged(ctx, res, error)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_problem) :: base_all
+      type(optimum_type) :: opt
+      real(dp), allocatable :: lo(:), hi(:), r1(:, :)
+      real(dp) :: f1(1)
+      logical :: ok1(1)
+      integer :: i
+      associate (prob => ctx%prob, path => ctx%prob%cfg%path)
+         call new_effect_problem(prob, [(i, i=1, size(prob%targets))], 0, ctx%eff_base, ctx%peak, base_all)
+         call base_all%bounds(lo, hi)
+         call levenberg_marquardt(base_all, min(max(base_all%start(), lo), hi), lo, hi, &
+                                  ctx%h, 1.0e-9_dp, 3, ctx%opts%max_evals, opt, error)
+         if (allocated(error)) return
+         res%nevals = res%nevals + opt%nevals
+         allocate (r1(base_all%nres(), 1))
+         call base_all%residuals(reshape(base_all%start(), [size(prob%idx), 1]), r1, f1, ok1, error)
+         if (allocated(error)) return
+         if (.not. ok1(1)) then
+            call fatal_error(error, path//': the model fails at the given constants: '// &
+               'is this the fit''s best.nml?', stat_input)
+            return
+         end if
+         if (f1(1) - opt%f > ctx%opts%converged_tol*f1(1)) then
+            call fatal_error(error, path//': the fit has not converged: three '// &
+               'Levenberg-Marquardt steps lower its objective '//real_str(f1(1), 'es10.3')// &
+               ' by '//real_str(100.0_dp*(f1(1) - opt%f)/f1(1), 'f0.1')//' %; finish it (usharp'// &
+               ' run) and pass its best.nml with -c', stat_input)
+            return
+         end if
+      end associate
+   end subroutine check_converged
+
+   !> Baseline: the fit tests without any effect, from the given constants; ctx's constants
+   !> become the baseline's
+   subroutine fit_baseline(ctx, res, error)
+      type(diagnose_context), intent(inout) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_problem) :: base
+      type(optimum_type) :: opt
+      real(dp), allocatable :: lo(:), hi(:)
+      call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
+      call base%bounds(lo, hi)
+      call levenberg_marquardt(base, base%start(), lo, hi, ctx%h, 1.0e-9_dp, 100, &
+                               ctx%opts%max_evals, opt, error)
+      if (allocated(error)) return
+      res%nevals = res%nevals + opt%nevals
+      ! Global starts come later, only when the local refits leave a structured gap
+      allocate (res%x_global(size(ctx%prob%idx), 0))
+      res%c = 10.0_dp**opt%x
+      ctx%prob%cfg%model%c = constants_at(ctx%prob, opt%x)
+      res%f0 = opt%f
+      res%m = base%nres()
+   end subroutine fit_baseline
+
+   !> Baseline residuals of every test (held-out ones: the prediction), their regions, the
+   !> noise parts, structured gaps and floors of both sets; ctx%nv is set
+   subroutine baseline_regions(ctx, res, error)
+      type(diagnose_context), intent(inout) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_problem) :: base_all
+      real(dp), allocatable :: r0(:), yb(:)
+      integer, allocatable :: npts(:)
+      integer :: i, m, nt
+      logical :: ok
+      nt = size(ctx%prob%targets)
+      call new_effect_problem(ctx%prob, [(i, i=1, nt)], 0, ctx%eff_base, ctx%peak, base_all)
+      m = base_all%nres()
+      allocate (r0(m), yb(m))
+      call base_all%residual_at(base_all%start(), r0, ok, yb)
+      if (.not. ok) then
+         call fatal_error(error, 'the baseline fit fails to simulate a held-out test', stat_failure)
+         return
+      end if
+      call points_of(ctx%prob, res)
+      res%y_base = yb
+      ctx%nv = noise_variance(ctx%prob, res%noise)
+      associate (nv => ctx%nv)
+         res%per_test0 = per_test(ctx%prob, r0)
+         res%regions = all_regions(ctx%prob, res, r0, yb, nv)
+         res%noise_fit = sum(nv, .not. res%held(res%test_of))
+         res%noise_held = sum(nv, res%held(res%test_of))
+         res%gap_fit = max(sum(r0**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
+         res%gap_held = max(sum(r0**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
+         npts = [(size(ctx%prob%targets(i)%exp%y), i=1, nt)]
+         res%floor_fit = gap_z*gap_se(nv, res%test_of, npts, .not. res%held)
+         res%floor_held = gap_z*gap_se(nv, res%test_of, npts, res%held)
+      end associate
+   end subroutine baseline_regions
+
+   !> Every point of every test in one list: time, data, test, history class
+   subroutine points_of(prob, res)
+      type(fit_problem), intent(in) :: prob
+      type(diagnose_result), intent(inout) :: res
+      integer :: i, n
+      integer, allocatable :: cls(:), cyc(:)
+      logical, allocatable :: el(:)
+      real(dp) :: thr
+      allocate (res%t(0), res%y_ex(0), res%test_of(0), res%cls(0), res%cycle(0), res%elastic(0))
+      do i = 1, size(prob%targets)
+         associate (tg => prob%targets(i), test => prob%cfg%tests(i))
+            n = size(tg%t)
+            ! Elastic below the weighting threshold, else below the model's YS; a strain
+            ! response has no elastic part
+            thr = prob%cfg%model%d0_yield
+            if (test%weighting == 'threshold' .and. test%sig > 0.0_dp) thr = test%sig
+            if (fits_strain(test)) thr = -1.0_dp
+            allocate (cls(n), cyc(n), el(n))
+            call point_classes(test%hist, tg%t, tg%y_ex, thr, cls, cyc, el)
+            res%t = [res%t, tg%t]
+            res%y_ex = [res%y_ex, tg%y_ex]
+            res%test_of = [res%test_of, spread(i, 1, n)]
+            res%cls = [res%cls, cls]
+            res%cycle = [res%cycle, cyc]
+            res%elastic = [res%elastic, el]
+            deallocate (cls, cyc, el)
+         end associate
+      end do
+   end subroutine points_of
+
+   !> Noise variance of each weighted residual from the noise sd of its test's data
+   function noise_variance(prob, sd) result(nv)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: sd(:)
+      real(dp), allocatable :: nv(:)
+      integer :: i, n
+      allocate (nv(0))
+      do i = 1, size(prob%targets)
+         associate (tg => prob%targets(i))
+            n = size(tg%t)
+            nv = [nv, (sd(i)*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), &
+                                             spread(0.0_dp, 1, n), tg%w, tg%y_ex_max))**2]
+         end associate
+      end do
+   end function noise_variance
+
+   !> Objective per test from the residuals of all tests
+   function per_test(prob, r) result(pt)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: r(:)
+      real(dp) :: pt(size(prob%targets))
+      integer :: i, k0, n
+      k0 = 0
+      do i = 1, size(prob%targets)
+         n = size(prob%targets(i)%t)
+         pt(i) = sum(r(k0 + 1:k0 + n)**2)
+         k0 = k0 + n
+      end do
+   end function per_test
+
+   !> Regions of every test: the whole test, each history class, each cycle, elastic and
+   !> inelastic points (threshold: the test's weighting threshold, else the model's YS)
+   function all_regions(prob, res, r, ysim, nv) result(regs)
+      type(fit_problem), intent(in) :: prob
+      type(diagnose_result), intent(in) :: res
+      real(dp), intent(in) :: r(:), ysim(:), nv(:)
+      type(region_stat), allocatable :: regs(:)
+      real(dp), allocatable :: e(:)
+      integer :: i, k0, n, c
+      character(len=:), allocatable :: tag
+      allocate (regs(0))
+      k0 = 0
+      do i = 1, size(prob%targets)
+         n = size(prob%targets(i)%t)
+         e = prob%targets(i)%y_ex - ysim(k0 + 1:k0 + n)
+         tag = trim(res%names(i))
+         if (res%held(i)) tag = tag//' (held out)'
+         associate (rr => r(k0 + 1:k0 + n), vv => nv(k0 + 1:k0 + n), cls => res%cls(k0 + 1:k0 + n), &
+                    cyc => res%cycle(k0 + 1:k0 + n), el => res%elastic(k0 + 1:k0 + n))
+            regs = [regs, region_of(tag, 'whole test', spread(.true., 1, n), rr, e, vv)]
+            do c = 1, size(class_names)
+               if (any(cls == c)) regs = [regs, region_of(tag, trim(class_names(c)), cls == c, rr, e, vv)]
+            end do
+            if (.not. fits_strain(prob%cfg%tests(i))) then
+               regs = [regs, region_of(tag, 'elastic', el, rr, e, vv)]
+               regs = [regs, region_of(tag, 'inelastic', .not. el, rr, e, vv)]
+            end if
+            do c = 1, maxval(cyc)
+               if (any(cyc == c)) regs = [regs, region_of(tag, 'cycle '//str(c), cyc == c, rr, e, vv)]
+            end do
+         end associate
+         k0 = k0 + n
+      end do
+   end function all_regions
+end module usharp_diagnose_baseline

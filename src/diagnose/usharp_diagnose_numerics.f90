@@ -1,0 +1,225 @@
+!> Numerical pieces the steps of a diagnosis share: forward-difference Jacobians of an
+!> effect problem, the Gauss-Newton decrease, a scaled pseudo-inverse, Levenberg-Marquardt
+!> from several starts, Latin-hypercube starts of the constants, and which of an effect's
+!> parameters are free
+module usharp_diagnose_numerics
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_miller, only: set_constant, miller_constants
+   use usharp_config, only: run_config
+   use usharp_objective, only: fit_problem
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_levenberg, only: levenberg_marquardt
+   use usharp_optimiser, only: optimum_type
+   use usharp_lapack, only: svd
+   use usharp_sampling, only: latin_hypercube
+   use usharp_rng, only: rng_type
+   use usharp_diagnose_types, only: diagnose_context
+   implicit none
+   private
+
+   public :: constants_at, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
+   public :: free_params, effect_fit
+
+contains
+
+   !> Constants of the model at x (log10 of the fitted constants)
+   pure function constants_at(prob, x) result(c)
+      type(fit_problem), intent(in) :: prob
+      real(dp), intent(in) :: x(:)
+      type(miller_constants) :: c
+      integer :: j
+      c = prob%cfg%model%c
+      do j = 1, size(prob%idx)
+         call set_constant(c, prob%idx(j), 10.0_dp**x(j))
+      end do
+   end function constants_at
+
+   !> Forward-difference Jacobian of ep's residuals at x (step h, backwards at an upper bound)
+   !> and the residuals r0 there, as one parallel batch; ok false if a point failed. With
+   !> hold_failed, a column whose every step fails is left at zero (that parameter held).
+   subroutine jacobian(ep, x, h, r0, jac, ok, hold_failed)
+      type(effect_problem), intent(inout) :: ep
+      real(dp), intent(in) :: x(:), h
+      real(dp), allocatable, intent(out) :: r0(:), jac(:, :)
+      logical, intent(out) :: ok
+      logical, intent(in), optional :: hold_failed
+      real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), lo(:), hi(:), step(:)
+      logical, allocatable :: oks(:)
+      type(error_type), allocatable :: error
+      integer :: n, j, attempt
+      n = size(x)
+      call ep%bounds(lo, hi)
+      allocate (xs(n, n + 1), rs(ep%nres(), n + 1), fs(n + 1), oks(n + 1), step(n))
+      do j = 1, n + 1
+         xs(:, j) = x
+      end do
+      do j = 1, n
+         step(j) = merge(-h, h, x(j) + h > hi(j))
+         xs(j, j + 1) = x(j) + step(j)
+      end do
+      call ep%residuals(xs, rs, fs, oks, error)
+      ok = oks(1) .and. .not. allocated(error)
+      ! A step that failed (the model's admissible region ends there) goes the other way,
+      ! then shorter, down to h/100
+      attempt = 0
+      do while (ok .and. .not. all(oks) .and. attempt < 5)
+         attempt = attempt + 1
+         do j = 1, n
+            if (oks(j + 1)) cycle
+            step(j) = -step(j)
+            if (mod(attempt, 2) == 0) step(j) = 0.1_dp*step(j)
+            xs(j, j + 1) = x(j) + step(j)
+         end do
+         call ep%residuals(xs, rs, fs, oks, error)
+         ok = oks(1) .and. .not. allocated(error)
+      end do
+      r0 = rs(:, 1)
+      allocate (jac(size(r0), n))
+      jac = 0.0_dp
+      do j = 1, n
+         if (oks(j + 1)) jac(:, j) = (rs(:, j + 1) - r0)/step(j)
+      end do
+      if (present(hold_failed)) then
+         if (hold_failed) return
+      end if
+      ok = ok .and. all(oks)
+   end subroutine jacobian
+
+   !> Gauss-Newton decrease g'(J'J)^+ g (g = J'r) of sum(r**2) in the span of the columns of
+   !> jac, and the step -(J'J)^+ g; columns scaled to unit norm, directions below 1e-10 of the
+   !> largest singular value of the scaled normal matrix dropped
+   pure subroutine gn_decrease(jac, r, drop, step)
+      real(dp), intent(in) :: jac(:, :), r(:)
+      real(dp), intent(out) :: drop
+      real(dp), intent(out), optional :: step(:)
+      real(dp) :: a(size(jac, 2), size(jac, 2)), v(size(jac, 2), size(jac, 2)), s(size(jac, 2))
+      real(dp) :: g(size(jac, 2)), d(size(jac, 2)), c(size(jac, 2))
+      integer :: j, info
+      a = matmul(transpose(jac), jac)
+      g = matmul(transpose(jac), r)
+      do j = 1, size(d)
+         d(j) = sqrt(a(j, j))
+         if (d(j) <= 0.0_dp) d(j) = 1.0_dp
+      end do
+      do j = 1, size(d)
+         a(:, j) = a(:, j)/(d*d(j))
+      end do
+      g = g/d
+      call svd(a, s, v, info)
+      drop = 0.0_dp
+      c = 0.0_dp
+      if (info /= 0) return
+      do j = 1, size(s)
+         if (s(j) <= 1.0e-10_dp*s(1)) exit
+         c = c + v(:, j)*dot_product(v(:, j), g)/s(j)
+         drop = drop + dot_product(v(:, j), g)**2/s(j)
+      end do
+      if (present(step)) step = -c/d
+   end subroutine gn_decrease
+
+   !> Which parameters of effect k are free on the tests `tests` (per-test parameters of the
+   !> other tests stay 0); screening leaves the rate of the second back stress fixed
+   pure function free_params(ep, tests, screening) result(free)
+      type(effect_problem), intent(in) :: ep
+      integer, intent(in) :: tests(:)
+      logical, intent(in) :: screening
+      logical :: free(size(ep%p0))
+      type(effect_info) :: cat(n_effects)
+      integer :: nt, j, i
+      cat = effect_catalogue(1.0_dp)
+      nt = size(ep%prob%targets)
+      free = .true.
+      if (cat(ep%k)%sharing == param_per_test) then
+         do j = 1, size(free)
+            i = mod(j - 1, nt) + 1
+            free(j) = any(tests == i)
+         end do
+      else if (screening) then
+         free = free .and. cat(ep%k)%screened(1:size(free))
+      end if
+   end function free_params
+
+   !> The fit of the constants with effect k on the fit tests, from the baseline constants
+   !> and zero effect (the second back stress from a small modulus, so that its rate has a
+   !> gradient)
+   subroutine effect_fit(ctx, k, ep)
+      type(diagnose_context), intent(in) :: ctx
+      !> Catalogue effect
+      integer, intent(in) :: k
+      type(effect_problem), intent(out) :: ep
+      call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
+      ep%pfree = free_params(ep, ctx%ifit, .false.)
+      if (k == 8) ep%p0 = [0.01_dp*ctx%peak, ctx%opts%gamma3]
+   end subroutine effect_fit
+
+   !> n Latin-hypercube points of the constants (log10) over the &fit multi-start box,
+   !> drawn with the &fit seed
+   function global_points(cfg, prob, n) result(xs)
+      type(run_config), intent(in) :: cfg
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: n
+      real(dp), allocatable :: xs(:, :)
+      type(rng_type) :: rng
+      real(dp), allocatable :: u(:, :), blo(:), bhi(:)
+      integer :: j
+      allocate (xs(size(prob%idx), n))
+      if (n == 0) return
+      blo = log10(cfg%fit%box_lower(prob%idx))
+      bhi = log10(cfg%fit%box_upper(prob%idx))
+      call rng%seed(cfg%fit%seed)
+      call latin_hypercube(rng, size(prob%idx), n, u)
+      do j = 1, n
+         xs(:, j) = blo + u(:, j)*(bhi - blo)
+      end do
+   end function global_points
+
+   !> Levenberg-Marquardt (100 steps) from every column of xs; opt becomes the lowest end
+   !> point when it is lower than opt already is. A start where the model fails is passed over.
+   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals)
+      type(effect_problem), intent(inout) :: ep
+      real(dp), intent(in) :: xs(:, :), lo(:), hi(:), h
+      integer, intent(in) :: max_evals
+      type(optimum_type), intent(inout) :: opt
+      integer, intent(inout) :: nevals
+      type(optimum_type) :: alt
+      type(error_type), allocatable :: error
+      integer :: j
+      do j = 1, size(xs, 2)
+         call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
+                                  max_evals, alt, error)
+         if (allocated(error)) then
+            deallocate (error)
+            cycle
+         end if
+         nevals = nevals + alt%nevals
+         if (alt%f < opt%f) opt = alt
+      end do
+   end subroutine best_of_starts
+
+   !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
+   !> the largest singular value dropped), after scaling to a unit diagonal
+   pure function pseudo_inverse(a) result(ai)
+      real(dp), intent(in) :: a(:, :)
+      real(dp) :: ai(size(a, 1), size(a, 2))
+      real(dp) :: b(size(a, 1), size(a, 2)), v(size(a, 1), size(a, 2)), s(size(a, 1)), d(size(a, 1))
+      integer :: j, info
+      do j = 1, size(d)
+         d(j) = sqrt(max(a(j, j), tiny(1.0_dp)))
+      end do
+      do j = 1, size(d)
+         b(:, j) = a(:, j)/(d*d(j))
+      end do
+      call svd(b, s, v, info)
+      ai = 0.0_dp
+      if (info /= 0) return
+      do j = 1, size(s)
+         if (s(j) <= 1.0e-12_dp*s(1)) exit
+         ai = ai + spread(v(:, j), 2, size(s))*spread(v(:, j), 1, size(s))/s(j)
+      end do
+      do j = 1, size(d)
+         ai(:, j) = ai(:, j)/(d*d(j))
+      end do
+   end function pseudo_inverse
+end module usharp_diagnose_numerics

@@ -1,0 +1,115 @@
+!> Settings of a diagnosis: the &diagnose group with its names resolved (tests held out,
+!> catalogue effects considered, self-check rows) and the thresholds of the verdict
+module usharp_diagnose_options
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_config, only: run_config
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects, effect_index
+   implicit none
+   private
+
+   public :: diagnose_options, diagnose_options_of, bic_margin, gap_z
+
+   !> BIC must fall by more than this for an effect to be significant (strong evidence)
+   real(dp), parameter :: bic_margin = 10.0_dp
+   !> A set of tests has a structured gap only above this many standard errors of the gap
+   !> that noise alone leaves (on a 600-point test that standard error is 10 % of the noise
+   !> part: a fixed fraction of the noise part is no measure of it)
+   real(dp), parameter :: gap_z = 3.0_dp
+
+   !> Settings of a diagnosis (&diagnose group)
+   type :: diagnose_options
+      integer, allocatable :: holdout(:)     !< tests held out of the fit
+      integer, allocatable :: effects(:)     !< catalogue effects considered
+      integer, allocatable :: rows(:)        !< self-check: effects injected (0: clean data)
+      integer :: n_refit = 3                 !< leading candidates refitted
+      real(dp) :: dlnE_dT = -4.0e-4_dp       !< 1/K, temperature slope of ln E
+      real(dp) :: gamma3 = 200.0_dp          !< -, second back stress recovery in screening
+      real(dp) :: confirm_shrink = 0.5_dp    !< held-out structured gap removed to confirm
+      real(dp) :: converged_tol = 0.01_dp    !< largest Gauss-Newton decrease of a converged fit
+      logical :: check_converged = .true.
+      integer :: max_evals = 3000            !< per refit
+      integer :: refit_starts = 1            !< screening end points a refit starts from
+      !> Latin-hypercube starts of the constants over the &fit multi-start box, run for the
+      !> baseline and for every refit when no significant local refit brings the fit tests'
+      !> structured gap down to the noise level (0: local only)
+      integer :: global_starts = 4
+      !> A refit that ends above another runs again from that one's constants
+      logical :: cross_starts = .true.
+   end type diagnose_options
+
+contains
+
+   !> The options of cfg's &diagnose group with names resolved: unknown effects or tests are
+   !> errors naming the file, group and variable; no effects given: the whole catalogue
+   subroutine diagnose_options_of(cfg, opts, error)
+      !> Configuration read from the deck
+      type(run_config), intent(in) :: cfg
+      !> Resolved settings
+      type(diagnose_options), intent(out) :: opts
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i, j, k
+      allocate (opts%holdout(0), opts%effects(0))
+      do i = 1, size(cfg%diagnose%holdout)
+         if (len_trim(cfg%diagnose%holdout(i)) == 0) cycle
+         k = 0
+         do j = 1, size(cfg%tests)
+            if (cfg%tests(j)%name == trim(cfg%diagnose%holdout(i))) k = j
+         end do
+         if (k == 0) then
+            call fatal_error(error, cfg%path//": &diagnose: holdout: no &test is named '"// &
+               trim(cfg%diagnose%holdout(i))//"'", stat_input)
+            return
+         end if
+         opts%holdout = [opts%holdout, k]
+      end do
+      call effect_numbers(cfg, cfg%diagnose%effects, 'effects', .false., opts%effects, error)
+      if (allocated(error)) return
+      call effect_numbers(cfg, cfg%diagnose%rows, 'rows', .true., opts%rows, error)
+      if (allocated(error)) return
+      if (size(opts%effects) == 0) opts%effects = [(k, k=1, n_effects)]
+      if (size(opts%rows) == 0) opts%rows = [0, opts%effects]
+      opts%n_refit = cfg%diagnose%n_refit
+      opts%refit_starts = cfg%diagnose%refit_starts
+      opts%global_starts = cfg%diagnose%global_starts
+      opts%cross_starts = cfg%diagnose%cross_starts
+      opts%dlnE_dT = cfg%diagnose%dlnE_dT
+      opts%gamma3 = cfg%diagnose%gamma3
+      opts%confirm_shrink = cfg%diagnose%confirm_shrink
+   end subroutine diagnose_options_of
+
+   !> Catalogue numbers of the effect names given to &diagnose variable `variable` (blank
+   !> entries skipped); with allow_none, 'none' is 0 (clean data)
+   subroutine effect_numbers(cfg, names, variable, allow_none, ks, error)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: names(:), variable
+      logical, intent(in) :: allow_none
+      integer, allocatable, intent(out) :: ks(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_info) :: cat(n_effects)
+      integer :: i, k
+      cat = effect_catalogue(1.0_dp)
+      allocate (ks(0))
+      do i = 1, size(names)
+         if (len_trim(names(i)) == 0) cycle
+         k = effect_index(names(i))
+         if (k == 0 .and. .not. (allow_none .and. trim(adjustl(names(i))) == 'none')) then
+            call fatal_error(error, cfg%path//': &diagnose: '//variable//": no effect is named '"// &
+               trim(names(i))//"' (known: "//catalogue_names(cat)// &
+               trim(merge(', none', '      ', allow_none))//')', stat_input)
+            return
+         end if
+         ks = [ks, k]
+      end do
+   end subroutine effect_numbers
+
+   pure function catalogue_names(cat) result(text)
+      type(effect_info), intent(in) :: cat(:)
+      character(len=:), allocatable :: text
+      integer :: j
+      text = trim(cat(1)%name)
+      do j = 2, size(cat)
+         text = text//', '//trim(cat(j)%name)
+      end do
+   end function catalogue_names
+end module usharp_diagnose_options

@@ -1,0 +1,359 @@
+!> The report of a diagnosis: Markdown (also what `diagnose` prints), the CSV tables
+!> (regions, effects, every point's residual) and the gnuplot plots
+module usharp_diagnose_report
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_strings, only: str, real_str
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects
+   use usharp_regions, only: class_names
+   use usharp_filesys, only: join_path, make_dir
+   use usharp_output, only: write_lines
+   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome
+   use usharp_diagnose_verdict, only: verdict_of, top_regions
+   implicit none
+   private
+
+   public :: diagnose_report, write_report
+
+contains
+
+   !> The report in Markdown (also what `diagnose` prints)
+   !> The report in Markdown (also what `diagnose` prints)
+   function diagnose_report(res, opts) result(lines)
+      type(diagnose_result), intent(in) :: res
+      type(diagnose_options), intent(in) :: opts
+      character(len=200), allocatable :: lines(:)
+      allocate (lines(0))
+      call add(lines, '# usharp diagnose')
+      call add(lines, '')
+      call add(lines, '**Verdict:** '//res%verdict)
+      call add(lines, '')
+      call where_section(lines, res)
+      call which_section(lines, res, opts)
+      call shrink_section(lines, res, opts)
+   end function diagnose_report
+
+   !> Section 1: the baseline per test, the floors, the regions ranked by structured gap
+   subroutine where_section(lines, res)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      integer, allocatable :: order(:)
+      integer :: i, k
+      call add(lines, '## 1. Where the gap lies')
+      call add(lines, '')
+      call add(lines, 'Baseline: the model without any effect fitted to the fit tests (objective '// &
+               real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals); held-out tests predicted.')
+      call add(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
+      call add(lines, 'explains is set against the residual. Structured gap = objective - noise part.')
+      call add(lines, '')
+      call add(lines, '| test | role | response | noise sd | % of peak | objective | noise part | structured gap |')
+      call add(lines, '|---|---|---|---|---|---|---|---|')
+      do i = 1, size(res%names)
+         call add(lines, '| '//trim(res%names(i))//' | '//trim(merge('held out', 'fit     ', res%held(i)))// &
+            ' | '//trim(res%unit(i))//' | '//real_str(res%noise(i), 'es10.3')//' | '// &
+            real_str(100.0_dp*res%noise(i)/res%peak(i), 'f0.2')//' | '// &
+            real_str(res%per_test0(i), 'es10.3')//' | '//real_str(region_noise(res, i), 'es10.3')//' | '// &
+            real_str(max(res%per_test0(i) - region_noise(res, i), 0.0_dp), 'es10.3')//' |')
+      end do
+      call add(lines, '')
+      call add(lines, 'A set of tests has a structured gap only above '//str(nint(gap_z))// &
+               ' standard errors of the gap noise alone leaves (the scatter of the noise')
+      call add(lines, 'estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &
+               real_str(res%floor_fit, 'es10.3')//', held-out tests '//real_str(res%gap_held, 'es10.3')// &
+               ' against '//real_str(res%floor_held, 'es10.3')//'.')
+      call add(lines, '')
+      call add(lines, 'Regions ranked by structured gap (share: of the objective of the test set the region')
+      call add(lines, 'belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')
+      call add(lines, '')
+      call add(lines, '| rank | test | region | points | share % | RMS | bias | runs z | residual/noise | |')
+      call add(lines, '|---|---|---|---|---|---|---|---|---|---|')
+      order = top_regions(res%regions, 15)
+      do k = 1, size(order)
+         i = order(k)
+         call add(lines, '| '//str(k)//' | '//trim(res%regions(i)%test)//' | '//trim(res%regions(i)%label)// &
+            ' | '//str(res%regions(i)%n)//' | '//real_str(100.0_dp*res%regions(i)%ssr/set_total(res, i), 'f0.1')// &
+            ' | '//real_str(res%regions(i)%rms, 'es9.2')//' | '//real_str(res%regions(i)%bias, 'es9.2')// &
+            ' | '//real_str(res%regions(i)%z, 'f0.1')//' | '//real_str(res%regions(i)%ratio, 'f0.2')//' | '// &
+            trim(merge('structured', 'noise     ', res%regions(i)%structured))//' |')
+      end do
+      call add(lines, '')
+   end subroutine where_section
+
+   !> Section 2: screening and refits
+   subroutine which_section(lines, res, opts)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      type(diagnose_options), intent(in) :: opts
+      integer :: j
+      call add(lines, '## 2. Which unmodelled effect causes it')
+      call add(lines, '')
+      call add(lines, 'Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
+      call add(lines, 'step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
+      call add(lines, '')
+      call add(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC |')
+      call add(lines, '|---|---|---|---|---|---|')
+      do j = 1, size(res%effects)
+         associate (e => res%effects(j))
+            call add(lines, '| '//str(j)//' | '//trim(e%name)//' | '//str(e%q)//' | '// &
+               real_str(e%pred_drop, 'es10.3')//' | '//real_str(100.0_dp*e%pred_drop/res%f0, 'f0.1')// &
+               ' | '//real_str(e%pred_dbic, 'f0.1')//' |')
+         end associate
+      end do
+      call add(lines, '')
+      call add(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
+               'effect''s parameters; dAIC, dBIC < 0: better; significant: dBIC < -'// &
+               real_str(bic_margin, 'f0.0')//'):')
+      if (count(res%effects%refitted) > opts%n_refit) call add(lines, '(beyond the leading '// &
+         str(opts%n_refit)//': none of those was confirmed while a structured gap remained)')
+      if (res%global) call add(lines, '(no significant local refit brought the fit tests'' structured gap '// &
+         'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
+         str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them '// &
+         real_str(res%f0_global, 'es10.3')//', the lower of the two is the reference of dAIC, dBIC)')
+      call add(lines, '')
+      call add(lines, '| effect | objective before | after | dAIC | dBIC | gap removed, fit % | held-out % | verdict |')
+      call add(lines, '|---|---|---|---|---|---|---|---|')
+      do j = 1, size(res%effects)
+         associate (e => res%effects(j))
+            if (.not. e%refitted) cycle
+            call add(lines, '| '//trim(e%name)//' | '//real_str(res%f0, 'es10.3')//' | '// &
+               real_str(e%f_after, 'es10.3')//' | '//real_str(e%daic, 'f0.1')//' | '// &
+               real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' | '// &
+               real_str(100.0_dp*e%shrink_held, 'f0.1')//' | '//trim(verdict_of(e, res))//' |')
+         end associate
+      end do
+      do j = 1, size(res%effects)
+         if (res%effects(j)%refitted) call refit_details(lines, res, res%effects(j))
+      end do
+      call add(lines, '')
+   end subroutine which_section
+
+   !> One refit: its fitted magnitude, the objective per test and the top regions before and after
+   subroutine refit_details(lines, res, e)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      type(effect_outcome), intent(in) :: e
+      type(effect_info) :: cat1(n_effects)
+      character(len=:), allocatable :: what
+      integer, allocatable :: order(:)
+      integer :: i, k
+      cat1 = effect_catalogue(1.0_dp)
+      order = top_regions(res%regions, 15)
+      call add(lines, '')
+      what = '|value|'
+      if (cat1(e%k)%relative) what = '|value - mean of the fit tests|'
+      call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest '//what//' is '// &
+         real_str(e%worst, 'f0.2')//' of the physical limit of the catalogue):')
+      do k = 1, size(e%p)
+         call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
+            real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']')
+      end do
+      call add(lines, '- objective per test, before -> after:')
+      do k = 1, size(res%names)
+         call add(lines, '  - '//trim(res%names(k))//trim(merge(' (held out)', '           ', res%held(k)))// &
+            ': '//real_str(res%per_test0(k), 'es10.3')//' -> '//real_str(e%per_test_after(k), 'es10.3'))
+      end do
+      call add(lines, '- top regions, structured gap before -> after:')
+      do k = 1, min(5, size(order))
+         i = order(k)
+         call add(lines, '  - '//trim(res%regions(i)%test)//' '//trim(res%regions(i)%label)//': '// &
+            real_str(res%regions(i)%gap, 'es10.3')//' -> '//real_str(e%regions(i)%gap, 'es10.3'))
+      end do
+   end subroutine refit_details
+
+   !> Section 3: how far the leading effect closes the gap
+   subroutine shrink_section(lines, res, opts)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      type(diagnose_options), intent(in) :: opts
+      call add(lines, '## 3. How far the gap shrinks')
+      call add(lines, '')
+      call add(lines, 'Structured gap at the baseline: fit tests '//real_str(res%gap_fit, 'es10.3')// &
+               ', held-out tests '//real_str(res%gap_held, 'es10.3')//'.')
+      if (res%leading > 0) then
+         associate (e => res%effects(res%leading))
+            call add(lines, 'With '//trim(e%name)//': fit tests '//real_str(100.0_dp*e%shrink_fit, 'f0.1')// &
+               ' % removed, held-out tests '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % removed.')
+         end associate
+      else
+         call add(lines, 'No effect is confirmed (significant, plausible, and removing at least '// &
+            real_str(100.0_dp*opts%confirm_shrink, 'f0.0')//' % of the held-out structured gap, '// &
+            'or opening none where there was none).')
+      end if
+      call add(lines, '')
+      call add(lines, str(res%nevals)//' simulations of the test set.')
+   end subroutine shrink_section
+
+   !> One line, wrapped at a space when longer than the lines hold
+   recursive subroutine add(lines, text)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=*), intent(in) :: text
+      integer :: cut
+      if (len(text) <= len(lines)) then
+         lines = [lines, text]
+         return
+      end if
+      cut = index(text(1:len(lines)), ' ', back=.true.)
+      if (cut <= 1) cut = len(lines)
+      lines = [lines, text(1:cut)]
+      call add(lines, '  '//text(cut + 1:))
+   end subroutine add
+
+   !> Noise part of test i's objective
+   real(dp) function region_noise(res, i) result(v)
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: i
+      integer :: j
+      v = 0.0_dp
+      do j = 1, size(res%regions)
+         if (res%regions(j)%label /= 'whole test') cycle
+         if (res%regions(j)%test(1:len_trim(res%names(i))) /= trim(res%names(i))) cycle
+         v = res%regions(j)%noise
+         exit
+      end do
+   end function region_noise
+
+   !> Objective of the set (fit or held-out) that region i belongs to
+   real(dp) function set_total(res, i) result(v)
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: i
+      if (index(res%regions(i)%test, '(held out)') > 0) then
+         v = max(sum(res%per_test0, res%held), tiny(1.0_dp))
+      else
+         v = max(sum(res%per_test0, .not. res%held), tiny(1.0_dp))
+      end if
+   end function set_total
+
+   !> The report (lines, also written to dir/report.md), the CSV tables and the plots in dir
+   subroutine write_report(dir, res, opts, lines, error)
+      !> Directory of the report (made when absent)
+      character(len=*), intent(in) :: dir
+      type(diagnose_result), intent(in) :: res
+      type(diagnose_options), intent(in) :: opts
+      !> The report, with a last line naming what was written
+      character(len=200), allocatable, intent(out) :: lines(:)
+      type(error_type), allocatable, intent(out) :: error
+      logical :: plotted
+      lines = diagnose_report(res, opts)
+      call make_dir(dir, error)
+      if (allocated(error)) return
+      call write_tables(dir, res, error)
+      if (allocated(error)) return
+      call draw_plots(dir, res, plotted)
+      if (plotted) then
+         lines = [character(len=200) :: lines, '', '## Plots', '', &
+                  '![residual against time](residuals.png)', '', &
+                  '![fit before and after the leading effect](fit.png)']
+      else
+         lines = [character(len=200) :: lines, '', '## Plots', '', &
+                  'Plots not drawn: gnuplot was not found or failed (scripts/setup.sh installs it);'// &
+                  ' the data are in residuals.csv.']
+      end if
+      call write_lines(join_path(dir, 'report.md'), lines, error)
+      if (allocated(error)) return
+      lines = [character(len=200) :: lines, '', 'wrote '//join_path(dir, 'report.md')//', '// &
+               'regions.csv, effects.csv, residuals.csv'//trim(merge(', *.png', '       ', plotted))]
+   end subroutine write_report
+
+   !> regions.csv, effects.csv, residuals.csv
+   subroutine write_tables(dir, res, error)
+      character(len=*), intent(in) :: dir
+      type(diagnose_result), intent(in) :: res
+      type(error_type), allocatable, intent(out) :: error
+      character(len=200), allocatable :: rows(:)
+      integer :: i, j, lead
+      allocate (rows(0))
+      rows = [character(len=200) :: rows, 'test,region,points,objective,noise_part,structured_gap,rms,bias,runs_z,structured']
+      do i = 1, size(res%regions)
+         associate (r => res%regions(i))
+            rows = [character(len=200) :: rows, trim(r%test)//','//trim(r%label)//','//str(r%n)//','// &
+               real_str(r%ssr, 'es12.5')//','//real_str(r%noise, 'es12.5')//','//real_str(r%gap, 'es12.5')// &
+               ','//real_str(r%rms, 'es12.5')//','//real_str(r%bias, 'es12.5')//','//real_str(r%z, 'f0.2')// &
+               ','//trim(merge('yes', 'no ', r%structured))]
+         end associate
+      end do
+      call write_lines(join_path(dir, 'regions.csv'), rows, error)
+      if (allocated(error)) return
+      deallocate (rows)
+      allocate (rows(0))
+      rows = [character(len=200) :: rows, 'rank,effect,parameters,predicted_fall,predicted_dbic,refitted,'// &
+              'objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed']
+      do j = 1, size(res%effects)
+         associate (e => res%effects(j))
+            rows = [character(len=200) :: rows, str(j)//','//trim(e%name)//','//str(e%q)//','// &
+               real_str(e%pred_drop, 'es12.5')//','//real_str(e%pred_dbic, 'f0.2')//','// &
+               trim(merge('yes', 'no ', e%refitted))//','//real_str(e%f_after, 'es12.5')//','// &
+               real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
+               real_str(e%shrink_fit, 'f0.4')//','//real_str(e%shrink_held, 'f0.4')//','// &
+               trim(merge('yes', 'no ', e%confirmed))]
+         end associate
+      end do
+      call write_lines(join_path(dir, 'effects.csv'), rows, error)
+      if (allocated(error)) return
+      deallocate (rows)
+      ! The curves: data, baseline, and with the leading (else the first refitted) effect
+      lead = res%leading
+      if (lead == 0) then
+         do j = size(res%effects), 1, -1
+            if (res%effects(j)%refitted) lead = j
+         end do
+      end if
+      allocate (rows(size(res%t) + 1))
+      rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id'
+      do i = 1, size(res%t)
+         rows(i + 1) = trim(res%names(res%test_of(i)))//','// &
+            trim(merge('yes', 'no ', res%held(res%test_of(i))))//','//real_str(res%t(i), 'es14.7')//','// &
+            trim(class_names(res%cls(i)))//','//real_str(res%y_ex(i), 'es14.7')//','// &
+            real_str(res%y_base(i), 'es14.7')//','//real_str(effect_curve(i), 'es14.7')//','// &
+            str(res%cls(i))
+      end do
+      call write_lines(join_path(dir, 'residuals.csv'), rows, error)
+   contains
+      real(dp) function effect_curve(i) result(y)
+         integer, intent(in) :: i
+         y = res%y_base(i)
+         if (lead > 0) y = res%effects(lead)%y(i)
+      end function effect_curve
+   end subroutine write_tables
+
+   !> residuals.png (data - baseline against time, one panel per test) and fit.png (data,
+   !> baseline and with the leading effect) with gnuplot; plotted false if it could not
+   subroutine draw_plots(dir, res, plotted)
+      character(len=*), intent(in) :: dir
+      type(diagnose_result), intent(in) :: res
+      logical, intent(out) :: plotted
+      character(len=512), allocatable :: gp(:)
+      type(error_type), allocatable :: error
+      integer :: stat, cmdstat, i, nt
+      nt = size(res%names)
+      allocate (gp(0))
+      gp = [character(len=512) :: gp, "set datafile separator ','", &
+            "set linetype 1 lc rgb '#c03030'", "set linetype 2 lc rgb '#3050c0'", &
+            "set linetype 3 lc rgb '#30a040'", "set linetype 4 lc rgb 'black'", 'set terminal pngcairo size 1200,'// &
+            str(300*nt)//' font ",9"', "set output '"//join_path(dir, 'residuals.png')//"'", &
+            'set multiplot layout '//str(nt)//',1', 'set key off', 'set xlabel "time (s)"']
+      do i = 1, nt
+         gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
+               trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
+               "plot '"//join_path(dir, 'residuals.csv')//"' every ::1 using 3:(strcol(1) eq '"// &
+               trim(res%names(i))//"' ? $5-$6 : 1/0):8 with points pt 7 ps 0.3 lc variable"]
+      end do
+      gp = [character(len=512) :: gp, 'unset multiplot', "set output '"//join_path(dir, 'fit.png')//"'", &
+            'set multiplot layout '//str(nt)//',1', 'set key top right']
+      do i = 1, nt
+         gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
+               "plot '"//join_path(dir, 'residuals.csv')//"' every ::1 using 3:(strcol(1) eq '"// &
+               trim(res%names(i))//"' ? $5 : 1/0) with dots lc rgb 'black' title 'data', '' every ::1 "// &
+               "using 3:(strcol(1) eq '"//trim(res%names(i))//"' ? $6 : 1/0) with lines lc rgb 'blue' "// &
+               "title 'baseline', '' every ::1 using 3:(strcol(1) eq '"//trim(res%names(i))// &
+               "' ? $7 : 1/0) with lines lc rgb 'red' title 'with effect'"]
+      end do
+      gp = [character(len=512) :: gp, 'unset multiplot']
+      call write_lines(join_path(dir, 'plots.gp'), gp, error)
+      plotted = .false.
+      if (allocated(error)) return
+      call execute_command_line('gnuplot '//join_path(dir, 'plots.gp')//' > /dev/null 2>&1', &
+                                exitstat=stat, cmdstat=cmdstat)
+      plotted = cmdstat == 0 .and. stat == 0
+   end subroutine draw_plots
+end module usharp_diagnose_report

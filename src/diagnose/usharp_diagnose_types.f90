@@ -1,0 +1,99 @@
+!> What a diagnosis works on and what it finds: the problem shared by its steps (tests, fit
+!> and held-out sets, noise), each effect's outcome, and the whole result
+module usharp_diagnose_types
+   use usharp_kinds, only: dp
+   use usharp_objective, only: fit_problem
+   use usharp_effects, only: test_effects, effect_info
+   use usharp_regions, only: region_stat
+   use usharp_diagnose_options, only: diagnose_options
+   implicit none
+   private
+
+   public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
+
+   !> The problem every step of a diagnosis works on
+   type :: diagnose_context
+      type(fit_problem) :: prob              !< all tests; constants: the baseline's once fitted
+      integer, allocatable :: ifit(:)        !< tests fitted
+      integer, allocatable :: ihold(:)       !< tests held out
+      type(diagnose_options) :: opts
+      type(test_effects) :: eff_base         !< dlnE_dT, gamma3
+      real(dp) :: peak = 0.0_dp              !< largest |response| of any test
+      real(dp) :: h = 0.0_dp                 !< forward-difference step of the fit (log10 units)
+      real(dp), allocatable :: nv(:)         !< noise variance of each weighted residual, all tests
+      type(effect_info), allocatable :: cat(:)  !< the catalogue scaled to peak
+   end type diagnose_context
+
+   !> One effect: screening, and the refit when it led
+   type :: effect_outcome
+      integer :: k = 0
+      character(len=16) :: name = ''
+      integer :: q = 0                       !< free parameters in the fit
+      real(dp) :: pred_drop = 0.0_dp         !< screening: predicted fall of the objective
+      real(dp) :: pred_dbic = 0.0_dp         !< screening: predicted BIC change (negative: better)
+      logical :: refitted = .false.
+      real(dp) :: f_after = 0.0_dp
+      real(dp), allocatable :: per_test_after(:)
+      real(dp), allocatable :: p(:), p_lo(:), p_hi(:)  !< fitted parameters, 95 % interval
+      real(dp), allocatable :: x(:)          !< search point after screening
+      real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
+      character(len=24), allocatable :: pname(:)
+      real(dp), allocatable :: c(:)          !< constants of the refit
+      real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
+      real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
+      real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
+      real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
+      logical :: significant = .false., confirmed = .false.
+      logical :: plausible = .true.          !< every magnitude within the effect's physical limit
+      real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
+      integer :: nevals = 0
+      type(region_stat), allocatable :: regions(:)
+      real(dp), allocatable :: y(:)          !< responses with the effect, all tests
+   end type effect_outcome
+
+   !> The whole diagnosis
+   type :: diagnose_result
+      character(len=40), allocatable :: names(:)
+      character(len=32), allocatable :: unit(:)   !< response and unit per test
+      logical, allocatable :: held(:)
+      real(dp), allocatable :: noise(:)           !< noise sd per test, response unit
+      real(dp), allocatable :: peak(:)
+      real(dp), allocatable :: c0(:), c(:)        !< constants given and of the baseline fit
+      character(len=2), allocatable :: cnames(:)
+      real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
+      real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)
+      real(dp) :: noise_fit = 0.0_dp, noise_held = 0.0_dp  !< objective the noise explains
+      real(dp) :: gap_fit = 0.0_dp, gap_held = 0.0_dp      !< structured gaps at the baseline
+      !> Gaps up to these are noise: gap_z standard errors of the gap noise alone leaves
+      real(dp) :: floor_fit = 0.0_dp, floor_held = 0.0_dp
+      integer :: m = 0                            !< residuals of the fit tests
+      type(region_stat), allocatable :: regions(:)
+      type(effect_outcome), allocatable :: effects(:)  !< sorted by pred_dbic
+      integer :: leading = 0                      !< index into effects, 0: none confirmed
+      character(len=:), allocatable :: verdict
+      integer :: nevals = 0
+      ! For the plots: every point of every test
+      integer, allocatable :: test_of(:), cls(:), cycle(:)
+      logical, allocatable :: elastic(:)
+      real(dp), allocatable :: t(:), y_ex(:), y_base(:)
+      !> Global starts of the constants (x: log10), shared by the baseline and the refits
+      real(dp), allocatable :: x_global(:, :)
+      logical :: global = .false.                 !< the refits ran from the global starts
+      real(dp) :: f0_global = 0.0_dp              !< the baseline's objective from them too
+   end type diagnose_result
+
+contains
+
+   !> True when the fit tests had a structured gap at the baseline (above their floor)
+   pure logical function fit_structured(res)
+      type(diagnose_result), intent(in) :: res
+      fit_structured = res%gap_fit > res%floor_fit
+   end function fit_structured
+
+   !> True when the held-out tests had no structured gap at the baseline: there is nothing
+   !> for an effect to shrink there, only a gap it must not open
+   pure logical function held_quiet(res)
+      type(diagnose_result), intent(in) :: res
+      held_quiet = res%gap_held <= res%floor_held
+   end function held_quiet
+end module usharp_diagnose_types
