@@ -1,9 +1,13 @@
 #!/usr/bin/env python3
 """The import graph of src/ by folder, and the check that every folder imports only the folders
-below it in the layer order. Prints the graph as a Markdown table (and a Graphviz dot text with
---dot); with --check exits 1 naming each import that goes upward or sideways.
+below it in the layer order. Prints the graph as a Markdown table, the one in docs/architecture.md (or a Graphviz
+dot text with the number of use statements on each edge, with --dot); with --check exits 1 naming each import that goes upward or sideways.
 
-usage: scripts/import-graph.py [--check] [--dot] [SRC]
+With --doc FILE the table is also compared with the one FILE holds between the lines
+`<!-- import-graph -->` and `<!-- /import-graph -->` (a difference fails --check), and
+--update writes it there.
+
+usage: scripts/import-graph.py [--check] [--dot] [--doc FILE [--update]] [SRC]
 """
 import collections
 import os
@@ -37,7 +41,9 @@ def scan(src):
 def main(argv):
     check = "--check" in argv
     dot = "--dot" in argv
-    rest = [a for a in argv if not a.startswith("--")]
+    update = "--update" in argv
+    doc = argv[argv.index("--doc") + 1] if "--doc" in argv else None
+    rest = [a for i, a in enumerate(argv) if not a.startswith("--") and (i == 0 or argv[i - 1] != "--doc")]
     src = rest[0] if rest else os.path.join(os.path.dirname(__file__), "..", "src")
     where, uses = scan(src)
     edges = collections.Counter()
@@ -56,12 +62,27 @@ def main(argv):
         for (a, b), n in sorted(edges.items()):
             print(f'  "{a}" -> "{b}" [label="{n}"];')
         print("}")
-    else:
-        print("| folder | imports (number of use statements) |")
-        print("|---|---|")
-        for layer in reversed(LAYERS):
-            out = [f"{b} ({n})" for (a, b), n in sorted(edges.items(), key=lambda e: LAYERS.index(e[0][1]) if e[0][1] in LAYERS else 99) if a == layer]
-            print(f"| {layer} | {', '.join(out) if out else '-'} |")
+    order = {name: i for i, name in enumerate(LAYERS)}
+    table = ["| folder | uses modules of |", "|---|---|"]
+    for layer in reversed(LAYERS):
+        out = sorted({b for (a, b) in edges if a == layer}, key=lambda b: order.get(b, 99))
+        table.append(f"| {layer} | {', '.join(out) if out else '-'} |")
+    if not dot:
+        print("\n".join(table))
+    if doc:
+        text = open(doc, encoding="utf-8").read()
+        start, end = "<!-- import-graph -->\n", "<!-- /import-graph -->"
+        i, j = text.find(start), text.find(end)
+        if i < 0 or j < i:
+            print(f"{doc}: no {start.strip()} ... {end} block", file=sys.stderr)
+            return 1
+        block = "\n".join(table) + "\n"
+        if update:
+            with open(doc, "w", encoding="utf-8") as f:
+                f.write(text[:i + len(start)] + block + text[j:])
+        elif text[i + len(start):j] != block:
+            bad.append(f"the table in {doc} is not the graph of the sources: "
+                       f"run scripts/import-graph.py --doc {doc} --update")
     if check and bad:
         for line in bad:
             print("import against the layers: " + line, file=sys.stderr)
