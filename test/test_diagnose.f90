@@ -17,7 +17,7 @@ module test_diagnose
                              class_loading, class_unloading, class_reversal, class_hold
    use usharp_strings, only: real_str
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
-                              diagnose_options_of, gn_decrease
+                              diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_rng, only: rng_type
    use test_util, only: write_text, check_message
@@ -57,6 +57,8 @@ contains
          new_unittest('score-test-on-a-linear-model', test_score), &
          new_unittest('history-classes-and-cycles', test_classes), &
          new_unittest('diagnose-bad-inputs', test_bad_inputs), &
+         new_unittest('baseline-ignores-held-out-data', test_held_out_unused), &
+         new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
    end subroutine collect_diagnose
 
@@ -340,7 +342,9 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       call check_message(error, e, "&diagnose: holdout: no &test is named 'c'")
       if (allocated(error)) return
-      call write_relaxation_data()
+      call write_relaxation_data('a.txt', 1.0_dp, e)
+      call check(error, .not. allocated(e), 'relaxation data not written')
+      if (allocated(error)) return
       call read_config(write_text('diag-empty.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", tests]), cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
@@ -353,36 +357,89 @@ contains
       if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
       call check_message(error, e, 'every test is held out')
       if (allocated(error)) return
-      ! The data were made with B = 1e15; at B = 3e15 the fit has clearly not converged
-      call read_config(write_text('diag-unconverged.nml', [character(len=100) :: &
+   end subroutine test_bad_inputs
+
+   !> Relaxation data made with the model_groups constants (B = 1e15), every stress times
+   !> scale, written to the scratch file name
+   subroutine write_relaxation_data(name, scale, e)
+      character(len=*), intent(in) :: name
+      real(dp), intent(in) :: scale
+      type(uerror), allocatable, intent(out) :: e
+      type(run_config) :: c
+      type(sim_result) :: sim
+      character(len=100), allocatable :: rows(:)
+      character(len=:), allocatable :: path
+      integer :: i
+      call read_config(write_text('diag-gen.nml', [character(len=100) :: model_groups, &
+         "&test name = 'a', history = 'relaxation' /"]), c, e)
+      if (allocated(e)) return
+      call simulate_cvode(c%model, c%tests(1)%hist, output_times(c%tests(1)%hist, 1.0_dp), &
+                          c%solver, sim, e)
+      if (allocated(e)) return
+      allocate (rows(size(sim%t) + 1))
+      rows(1) = 'time stress'
+      do i = 1, size(sim%t)
+         write (rows(i + 1), '(2es24.15)') sim%t(i), scale*sim%stress(i)
+      end do
+      path = write_text(name, rows)
+   end subroutine write_relaxation_data
+
+   !> The baseline is fitted to the fit tests alone: a held-out data file 30 % off changes
+   !> none of its figures (constants, objective, noise part, gap and floor of the fit tests)
+   subroutine test_held_out_unused(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: r1, r2
+      real(dp), parameter :: scale(2) = [1.0_dp, 1.3_dp]
+      integer :: k
+      do k = 1, 2
+         call write_relaxation_data('fit.txt', 1.0_dp, e)
+         if (.not. allocated(e)) call write_relaxation_data('held.txt', scale(k), e)
+         if (.not. allocated(e)) call read_config(write_text('diag-held.nml', [character(len=100) :: &
+            model_groups, "&fit fitted = 'B', 'n', method = 'lm' /", "&diagnose holdout = 'held' /", &
+            "&test name = 'fit', history = 'relaxation', data_file = 'fit.txt' /", &
+            "&test name = 'held', history = 'relaxation', data_file = 'held.txt' /"]), cfg, e)
+         if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+         if (k == 1 .and. .not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, r1, e)
+         if (k == 2 .and. .not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, r2, e)
+         call check(error, .not. allocated(e), 'baseline failed')
+         if (allocated(error)) return
+      end do
+      ! The held-out prediction does see the change
+      call check(error, r2%per_test0(2) > 10.0_dp*r1%per_test0(2), 'held-out data not read')
+      if (allocated(error)) return
+      call check(error, all(r1%c == r2%c) .and. r1%f0 == r2%f0 .and. r1%per_test0(1) == r2%per_test0(1) &
+                 .and. r1%noise_fit == r2%noise_fit .and. r1%gap_fit == r2%gap_fit .and. &
+                 r1%floor_fit == r2%floor_fit .and. r1%noise(1) == r2%noise(1), &
+                 'a baseline figure changed with the held-out data')
+   end subroutine test_held_out_unused
+
+   !> The constants given are only a start: from B three times too high (an unconverged fit)
+   !> the baseline comes back to the B the data were made with
+   subroutine test_unconverged_start(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      call write_relaxation_data('a.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text('diag-unconverged.nml', [character(len=100) :: &
          "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
          "&constants a1 = 0.8, a2 = 7.42e-5, b = 3.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
-         "  n = 5.8, q = 91000.0 /", "&fit fitted = 'B', method = 'lm' /", &
-         "&diagnose holdout = 'b' /", tests]), cfg, e)
+         "  n = 5.8, q = 91000.0 /", "&fit fitted = 'B', method = 'lm' /", "&diagnose holdout = 'b' /", &
+         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
+         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]), cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
-      call check_message(error, e, 'the fit has not converged')
-   contains
-      subroutine write_relaxation_data()
-         type(run_config) :: c
-         type(sim_result) :: sim
-         character(len=100), allocatable :: rows(:)
-         character(len=:), allocatable :: path
-         integer :: i
-         call read_config(write_text('diag-gen.nml', [character(len=100) :: model_groups, &
-            "&test name = 'a', history = 'relaxation' /"]), c, e)
-         if (allocated(e)) return
-         call simulate_cvode(c%model, c%tests(1)%hist, output_times(c%tests(1)%hist, 1.0_dp), &
-                             c%solver, sim, e)
-         if (allocated(e)) return
-         allocate (rows(size(sim%t) + 1))
-         rows(1) = 'time stress'
-         do i = 1, size(sim%t)
-            write (rows(i + 1), '(2es24.15)') sim%t(i), sim%stress(i)
-         end do
-         path = write_text('a.txt', rows)
-      end subroutine write_relaxation_data
-   end subroutine test_bad_inputs
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call check(error, .not. allocated(e), 'baseline failed from an unconverged start')
+      if (allocated(error)) return
+      call check(error, abs(res%c(1)/1.0e15_dp - 1.0_dp) < 1.0e-3_dp, 'baseline B = '// &
+                 real_str(res%c(1), 'es12.5')//', data made with 1e15')
+   end subroutine test_unconverged_start
 
    !> One noisy repetition each of clean data, compliance, lag and shift on a small
    !> matrix: every injected effect ranks first and clean data give no effect

@@ -5,7 +5,7 @@ module usharp_cmd_diagnose
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, write_report, &
-                              diagnose_options_of
+                              diagnose_options_of, diagnose_progress
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
@@ -16,11 +16,14 @@ module usharp_cmd_diagnose
 
 contains
 
-   !> Diagnose the fit of path's tests at the constants of constants_file (a best.nml)
-   subroutine diagnose_command(path, out_dir, constants_file, lines, error)
+   !> Diagnose path's tests: the baseline fitted to the fit tests from the deck's constants
+   !> or those of constants_file (a best.nml, only a start); progress, when given, is told of
+   !> each step (app passes it on a terminal without --quiet)
+   subroutine diagnose_command(path, out_dir, constants_file, lines, error, progress)
       character(len=*), intent(in) :: path, out_dir, constants_file
       character(len=200), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
+      procedure(diagnose_progress), optional :: progress
       type(run_config) :: cfg
       type(diagnose_options) :: opts
       type(diagnose_result) :: res
@@ -28,7 +31,7 @@ contains
       if (allocated(error)) return
       call diagnose_options_of(cfg, opts, error)
       if (allocated(error)) return
-      call diagnose_run(cfg, opts, res, error)
+      call diagnose_run(cfg, opts, res, error, progress=progress)
       if (allocated(error)) return
       call write_report(join_path(cfg%out_dir, 'diagnose'), res, opts, lines, error)
    end subroutine diagnose_command

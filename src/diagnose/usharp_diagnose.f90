@@ -2,7 +2,8 @@
 !> and how far adding the effect closes it, also on tests held out of the fit.
 !>
 !> 1. The fit tests are fitted without any effect (Levenberg-Marquardt from the given
-!>    constants); its residual is split into regions (usharp_regions) and set against the noise
+!>    constants, which are only a start, and from the &fit multi-start points when the deck
+!>    asks for them; the held-out tests play no part); its residual is split into regions (usharp_regions) and set against the noise
 !>    level estimated from each test's data (usharp_diagnose_baseline).
 !> 2. Screening (score or Lagrange-multiplier test): at that fit, the Gauss-Newton decrease of
 !>    the objective that an effect's parameters could give beyond what the constants can
@@ -27,9 +28,9 @@ module usharp_diagnose
    use usharp_regions, only: noise_sd
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
-                                    fit_structured
+                                    fit_structured, diagnose_progress, tell
    use usharp_diagnose_numerics, only: gn_decrease
-   use usharp_diagnose_baseline, only: check_converged, fit_baseline, baseline_regions
+   use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
    use usharp_diagnose_refit, only: refit_candidates, refit_global
    use usharp_diagnose_verdict, only: conclude
@@ -39,26 +40,21 @@ module usharp_diagnose
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
    public :: write_report, gn_decrease, diagnose_options_of, held_quiet
+   public :: diagnose_baseline, diagnose_context, diagnose_progress
 
 contains
 
-   !> Diagnose the fit of cfg's tests at cfg's constants; experiments: the data given directly
-   subroutine diagnose_run(cfg, opts, res, error, experiments)
+   !> Diagnose the fit of cfg's tests from cfg's constants (a start: the baseline is fitted to
+   !> the fit tests); experiments: the data given directly; progress: told of each step
+   subroutine diagnose_run(cfg, opts, res, error, experiments, progress)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(diagnose_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
+      procedure(diagnose_progress), optional :: progress
       type(diagnose_context) :: ctx
-      call prepare(cfg, opts, ctx, res, error, experiments)
-      if (allocated(error)) return
-      if (opts%check_converged) then
-         call check_converged(ctx, res, error)
-         if (allocated(error)) return
-      end if
-      call fit_baseline(ctx, res, error)
-      if (allocated(error)) return
-      call baseline_regions(ctx, res, error)
+      call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress)
       if (allocated(error)) return
       call screen(ctx, res, error)
       if (allocated(error)) return
@@ -81,13 +77,36 @@ contains
       if (opts%global_starts > 0 .and. fit_structured(res) .and. &
           .not. any(res%effects%refitted .and. res%effects%significant .and. &
                     (1.0_dp - res%effects%shrink_fit)*res%gap_fit <= res%floor_fit)) then
+         call tell(ctx, 'global starts', res%nevals)
          call refit_global(ctx, res, error)
          if (allocated(error)) return
          call refit_candidates(ctx, res, 1, 0, error)
          if (allocated(error)) return
          call conclude(res)
       end if
+      call tell(ctx, 'done', res%nevals)
    end subroutine diagnose_run
+
+   !> The first step of a diagnosis: the baseline fitted to the fit tests alone (the held-out
+   !> tests' data are not read before it is fitted: only their prediction follows), its
+   !> regions and floors; ctx is what the later steps work on
+   subroutine diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(diagnose_context), intent(out) :: ctx
+      type(diagnose_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
+      procedure(diagnose_progress), optional :: progress
+      call system_clock(ctx%clock0)
+      if (present(progress)) ctx%progress => progress
+      call prepare(cfg, opts, ctx, res, error, experiments)
+      if (allocated(error)) return
+      call tell(ctx, 'baseline fit', res%nevals)
+      call fit_baseline(ctx, res, error)
+      if (allocated(error)) return
+      call baseline_regions(ctx, res, error)
+   end subroutine diagnose_baseline
 
    !> The context of a diagnosis: the fit problem of every test, the fit and held-out sets,
    !> each test's name, response, noise level and peak; errors for what it cannot diagnose
@@ -98,6 +117,7 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
+      logical, allocatable :: strain_fit(:)
       integer :: nt, i, j
       call setup_problem(cfg, ctx%prob, error, experiments)
       if (allocated(error)) return
@@ -126,15 +146,18 @@ contains
             'nothing is left to fit', stat_input)
          return
       end if
-      allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt))
+      allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt), strain_fit(nt))
       do i = 1, nt
          res%names(i) = cfg%tests(i)%name
          res%unit(i) = merge('strain (-)     ', 'stress ('//cfg%units//')   ', fits_strain(cfg%tests(i)))
          res%noise(i) = noise_sd(ctx%prob%targets(i)%exp%y)
          res%peak(i) = ctx%prob%targets(i)%y_ex_max
+         strain_fit(i) = fits_strain(cfg%tests(i))
       end do
       ctx%opts = opts
-      ctx%peak = maxval(res%peak)
+      ! A typical stress of the fit tests scales the catalogue (the held-out data unread)
+      ctx%peak = maxval(res%peak, .not. res%held .and. .not. strain_fit)
+      if (.not. any(.not. res%held .and. .not. strain_fit)) ctx%peak = maxval(res%peak, .not. res%held)
       ctx%h = cfg%fit%fd_step
       ctx%eff_base%dlnE_dT = opts%dlnE_dT
       ctx%eff_base%gamma3 = opts%gamma3

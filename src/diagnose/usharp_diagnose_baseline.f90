@@ -3,8 +3,8 @@
 !> level of each test's data, and the floors below which a set's structured gap is noise
 module usharp_diagnose_baseline
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_input, stat_failure
-   use usharp_strings, only: str, real_str
+   use usharp_error, only: error_type, fatal_error, stat_failure
+   use usharp_strings, only: str
    use usharp_objective, only: fit_problem, test_residuals
    use usharp_experiment, only: fits_strain
    use usharp_effect_problem, only: effect_problem, new_effect_problem
@@ -12,55 +12,18 @@ module usharp_diagnose_baseline
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
-   use usharp_diagnose_types, only: diagnose_context, diagnose_result
-   use usharp_diagnose_numerics, only: constants_at
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell
+   use usharp_diagnose_numerics, only: constants_at, best_of_starts, global_points, at_bound
    implicit none
    private
 
-   public :: check_converged, fit_baseline, baseline_regions, per_test, all_regions
+   public :: fit_baseline, baseline_regions, per_test, all_regions
 
 contains
 
-   !> The fit must have converged: three Levenberg-Marquardt steps from it on all its tests
-   !> may not lower it by more than converged_tol (a Gauss-Newton prediction alone is not
-   !> trusted: along the weak directions of a fit it promises falls that do not come)
-   subroutine check_converged(ctx, res, error)
-      type(diagnose_context), intent(in) :: ctx
-      type(diagnose_result), intent(inout) :: res
-      type(error_type), allocatable, intent(out) :: error
-      type(effect_problem) :: base_all
-      type(optimum_type) :: opt
-      real(dp), allocatable :: lo(:), hi(:), r1(:, :)
-      real(dp) :: f1(1)
-      logical :: ok1(1)
-      integer :: i
-      associate (prob => ctx%prob, path => ctx%prob%cfg%path)
-         call new_effect_problem(prob, [(i, i=1, size(prob%targets))], 0, ctx%eff_base, ctx%peak, base_all)
-         call base_all%bounds(lo, hi)
-         call levenberg_marquardt(base_all, min(max(base_all%start(), lo), hi), lo, hi, &
-                                  ctx%h, 1.0e-9_dp, 3, ctx%opts%max_evals, opt, error)
-         if (allocated(error)) return
-         res%nevals = res%nevals + opt%nevals
-         allocate (r1(base_all%nres(), 1))
-         call base_all%residuals(reshape(base_all%start(), [size(prob%idx), 1]), r1, f1, ok1, error)
-         if (allocated(error)) return
-         if (.not. ok1(1)) then
-            call fatal_error(error, path//': the model fails at the given constants: '// &
-               'is this the fit''s best.nml?', stat_input)
-            return
-         end if
-         if (f1(1) - opt%f > ctx%opts%converged_tol*f1(1)) then
-            call fatal_error(error, path//': the fit has not converged: three '// &
-               'Levenberg-Marquardt steps lower its objective '//real_str(f1(1), 'es10.3')// &
-               ' by '//real_str(100.0_dp*(f1(1) - opt%f)/f1(1), 'f0.1')//' %; finish it (usharp'// &
-               ' run) and pass its best.nml with -c', stat_input)
-            return
-         end if
-      end associate
-   end subroutine check_converged
-
-   !> Baseline: the fit tests without any effect, from the given constants; ctx's constants
-   !> become the baseline's
+   !> Baseline: the fit tests without any effect, from the given constants (a start) and,
+   !> when &fit asks for multi-start, from its Latin-hypercube points too (the lowest end
+   !> point is kept); ctx's constants become the baseline's
    subroutine fit_baseline(ctx, res, error)
       type(diagnose_context), intent(inout) :: ctx
       type(diagnose_result), intent(inout) :: res
@@ -70,16 +33,23 @@ contains
       real(dp), allocatable :: lo(:), hi(:)
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
       call base%bounds(lo, hi)
-      call levenberg_marquardt(base, base%start(), lo, hi, ctx%h, 1.0e-9_dp, 100, &
+      call levenberg_marquardt(base, min(max(base%start(), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, 100, &
                                ctx%opts%max_evals, opt, error)
       if (allocated(error)) return
       res%nevals = res%nevals + opt%nevals
+      res%baseline_starts = 1 + max(ctx%prob%cfg%fit%multistart, 0)
+      if (ctx%prob%cfg%fit%multistart > 0) then
+         call tell(ctx, 'baseline fit from '//str(res%baseline_starts)//' starts', res%nevals)
+         call best_of_starts(base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
+                             lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals)
+      end if
       ! Global starts come later, only when the local refits leave a structured gap
       allocate (res%x_global(size(ctx%prob%idx), 0))
       res%c = 10.0_dp**opt%x
       ctx%prob%cfg%model%c = constants_at(ctx%prob, opt%x)
       res%f0 = opt%f
       res%m = base%nres()
+      res%c_bound = at_bound(opt%x, lo, hi)
    end subroutine fit_baseline
 
    !> Baseline residuals of every test (held-out ones: the prediction), their regions, the

@@ -20,7 +20,7 @@ module usharp_diagnose_numerics
    private
 
    public :: constants_at, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
-   public :: free_params, effect_fit
+   public :: free_params, effect_fit, at_bound
 
 contains
 
@@ -222,4 +222,12 @@ contains
          ai(:, j) = ai(:, j)/(d*d(j))
       end do
    end function pseudo_inverse
+
+   !> Which components of x lie at a bound (within 1e-3 of the box, log10 units for the
+   !> constants): a fit that ends there has run away rather than converged
+   pure function at_bound(x, lo, hi) result(mask)
+      real(dp), intent(in) :: x(:), lo(:), hi(:)
+      logical :: mask(size(x))
+      mask = x <= lo + 1.0e-3_dp*max(hi - lo, 1.0_dp) .or. x >= hi - 1.0e-3_dp*max(hi - lo, 1.0_dp)
+   end function at_bound
 end module usharp_diagnose_numerics

@@ -26,8 +26,6 @@ module usharp_diagnose_options
       real(dp) :: dlnE_dT = -4.0e-4_dp       !< 1/K, temperature slope of ln E
       real(dp) :: gamma3 = 200.0_dp          !< -, second back stress recovery in screening
       real(dp) :: confirm_shrink = 0.5_dp    !< held-out structured gap removed to confirm
-      real(dp) :: converged_tol = 0.01_dp    !< largest Gauss-Newton decrease of a converged fit
-      logical :: check_converged = .true.
       integer :: max_evals = 3000            !< per refit
       integer :: refit_starts = 1            !< screening end points a refit starts from
       !> Latin-hypercube starts of the constants over the &fit multi-start box, run for the

@@ -15,9 +15,9 @@ module usharp_diagnose_refit
    use usharp_identify, only: robust_covariance
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
-                                    fit_structured, held_quiet
+                                    fit_structured, held_quiet, tell
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, best_of_starts, global_points, &
-                                       free_params, effect_fit
+                                       free_params, effect_fit, at_bound
    use usharp_diagnose_baseline, only: per_test, all_regions
    implicit none
    private
@@ -104,6 +104,7 @@ contains
       type(miller_model) :: mdl
       real(dp), allocatable :: p(:)
       logical :: moved
+      call tell(ctx, 'refit '//trim(ctx%cat(e%k)%name), res%nevals)
       call effect_fit(ctx, e%k, ep)
       call fit_constants(ctx, res, ep, e, opt, moved, error, starts)
       if (allocated(error)) return
@@ -183,7 +184,7 @@ contains
       type(effect_outcome), intent(inout) :: e
       type(miller_model), intent(out) :: mdl
       real(dp), allocatable, intent(out) :: p(:)
-      real(dp), allocatable :: r(:), jac(:, :), cov(:, :), se(:), pscale(:)
+      real(dp), allocatable :: r(:), jac(:, :), cov(:, :), se(:), pscale(:), lo(:), hi(:)
       real(dp) :: pmean(2)
       integer :: nc, nt, n, j, g, i
       logical :: ok
@@ -198,6 +199,8 @@ contains
       do j = 1, n
          se(j) = sqrt(max(cov(j, j), 0.0_dp))
       end do
+      call ep%bounds(lo, hi)
+      e%c_bound = at_bound(x(1:nc), lo(1:nc), hi(1:nc))
       call ep%unpack(x, mdl, p)
       e%c = [(get_constant(mdl%c, ctx%prob%idx(j)), j=1, nc)]
       pscale = pack(ep%pscale, ep%pfree)

@@ -10,7 +10,7 @@ module usharp_diagnose_screen
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_sort, only: order_of
-   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit
    implicit none
    private
@@ -42,6 +42,7 @@ contains
       call gn_decrease(jc, r0, d0)
       allocate (res%effects(size(ctx%opts%effects)))
       do i = 1, size(ctx%opts%effects)
+         call tell(ctx, 'screening '//trim(ctx%cat(ctx%opts%effects(i))%name), res%nevals)
          call screen_one(ctx, ctx%opts%effects(i), r0, jc, d0, res%effects(i), res%nevals, error)
          if (allocated(error)) return
       end do

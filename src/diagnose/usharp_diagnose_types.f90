@@ -1,6 +1,7 @@
 !> What a diagnosis works on and what it finds: the problem shared by its steps (tests, fit
 !> and held-out sets, noise), each effect's outcome, and the whole result
 module usharp_diagnose_types
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_objective, only: fit_problem
    use usharp_effects, only: test_effects, effect_info
@@ -10,6 +11,17 @@ module usharp_diagnose_types
    private
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
+   public :: diagnose_progress, tell
+
+   abstract interface
+      !> Told at each step of a diagnosis: what it is doing, simulations so far, elapsed s
+      subroutine diagnose_progress(stage, nevals, seconds)
+         import :: dp
+         character(len=*), intent(in) :: stage
+         integer, intent(in) :: nevals
+         real(dp), intent(in) :: seconds
+      end subroutine diagnose_progress
+   end interface
 
    !> The problem every step of a diagnosis works on
    type :: diagnose_context
@@ -22,6 +34,9 @@ module usharp_diagnose_types
       real(dp) :: h = 0.0_dp                 !< forward-difference step of the fit (log10 units)
       real(dp), allocatable :: nv(:)         !< noise variance of each weighted residual, all tests
       type(effect_info), allocatable :: cat(:)  !< the catalogue scaled to peak
+      !> Told of each step (null: nobody listens)
+      procedure(diagnose_progress), pointer, nopass :: progress => null()
+      integer(int64) :: clock0 = 0           !< system clock at the start
    end type diagnose_context
 
    !> One effect: screening, and the refit when it led
@@ -40,6 +55,7 @@ module usharp_diagnose_types
       character(len=24), allocatable :: pname(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
       real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
+      logical, allocatable :: c_bound(:)     !< its constants at a search bound
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
@@ -59,6 +75,8 @@ module usharp_diagnose_types
       real(dp), allocatable :: noise(:)           !< noise sd per test, response unit
       real(dp), allocatable :: peak(:)
       real(dp), allocatable :: c0(:), c(:)        !< constants given and of the baseline fit
+      logical, allocatable :: c_bound(:)          !< baseline constants at a search bound
+      integer :: baseline_starts = 1              !< starts of the baseline fit
       character(len=2), allocatable :: cnames(:)
       real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
       real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)
@@ -83,6 +101,17 @@ module usharp_diagnose_types
    end type diagnose_result
 
 contains
+
+   !> Tell the listener, if any, of a step: stage, simulations so far
+   subroutine tell(ctx, stage, nevals)
+      type(diagnose_context), intent(in) :: ctx
+      character(len=*), intent(in) :: stage
+      integer, intent(in) :: nevals
+      integer(int64) :: now, rate
+      if (.not. associated(ctx%progress)) return
+      call system_clock(now, rate)
+      call ctx%progress(stage, nevals, real(now - ctx%clock0, dp)/real(max(rate, 1_int64), dp))
+   end subroutine tell
 
    !> True when the fit tests had a structured gap at the baseline (above their floor)
    pure logical function fit_structured(res)

@@ -149,7 +149,6 @@ contains
       integer :: row, rep, k, first, j, c0, c1, rate
       call system_clock(c0, rate)
       o = opts
-      o%check_converged = .false.
       sc%reps = cfg%diagnose%reps
       sc%injected = opts%rows
       sc%columns = [0, opts%effects]
