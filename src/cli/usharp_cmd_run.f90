@@ -2,7 +2,7 @@
 !> best.nml, the best fit's curves beside the data, and a summary
 module usharp_cmd_run
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_io
+   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy
    use usharp_strings, only: str, real_str
    use usharp_miller, only: n_constants, constant_names, get_constant, miller_model
    use usharp_config, only: run_config
@@ -11,8 +11,8 @@ module usharp_cmd_run
    use usharp_experiment, only: fits_strain, response_name
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
-   use usharp_output, only: write_sim_file, write_lines
-   use usharp_filesys, only: make_dir, join_path
+   use usharp_output, only: write_sim_file, write_lines, result_file
+   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    implicit none
@@ -24,73 +24,107 @@ contains
 
    !> Run a fit. out_dir overrides &output out_dir; constants_file, when given, replaces the
    !> starting constants. summary returns the lines to show the user; progress, when given,
-   !> is called after every evaluation.
-   subroutine run_command(path, out_dir, constants_file, resume, summary, error, progress)
+   !> is called after every evaluation. force: start again over an earlier run's journal.
+   !> The output folder is locked for the run (a second run into it is an error, exit 6).
+   !> When the fit finished but its identifiability report failed, the results are written,
+   !> the summary says so, and error has stat_report (exit 5).
+   subroutine run_command(path, out_dir, constants_file, resume, summary, error, progress, force)
       character(len=*), intent(in) :: path, out_dir, constants_file
       logical, intent(in) :: resume
       character(len=200), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
       procedure(progress_interface), optional :: progress
-      type(run_config) :: cfg
-      type(fit_problem) :: prob
-      type(fit_outcome) :: out
-      type(miller_model) :: best
-      type(identify_result) :: ident
-      character(len=200), allocatable :: report(:)
-      character(len=:), allocatable :: dir
-      real(dp) :: start(n_constants)
-      integer :: i, j
-      allocate (summary(0))
-      call read_config_as(path, constants_file, out_dir, cfg, error)
-      if (allocated(error)) return
-      dir = cfg%out_dir
-      call setup_problem(cfg, prob, error)
-      if (allocated(error)) return
-      call make_dir(dir, error)
-      if (allocated(error)) return
-      call run_fit(prob, dir, resume, out, error, progress)
-      if (allocated(error)) return
+      logical, intent(in), optional :: force
+      integer :: lock
+      logical :: overwrite
 
-      best = cfg%model
-      do j = 1, n_constants
-         start(j) = get_constant(cfg%model%c, j)
-      end do
-      call prob%model_of(out%opt%x, best, error)
-      if (allocated(error)) return
-      call write_best(join_path(dir, 'best.nml'), path, best, out, error)
-      if (allocated(error)) return
-      call write_curves(prob, best, dir, error)
-      if (allocated(error)) return
+      overwrite = .false.
+      if (present(force)) overwrite = force
+      lock = -1
+      call locked_run()
+      call unlock_file(lock)
 
-      summary = [character(len=200) :: &
-         'usharp run '//path//': '//out%opt%reason, &
-         '  objective ('//cfg%fit%objective//'): start '//real_str(out%f_start, 'es12.5')// &
-         ', best '//real_str(out%opt%f, 'es12.5'), &
-         '  evaluations '//str(out%opt%nevals)//' ('//str(out%nreplayed)//' replayed), iterations '// &
-         str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
-         real_str(out%seconds, 'f10.2')//' s']
-      do i = 1, size(cfg%tests)
-         summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
-            real_str(out%per_test(i), 'es12.5')]
-      end do
-      summary = [character(len=200) :: summary, '  constant        start          fitted']
-      do j = 1, n_constants
-         summary = [character(len=200) :: summary, '  '//constant_names(j)//'  '// &
-            real_str(start(j), 'es14.6')//'  '//real_str(get_constant(best%c, j), 'es14.6')// &
-            merge('         ', '  (fixed)', cfg%fit%fitted(j))]
-      end do
-      summary = [character(len=200) :: summary, '  D0 = '//real_str(best%d0, 'g0.6')//' '//cfg%units, &
-         '  wrote '//join_path(dir, 'best.nml')//', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
-         '<test>.fit.txt']
-      if (cfg%fit%identify) then
-         call identify_at(prob, out%constants, cfg%fit%fd_step, ident, error)
+   contains
+
+      subroutine locked_run()
+         type(run_config) :: cfg
+         type(fit_problem) :: prob
+         type(fit_outcome) :: out
+         type(miller_model) :: best
+         type(identify_result) :: ident
+         type(error_type), allocatable :: report_error
+         character(len=200), allocatable :: report(:)
+         character(len=:), allocatable :: dir
+         real(dp) :: start(n_constants)
+         integer :: i, j
+         allocate (summary(0))
+         call read_config_as(path, constants_file, out_dir, cfg, error)
          if (allocated(error)) return
-         report = identify_report(ident)
-         call write_lines(join_path(dir, 'identify.txt'), report, error)
+         dir = cfg%out_dir
+         call setup_problem(cfg, prob, error)
          if (allocated(error)) return
-         summary = [character(len=200) :: summary, report]
-      end if
-      call write_lines(join_path(dir, 'summary.txt'), summary, error)
+         call make_dir(dir, error)
+         if (allocated(error)) return
+         call lock_file(join_path(dir, '.usharp.lock'), lock, error)
+         if (allocated(error)) return
+         if (lock < 0) then
+            call fatal_error(error, dir//': another usharp run is writing into this folder '// &
+               '(it holds '//join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
+            return
+         end if
+         call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file)
+         if (allocated(error)) return
+
+         best = cfg%model
+         do j = 1, n_constants
+            start(j) = get_constant(cfg%model%c, j)
+         end do
+         call prob%model_of(out%opt%x, best, error)
+         if (allocated(error)) return
+         call write_best(join_path(dir, 'best.nml'), path, best, out, error)
+         if (allocated(error)) return
+         call write_curves(prob, best, dir, error)
+         if (allocated(error)) return
+
+         summary = [character(len=200) :: &
+            'usharp run '//path//': '//out%opt%reason, &
+            '  objective ('//cfg%fit%objective//'): start '//real_str(out%f_start, 'es12.5')// &
+            ', best '//real_str(out%opt%f, 'es12.5'), &
+            '  evaluations '//str(out%opt%nevals)//' ('//str(out%nreplayed)//' replayed, '// &
+            str(out%nsimulated)//' simulated), iterations '// &
+            str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
+            real_str(out%seconds, 'f10.2')//' s']
+         do i = 1, size(cfg%tests)
+            summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
+               real_str(out%per_test(i), 'es12.5')]
+         end do
+         summary = [character(len=200) :: summary, '  constant        start          fitted']
+         do j = 1, n_constants
+            summary = [character(len=200) :: summary, '  '//constant_names(j)//'  '// &
+               real_str(start(j), 'es14.6')//'  '//real_str(get_constant(best%c, j), 'es14.6')// &
+               merge('         ', '  (fixed)', cfg%fit%fitted(j))]
+         end do
+         summary = [character(len=200) :: summary, '  D0 = '//real_str(best%d0, 'g0.6')//' '//cfg%units, &
+            '  wrote '//join_path(dir, 'best.nml')//', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
+            '<test>.fit.txt']
+         if (cfg%fit%identify) then
+            call identify_at(prob, out%constants, cfg%fit%fd_step, ident, report_error)
+            if (allocated(report_error)) then
+               ! The fit stands: its results are written; the report's failure is a warning
+               report = [character(len=200) :: 'warning: the identifiability report failed: '// &
+                         report_error%message]
+            else
+               report = identify_report(ident)
+            end if
+            call write_lines(join_path(dir, 'identify.txt'), report, error)
+            if (allocated(error)) return
+            summary = [character(len=200) :: summary, report]
+         end if
+         call write_lines(join_path(dir, 'summary.txt'), summary, error)
+         if (allocated(error)) return
+         if (allocated(report_error)) call fatal_error(error, 'the fit is done and written, but its '// &
+            'identifiability report failed: '//report_error%message, stat_report)
+      end subroutine locked_run
    end subroutine run_command
 
    subroutine write_best(file, path, best, out, error)
@@ -130,8 +164,9 @@ contains
       character(len=*), intent(in) :: dir
       type(error_type), allocatable, intent(out) :: error
       type(sim_result), allocatable :: res(:)
-      integer :: i, k, unit, ios
-      character(len=:), allocatable :: file
+      integer :: i, k
+      type(result_file) :: out
+      character(len=160) :: row
       character(len=120) :: header(1)
       character(len=:), allocatable :: resp
       real(dp), allocatable :: y(:)
@@ -143,24 +178,22 @@ contains
          call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), res(i), &
                              header, prob%cfg%units, error)
          if (allocated(error)) return
-         file = join_path(dir, prob%cfg%tests(i)%name//'.fit.txt')
-         open (newunit=unit, file=file, status='replace', action='write', iostat=ios)
-         if (ios /= 0) then
-            call fatal_error(error, file//': cannot write', stat_io)
-            return
-         end if
-         write (unit, '(a)') "# best fit of test '"//prob%cfg%tests(i)%name//"' against "//prob%cfg%tests(i)%data%file
+         call out%open(join_path(dir, prob%cfg%tests(i)%name//'.fit.txt'), error)
+         if (allocated(error)) return
+         call out%line("# best fit of test '"//prob%cfg%tests(i)%name//"' against "//prob%cfg%tests(i)%data%file)
          resp = response_name(prob%cfg%tests(i), prob%cfg%units)
-         write (unit, '(a)') '# columns: time (s), strain (-), measured '//resp//', simulated '// &
-            resp//', residual, weight (-); stress ('//prob%cfg%units//') of the simulation'
-         write (unit, '(a)') '# time strain '//merge('strain_exp', 'stress_exp', fits_strain(prob%cfg%tests(i)))// &
-            ' '//merge('strain_sim', 'stress_sim', fits_strain(prob%cfg%tests(i)))//' residual weight stress'
+         call out%line('# columns: time (s), strain (-), measured '//resp//', simulated '// &
+            resp//', residual, weight (-); stress ('//prob%cfg%units//') of the simulation')
+         call out%line('# time strain '//merge('strain_exp', 'stress_exp', fits_strain(prob%cfg%tests(i)))// &
+            ' '//merge('strain_sim', 'stress_sim', fits_strain(prob%cfg%tests(i)))//' residual weight stress')
          y = simulated(prob%cfg%tests(i), res(i))
          do k = 1, size(prob%targets(i)%t)
-            write (unit, '(7es20.11e3)') prob%targets(i)%t(k), res(i)%strain(k), prob%targets(i)%y_ex(k), &
+            write (row, '(7es20.11e3)') prob%targets(i)%t(k), res(i)%strain(k), prob%targets(i)%y_ex(k), &
                y(k), prob%targets(i)%y_ex(k) - y(k), prob%targets(i)%w(k), res(i)%stress(k)
+            call out%line(row)
          end do
-         close (unit)
+         call out%commit(error)
+         if (allocated(error)) return
       end do
    end subroutine write_curves
 

@@ -6,11 +6,13 @@
 !>
 !> The command comes from the namelist only. The placeholders {work}, {constants}, {output}
 !> and {input_dir} are replaced by quoted absolute paths, {test} by the test's name (letters,
-!> digits, _ - . only). The command runs with `sh` in the work folder, stdin from /dev/null,
-!> stdout and stderr in the files stdout.txt and stderr.txt there.
+!> digits, _ - . only). The command is written to usharp-command.sh in the work folder and run
+!> there by /bin/sh, started with posix_spawn (no other shell, safe from parallel evaluations)
+!> in a process group of its own, stdin from /dev/null, stdout and stderr in the files
+!> stdout.txt and stderr.txt there. At the time limit the whole group is stopped.
 module usharp_external
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, prefix_error
+   use usharp_error, only: error_type, fatal_error, prefix_error, stat_io
    use usharp_strings, only: str, real_str, shell_quote
    use usharp_miller, only: miller_model
    use usharp_upf, only: upf_props
@@ -20,6 +22,9 @@ module usharp_external
    use usharp_table, only: read_columns, merge_repeated_times
    use usharp_units, only: stress_factor
    use usharp_experiment, only: interpolate
+   use usharp_process, only: run_process, process_result, proc_exited, proc_timed_out, &
+                             proc_stopped, proc_spawn_failed, proc_signalled
+   use usharp_signal, only: stop_signal
    use usharp_filesys, only: make_dir, join_path, file_exists, absolute_path, remove_file, &
                              remove_dir
    implicit none
@@ -51,9 +56,15 @@ contains
          return
       end if
       do k = 1, n_constants_file
-         write (unit, fmt, iostat=ios) vals(k)
+         if (ios == 0) write (unit, fmt, iostat=ios, iomsg=msg) vals(k)
       end do
-      close (unit)
+      if (ios == 0) then
+         close (unit, iostat=ios, iomsg=msg)
+      else
+         close (unit)
+      end if
+      if (ios /= 0) call fatal_error(error, path//': cannot write the constants file ('// &
+                                     trim(msg)//')', stat_io)
    end subroutine write_constants_file
 
    !> The command with its placeholders replaced: {work} {constants} {output} {input_dir} by
@@ -104,7 +115,8 @@ contains
       character(len=256) :: names(5)
       character(len=64) :: cols(2)
       real(dp), allocatable :: vals(:, :)
-      integer :: unit, ios, stat, nmerged
+      integer :: unit, ios, nmerged
+      type(process_result) :: proc
       logical :: gone
 
       call make_dir(join_path(work_root, test//'.'//tag), error)
@@ -133,24 +145,45 @@ contains
          call fatal_error(error, join_path(work, script_name)//': cannot write')
          return
       end if
-      write (unit, '(a)') '# usharp external backend: test '//test//', evaluation '//tag
-      write (unit, '(a)') cmd
-      close (unit)
-      ! timeout(1) stops the command at the limit (TERM, then KILL 5 s later) and exits 124
-      call execute_command_line('cd '//shell_quote(work)//' && exec timeout -k 5 '// &
-         real_str(ext%time_limit, 'f0.1')//' sh ./'//script_name//' </dev/null >'//stdout_name// &
-         ' 2>'//stderr_name, exitstat=stat)
-      if (stat /= 0) then
-         select case (stat)
-         case (124, 137)
+      write (unit, '(a)', iostat=ios) '# usharp external backend: test '//test//', evaluation '//tag
+      if (ios == 0) write (unit, '(a)', iostat=ios) cmd
+      if (ios == 0) then
+         close (unit, iostat=ios)
+      else
+         close (unit)
+      end if
+      if (ios /= 0) then
+         call fatal_error(error, join_path(work, script_name)//': write failed', stat_io)
+         return
+      end if
+      ! The script runs in a process group of its own: at the time limit (or when usharp is
+      ! asked to stop) the group gets TERM, then KILL 5 s later; what it leaves running is killed
+      call run_process([character(len=len(script_name) + 2) :: '/bin/sh', './'//script_name], &
+                       work, stdout_name, stderr_name, ext%time_limit, 5.0_dp, proc)
+      if (proc%how /= proc_exited .or. proc%code /= 0) then
+         select case (proc%how)
+         case (proc_timed_out)
             call fatal_error(error, 'command ran past its time_limit of '// &
                real_str(ext%time_limit, 'g0.6')//' s and was stopped')
-         case (127)
-            call fatal_error(error, 'command not found (exit status 127): '// &
-               last_line(join_path(work, stderr_name)))
-         case default
-            call fatal_error(error, 'command failed with exit status '//str(stat)// &
+         case (proc_stopped)
+            call fatal_error(error, 'command stopped: usharp received signal '//str(stop_signal()))
+         case (proc_spawn_failed)
+            call fatal_error(error, 'cannot start /bin/sh (error '//str(proc%code)//')')
+         case (proc_signalled)
+            call fatal_error(error, 'command was killed by signal '//str(proc%code)// &
                trim(': '//last_line(join_path(work, stderr_name))))
+         case default
+            select case (proc%code)
+            case (127)
+               call fatal_error(error, 'command not found (exit status 127): '// &
+                  last_line(join_path(work, stderr_name)))
+            case (126)
+               call fatal_error(error, 'command not executable (exit status 126): '// &
+                  last_line(join_path(work, stderr_name)))
+            case default
+               call fatal_error(error, 'command failed with exit status '//str(proc%code)// &
+                  trim(': '//last_line(join_path(work, stderr_name))))
+            end select
          end select
       else if (.not. file_exists(output)) then
          call fatal_error(error, 'command did not write its output file '//ext%output_file)

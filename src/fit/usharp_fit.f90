@@ -4,7 +4,7 @@
 module usharp_fit
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_failure, stat_input
+   use usharp_error, only: error_type, fatal_error, stat_failure, stat_input, stat_usage
    use usharp_strings, only: str, real_str
    use usharp_miller, only: get_constant, constant_names
    use usharp_objective, only: fit_problem, eval_ok, eval_invalid, message_len
@@ -15,12 +15,16 @@ module usharp_fit
    use usharp_annealing, only: anneal
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
-   use usharp_fit_log, only: fit_log, journal_record, read_journal, journal_name
-   use usharp_filesys, only: join_path
+   use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
+                             journal_name, cache_name, fingerprint_mismatch
+   use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex
+   use usharp_signal, only: catch_stop_signals, stop_signal
+   use usharp_version, only: usharp_version_string
+   use usharp_config, only: run_config
    implicit none
    private
 
-   public :: fit_objective, run_fit, fit_outcome, progress_interface
+   public :: fit_objective, run_fit, fit_outcome, progress_interface, fit_fingerprint
 
 
    abstract interface
@@ -37,8 +41,10 @@ module usharp_fit
       type(fit_problem) :: prob
       type(fit_log) :: log
       type(journal_record), allocatable :: replay(:)
+      type(cached_jacobian), allocatable :: replay_jac(:)
       integer :: nevals = 0
       integer :: nsens = 0              !< sensitivity Jacobians (one simulation each)
+      integer :: nsimulated = 0         !< evaluations simulated (not replayed) in this run
       integer :: nfail_row = 0          !< failures in a row
       integer :: nfail_total = 0
       integer :: ninvalid_total = 0
@@ -64,6 +70,7 @@ module usharp_fit
       real(dp), allocatable :: per_test(:)
       real(dp), allocatable :: constants(:)  !< fitted constants, physical units
       integer :: nfail = 0, ninvalid = 0, nreplayed = 0
+      integer :: nsimulated = 0  !< evaluations and sensitivity Jacobians simulated in this run
       integer :: nstarts = 1  !< local searches run (multi-start)
       real(dp) :: seconds = 0.0_dp
    end type fit_outcome
@@ -93,6 +100,8 @@ contains
       real(dp) :: per_test(size(self%prob%targets))
       integer :: status, k
       character(len=:), allocatable :: message
+      call check_stop(self, error)
+      if (allocated(error)) return
       k = self%nevals + 1
       if (k <= size(self%replay)) then
          call check_replay(self, k, x, error)
@@ -103,6 +112,10 @@ contains
          message = 'replayed'
       else
          call self%prob%evaluate(x, f, per_test, status, message, str(k))
+         self%nsimulated = self%nsimulated + 1
+         ! An evaluation a stop signal may have cut short is not logged
+         call check_stop(self, error)
+         if (allocated(error)) return
       end if
       call self%record(x, f, per_test, status, message, error)
    end subroutine fit_eval
@@ -115,10 +128,25 @@ contains
       real(dp), intent(out) :: jac(:, :)
       logical, intent(out) :: done
       type(error_type), allocatable, intent(out) :: error
+      integer :: i
       done = .false.
       if (self%prob%cfg%fit%jacobian /= 'sensitivity') return
-      call self%prob%jacobian(x, jac, done)
-      if (done) self%nsens = self%nsens + 1
+      call check_stop(self, error)
+      if (allocated(error)) return
+      i = self%nsens + 1
+      if (i <= size(self%replay_jac)) then
+         if (all(self%replay_jac(i)%x == x)) then
+            jac = self%replay_jac(i)%jac
+            done = .true.
+         end if
+      end if
+      if (.not. done) then
+         call self%prob%jacobian(x, jac, done)
+         self%nsimulated = self%nsimulated + 1
+      end if
+      if (.not. done) return
+      self%nsens = i
+      call self%log%record_jacobian(i, x, jac, error)
    end subroutine fit_jacobian
 
    !> Residuals at several points, simulated in parallel (OpenMP) and then logged in order,
@@ -131,16 +159,36 @@ contains
       logical, intent(out) :: ok(:)
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: per_test(size(self%prob%targets), size(xs, 2))
-      integer :: status(size(xs, 2)), j, k0
+      integer :: status(size(xs, 2)), j, k0, nr
       character(len=message_len) :: messages(size(xs, 2))
+      call check_stop(self, error)
+      if (allocated(error)) return
       k0 = self%nevals
+      ! The journal's leading points whose residuals fit.cache kept are replayed; the rest
+      ! (a resumed run's first new points onwards) are simulated as one batch
+      nr = 0
       do j = 1, size(xs, 2)
-         if (k0 + j <= size(self%replay)) call check_replay(self, k0 + j, xs(:, j), error)
+         if (k0 + j > size(self%replay)) exit
+         call check_replay(self, k0 + j, xs(:, j), error)
          if (allocated(error)) return
+         if (.not. allocated(self%replay(k0 + j)%r)) exit
+         nr = j
+         rs(:, j) = self%replay(k0 + j)%r
+         fs(j) = self%replay(k0 + j)%f
+         per_test(:, j) = self%replay(k0 + j)%per_test
+         status(j) = self%replay(k0 + j)%status
+         messages(j) = 'replayed'
       end do
-      call self%prob%batch(xs, k0, rs, fs, per_test, status, messages)
+      if (nr < size(xs, 2)) then
+         call self%prob%batch(xs(:, nr + 1:), k0 + nr, rs(:, nr + 1:), fs(nr + 1:), &
+                              per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:))
+         self%nsimulated = self%nsimulated + size(xs, 2) - nr
+         call check_stop(self, error)
+         if (allocated(error)) return
+      end if
       do j = 1, size(xs, 2)
-         call self%record(xs(:, j), fs(j), per_test(:, j), status(j), trim(messages(j)), error)
+         call self%record(xs(:, j), fs(j), per_test(:, j), status(j), trim(messages(j)), error, &
+                          rs(:, j))
          if (allocated(error)) return
          ok(j) = status(j) == eval_ok
       end do
@@ -158,17 +206,33 @@ contains
       end if
    end subroutine check_replay
 
-   !> Log one evaluation, count failures (an error after max_failures in a row), keep the best
-   subroutine fit_record(self, x, f, per_test, status, message, error)
+   !> A stop signal (SIGTERM from a batch scheduler, Ctrl-C) ends the fit between
+   !> evaluations with a note in fit.log; the exit code is 128 + the signal's number
+   subroutine check_stop(self, error)
+      class(fit_objective), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      integer :: sig
+      sig = stop_signal()
+      if (sig == 0) return
+      call fatal_error(error, 'stopped by signal '//str(sig)//' after '//str(self%nevals)// &
+                       ' evaluations; continue with --resume', 128 + sig)
+      call self%log%event(error%message)
+   end subroutine check_stop
+
+   !> Log one evaluation (with its residuals r, when given, for a resume to replay), count
+   !> failures (an error after max_failures in a row), keep the best
+   subroutine fit_record(self, x, f, per_test, status, message, error, r)
       class(fit_objective), intent(inout) :: self
       real(dp), intent(in) :: x(:), f, per_test(:)
       integer, intent(in) :: status
       character(len=*), intent(in) :: message
       type(error_type), allocatable, intent(out) :: error
+      real(dp), intent(in), optional :: r(:)
       integer :: k
       self%nevals = self%nevals + 1
       k = self%nevals
-      call self%log%record(k, status, f, per_test, x, self%constants_of(x))
+      call self%log%record(k, status, f, per_test, x, self%constants_of(x), error, r)
+      if (allocated(error)) return
       if (k == 1) self%first = f
       if (status /= eval_ok) then
          self%nfail_row = self%nfail_row + 1
@@ -201,25 +265,57 @@ contains
    end subroutine report
 
    !> Run the fit of a problem with its &fit settings, logging into dir. With resume, the
-   !> journal in dir is replayed first. progress, when given, hears of every evaluation.
-   subroutine run_fit(prob, dir, resume, outcome, error, progress)
+   !> journal in dir is replayed first (refused when the fingerprint of the inputs changed);
+   !> without resume, an existing journal is an error unless force. constants_file: the
+   !> --constants file, part of the fingerprint. progress, when given, hears of every
+   !> evaluation. SIGTERM and SIGINT stop the fit between evaluations (see check_stop).
+   subroutine run_fit(prob, dir, resume, outcome, error, progress, force, constants_file)
       type(fit_problem), intent(in) :: prob
       character(len=*), intent(in) :: dir
       logical, intent(in) :: resume
       type(fit_outcome), intent(out) :: outcome
       type(error_type), allocatable, intent(out) :: error
       procedure(progress_interface), optional :: progress
+      logical, intent(in), optional :: force
+      character(len=*), intent(in), optional :: constants_file
       type(fit_objective) :: obj
+      type(error_type), allocatable :: close_error
       integer(int64) :: now, rate
+      character(len=:), allocatable :: fingerprint, old_fingerprint, changed, journal
+      logical :: overwrite
       obj%prob = prob
-      allocate (obj%replay(0))
-      if (resume) then
-         call read_journal(join_path(dir, journal_name), size(prob%targets), size(prob%idx), &
-                           obj%replay, error)
-         if (allocated(error)) return
+      allocate (obj%replay(0), obj%replay_jac(0))
+      overwrite = .false.
+      if (present(force)) overwrite = force
+      if (present(constants_file)) then
+         fingerprint = fit_fingerprint(prob%cfg, constants_file)
+      else
+         fingerprint = fit_fingerprint(prob%cfg, '')
       end if
-      call obj%log%open(dir, error)
-      if (allocated(error)) return
+      journal = join_path(dir, journal_name)
+      if (resume) then
+         call read_journal(journal, size(prob%targets), size(prob%idx), obj%replay, &
+                           old_fingerprint, error)
+         if (allocated(error)) return
+         changed = fingerprint_mismatch(old_fingerprint, fingerprint)
+         if (len(changed) > 0) then
+            call fatal_error(error, journal//': cannot resume: '//changed// &
+               ' changed since the journal was written (start again without --resume, with --force)', &
+               stat_input)
+            return
+         end if
+         call read_cache(join_path(dir, cache_name), prob%nres(), obj%replay, obj%replay_jac)
+      else if (.not. overwrite .and. journal_has_records(journal)) then
+         call fatal_error(error, journal//': holds the journal of an earlier run; continue it '// &
+            'with --resume, or start again and overwrite it with --force', stat_usage)
+         return
+      end if
+      call obj%log%open(dir, fingerprint, prob%nres(), size(prob%idx), error)
+      if (allocated(error)) then
+         call obj%log%close()
+         return
+      end if
+      call catch_stop_signals()
       if (size(obj%replay) > 0) call obj%log%event('resumed: replaying '// &
          str(size(obj%replay))//' evaluations from '//journal_name)
       if (present(progress)) obj%progress => progress
@@ -230,7 +326,8 @@ contains
       outcome%f_start = obj%first
       outcome%nfail = obj%nfail_total
       outcome%ninvalid = obj%ninvalid_total
-      outcome%nreplayed = size(obj%replay)
+      outcome%nreplayed = min(size(obj%replay), obj%nevals)
+      outcome%nsimulated = obj%nsimulated
       if (.not. allocated(error)) then
          outcome%opt%nevals = obj%nevals
          outcome%constants = obj%constants_of(outcome%opt%x)
@@ -238,8 +335,55 @@ contains
          call obj%log%event('finished: '//outcome%opt%reason//', objective '// &
             real_str(outcome%opt%f, 'es12.5')//' after '//str(outcome%opt%nevals)//' evaluations')
       end if
-      call obj%log%close()
+      call obj%log%close(close_error)
+      if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
    end subroutine run_fit
+
+   !> Whether a journal file holds at least one line
+   logical function journal_has_records(path) result(has)
+      character(len=*), intent(in) :: path
+      integer :: unit, ios
+      character(len=1) :: c
+      has = .false.
+      if (.not. file_exists(path)) return
+      open (newunit=unit, file=path, status='old', action='read', access='stream', &
+            form='unformatted', iostat=ios)
+      if (ios /= 0) return
+      read (unit, iostat=ios) c
+      has = ios == 0
+      close (unit)
+   end function journal_has_records
+
+   !> The fingerprint of everything that decides a fit's result: the program version and the
+   !> FNV-1a 64-bit hashes of the input file's, the constants file's and every test's data
+   !> file's contents, as space-separated name=value items
+   function fit_fingerprint(cfg, constants_file) result(fp)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: constants_file
+      character(len=:), allocatable :: fp
+      integer :: i
+      fp = 'version='//usharp_version_string//' input='//hashed(cfg%path)
+      if (len_trim(constants_file) > 0) fp = fp//' constants='//hashed(constants_file)
+      do i = 1, size(cfg%tests)
+         if (allocated(cfg%tests(i)%data%file)) then
+            if (len_trim(cfg%tests(i)%data%file) > 0) &
+               fp = fp//' data:'//trim(cfg%tests(i)%name)//'='//hashed(cfg%tests(i)%data%file)
+         end if
+      end do
+   contains
+      function hashed(path) result(hex)
+         character(len=*), intent(in) :: path
+         character(len=:), allocatable :: hex
+         integer(int64) :: h
+         logical :: ok
+         call file_hash(path, h, ok)
+         if (ok) then
+            hex = hash_hex(h)
+         else
+            hex = 'unreadable'
+         end if
+      end function hashed
+   end function fit_fingerprint
    !> The configured method from the input's start, or from each multi-start point (a Latin
    !> hypercube over the box, in log10 of the constants); the best result wins
    subroutine search(obj, opt, nstarts, error)

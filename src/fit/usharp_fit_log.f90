@@ -1,6 +1,11 @@
 !> The fit's logs: the original's GUESS.TXT, FOM.TXT and SUMS.TXT (E12.5), and a journal with
-!> every evaluation at full precision from which a killed run is resumed
+!> every evaluation at full precision from which a killed run is resumed. The journal's first
+!> line is the fingerprint of everything that decides the result (program version, input
+!> file, constants file, data files); fit.cache beside it keeps, in binary at full precision,
+!> the residual vectors and sensitivity Jacobians a least-squares fit computed, so that a
+!> resumed Levenberg-Marquardt run replays them instead of simulating again.
 module usharp_fit_log
+   use, intrinsic :: iso_fortran_env, only: int32
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_input
    use usharp_strings, only: str
@@ -8,40 +13,71 @@ module usharp_fit_log
    implicit none
    private
 
-   public :: fit_log, journal_record, read_journal, journal_name
+   public :: fit_log, journal_record, cached_jacobian, read_journal, read_cache, journal_name
+   public :: cache_name, fingerprint_mismatch
 
    character(len=*), parameter :: journal_name = 'fit.journal'
+   character(len=*), parameter :: cache_name = 'fit.cache'
    character(len=*), parameter :: rec_fmt = '(i10,1x,i2,*(1x,es25.17e3))'
+   character(len=*), parameter :: fingerprint_tag = '# fingerprint'
+   character(len=8), parameter :: cache_magic = 'USHARPC1'
+   !> Kinds of record in fit.cache
+   integer(int32), parameter :: cache_residuals = 1, cache_jacobian = 2
 
-   !> One evaluation as the journal keeps it
+   !> One evaluation as the journal keeps it (r: its residuals, when fit.cache has them)
    type :: journal_record
       integer :: status = 0
       real(dp) :: f = 0.0_dp
       real(dp), allocatable :: per_test(:), x(:)
+      real(dp), allocatable :: r(:)
    end type journal_record
+
+   !> A sensitivity Jacobian as fit.cache keeps it
+   type :: cached_jacobian
+      real(dp), allocatable :: x(:), jac(:, :)
+   end type cached_jacobian
 
    !> Open log files of a fit
    type :: fit_log
-      integer :: guess = -1, fom = -1, sums = -1, journal = -1, events = -1
+      integer :: guess = -1, fom = -1, sums = -1, journal = -1, events = -1, cache = -1
+      character(len=:), allocatable :: dir
    contains
       procedure :: open => log_open
       procedure :: record => log_record
+      procedure :: record_jacobian => log_record_jacobian
       procedure :: event => log_event
       procedure :: close => log_close
    end type fit_log
 
 contains
 
-   !> Create the logs in dir, replacing old ones (a resumed run writes its replayed records again)
-   subroutine log_open(self, dir, error)
+   !> Create the logs in dir, replacing old ones (a resumed run writes its replayed records
+   !> again); the journal starts with the fingerprint line, fit.cache with its header (m
+   !> residuals, n fitted constants)
+   subroutine log_open(self, dir, fingerprint, m, n, error)
       class(fit_log), intent(inout) :: self
-      character(len=*), intent(in) :: dir
+      character(len=*), intent(in) :: dir, fingerprint
+      integer, intent(in) :: m, n
       type(error_type), allocatable, intent(out) :: error
+      integer :: ios
+      character(len=256) :: msg
+      self%dir = dir
       call open_one(self%guess, 'GUESS.TXT')
       call open_one(self%fom, 'FOM.TXT')
       call open_one(self%sums, 'SUMS.TXT')
       call open_one(self%events, 'fit.log')
       call open_one(self%journal, journal_name)
+      if (allocated(error)) return
+      write (self%journal, '(a)', iostat=ios, iomsg=msg) fingerprint_tag//' '//fingerprint
+      if (ios /= 0) then
+         call fatal_error(error, join_path(dir, journal_name)//': write failed ('//trim(msg)//')', stat_io)
+         return
+      end if
+      open (newunit=self%cache, file=join_path(dir, cache_name), status='replace', action='write', &
+            access='stream', form='unformatted', iostat=ios, iomsg=msg)
+      if (ios == 0) write (self%cache, iostat=ios, iomsg=msg) cache_magic, int(m, int32), int(n, int32)
+      if (ios /= 0) call fatal_error(error, join_path(dir, cache_name)//': cannot write ('// &
+                                     trim(msg)//')', stat_io)
    contains
       subroutine open_one(unit, name)
          integer, intent(out) :: unit
@@ -56,63 +92,128 @@ contains
       end subroutine open_one
    end subroutine log_open
 
-   !> Log evaluation k: x (search space) goes to the journal, constants (physical) to GUESS
-   subroutine log_record(self, k, status, f, per_test, x, constants)
+   !> Log evaluation k: x (search space) goes to the journal, constants (physical) to GUESS,
+   !> the residuals r (when given) to fit.cache. Every write is checked; a failure is an
+   !> error naming the file.
+   subroutine log_record(self, k, status, f, per_test, x, constants, error, r)
       class(fit_log), intent(inout) :: self
       integer, intent(in) :: k, status
       real(dp), intent(in) :: f, per_test(:), x(:), constants(:)
-      integer :: j
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), intent(in), optional :: r(:)
+      integer :: j, ios
+      character(len=256) :: msg
+      ios = 0
       do j = 1, size(constants)
-         write (self%guess, '(E12.5)') constants(j)
+         if (ios == 0) write (self%guess, '(E12.5)', iostat=ios, iomsg=msg) constants(j)
       end do
-      write (self%guess, '(a)') '------------'
-      write (self%fom, '(E12.5)') f
-      write (self%sums, '(*(E12.5))') per_test
+      if (ios == 0) write (self%guess, '(a)', iostat=ios, iomsg=msg) '------------'
+      if (ios == 0) flush (self%guess, iostat=ios, iomsg=msg)
+      if (failed('GUESS.TXT')) return
+      write (self%fom, '(E12.5)', iostat=ios, iomsg=msg) f
+      if (ios == 0) flush (self%fom, iostat=ios, iomsg=msg)
+      if (failed('FOM.TXT')) return
+      write (self%sums, '(*(E12.5))', iostat=ios, iomsg=msg) per_test
+      if (ios == 0) flush (self%sums, iostat=ios, iomsg=msg)
+      if (failed('SUMS.TXT')) return
+      if (present(r)) then
+         write (self%cache, iostat=ios, iomsg=msg) cache_residuals, int(k, int32), x, r
+         if (ios == 0) flush (self%cache, iostat=ios, iomsg=msg)
+         if (failed(cache_name)) return
+      end if
       ! The journal line goes last: a record in it means the evaluation is logged everywhere
-      write (self%journal, rec_fmt) k, status, f, per_test, x
-      flush (self%guess)
-      flush (self%fom)
-      flush (self%sums)
-      flush (self%journal)
+      write (self%journal, rec_fmt, iostat=ios, iomsg=msg) k, status, f, per_test, x
+      if (ios == 0) flush (self%journal, iostat=ios, iomsg=msg)
+      if (failed(journal_name)) return
+   contains
+      logical function failed(name)
+         character(len=*), intent(in) :: name
+         failed = ios /= 0
+         if (failed) call fatal_error(error, join_path(self%dir, name)//': write failed ('// &
+                                      trim(msg)//')', stat_io)
+      end function failed
    end subroutine log_record
 
-   !> A line in fit.log (warnings, penalties, the summary)
+   !> Keep the i-th sensitivity Jacobian (at x) in fit.cache
+   subroutine log_record_jacobian(self, i, x, jac, error)
+      class(fit_log), intent(inout) :: self
+      integer, intent(in) :: i
+      real(dp), intent(in) :: x(:), jac(:, :)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: ios
+      character(len=256) :: msg
+      write (self%cache, iostat=ios, iomsg=msg) cache_jacobian, int(i, int32), x, jac
+      if (ios == 0) flush (self%cache, iostat=ios, iomsg=msg)
+      if (ios /= 0) call fatal_error(error, join_path(self%dir, cache_name)//': write failed ('// &
+                                     trim(msg)//')', stat_io)
+   end subroutine log_record_jacobian
+
+   !> A line in fit.log (warnings, penalties, the summary). A failed write here is not an
+   !> error of its own: the journal's next write to the same disk reports it.
    subroutine log_event(self, text)
       class(fit_log), intent(inout) :: self
       character(len=*), intent(in) :: text
-      write (self%events, '(a)') text
-      flush (self%events)
+      integer :: ios
+      if (self%events == -1) return
+      write (self%events, '(a)', iostat=ios) text
+      flush (self%events, iostat=ios)
    end subroutine log_event
 
-   subroutine log_close(self)
+   !> Close the logs; error (when given) reports the first close that failed
+   subroutine log_close(self, error)
       class(fit_log), intent(inout) :: self
-      if (self%guess >= 0) close (self%guess)
-      if (self%fom >= 0) close (self%fom)
-      if (self%sums >= 0) close (self%sums)
-      if (self%journal >= 0) close (self%journal)
-      if (self%events >= 0) close (self%events)
+      type(error_type), allocatable, intent(out), optional :: error
+      call close_one(self%guess, 'GUESS.TXT')
+      call close_one(self%fom, 'FOM.TXT')
+      call close_one(self%sums, 'SUMS.TXT')
+      call close_one(self%cache, cache_name)
+      call close_one(self%journal, journal_name)
+      call close_one(self%events, 'fit.log')
+   contains
+      subroutine close_one(unit, name)
+         integer, intent(inout) :: unit
+         character(len=*), intent(in) :: name
+         integer :: ios
+         if (unit == -1) return  ! (newunit numbers are negative; -1 is never one)
+         close (unit, iostat=ios)
+         unit = -1
+         if (ios /= 0 .and. present(error)) then
+            if (.not. allocated(error)) call fatal_error(error, join_path(self%dir, name)// &
+                                                         ': write failed on close', stat_io)
+         end if
+      end subroutine close_one
    end subroutine log_close
 
-   !> Read the complete records of a journal (a torn last line from a kill is dropped)
-   subroutine read_journal(path, ntest, nx, records, error)
+   !> Read the complete records of a journal (a torn last line from a kill is dropped) and
+   !> its fingerprint ('' if it has none)
+   subroutine read_journal(path, ntest, nx, records, fingerprint, error)
       character(len=*), intent(in) :: path
       integer, intent(in) :: ntest, nx
       type(journal_record), allocatable, intent(out) :: records(:)
+      character(len=:), allocatable, intent(out) :: fingerprint
       type(error_type), allocatable, intent(out) :: error
+      type(journal_record), allocatable :: grown(:)
       type(journal_record) :: rec
-      character(len=4096) :: line
-      integer :: unit, ios, k, kk
-      allocate (records(0))
+      character(len=:), allocatable :: line
+      integer :: unit, ios, k, kk, nrec
+      allocate (records(16))
+      fingerprint = ''
+      nrec = 0
       if (.not. file_exists(path)) then
          call fatal_error(error, path//': no journal to resume from (run without --resume first)')
+         allocate (records(0))
          return
       end if
       open (newunit=unit, file=path, status='old', action='read')
       allocate (rec%per_test(ntest), rec%x(nx))
       k = 0
       do
-         read (unit, '(a)', iostat=ios) line
+         call read_line(unit, line, ios)
          if (ios /= 0) exit
+         if (index(line, fingerprint_tag) == 1) then
+            fingerprint = trim(adjustl(line(len(fingerprint_tag) + 1:)))
+            cycle
+         end if
          read (line, *, iostat=ios) kk, rec%status, rec%f, rec%per_test, rec%x
          if (ios /= 0) exit
          ! A torn line has too few fields; a complete one ends in a full number
@@ -123,8 +224,139 @@ contains
                ' out of order', stat_input)
             exit
          end if
-         records = [records, rec]
+         ! Grown by doubling: a journal of many evaluations is read in linear time
+         if (nrec == size(records)) then
+            allocate (grown(2*nrec))
+            grown(:nrec) = records(:nrec)
+            call move_alloc(grown, records)
+         end if
+         nrec = nrec + 1
+         records(nrec) = rec
       end do
       close (unit)
+      records = records(:nrec)
    end subroutine read_journal
+
+   !> One line of any length
+   subroutine read_line(unit, line, ios)
+      integer, intent(in) :: unit
+      character(len=:), allocatable, intent(out) :: line
+      integer, intent(out) :: ios
+      character(len=4096) :: buf
+      integer :: nread
+      line = ''
+      do
+         read (unit, '(a)', advance='no', iostat=ios, size=nread) buf
+         line = line//buf(:nread)
+         if (ios /= 0) exit
+      end do
+      if (is_iostat_eor(ios)) ios = 0
+   end subroutine read_line
+
+   !> Attach the residuals kept in fit.cache to the journal's records (where the cache has
+   !> them at the record's point) and return its sensitivity Jacobians. A missing, foreign or
+   !> torn cache only means less is replayed.
+   subroutine read_cache(path, m, records, jacobians)
+      character(len=*), intent(in) :: path
+      integer, intent(in) :: m
+      type(journal_record), intent(inout) :: records(:)
+      type(cached_jacobian), allocatable, intent(out) :: jacobians(:)
+      character(len=8) :: magic
+      integer(int32) :: mm, nn, kind, k
+      real(dp), allocatable :: x(:), r(:), jac(:, :)
+      integer :: unit, ios, n
+      allocate (jacobians(0))
+      if (size(records) == 0) return
+      n = size(records(1)%x)
+      open (newunit=unit, file=path, status='old', action='read', access='stream', &
+            form='unformatted', iostat=ios)
+      if (ios /= 0) return
+      read (unit, iostat=ios) magic, mm, nn
+      if (ios /= 0 .or. magic /= cache_magic .or. mm /= m .or. nn /= n) then
+         close (unit)
+         return
+      end if
+      allocate (x(n), r(m), jac(m, n))
+      do
+         read (unit, iostat=ios) kind, k
+         if (ios /= 0) exit
+         select case (kind)
+         case (cache_residuals)
+            read (unit, iostat=ios) x, r
+            if (ios /= 0) exit
+            if (k < 1 .or. k > size(records)) cycle
+            if (all(x == records(k)%x)) records(k)%r = r
+         case (cache_jacobian)
+            read (unit, iostat=ios) x, jac
+            if (ios /= 0) exit
+            if (k /= size(jacobians) + 1) exit
+            jacobians = [jacobians, cached_jacobian(x, jac)]
+         case default
+            exit
+         end select
+      end do
+      close (unit)
+   end subroutine read_cache
+
+   !> '' when the fingerprints agree, else what changed (the fingerprint is a list of
+   !> name=hash items; see usharp_fit)
+   function fingerprint_mismatch(old, new) result(what)
+      character(len=*), intent(in) :: old, new
+      character(len=:), allocatable :: what
+      character(len=:), allocatable :: item, name, old_value
+      integer :: pos, next, eq
+      what = ''
+      if (len_trim(old) == 0) then
+         what = 'the journal has no fingerprint'
+         return
+      end if
+      pos = 1
+      do while (pos <= len_trim(new))
+         next = index(new(pos:), ' ')
+         if (next == 0) then
+            item = new(pos:len_trim(new))
+            next = len_trim(new) + 1
+         else
+            item = new(pos:pos + next - 2)
+            next = pos + next
+         end if
+         pos = next
+         if (len(item) == 0) cycle
+         eq = index(item, '=')
+         name = item(:eq - 1)
+         old_value = value_of(old, name)
+         if (old_value /= item(eq + 1:)) then
+            if (len(what) > 0) what = what//', '
+            what = what//describe(name)
+         end if
+      end do
+   contains
+      function value_of(list, name) result(val)
+         character(len=*), intent(in) :: list, name
+         character(len=:), allocatable :: val
+         integer :: at, stop_at
+         val = '(none)'
+         at = index(' '//list//' ', ' '//name//'=')
+         if (at == 0) return
+         stop_at = index(list(at:)//' ', ' ')
+         val = list(at + len(name) + 1:at + stop_at - 2)
+      end function value_of
+      function describe(name) result(text)
+         character(len=*), intent(in) :: name
+         character(len=:), allocatable :: text
+         select case (name)
+         case ('version'); text = 'the program version'
+         case ('input'); text = 'the input file'
+         case ('constants'); text = 'the constants file (--constants)'
+         case default
+            if (index(name, 'data:') == 1) then
+               text = "the data file of test '"//name(6:)//"'"
+            else if (index(name, 'history:') == 1) then
+               text = "the history file of test '"//name(9:)//"'"
+            else
+               text = name
+            end if
+         end select
+      end function describe
+   end function fingerprint_mismatch
 end module usharp_fit_log

@@ -4,7 +4,7 @@ module usharp_error
    private
 
    public :: error_type, fatal_error, prefix_error
-   public :: stat_input, stat_usage, stat_failure, stat_io
+   public :: stat_input, stat_usage, stat_failure, stat_io, stat_report, stat_busy
 
    !> A user error in an input file or its contents (exit code 1)
    integer, parameter :: stat_input = 1
@@ -14,6 +14,12 @@ module usharp_error
    integer, parameter :: stat_failure = 3
    !> Output could not be written (exit code 4)
    integer, parameter :: stat_io = 4
+   !> A fit that finished and whose results are written, but whose identifiability report
+   !> failed (exit code 5)
+   integer, parameter :: stat_report = 5
+   !> The output folder is in use by another run (exit code 6)
+   integer, parameter :: stat_busy = 6
+   ! A run stopped by a signal exits with 128 + the signal's number (143 for SIGTERM)
 
    !> Error carried back to the caller
    type :: error_type

@@ -2,12 +2,14 @@
 module usharp_filesys
    use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char, c_ptr, c_null_ptr, &
                                           c_associated
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_error, only: error_type, fatal_error, stat_io
-   use usharp_strings, only: shell_quote
+   use usharp_process, only: run_process, process_result
    implicit none
    private
 
    public :: make_dir, join_path, file_exists, absolute_path, remove_file, remove_dir
+   public :: rename_file, lock_file, unlock_file, file_hash, hash_text, hash_hex
 
    interface
       function c_mkdir(path, mode) bind(C, name='mkdir') result(stat)
@@ -27,9 +29,123 @@ module usharp_filesys
          character(kind=c_char), intent(in) :: path(*)
          integer(c_int) :: stat
       end function c_remove
+      function c_rename(old, new) bind(C, name='rename') result(stat)
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: old(*), new(*)
+         integer(c_int) :: stat
+      end function c_rename
+      function c_open(path, flags, mode) bind(C, name='open') result(fd)
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_int), value, intent(in) :: flags, mode
+         integer(c_int) :: fd
+      end function c_open
+      function c_close(fd) bind(C, name='close') result(stat)
+         import :: c_int
+         integer(c_int), value, intent(in) :: fd
+         integer(c_int) :: stat
+      end function c_close
+      function c_flock(fd, op) bind(C, name='flock') result(stat)
+         import :: c_int
+         integer(c_int), value, intent(in) :: fd, op
+         integer(c_int) :: stat
+      end function c_flock
    end interface
 
+   ! Linux values of <fcntl.h> and <sys/file.h>
+   integer(c_int), parameter :: o_rdwr = 2, o_creat = int(o'100', c_int), o_cloexec = int(o'2000000', c_int)
+   integer(c_int), parameter :: lock_ex = 2, lock_nb = 4
+
+   !> FNV-1a 64-bit offset basis 0xcbf29ce484222325 (as a signed 64-bit integer)
+   integer(int64), parameter :: fnv_basis = -3750763034362895579_int64
+
 contains
+
+   !> Rename a file (atomic within one file system: a reader sees the old or the new file)
+   subroutine rename_file(old, new, error)
+      character(len=*), intent(in) :: old, new
+      type(error_type), allocatable, intent(out) :: error
+      if (c_rename(old//c_null_char, new//c_null_char) /= 0) &
+         call fatal_error(error, new//': cannot move the finished file into place from '//old, stat_io)
+   end subroutine rename_file
+
+   !> Take an advisory lock (flock) on the file path, created if needed, without waiting.
+   !> fd is the open descriptor that holds the lock (-1 when taken by another process); the
+   !> kernel releases it when the descriptor is closed or the process ends in any way, so a
+   !> killed process leaves no stale lock. The descriptor is not inherited by commands run.
+   subroutine lock_file(path, fd, error)
+      character(len=*), intent(in) :: path
+      integer, intent(out) :: fd
+      type(error_type), allocatable, intent(out) :: error
+      integer(c_int) :: cfd, stat
+      fd = -1
+      cfd = c_open(path//c_null_char, ior(ior(o_rdwr, o_creat), o_cloexec), int(o'644', c_int))
+      if (cfd < 0) then
+         call fatal_error(error, path//': cannot create the lock file', stat_io)
+         return
+      end if
+      stat = c_flock(cfd, ior(lock_ex, lock_nb))
+      if (stat /= 0) then
+         stat = c_close(cfd)
+         return
+      end if
+      fd = int(cfd)
+   end subroutine lock_file
+
+   !> Release a lock taken by lock_file
+   subroutine unlock_file(fd)
+      integer, intent(inout) :: fd
+      integer(c_int) :: stat
+      if (fd >= 0) stat = c_close(int(fd, c_int))
+      fd = -1
+   end subroutine unlock_file
+
+   !> FNV-1a 64-bit hash of a file's bytes; ok false if it cannot be read
+   subroutine file_hash(path, hash, ok)
+      character(len=*), intent(in) :: path
+      integer(int64), intent(out) :: hash
+      logical, intent(out) :: ok
+      integer :: unit, ios
+      integer(int64) :: size_bytes
+      character(len=:), allocatable :: bytes
+      hash = 0
+      open (newunit=unit, file=path, status='old', action='read', access='stream', &
+            form='unformatted', iostat=ios)
+      ok = ios == 0
+      if (.not. ok) return
+      inquire (unit=unit, size=size_bytes)
+      allocate (character(len=max(0_int64, size_bytes)) :: bytes)
+      if (size_bytes > 0) read (unit, iostat=ios) bytes
+      close (unit)
+      ok = ios == 0
+      hash = hash_text(bytes)
+   end subroutine file_hash
+
+   !> FNV-1a 64-bit hash of a text. The product modulo 2**64 is formed on 32-bit halves, so
+   !> no signed integer overflows (prime = 2**40 + 435)
+   pure function hash_text(text) result(hash)
+      character(len=*), intent(in) :: text
+      integer(int64) :: hash
+      integer(int64), parameter :: m32 = 4294967295_int64
+      integer(int64) :: hi, lo, t
+      integer :: k
+      hi = iand(ishft(fnv_basis, -32), m32)
+      lo = iand(fnv_basis, m32)
+      do k = 1, len(text)
+         lo = ieor(lo, int(iachar(text(k:k)), int64))
+         t = lo*435_int64
+         hi = iand(hi*435_int64 + ishft(t, -32) + iand(ishft(lo, 8), m32), m32)
+         lo = iand(t, m32)
+      end do
+      hash = ior(ishft(hi, 32), lo)
+   end function hash_text
+
+   !> A hash as 16 hexadecimal digits
+   pure function hash_hex(hash) result(hex)
+      integer(int64), intent(in) :: hash
+      character(len=16) :: hex
+      write (hex, '(z16.16)') hash
+   end function hash_hex
 
    !> Create a folder and its parents (like mkdir -p); an error if it cannot be made or written
    subroutine make_dir(path, error)
@@ -97,13 +213,15 @@ contains
    subroutine remove_dir(path, names)
       character(len=*), intent(in) :: path
       character(len=*), intent(in) :: names(:)
-      integer :: k, stat
+      integer :: k
       logical :: gone
+      type(process_result) :: res
       do k = 1, size(names)
          gone = remove_file(join_path(path, trim(names(k))))
       end do
       if (c_remove(path//c_null_char) == 0) return
-      call execute_command_line('rm -rf '//shell_quote(path), exitstat=stat)
+      call run_process([character(len=max(6, len(path))) :: '/bin/rm', '-rf', '--', path], '/', &
+                       '/dev/null', '/dev/null', 600.0d0, 5.0d0, res, stoppable=.false.)
    end subroutine remove_dir
 
    !> Whether a file exists

@@ -1,0 +1,222 @@
+!> Running another program: posix_spawn with an argument vector (no command string is
+!> parsed by a shell on the way), in a folder, with stdin from /dev/null and stdout and
+!> stderr into files, in a process group of its own, under a time limit. At the limit, or
+!> when usharp is asked to stop (usharp_signal), the whole group gets SIGTERM and, after a
+!> grace period, SIGKILL; when the program ends, whatever it left running in its group is
+!> killed too. posix_spawn is safe to call from several threads at once (execute_command_line
+!> goes through system(), which is not specified to be).
+!>
+!> Linux/glibc: the sizes of the opaque spawn structures and the flag values are those of
+!> glibc on 64-bit Linux, with room to spare.
+module usharp_process
+   use, intrinsic :: iso_c_binding, only: c_int, c_short, c_char, c_ptr, c_null_ptr, &
+                                          c_null_char, c_loc, c_int64_t
+   use, intrinsic :: iso_fortran_env, only: int64
+   use usharp_kinds, only: dp
+   use usharp_signal, only: stop_signal
+   implicit none
+   private
+
+   public :: process_result, run_process
+   public :: proc_exited, proc_signalled, proc_timed_out, proc_stopped, proc_spawn_failed
+
+   !> How a program ended
+   integer, parameter :: proc_exited = 0       !< by itself, code = exit status
+   integer, parameter :: proc_signalled = 1    !< killed by a signal from elsewhere, code = signal
+   integer, parameter :: proc_timed_out = 2    !< stopped at its time limit
+   integer, parameter :: proc_stopped = 3      !< stopped because usharp received a stop signal
+   integer, parameter :: proc_spawn_failed = 4 !< could not be started, code = errno
+
+   type :: process_result
+      integer :: how = proc_exited
+      integer :: code = 0
+   end type process_result
+
+   integer(c_int), parameter :: sigterm = 15, sigkill = 9, wnohang = 1
+   integer(c_int), parameter :: o_rdonly = 0, o_wronly = 1, o_creat = int(o'100', c_int), &
+                                o_trunc = int(o'1000', c_int)
+   integer(c_short), parameter :: spawn_setpgroup = 2_c_short
+
+   !> Opaque posix_spawnattr_t (336 bytes) and posix_spawn_file_actions_t (80 bytes)
+   type, bind(C) :: spawn_attr
+      integer(c_int64_t) :: opaque(96) = 0
+   end type spawn_attr
+   type, bind(C) :: spawn_actions
+      integer(c_int64_t) :: opaque(32) = 0
+   end type spawn_actions
+
+   type(c_ptr), bind(C, name='environ') :: c_environ
+
+   interface
+      function c_posix_spawn(pid, path, actions, attr, argv, envp) bind(C, name='posix_spawn') result(r)
+         import :: c_int, c_char, c_ptr, spawn_attr, spawn_actions
+         integer(c_int), intent(out) :: pid
+         character(kind=c_char), intent(in) :: path(*)
+         type(spawn_actions), intent(in) :: actions
+         type(spawn_attr), intent(in) :: attr
+         type(c_ptr), intent(in) :: argv(*)
+         type(c_ptr), value, intent(in) :: envp
+         integer(c_int) :: r
+      end function c_posix_spawn
+      function c_attr_init(attr) bind(C, name='posix_spawnattr_init') result(r)
+         import :: c_int, spawn_attr
+         type(spawn_attr), intent(inout) :: attr
+         integer(c_int) :: r
+      end function c_attr_init
+      function c_attr_destroy(attr) bind(C, name='posix_spawnattr_destroy') result(r)
+         import :: c_int, spawn_attr
+         type(spawn_attr), intent(inout) :: attr
+         integer(c_int) :: r
+      end function c_attr_destroy
+      function c_attr_setflags(attr, flags) bind(C, name='posix_spawnattr_setflags') result(r)
+         import :: c_int, c_short, spawn_attr
+         type(spawn_attr), intent(inout) :: attr
+         integer(c_short), value, intent(in) :: flags
+         integer(c_int) :: r
+      end function c_attr_setflags
+      function c_attr_setpgroup(attr, pgroup) bind(C, name='posix_spawnattr_setpgroup') result(r)
+         import :: c_int, spawn_attr
+         type(spawn_attr), intent(inout) :: attr
+         integer(c_int), value, intent(in) :: pgroup
+         integer(c_int) :: r
+      end function c_attr_setpgroup
+      function c_actions_init(fa) bind(C, name='posix_spawn_file_actions_init') result(r)
+         import :: c_int, spawn_actions
+         type(spawn_actions), intent(inout) :: fa
+         integer(c_int) :: r
+      end function c_actions_init
+      function c_actions_destroy(fa) bind(C, name='posix_spawn_file_actions_destroy') result(r)
+         import :: c_int, spawn_actions
+         type(spawn_actions), intent(inout) :: fa
+         integer(c_int) :: r
+      end function c_actions_destroy
+      function c_actions_addopen(fa, fd, path, flags, mode) &
+         bind(C, name='posix_spawn_file_actions_addopen') result(r)
+         import :: c_int, c_char, spawn_actions
+         type(spawn_actions), intent(inout) :: fa
+         integer(c_int), value, intent(in) :: fd, flags, mode
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_int) :: r
+      end function c_actions_addopen
+      function c_actions_addchdir(fa, path) bind(C, name='posix_spawn_file_actions_addchdir_np') result(r)
+         import :: c_int, c_char, spawn_actions
+         type(spawn_actions), intent(inout) :: fa
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_int) :: r
+      end function c_actions_addchdir
+      function c_waitpid(pid, status, options) bind(C, name='waitpid') result(r)
+         import :: c_int
+         integer(c_int), value, intent(in) :: pid, options
+         integer(c_int), intent(out) :: status
+         integer(c_int) :: r
+      end function c_waitpid
+      function c_kill(pid, sig) bind(C, name='kill') result(r)
+         import :: c_int
+         integer(c_int), value, intent(in) :: pid, sig
+         integer(c_int) :: r
+      end function c_kill
+      function c_usleep(usec) bind(C, name='usleep') result(r)
+         import :: c_int
+         integer(c_int), value, intent(in) :: usec
+         integer(c_int) :: r
+      end function c_usleep
+   end interface
+
+   !> A C string that stays in place while its address is used
+   type :: c_string
+      character(kind=c_char), allocatable :: chars(:)
+   end type c_string
+
+contains
+
+   !> Run the program argv(1) (an absolute path) with the arguments argv(2:) in the folder
+   !> dir, stdin from /dev/null, stdout and stderr into the files out and err of dir; wait
+   !> until it ends, at most time_limit s (then TERM to its group, KILL grace s later).
+   !> stoppable (default true): also stop it when usharp receives a stop signal.
+   subroutine run_process(argv, dir, out, err, time_limit, grace, res, stoppable)
+      character(len=*), intent(in) :: argv(:)
+      character(len=*), intent(in) :: dir, out, err
+      real(dp), intent(in) :: time_limit, grace
+      type(process_result), intent(out) :: res
+      logical, intent(in), optional :: stoppable
+      type(c_string), allocatable, target :: args(:)
+      type(c_ptr), allocatable :: ptrs(:)
+      type(spawn_attr) :: attr
+      type(spawn_actions) :: fa
+      integer(c_int) :: pid, rc, status, r
+      integer(int64) :: t0, now, rate, t_term
+      integer :: k, sleep_us
+      logical :: terminating
+
+      allocate (args(size(argv)), ptrs(size(argv) + 1))
+      do k = 1, size(argv)
+         args(k)%chars = to_c(trim(argv(k)))
+         ptrs(k) = c_loc(args(k)%chars)
+      end do
+      ptrs(size(argv) + 1) = c_null_ptr
+      rc = c_attr_init(attr)
+      rc = c_attr_setflags(attr, spawn_setpgroup)
+      rc = c_attr_setpgroup(attr, 0_c_int)
+      rc = c_actions_init(fa)
+      rc = c_actions_addchdir(fa, to_c(dir))
+      rc = c_actions_addopen(fa, 0_c_int, to_c('/dev/null'), o_rdonly, 0_c_int)
+      rc = c_actions_addopen(fa, 1_c_int, to_c(out), ior(ior(o_wronly, o_creat), o_trunc), &
+                             int(o'644', c_int))
+      rc = c_actions_addopen(fa, 2_c_int, to_c(err), ior(ior(o_wronly, o_creat), o_trunc), &
+                             int(o'644', c_int))
+      rc = c_posix_spawn(pid, to_c(trim(argv(1))), fa, attr, ptrs, c_environ)
+      r = c_actions_destroy(fa)
+      r = c_attr_destroy(attr)
+      if (rc /= 0) then
+         res%how = proc_spawn_failed
+         res%code = int(rc)
+         return
+      end if
+
+      call system_clock(t0, rate)
+      terminating = .false.
+      t_term = 0
+      sleep_us = 2000
+      do
+         r = c_waitpid(pid, status, wnohang)
+         if (r == pid) exit
+         call system_clock(now)
+         if (.not. terminating) then
+            if (stop_signal() /= 0 .and. .not. (present(stoppable) .and. .not. stoppable)) then
+               res%how = proc_stopped
+            else if (real(now - t0, dp)/real(rate, dp) > time_limit) then
+               res%how = proc_timed_out
+            end if
+            if (res%how /= proc_exited) then
+               r = c_kill(-pid, sigterm)
+               terminating = .true.
+               t_term = now
+            end if
+         else if (real(now - t_term, dp)/real(rate, dp) > grace) then
+            r = c_kill(-pid, sigkill)
+         end if
+         r = c_usleep(int(sleep_us, c_int))
+         sleep_us = min(2*sleep_us, 50000)
+      end do
+      ! Whatever the program left running in its group goes with it
+      r = c_kill(-pid, sigkill)
+      if (res%how /= proc_exited) return
+      if (iand(status, 127_c_int) == 0) then
+         res%code = int(iand(ishft(status, -8), 255_c_int))
+      else
+         res%how = proc_signalled
+         res%code = int(iand(status, 127_c_int))
+      end if
+   end subroutine run_process
+
+   pure function to_c(text) result(chars)
+      character(len=*), intent(in) :: text
+      character(kind=c_char), allocatable :: chars(:)
+      integer :: k
+      allocate (chars(len(text) + 1))
+      do k = 1, len(text)
+         chars(k) = text(k:k)
+      end do
+      chars(len(text) + 1) = c_null_char
+   end function to_c
+end module usharp_process

@@ -1,0 +1,48 @@
+!> A stop request by signal: SIGTERM (what a batch scheduler sends at its wall-time limit)
+!> and SIGINT (Ctrl-C) set a flag that a fit checks between evaluations, so it stops with
+!> its logs and journal complete and can be continued with --resume.
+!>
+!> The flag is the one piece of global mutable state in usharp: a signal handler runs
+!> outside any call chain and can hand nothing back but through a variable it can reach;
+!> it only ever stores the signal's number (an async-signal-safe act) and is read in
+!> between evaluations.
+module usharp_signal
+   use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
+   implicit none
+   private
+
+   public :: catch_stop_signals, stop_signal, sigterm, sigint
+
+   integer(c_int), parameter :: sigint = 2, sigterm = 15
+
+   !> The number of the last stop signal received (0: none)
+   integer(c_int), volatile, save :: received = 0
+
+   interface
+      function c_signal(signum, handler) bind(C, name='signal') result(previous)
+         import :: c_int, c_funptr
+         integer(c_int), value, intent(in) :: signum
+         type(c_funptr), value, intent(in) :: handler
+         type(c_funptr) :: previous
+      end function c_signal
+   end interface
+
+contains
+
+   !> Catch SIGTERM and SIGINT from now on (they no longer end the process at once)
+   subroutine catch_stop_signals()
+      type(c_funptr) :: previous
+      previous = c_signal(sigterm, c_funloc(on_signal))
+      previous = c_signal(sigint, c_funloc(on_signal))
+   end subroutine catch_stop_signals
+
+   !> The stop signal received since catch_stop_signals (0: none)
+   integer function stop_signal()
+      stop_signal = int(received)
+   end function stop_signal
+
+   subroutine on_signal(signum) bind(C)
+      integer(c_int), value, intent(in) :: signum
+      received = signum
+   end subroutine on_signal
+end module usharp_signal
