@@ -12,7 +12,7 @@
 !> stdout.txt and stderr.txt there. At the time limit the whole group is stopped.
 module usharp_external
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, prefix_error, stat_io
+   use usharp_error, only: error_type, fatal_error, prefix_error, stat_io, stat_failure
    use usharp_strings, only: str, real_str, shell_quote
    use usharp_miller, only: miller_model
    use usharp_upf, only: upf_props
@@ -171,7 +171,7 @@ contains
             call fatal_error(error, 'cannot start /bin/sh (error '//str(proc%code)//')')
          case (proc_signalled)
             call fatal_error(error, 'command was killed by signal '//str(proc%code)// &
-               trim(': '//last_line(join_path(work, stderr_name))))
+               stderr_tail())
          case default
             select case (proc%code)
             case (127)
@@ -182,7 +182,7 @@ contains
                   last_line(join_path(work, stderr_name)))
             case default
                call fatal_error(error, 'command failed with exit status '//str(proc%code)// &
-                  trim(': '//last_line(join_path(work, stderr_name))))
+                  stderr_tail())
             end select
          end select
       else if (.not. file_exists(output)) then
@@ -199,12 +199,21 @@ contains
          if (.not. allocated(error)) call to_output_times(vals, error)
       end if
       if (allocated(error)) then
+         ! A failing command is a failed simulation, as a failing integrator is (exit 3)
          call prefix_error(error, 'external run (work folder '//work//'): ')
+         error%stat = stat_failure
          return
       end if
       call remove_dir(work, names)
 
    contains
+
+      !> ': ' and the last line the command wrote to stderr ('' when it wrote none)
+      function stderr_tail() result(text)
+         character(len=:), allocatable :: text
+         text = last_line(join_path(work, stderr_name))
+         if (len(text) > 0) text = ': '//text
+      end function stderr_tail
 
       !> Stress at t_out from the (time, stress) listing: repeated times merged, the unstressed
       !> start added when the listing begins at the first increment, no extrapolation

@@ -339,18 +339,23 @@ contains
       if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
    end subroutine run_fit
 
-   !> Whether a journal file holds at least one line
+   !> Whether a journal file holds at least one evaluation (a line besides the fingerprint)
    logical function journal_has_records(path) result(has)
       character(len=*), intent(in) :: path
       integer :: unit, ios
       character(len=1) :: c
       has = .false.
       if (.not. file_exists(path)) return
-      open (newunit=unit, file=path, status='old', action='read', access='stream', &
-            form='unformatted', iostat=ios)
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
       if (ios /= 0) return
-      read (unit, iostat=ios) c
-      has = ios == 0
+      do
+         read (unit, '(a)', iostat=ios) c
+         if (ios /= 0) exit
+         if (c /= '#') then
+            has = .true.
+            exit
+         end if
+      end do
       close (unit)
    end function journal_has_records
 

@@ -9,7 +9,7 @@ module usharp_fit_log
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_input
    use usharp_strings, only: str
-   use usharp_filesys, only: join_path, file_exists
+   use usharp_filesys, only: join_path, file_exists, raw_file
    implicit none
    private
 
@@ -37,9 +37,9 @@ module usharp_fit_log
       real(dp), allocatable :: x(:), jac(:, :)
    end type cached_jacobian
 
-   !> Open log files of a fit
+   !> Open log files of a fit (written through the C library: a full disk is noticed)
    type :: fit_log
-      integer :: guess = -1, fom = -1, sums = -1, journal = -1, events = -1, cache = -1
+      type(raw_file) :: guess, fom, sums, journal, events, cache
       character(len=:), allocatable :: dir
    contains
       procedure :: open => log_open
@@ -59,37 +59,16 @@ contains
       character(len=*), intent(in) :: dir, fingerprint
       integer, intent(in) :: m, n
       type(error_type), allocatable, intent(out) :: error
-      integer :: ios
-      character(len=256) :: msg
       self%dir = dir
-      call open_one(self%guess, 'GUESS.TXT')
-      call open_one(self%fom, 'FOM.TXT')
-      call open_one(self%sums, 'SUMS.TXT')
-      call open_one(self%events, 'fit.log')
-      call open_one(self%journal, journal_name)
-      if (allocated(error)) return
-      write (self%journal, '(a)', iostat=ios, iomsg=msg) fingerprint_tag//' '//fingerprint
-      if (ios /= 0) then
-         call fatal_error(error, join_path(dir, journal_name)//': write failed ('//trim(msg)//')', stat_io)
-         return
-      end if
-      open (newunit=self%cache, file=join_path(dir, cache_name), status='replace', action='write', &
-            access='stream', form='unformatted', iostat=ios, iomsg=msg)
-      if (ios == 0) write (self%cache, iostat=ios, iomsg=msg) cache_magic, int(m, int32), int(n, int32)
-      if (ios /= 0) call fatal_error(error, join_path(dir, cache_name)//': cannot write ('// &
-                                     trim(msg)//')', stat_io)
-   contains
-      subroutine open_one(unit, name)
-         integer, intent(out) :: unit
-         character(len=*), intent(in) :: name
-         integer :: ios
-         character(len=256) :: msg
-         if (allocated(error)) return
-         open (newunit=unit, file=join_path(dir, name), status='replace', action='write', &
-               iostat=ios, iomsg=msg)
-         if (ios /= 0) call fatal_error(error, join_path(dir, name)//': cannot write ('// &
-            trim(msg)//')', stat_io)
-      end subroutine open_one
+      call self%guess%create(join_path(dir, 'GUESS.TXT'), error)
+      if (.not. allocated(error)) call self%fom%create(join_path(dir, 'FOM.TXT'), error)
+      if (.not. allocated(error)) call self%sums%create(join_path(dir, 'SUMS.TXT'), error)
+      if (.not. allocated(error)) call self%events%create(join_path(dir, 'fit.log'), error)
+      if (.not. allocated(error)) call self%journal%create(join_path(dir, journal_name), error)
+      if (.not. allocated(error)) call self%cache%create(join_path(dir, cache_name), error)
+      if (.not. allocated(error)) call self%journal%put(fingerprint_tag//' '//fingerprint// &
+                                                        new_line('a'), error)
+      if (.not. allocated(error)) call self%cache%put(cache_magic//bytes_i([m, n]), error)
    end subroutine log_open
 
    !> Log evaluation k: x (search space) goes to the journal, constants (physical) to GUESS,
@@ -101,37 +80,28 @@ contains
       real(dp), intent(in) :: f, per_test(:), x(:), constants(:)
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: r(:)
-      integer :: j, ios
-      character(len=256) :: msg
-      ios = 0
+      character(len=12*(size(constants) + size(per_test)) + 16) :: buf
+      character(len=16 + 26*(1 + size(per_test) + size(x))) :: rec
+      integer :: j
+      buf = ''
       do j = 1, size(constants)
-         if (ios == 0) write (self%guess, '(E12.5)', iostat=ios, iomsg=msg) constants(j)
+         write (buf(13*(j - 1) + 1:13*j), '(E12.5,a)') constants(j), new_line('a')
       end do
-      if (ios == 0) write (self%guess, '(a)', iostat=ios, iomsg=msg) '------------'
-      if (ios == 0) flush (self%guess, iostat=ios, iomsg=msg)
-      if (failed('GUESS.TXT')) return
-      write (self%fom, '(E12.5)', iostat=ios, iomsg=msg) f
-      if (ios == 0) flush (self%fom, iostat=ios, iomsg=msg)
-      if (failed('FOM.TXT')) return
-      write (self%sums, '(*(E12.5))', iostat=ios, iomsg=msg) per_test
-      if (ios == 0) flush (self%sums, iostat=ios, iomsg=msg)
-      if (failed('SUMS.TXT')) return
+      call self%guess%put(buf(:13*size(constants))//'------------'//new_line('a'), error)
+      if (allocated(error)) return
+      write (buf, '(E12.5)') f
+      call self%fom%put(trim(buf)//new_line('a'), error)
+      if (allocated(error)) return
+      write (buf, '(*(E12.5))') per_test
+      call self%sums%put(trim(buf)//new_line('a'), error)
+      if (allocated(error)) return
       if (present(r)) then
-         write (self%cache, iostat=ios, iomsg=msg) cache_residuals, int(k, int32), x, r
-         if (ios == 0) flush (self%cache, iostat=ios, iomsg=msg)
-         if (failed(cache_name)) return
+         call self%cache%put(bytes_i([cache_residuals, k])//bytes_r(x)//bytes_r(r), error)
+         if (allocated(error)) return
       end if
       ! The journal line goes last: a record in it means the evaluation is logged everywhere
-      write (self%journal, rec_fmt, iostat=ios, iomsg=msg) k, status, f, per_test, x
-      if (ios == 0) flush (self%journal, iostat=ios, iomsg=msg)
-      if (failed(journal_name)) return
-   contains
-      logical function failed(name)
-         character(len=*), intent(in) :: name
-         failed = ios /= 0
-         if (failed) call fatal_error(error, join_path(self%dir, name)//': write failed ('// &
-                                      trim(msg)//')', stat_io)
-      end function failed
+      write (rec, rec_fmt) k, status, f, per_test, x
+      call self%journal%put(trim(rec)//new_line('a'), error)
    end subroutine log_record
 
    !> Keep the i-th sensitivity Jacobian (at x) in fit.cache
@@ -140,46 +110,50 @@ contains
       integer, intent(in) :: i
       real(dp), intent(in) :: x(:), jac(:, :)
       type(error_type), allocatable, intent(out) :: error
-      integer :: ios
-      character(len=256) :: msg
-      write (self%cache, iostat=ios, iomsg=msg) cache_jacobian, int(i, int32), x, jac
-      if (ios == 0) flush (self%cache, iostat=ios, iomsg=msg)
-      if (ios /= 0) call fatal_error(error, join_path(self%dir, cache_name)//': write failed ('// &
-                                     trim(msg)//')', stat_io)
+      call self%cache%put(bytes_i([cache_jacobian, i])//bytes_r(x)//bytes_r(reshape(jac, [size(jac)])), &
+                          error)
    end subroutine log_record_jacobian
+
+   !> The bytes of 32-bit integers and of doubles, as fit.cache keeps them
+   pure function bytes_i(v) result(b)
+      integer, intent(in) :: v(:)
+      character(len=4*size(v)) :: b
+      b = transfer(int(v, int32), b)
+   end function bytes_i
+
+   pure function bytes_r(v) result(b)
+      real(dp), intent(in) :: v(:)
+      character(len=8*size(v)) :: b
+      b = transfer(v, b)
+   end function bytes_r
 
    !> A line in fit.log (warnings, penalties, the summary). A failed write here is not an
    !> error of its own: the journal's next write to the same disk reports it.
    subroutine log_event(self, text)
       class(fit_log), intent(inout) :: self
       character(len=*), intent(in) :: text
-      integer :: ios
-      if (self%events == -1) return
-      write (self%events, '(a)', iostat=ios) text
-      flush (self%events, iostat=ios)
+      type(error_type), allocatable :: error
+      if (self%events%fd < 0) return
+      call self%events%put(text//new_line('a'), error)
    end subroutine log_event
 
    !> Close the logs; error (when given) reports the first close that failed
    subroutine log_close(self, error)
       class(fit_log), intent(inout) :: self
       type(error_type), allocatable, intent(out), optional :: error
-      call close_one(self%guess, 'GUESS.TXT')
-      call close_one(self%fom, 'FOM.TXT')
-      call close_one(self%sums, 'SUMS.TXT')
-      call close_one(self%cache, cache_name)
-      call close_one(self%journal, journal_name)
-      call close_one(self%events, 'fit.log')
+      call close_one(self%guess)
+      call close_one(self%fom)
+      call close_one(self%sums)
+      call close_one(self%cache)
+      call close_one(self%journal)
+      call close_one(self%events)
    contains
-      subroutine close_one(unit, name)
-         integer, intent(inout) :: unit
-         character(len=*), intent(in) :: name
-         integer :: ios
-         if (unit == -1) return  ! (newunit numbers are negative; -1 is never one)
-         close (unit, iostat=ios)
-         unit = -1
-         if (ios /= 0 .and. present(error)) then
-            if (.not. allocated(error)) call fatal_error(error, join_path(self%dir, name)// &
-                                                         ': write failed on close', stat_io)
+      subroutine close_one(f)
+         type(raw_file), intent(inout) :: f
+         type(error_type), allocatable :: e
+         call f%close(e)
+         if (allocated(e) .and. present(error)) then
+            if (.not. allocated(error)) call move_alloc(e, error)
          end if
       end subroutine close_one
    end subroutine log_close

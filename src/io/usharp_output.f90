@@ -1,26 +1,23 @@
-!> Writing result files whole or not at all. A result file is written under a temporary
-!> name in its own folder (<name>.part), every write and the close are checked, and only a
-!> complete file is renamed into place (rename is atomic within a file system): a reader
+!> Writing result files whole or not at all. A result file is gathered in memory, written
+!> under a temporary name in its own folder (<name>.part) through the C library (every
+!> write, the sync and the close checked), and only a complete file is renamed into place (rename is atomic within a file system): a reader
 !> never sees half a file, and a failed write (a full disk) leaves the old file untouched and
 !> is an error (exit 4) that names the file. Every command writes its results through here.
 module usharp_output
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io
    use usharp_simulation, only: sim_result
-   use usharp_filesys, only: rename_file, remove_file
+   use usharp_filesys, only: rename_file, remove_file, raw_file
    implicit none
    private
 
    public :: result_file, write_sim_file, write_lines
 
-   !> A result file being written
+   !> A result file being written: its text is gathered in memory and written at commit
    type :: result_file
       character(len=:), allocatable :: path  !< the final name
-      character(len=:), allocatable :: temp  !< the name while it is written
-      integer :: unit = 0
-      logical :: opened = .false.
-      integer :: ios = 0                     !< first failure of a write (0: none)
-      character(len=256) :: msg = ''
+      character(len=:), allocatable :: text  !< the contents so far (text(:used))
+      integer :: used = 0
    contains
       procedure :: open => result_open
       procedure :: line => result_line
@@ -29,58 +26,65 @@ module usharp_output
 
 contains
 
-   !> Start writing the result file path (under its temporary name)
+   !> Start a result file path (nothing is written before commit)
    subroutine result_open(self, path, error)
       class(result_file), intent(inout) :: self
       character(len=*), intent(in) :: path
       type(error_type), allocatable, intent(out) :: error
       self%path = path
-      self%temp = path//'.part'
-      self%ios = 0
-      self%msg = ''
-      open (newunit=self%unit, file=self%temp, status='replace', action='write', &
-            iostat=self%ios, iomsg=self%msg)
-      self%opened = self%ios == 0
-      if (.not. self%opened) then
-         call fatal_error(error, path//': cannot write ('//trim(self%msg)//')', stat_io)
-      end if
+      self%used = 0
+      if (allocated(self%text)) deallocate (self%text)
+      allocate (character(len=4096) :: self%text)
    end subroutine result_open
 
-   !> Write one line (trailing blanks trimmed); a failure is kept and reported by commit
+   !> Add one line (trailing blanks trimmed)
    subroutine result_line(self, text)
       class(result_file), intent(inout) :: self
       character(len=*), intent(in) :: text
-      if (self%ios /= 0 .or. .not. self%opened) return
-      write (self%unit, '(a)', iostat=self%ios, iomsg=self%msg) trim(text)
+      character(len=:), allocatable :: grown
+      integer :: n
+      n = len_trim(text) + 1
+      if (self%used + n > len(self%text)) then
+         allocate (character(len=max(2*len(self%text), self%used + n)) :: grown)
+         grown(:self%used) = self%text(:self%used)
+         call move_alloc(grown, self%text)
+      end if
+      self%text(self%used + 1:self%used + n) = trim(text)//new_line('a')
+      self%used = self%used + n
    end subroutine result_line
 
-   !> Finish the file: flush and close (checked), then rename it into place. On any failure
-   !> the temporary file is removed and the error names the file.
+   !> Write the file under <path>.part in the same folder (every write, the sync and the
+   !> close checked), then rename it into place. On a failure the partial file is removed,
+   !> an old file of that name is left as it was, and the error names the file (exit 4).
    subroutine result_commit(self, error)
       class(result_file), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
-      integer :: ios
-      character(len=256) :: msg
+      type(raw_file) :: f
+      character(len=:), allocatable :: temp
       logical :: gone
-      if (.not. self%opened) then
-         call fatal_error(error, self%path//': cannot write', stat_io)
-         return
+      temp = self%path//'.part'
+      call f%create(temp, error)
+      if (.not. allocated(error)) call f%put(self%text(:self%used), error)
+      if (.not. allocated(error)) call f%sync(error)
+      if (allocated(error)) then
+         call f%close()
+      else
+         call f%close(error)
       end if
-      if (self%ios == 0) flush (self%unit, iostat=self%ios, iomsg=self%msg)
-      ios = 0
-      close (self%unit, iostat=ios, iomsg=msg)
-      self%opened = .false.
-      if (self%ios == 0 .and. ios /= 0) then
-         self%ios = ios
-         self%msg = msg
+      if (.not. allocated(error)) call rename_file(temp, self%path, error)
+      if (allocated(error)) then
+         gone = remove_file(temp)
+         ! Name the result file, not its temporary name
+         error%message = self%path//': '//after_colon(error%message)
       end if
-      if (self%ios /= 0) then
-         gone = remove_file(self%temp)
-         call fatal_error(error, self%path//': write failed ('//trim(self%msg)//')', stat_io)
-         return
-      end if
-      call rename_file(self%temp, self%path, error)
-      if (allocated(error)) gone = remove_file(self%temp)
+   contains
+      pure function after_colon(message) result(rest)
+         character(len=*), intent(in) :: message
+         character(len=:), allocatable :: rest
+         integer :: k
+         k = index(message, ': ')
+         rest = message(k + 2:)
+      end function after_colon
    end subroutine result_commit
 
    !> Write a simulation result as text: '#' comment lines (header), a '#' line naming the

@@ -1,7 +1,7 @@
 !> File-system helpers through the C library (no shell involved)
 module usharp_filesys
    use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char, c_ptr, c_null_ptr, &
-                                          c_associated
+                                          c_associated, c_size_t, c_f_pointer
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_error, only: error_type, fatal_error, stat_io
    use usharp_process, only: run_process, process_result
@@ -10,6 +10,20 @@ module usharp_filesys
 
    public :: make_dir, join_path, file_exists, absolute_path, remove_file, remove_dir
    public :: rename_file, lock_file, unlock_file, file_hash, hash_text, hash_hex
+   public :: raw_file
+
+   !> A file written through the C library, every write and the close checked. (gfortran's
+   !> formatted and stream writes do not report a full disk: the bytes are lost and iostat
+   !> stays 0; write(2) reports it.) Lines are written as they come, unbuffered.
+   type :: raw_file
+      integer(c_int) :: fd = -1
+      character(len=:), allocatable :: path
+   contains
+      procedure :: create => raw_create
+      procedure :: put => raw_put
+      procedure :: sync => raw_sync
+      procedure :: close => raw_close
+   end type raw_file
 
    interface
       function c_mkdir(path, mode) bind(C, name='mkdir') result(stat)
@@ -50,16 +64,108 @@ module usharp_filesys
          integer(c_int), value, intent(in) :: fd, op
          integer(c_int) :: stat
       end function c_flock
+      function c_write(fd, buf, count) bind(C, name='write') result(written)
+         import :: c_int, c_char, c_size_t
+         integer(c_int), value, intent(in) :: fd
+         character(kind=c_char), intent(in) :: buf(*)
+         integer(c_size_t), value, intent(in) :: count
+         integer(c_size_t) :: written
+      end function c_write
+      function c_fsync(fd) bind(C, name='fsync') result(stat)
+         import :: c_int
+         integer(c_int), value, intent(in) :: fd
+         integer(c_int) :: stat
+      end function c_fsync
+      function c_errno_location() bind(C, name='__errno_location') result(p)
+         import :: c_ptr
+         type(c_ptr) :: p
+      end function c_errno_location
+      function c_strerror(errnum) bind(C, name='strerror') result(p)
+         import :: c_int, c_ptr
+         integer(c_int), value, intent(in) :: errnum
+         type(c_ptr) :: p
+      end function c_strerror
    end interface
 
    ! Linux values of <fcntl.h> and <sys/file.h>
+   integer(c_int), parameter :: o_wronly = 1, o_trunc = int(o'1000', c_int)
    integer(c_int), parameter :: o_rdwr = 2, o_creat = int(o'100', c_int), o_cloexec = int(o'2000000', c_int)
    integer(c_int), parameter :: lock_ex = 2, lock_nb = 4
 
    !> FNV-1a 64-bit offset basis 0xcbf29ce484222325 (as a signed 64-bit integer)
    integer(int64), parameter :: fnv_basis = -3750763034362895579_int64
 
+
 contains
+
+   !> Create (or truncate) a file for writing
+   subroutine raw_create(self, path, error)
+      class(raw_file), intent(inout) :: self
+      character(len=*), intent(in) :: path
+      type(error_type), allocatable, intent(out) :: error
+      self%path = path
+      self%fd = c_open(path//c_null_char, ior(ior(ior(o_wronly, o_creat), o_trunc), o_cloexec), &
+                       int(o'644', c_int))
+      if (self%fd < 0) call fatal_error(error, path//': cannot write ('//errno_text()//')', stat_io)
+   end subroutine raw_create
+
+   !> Write text (bytes as they are; add new_line('a') for a line)
+   subroutine raw_put(self, text, error)
+      class(raw_file), intent(inout) :: self
+      character(len=*), intent(in) :: text
+      type(error_type), allocatable, intent(out) :: error
+      integer(c_size_t) :: n
+      integer :: done
+      if (self%fd < 0) then
+         call fatal_error(error, self%path//': write failed (not open)', stat_io)
+         return
+      end if
+      done = 0
+      do while (done < len(text))
+         n = c_write(self%fd, text(done + 1:), int(len(text) - done, c_size_t))
+         if (n <= 0) then
+            call fatal_error(error, self%path//': write failed ('//errno_text()//')', stat_io)
+            return
+         end if
+         done = done + int(n)
+      end do
+   end subroutine raw_put
+
+   !> Wait until the file's contents are on the disk
+   subroutine raw_sync(self, error)
+      class(raw_file), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      if (self%fd < 0) return
+      if (c_fsync(self%fd) /= 0) call fatal_error(error, self%path//': write failed ('// &
+                                                  errno_text()//')', stat_io)
+   end subroutine raw_sync
+
+   !> Close the file (error, when given, reports a failure)
+   subroutine raw_close(self, error)
+      class(raw_file), intent(inout) :: self
+      type(error_type), allocatable, intent(out), optional :: error
+      integer(c_int) :: stat
+      if (self%fd < 0) return
+      stat = c_close(self%fd)
+      self%fd = -1
+      if (stat /= 0 .and. present(error)) call fatal_error(error, self%path// &
+         ': write failed on close ('//errno_text()//')', stat_io)
+   end subroutine raw_close
+
+   !> The C library's text for the current errno
+   function errno_text() result(text)
+      character(len=:), allocatable :: text
+      integer(c_int), pointer :: errno
+      character(kind=c_char), pointer :: chars(:)
+      integer :: k
+      call c_f_pointer(c_errno_location(), errno)
+      call c_f_pointer(c_strerror(errno), chars, [256])
+      text = ''
+      do k = 1, 256
+         if (chars(k) == c_null_char) exit
+         text = text//chars(k)
+      end do
+   end function errno_text
 
    !> Rename a file (atomic within one file system: a reader sees the old or the new file)
    subroutine rename_file(old, new, error)

@@ -146,8 +146,10 @@ contains
       integer(c_int) :: pid, rc, status, r
       integer(int64) :: t0, now, rate, t_term
       integer :: k, sleep_us
-      logical :: terminating
+      logical :: terminating, may_stop
 
+      may_stop = .true.
+      if (present(stoppable)) may_stop = stoppable
       allocate (args(size(argv)), ptrs(size(argv) + 1))
       do k = 1, size(argv)
          args(k)%chars = to_c(trim(argv(k)))
@@ -182,7 +184,7 @@ contains
          if (r == pid) exit
          call system_clock(now)
          if (.not. terminating) then
-            if (stop_signal() /= 0 .and. .not. (present(stoppable) .and. .not. stoppable)) then
+            if (may_stop .and. stop_signal() /= 0) then
                res%how = proc_stopped
             else if (real(now - t0, dp)/real(rate, dp) > time_limit) then
                res%how = proc_timed_out
@@ -198,8 +200,12 @@ contains
          r = c_usleep(int(sleep_us, c_int))
          sleep_us = min(2*sleep_us, 50000)
       end do
-      ! Whatever the program left running in its group goes with it
-      r = c_kill(-pid, sigkill)
+      ! Whatever the program left running in its group goes with it (again after a moment:
+      ! a member that was forking at the first kill may have escaped it)
+      do k = 1, 5
+         if (c_kill(-pid, sigkill) /= 0) exit
+         r = c_usleep(5000_c_int)
+      end do
       if (res%how /= proc_exited) return
       if (iand(status, 127_c_int) == 0) then
          res%code = int(iand(ishft(status, -8), 255_c_int))
