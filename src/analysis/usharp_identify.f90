@@ -63,7 +63,7 @@ contains
          xs(j, 2*j) = x(j) + h
          xs(j, 2*j + 1) = x(j) - h
       end do
-      call prob%batch(xs, 0, rs, fs, pt, status, msg)
+      call prob%batch(xs, 0, rs, fs, pt, status, msg, 'identify')
       nevals = 2*n + 1
       do j = 1, 2*n + 1
          if (status(j) /= eval_ok) then

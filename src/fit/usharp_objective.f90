@@ -393,16 +393,22 @@ contains
       end subroutine one_test
    end subroutine problem_jacobian
 
-   !> Residuals at the points xs(:, j) (evaluation numbers k0 + j name the external work
-   !> folders), simulated in parallel with OpenMP; each point is independent of the others
-   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages)
+   !> Residuals at the points xs(:, j) (evaluation numbers k0 + j, after prefix, name the
+   !> external work folders: a batch outside the fit's evaluations gives a prefix of its own so
+   !> that no two runs share a folder), simulated in parallel with OpenMP; each point is
+   !> independent of the others
+   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages, prefix)
       class(fit_problem), intent(in) :: self
       real(dp), intent(in) :: xs(:, :)
       integer, intent(in) :: k0
       real(dp), intent(out) :: rs(:, :), fs(:), per_test(:, :)
       integer, intent(out) :: status(:)
       character(len=message_len), intent(out) :: messages(:)
+      character(len=*), intent(in), optional :: prefix
+      character(len=:), allocatable :: tag0
       integer :: j
+      tag0 = ''
+      if (present(prefix)) tag0 = prefix
       !$omp parallel do schedule(dynamic)
       do j = 1, size(xs, 2)
          call one_point(j)
@@ -413,7 +419,7 @@ contains
          integer, intent(in) :: j
          character(len=:), allocatable :: msg
          call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
-                             str(k0 + j))
+                             tag0//str(k0 + j))
          messages(j) = msg
       end subroutine one_point
    end subroutine problem_batch
