@@ -58,13 +58,16 @@ program usharp_main
    else
       call execute_command(cmd, lines, error)
    end if
+   ! (lines come with an error only where the results stand: a fit whose report failed)
+   if (allocated(lines)) then
+      do i = 1, size(lines)
+         write (output_unit, '(a)') trim(lines(i))
+      end do
+   end if
    if (allocated(error)) then
       write (error_unit, '(a)') 'usharp: error: '//error%message
       stop error%stat, quiet=.true.
    end if
-   do i = 1, size(lines)
-      write (output_unit, '(a)') trim(lines(i))
-   end do
 
 contains
 

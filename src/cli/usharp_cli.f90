@@ -2,7 +2,7 @@
 !> to show the user come back; the program prints them and exits with the error's code.
 module usharp_cli
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type
+   use usharp_error, only: error_type, stat_report
    use usharp_fit, only: progress_interface
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments, command_names
    use usharp_cli_help, only: main_help, command_help, version_text
@@ -59,7 +59,12 @@ contains
             call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
          end if
       case ('run')
-         call run_command(cmd%input, cmd%out_dir, cmd%constants, cmd%resume, summary, error, progress)
+         call run_command(cmd%input, cmd%out_dir, cmd%constants, cmd%resume, summary, error, progress, &
+                          cmd%force)
+         ! A fit that is done but whose report failed still shows its summary
+         if (allocated(error)) then
+            if (error%stat == stat_report) lines = [character(len=1024) :: summary]
+         end if
       end select
       if (allocated(error)) return
       lines = [character(len=1024) :: summary]

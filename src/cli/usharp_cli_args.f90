@@ -32,6 +32,8 @@ module usharp_cli_args
       character(len=:), allocatable :: only_test
       !> --resume: `run` continues a stopped run from its journal
       logical :: resume = .false.
+      !> --force: `run` starts again over an earlier run's journal
+      logical :: force = .false.
       !> -q, --quiet: no progress line, no list of files written
       logical :: quiet = .false.
       !> --selfcheck: `diagnose` on synthetic data with injected effects
@@ -61,7 +63,7 @@ contains
          ok = .true.
       case ('--test')
          ok = command == 'simulate'
-      case ('--resume')
+      case ('--resume', '--force')
          ok = command == 'run'
       case ('--selfcheck')
          ok = command == 'diagnose'
@@ -148,6 +150,8 @@ contains
             end select
          case ('--resume')
             cmd%resume = .true.
+         case ('--force')
+            cmd%force = .true.
          case ('--quiet')
             cmd%quiet = .true.
          case ('--selfcheck')
@@ -189,7 +193,7 @@ contains
          long = '--test'
       case ('-q', '--quiet')
          long = '--quiet'
-      case ('--resume', '--selfcheck')
+      case ('--resume', '--selfcheck', '--force')
          long = arg
       case default
          long = ''

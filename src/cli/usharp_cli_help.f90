@@ -15,7 +15,10 @@ module usharp_cli_help
    !> Exit codes, shown by every help text
    character(len=*), parameter :: exit_codes = &
       'exit codes: 0 success, 1 input error, 2 usage error, 3 failed simulation or fit,'//nl// &
-      '            4 output not writable'
+      '            4 output not writable (disk full: no result file is left half written),'//nl// &
+      '            5 fit done and written but its identifiability report failed,'//nl// &
+      '            6 output folder in use by another run, 128+N stopped by signal N'//nl// &
+      '            (143: SIGTERM, 130: Ctrl-C; continue with --resume)'
 
    !> Where the reference lives, shown by every command's help
    character(len=*), parameter :: see_docs = &
@@ -75,7 +78,10 @@ contains
             'summary.txt, identify.txt and <test>.sim.txt / <test>.fit.txt per test.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
-            '      --resume          continue a stopped run from its fit.journal'//nl// &
+            '      --resume          continue a stopped run from its fit.journal (refused when'//nl// &
+            '                        the input, constants or data files changed since)'//nl// &
+            '      --force           start again, overwriting the fit.journal of an earlier run'//nl// &
+            '                        (without --resume or --force such a journal is an error)'//nl// &
             '  -q, --quiet           no progress line on stderr'//nl// &
             common_options
       case ('identify')
