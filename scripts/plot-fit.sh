@@ -3,42 +3,57 @@
 # of `usharp run`, the response against strain (measured and fitted), and one overview of all
 # tests. Writes <out_dir>/plots/<test>.png and <out_dir>/plots/all.png.
 # Usage: scripts/plot-fit.sh <out_dir> [title]
+#
+# No name reaches gnuplot as code: every path and the title enter the gnuplot script as
+# single-quoted gnuplot strings (in which only '' is special, for a quote), paths begin with
+# / or ./ (a gnuplot file name beginning with < or | would run a command), and names with a
+# line break are refused.
 set -euo pipefail
 dir=${1:?usage: scripts/plot-fit.sh <out_dir> [title]}
-title=${2:-$(basename "$dir")}
+title=${2:-$(basename -- "$dir")}
 command -v gnuplot >/dev/null 2>&1 || { echo "plot-fit: gnuplot is not installed (bash scripts/setup.sh installs it)" >&2; exit 1; }
+nl='
+'
+case "$dir$title" in *"$nl"*) echo "plot-fit: a folder name or title with a line break is not supported" >&2; exit 1 ;; esac
+case "$dir" in /*) ;; *) dir="./$dir" ;; esac
+
+# A text as a gnuplot single-quoted string
+gq() { printf "'%s'" "$(printf '%s' "$1" | sed "s/'/''/g")"; }
+
 shopt -s nullglob
 files=("$dir"/*.fit.txt)
 [ ${#files[@]} -gt 0 ] || { echo "plot-fit: no *.fit.txt in $dir" >&2; exit 1; }
-mkdir -p "$dir/plots"
+mkdir -p -- "$dir/plots"
 # The measured column's title says whether the test is fitted on stress or on strain
 for f in "${files[@]}"; do
-  name=$(basename "$f" .fit.txt)
+  name=$(basename -- "$f" .fit.txt)
   unit=$(sed -n 's/.*stress (\([A-Za-z]*\)) of the simulation.*/\1/p' "$f" | head -1)
-  gnuplot <<GP
-set terminal pngcairo size 800,600 font ",11"
-set output "$dir/plots/$name.png"
-set title "$title: $name"
-set xlabel "strain (%)"
-set ylabel "stress (${unit:-model unit})"
-set key top left
-set grid
-plot "$f" using (100*\$2):3 with points pt 7 ps 0.3 lc rgb "#888888" title "measured", \
-     "$f" using (100*\$2):4 with lines lw 2 lc rgb "#c0392b" title "fit"
-GP
+  {
+    echo 'set terminal pngcairo size 800,600 font ",11" noenhanced'
+    echo "set output $(gq "$dir/plots/$name.png")"
+    echo "set title $(gq "$title: $name")"
+    echo 'set xlabel "strain (%)"'
+    echo "set ylabel 'stress (${unit:-model unit})'"
+    echo 'set key top left'
+    echo 'set grid'
+    echo "f = $(gq "$f")"
+    echo 'plot f using (100*$2):3 with points pt 7 ps 0.3 lc rgb "#888888" title "measured", \'
+    echo '     f using (100*$2):4 with lines lw 2 lc rgb "#c0392b" title "fit"'
+  } | gnuplot
 done
 n=${#files[@]}
 cols=$(( n < 3 ? n : 3 ))
 rows=$(( (n + cols - 1) / cols ))
 {
-  echo "set terminal pngcairo size $((420*cols)),$((330*rows)) font \",9\""
-  echo "set output \"$dir/plots/all.png\""
-  echo "set multiplot layout $rows,$cols title \"$title\""
+  echo "set terminal pngcairo size $((420*cols)),$((330*rows)) font \",9\" noenhanced"
+  echo "set output $(gq "$dir/plots/all.png")"
+  echo "set multiplot layout $rows,$cols title $(gq "$title")"
   echo "set grid; set key top left; set xlabel 'strain (%)'; set ylabel 'stress'"
   for f in "${files[@]}"; do
-    name=$(basename "$f" .fit.txt)
-    echo "set title \"$name\""
-    echo "plot \"$f\" using (100*\$2):3 with points pt 7 ps 0.2 lc rgb '#888888' title 'measured', \"$f\" using (100*\$2):4 with lines lw 2 lc rgb '#c0392b' title 'fit'"
+    name=$(basename -- "$f" .fit.txt)
+    echo "set title $(gq "$name")"
+    echo "f = $(gq "$f")"
+    echo "plot f using (100*\$2):3 with points pt 7 ps 0.2 lc rgb '#888888' title 'measured', f using (100*\$2):4 with lines lw 2 lc rgb '#c0392b' title 'fit'"
   done
   echo "unset multiplot"
 } | gnuplot

@@ -14,6 +14,7 @@ program tester
    use test_design, only: collect_design
    use test_diagnose, only: collect_diagnose
    use test_cli, only: collect_cli
+   use test_safety, only: collect_safety
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -33,7 +34,8 @@ program tester
       new_testsuite('optimise', collect_optimise), &
       new_testsuite('design', collect_design), &
       new_testsuite('diagnose', collect_diagnose), &
-      new_testsuite('cli', collect_cli)]
+      new_testsuite('cli', collect_cli), &
+      new_testsuite('safety', collect_safety)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

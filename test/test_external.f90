@@ -337,7 +337,7 @@ contains
          'echo more noise >&2; exit 2', '', cfg, error)
       if (allocated(error)) return
       dir = cfg%out_dir
-      call run_command(cfg%path, '', '', .false., summary, e)
+      call run_command(cfg%path, '', '', .false., summary, e, force=.true.)
       call check_message(error, e, 'fit aborted: 3 failed evaluations in a row (max_failures); '// &
                          "last: test 'relax': external run")
       if (allocated(error)) return
@@ -378,12 +378,12 @@ contains
       ext = ", backend = 'external', constants_format = '(ES24.16)', command = 'sh "// &
             standin//' '//exe//" {input_dir}/standin-internal.nml {test}'"
       p_ext = write_text('standin-external.nml', fit_lines('standin-external', ext))
-      call run_command(p_int, '', '', .false., summary, e)
+      call run_command(p_int, '', '', .false., summary, e, force=.true.)
       if (allocated(e)) then
          call test_failed(error, 'internal fit: '//e%message)
          return
       end if
-      call run_command(p_ext, '', '', .false., summary, e)
+      call run_command(p_ext, '', '', .false., summary, e, force=.true.)
       if (allocated(e)) then
          call test_failed(error, 'external fit: '//e%message)
          return
@@ -430,6 +430,7 @@ contains
       do
          read (unit, '(a)', iostat=ios) line
          if (ios /= 0) exit
+         if (line(1:1) == '#') cycle  ! the fingerprint
          read (line, *) k, status, x
          f = [f, x]
       end do

@@ -212,7 +212,7 @@ contains
       ! rho = 0.99 steps H1 and n by 99 %: with max_failures = 1 the first bad point aborts
       deck = fit_deck('abort.nml', 'max_failures=1, rho=0.99', [character(len=200) :: &
          "&test name='lcf', history='thesis_lcf', data_file='../../data/thesis/lcf.sim.txt' /"])
-      call run_command(deck, scratch_dir//'/abort-out', '', .false., summary, uerr)
+      call run_command(deck, scratch_dir//'/abort-out', '', .false., summary, uerr, force=.true.)
       call check(error, allocated(uerr), 'fit must abort')
       if (allocated(error)) return
       call check(error, uerr%stat, stat_failure, 'failed-fit exit category')

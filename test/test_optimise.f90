@@ -201,9 +201,9 @@ contains
          "  data_file = '../../data/thesis/relax.sim.txt' /"])
       nthreads = omp_get_max_threads()
       call omp_set_num_threads(1)
-      call run_command(path, scratch_dir//'/threads-1', '', .false., summary, e)
+      call run_command(path, scratch_dir//'/threads-1', '', .false., summary, e, force=.true.)
       call omp_set_num_threads(2)
-      if (.not. allocated(e)) call run_command(path, scratch_dir//'/threads-2', '', .false., summary, e)
+      if (.not. allocated(e)) call run_command(path, scratch_dir//'/threads-2', '', .false., summary, e, force=.true.)
       call omp_set_num_threads(nthreads)
       if (allocated(e)) then
          call test_failed(error, e%message)

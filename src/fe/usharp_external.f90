@@ -117,6 +117,7 @@ contains
       real(dp), allocatable :: vals(:, :)
       integer :: unit, ios, nmerged
       type(process_result) :: proc
+      character(len=len(script_name) + 2) :: argv(2)
       logical :: gone
 
       call make_dir(join_path(work_root, test//'.'//tag), error)
@@ -158,8 +159,9 @@ contains
       end if
       ! The script runs in a process group of its own: at the time limit (or when usharp is
       ! asked to stop) the group gets TERM, then KILL 5 s later; what it leaves running is killed
-      call run_process([character(len=len(script_name) + 2) :: '/bin/sh', './'//script_name], &
-                       work, stdout_name, stderr_name, ext%time_limit, 5.0_dp, proc)
+      argv(1) = '/bin/sh'
+      argv(2) = './'//script_name
+      call run_process(argv, work, stdout_name, stderr_name, ext%time_limit, 5.0_dp, proc)
       if (proc%how /= proc_exited .or. proc%code /= 0) then
          select case (proc%how)
          case (proc_timed_out)

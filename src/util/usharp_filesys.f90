@@ -322,12 +322,17 @@ contains
       integer :: k
       logical :: gone
       type(process_result) :: res
+      character(len=:), allocatable :: argv(:)
       do k = 1, size(names)
          gone = remove_file(join_path(path, trim(names(k))))
       end do
       if (c_remove(path//c_null_char) == 0) return
-      call run_process([character(len=max(6, len(path))) :: '/bin/rm', '-rf', '--', path], '/', &
-                       '/dev/null', '/dev/null', 600.0d0, 5.0d0, res, stoppable=.false.)
+      allocate (character(len=max(7, len(path))) :: argv(4))
+      argv(1) = '/bin/rm'
+      argv(2) = '-rf'
+      argv(3) = '--'
+      argv(4) = path
+      call run_process(argv, '/', '/dev/null', '/dev/null', 600.0d0, 5.0d0, res, stoppable=.false.)
    end subroutine remove_dir
 
    !> Whether a file exists

@@ -1,0 +1,456 @@
+!> Tests of batch safety: a full disk, an earlier run's journal, two runs in one folder, a
+!> changed input under --resume, a failed report after a fit, failing external commands, the
+!> plot script and hostile folder names, what a resume costs, SIGTERM
+module test_safety
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type, stat_io, stat_usage, stat_input, stat_busy, &
+                           stat_failure, stat_report
+   use usharp_filesys, only: raw_file, lock_file, unlock_file, join_path, absolute_path, &
+                             file_exists, make_dir, hash_text, hash_hex
+   use usharp_output, only: write_lines
+   use usharp_cmd_run, only: run_command
+   use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message
+   implicit none
+   private
+   public :: collect_safety
+
+   character(len=*), parameter :: thesis = '../../data/thesis/'
+
+contains
+
+   subroutine collect_safety(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('fnv1a-hash-reference-values', test_hash), &
+         new_unittest('writer-reports-a-full-device', test_dev_full), &
+         new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
+         new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
+         new_unittest('output-folder-locked', test_lock), &
+         new_unittest('resume-refused-after-a-change', test_fingerprint), &
+         new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
+         new_unittest('external-not-found-not-executable', test_external_127), &
+         new_unittest('external-ignores-term-and-leaves-a-child', test_external_term), &
+         new_unittest('plot-script-hostile-folder-name', test_plot_script), &
+         new_unittest('lm-resume-at-90-percent-replays', test_resume_cost), &
+         new_unittest('sigterm-stops-with-a-note', test_sigterm)]
+   end subroutine collect_safety
+
+   !> A fit deck in the scratch folder: H1 and n of the thesis's LCF test by Hooke-Jeeves
+   function deck(name, extra_fit, extra_test) result(path)
+      character(len=*), intent(in) :: name, extra_fit, extra_test
+      character(len=:), allocatable :: path
+      path = write_text(name, [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200 "//extra_fit//' /', &
+         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', "// &
+         "weighting='threshold', sig=14 "//extra_test//" /"])
+   end function deck
+
+   !> Run a shell command line (the tests' own: fixed text and scratch paths), its exit status
+   integer function shell(line) result(stat)
+      character(len=*), intent(in) :: line
+      call execute_command_line(line, exitstat=stat)
+   end function shell
+
+   subroutine test_hash(error)
+      type(error_type), allocatable, intent(out) :: error
+      ! FNV-1a 64 of '' and 'hello' (reference values of the algorithm)
+      call check(error, hash_hex(hash_text('')) == 'CBF29CE484222325', hash_hex(hash_text('')))
+      if (allocated(error)) return
+      call check(error, hash_hex(hash_text('hello')) == 'A430D84680AABD0B', hash_hex(hash_text('hello')))
+   end subroutine test_hash
+
+   !> /dev/full refuses every write with ENOSPC, as a full disk does
+   subroutine test_dev_full(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(raw_file) :: f
+      type(uerror), allocatable :: e
+      if (.not. file_exists('/dev/full')) then
+         call skip_test(error, '/dev/full does not exist here')
+         return
+      end if
+      call f%create('/dev/full', e)
+      if (.not. allocated(e)) call f%put('a line'//new_line('a'), e)
+      call f%close()
+      call check_message(error, e, '/dev/full: write failed (No space left on device)')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_io, 'exit code 4')
+   end subroutine test_dev_full
+
+   !> run and simulate into a 64 KiB tmpfs: exit 4 naming the file; no result file is
+   !> partial, no temporary file is left
+   subroutine test_disk_full(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, mnt, errfile, text, input
+      integer :: stat, k
+      character(len=16), parameter :: results(6) = [character(len=16) :: 'best.nml', 'summary.txt', &
+         'lcf.fit.txt', 'lcf.sim.txt', 'identify.txt', 'relax.sim.txt']
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'the usharp executable was not found beside the tester')
+         return
+      end if
+      mnt = scratch_dir//'/tiny'
+      errfile = scratch_dir//'/tiny.err'
+      stat = shell('umount '//mnt//' 2>/dev/null; mkdir -p '//mnt)
+      stat = shell('mount -t tmpfs -o size=64k tmpfs '//mnt//' 2>/dev/null')
+      if (stat /= 0) then
+         call skip_test(error, 'cannot mount a 64 KiB tmpfs here (needs root and mount rights); '// &
+                        'writer-reports-a-full-device covers the writer')
+         return
+      end if
+      ! A fit whose logs fit and whose curves (35 kB each) do not
+      input = deck('full.nml', 'max_evals=40', '')
+      stat = shell(exe//' run -q '//input//' -o '//mnt//'/run > /dev/null 2> '//errfile)
+      text = read_text(errfile)
+      call check(error, stat, stat_io, 'run exit code: '//text)
+      if (.not. allocated(error)) call check(error, index(text, 'write failed (No space left on device)') > 0 &
+                                             .and. index(text, mnt//'/run/') > 0, 'message names the file: '//text)
+      if (.not. allocated(error)) then
+         do k = 1, size(results)
+            call check(error, .not. file_exists(mnt//'/run/'//trim(results(k))//'.part'), &
+                       'temporary file left: '//trim(results(k)))
+            if (allocated(error)) exit
+         end do
+      end if
+      if (.not. allocated(error)) then
+         ! best.nml is written first: whole (it ends with the group's '/') or absent
+         text = read_text(mnt//'/run/best.nml')
+         call check(error, len(text) == 0 .or. index(text, new_line('a')//'/'//new_line('a')) > 0, &
+                    'best.nml half written')
+      end if
+      if (.not. allocated(error)) then
+         stat = shell('rm -rf '//mnt//'/run; '//exe//' simulate -q decks/thesis-data.nml -o '//mnt// &
+                      '/sim > /dev/null 2> '//errfile)
+         text = read_text(errfile)
+         call check(error, stat, stat_io, 'simulate exit code: '//text)
+         if (.not. allocated(error)) call check(error, index(text, '.sim.txt: write failed') > 0, text)
+         if (.not. allocated(error)) call check(error, .not. file_exists(mnt//'/sim/ratchet.sim.txt.part') .and. &
+                                                .not. file_exists(mnt//'/sim/relax.sim.txt.part'), 'temporary file left')
+      end if
+      stat = shell('umount '//mnt)
+   end subroutine test_disk_full
+
+   !> A second run into a folder with a journal is refused, naming --resume and --force
+   subroutine test_journal_kept(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, journal
+      input = deck('journal.nml', 'max_evals=12', '')
+      dir = scratch_dir//'/journal-out'
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'first run: '//e%message)
+         return
+      end if
+      journal = read_text(dir//'/fit.journal')
+      call run_command(input, dir, '', .false., summary, e)
+      call check_message(error, e, 'holds the journal of an earlier run; continue it with --resume, '// &
+                         'or start again and overwrite it with --force')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'exit code 2')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/fit.journal') == journal, 'the journal is untouched')
+      if (allocated(error)) return
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check(error, .not. allocated(e), '--force starts again')
+   end subroutine test_journal_kept
+
+   !> While another process holds the folder's lock a run exits 6; the lock file left behind
+   !> by a run is no lock
+   subroutine test_lock(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir
+      integer :: fd
+      input = deck('lock.nml', 'max_evals=6', '')
+      dir = scratch_dir//'/lock-out'
+      call make_dir(dir, e)
+      ! flock locks of two open files conflict even within one process
+      call lock_file(dir//'/.usharp.lock', fd, e)
+      call check(error, fd >= 0, 'the test takes the lock')
+      if (allocated(error)) return
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call unlock_file(fd)
+      call check_message(error, e, 'another usharp run is writing into this folder')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_busy, 'exit code 6')
+      if (allocated(error)) return
+      call check(error, file_exists(dir//'/.usharp.lock'), 'lock file present')
+      if (allocated(error)) return
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check(error, .not. allocated(e), 'run after the lock is released')
+   end subroutine test_lock
+
+   !> --resume refuses when a data file, the input or the constants file changed
+   subroutine test_fingerprint(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, data
+      character(len=4000) :: edited(1)
+      integer :: stat
+      dir = scratch_dir//'/fingerprint-out'
+      data = scratch_dir//'/fingerprint-lcf.txt'
+      stat = shell('cp data/thesis/lcf.sim.txt '//data)
+      input = write_text('fingerprint.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200, max_evals=10 /", &
+         "&test name='lcf', history='thesis_lcf', data_file='fingerprint-lcf.txt', "// &
+         "weighting='threshold', sig=14 /"])
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'first run: '//e%message)
+         return
+      end if
+      call run_command(input, dir, '', .true., summary, e)
+      call check(error, .not. allocated(e), 'resume of an unchanged fit')
+      if (allocated(error)) return
+      ! The data changed (a comment line is enough)
+      stat = shell('echo "# changed" >> '//data)
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, "cannot resume: the data file of test 'lcf' changed since the journal was written")
+      if (allocated(error)) return
+      call check(error, e%stat, stat_input, 'exit code 1')
+      if (allocated(error)) return
+      ! The input changed too
+      edited(1) = read_text(input)//'! edited'
+      input = write_text('fingerprint.nml', edited)
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, "cannot resume: the input file, the data file of test 'lcf' changed")
+      if (allocated(error)) return
+      ! A constants file given with -c is part of the fingerprint
+      call run_command(input, dir, 'decks/thesis-run2.nml', .true., summary, e)
+      call check_message(error, e, 'the constants file (--constants)')
+   end subroutine test_fingerprint
+
+   !> A fit whose identifiability report fails: results written, warning in summary.txt and
+   !> identify.txt, exit code 5. The report's simulations fail here because the stand-in FE
+   !> command refuses the report's work folders.
+   subroutine test_report_failed(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: exe, input, dir, ext
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'the usharp executable was not found beside the tester')
+         return
+      end if
+      dir = scratch_dir//'/report-out'
+      ext = ", backend='external', constants_format='(ES24.16)', command='case {work} in "// &
+            "*identify*) echo no report here >&2; exit 9;; esac; sh "//absolute_path('test/ansys_standin.sh')// &
+            ' '//absolute_path(exe)//" {input_dir}/report-internal.nml {test}'"
+      input = write_text('report-internal.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n' /", &
+         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt' /"])
+      input = deck('report.nml', 'max_evals=3, identify=.true.', ext)
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check_message(error, e, 'the fit is done and written, but its identifiability report failed')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_report, 'exit code 5')
+      if (allocated(error)) return
+      call check(error, index(read_text(dir//'/best.nml'), '&constants') > 0, 'best.nml written')
+      if (allocated(error)) return
+      call check(error, index(read_text(dir//'/summary.txt'), 'warning: the identifiability report failed') > 0 &
+                 .and. index(read_text(dir//'/summary.txt'), 'test lcf:') > 0, 'summary.txt: fit and warning')
+      if (allocated(error)) return
+      call check(error, index(read_text(dir//'/identify.txt'), 'warning: the identifiability report failed') > 0, &
+                 'identify.txt: warning')
+   end subroutine test_report_failed
+
+   !> A command not found (127) or not executable (126) is a failed evaluation with its
+   !> reason; when it fails everywhere the run ends as a failed fit (exit 3), as with the
+   !> internal integrator
+   subroutine test_external_127(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, script
+      integer :: stat
+      dir = scratch_dir//'/ext127-out'
+      input = deck('ext127.nml', 'max_evals=2, identify=.false.', &
+                   ", backend='external', command='no-such-fe-program {constants}'")
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check_message(error, e, 'command not found (exit status 127)')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_failure, 'exit code 3')
+      if (allocated(error)) return
+      call check(error, index(read_text(dir//'/fit.log'), 'evaluation 1: penalty') > 0, &
+                 'a failed evaluation in fit.log')
+      if (allocated(error)) return
+      script = scratch_dir//'/not-executable.sh'
+      stat = shell('echo "exit 0" > '//script//'; chmod -x '//script)
+      input = deck('ext126.nml', 'max_evals=2, identify=.false.', &
+                   ", backend='external', command='"//absolute_path(script)//"'")
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check_message(error, e, 'command not executable (exit status 126)')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_failure, 'exit code 3')
+   end subroutine test_external_127
+
+   !> A command that ignores TERM is stopped at its time limit (KILL after the grace
+   !> period) and reported as such; a background child it leaves goes with its group
+   subroutine test_external_term(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, pid
+      integer :: stat
+      dir = scratch_dir//'/extterm-out'
+      stat = shell('rm -rf '//dir)
+      input = deck('extterm.nml', 'max_evals=1, identify=.false.', &
+                   ", backend='external', time_limit=0.5, command='sleep 60 & echo $! > ../child.pid; "// &
+                   "trap """" TERM; sleep 60'")
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check_message(error, e, 'command ran past its time_limit of 0.500000 s and was stopped')
+      if (allocated(error)) return
+      pid = trim(read_text(dir//'/work/child.pid'))
+      if (len(pid) > 0) pid = pid(:len(pid) - 1)
+      call check(error, len(pid) > 0, 'the background child wrote its pid')
+      if (allocated(error)) return
+      ! Gone, or a zombie waiting for a parent that does not reap
+      stat = shell('test ! -e /proc/'//pid//' || grep -q ") Z" /proc/'//pid//'/stat')
+      call check(error, stat, 0, 'the background child '//pid//' is still running')
+   end subroutine test_external_term
+
+   !> scripts/plot-fit.sh with a folder name that would be gnuplot code if pasted into it
+   subroutine test_plot_script(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: dir
+      integer :: stat
+      if (shell('command -v gnuplot > /dev/null 2>&1') /= 0) then
+         call skip_test(error, 'gnuplot is not installed')
+         return
+      end if
+      dir = scratch_dir//'/plot/p";system("touch pwned");print "'
+      stat = shell("rm -rf "//scratch_dir//"/plot pwned; mkdir -p '"//dir//"' && "// &
+                   "cp data/thesis/lcf.sim.txt '"//dir//"/a"" b.fit.txt'")
+      call check(error, stat, 0, 'scratch folder with a hostile name')
+      if (allocated(error)) return
+      stat = shell("cd "//scratch_dir//"/plot && bash ../../../scripts/plot-fit.sh '"// &
+                   'p";system("touch pwned");print "'//"' 'x""; system(""touch pwned""); y' > /dev/null 2>&1")
+      call check(error, stat, 0, 'plot-fit.sh exit status')
+      if (allocated(error)) return
+      call check(error, .not. file_exists(scratch_dir//'/plot/pwned') .and. .not. file_exists('pwned'), &
+                 'a command in the folder name or title ran')
+      if (allocated(error)) return
+      call check(error, file_exists(dir//'/plots/a" b.png') .and. file_exists(dir//'/plots/all.png'), &
+                 'plots written')
+   end subroutine test_plot_script
+
+   !> Levenberg-Marquardt from 2 starts, stopped after 90 % of its evaluations and resumed:
+   !> the resumed run simulates at most 15 % of the evaluations and ends bit for bit as the
+   !> uninterrupted one
+   subroutine test_resume_cost(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, full, part
+      integer :: ntotal, nkept, nrep, nsim, stat, m
+      input = deck('lmresume.nml', "method='lm', multistart=2, seed=3, identify=.false.", &
+                   ", dt_out=4.0")
+      full = scratch_dir//'/lmresume-full'
+      part = scratch_dir//'/lmresume-part'
+      call run_command(input, full, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'uninterrupted run: '//e%message)
+         return
+      end if
+      call counts(summary(3), ntotal, nrep, nsim)
+      call check(error, ntotal > 40 .and. nsim == ntotal, 'uninterrupted run: '//trim(summary(3)))
+      if (allocated(error)) return
+      ! The journal and the cache as a kill after 90 % of the evaluations leaves them: the
+      ! fingerprint line and nkept records; the cache's header (16 bytes) and nkept records
+      ! of 4 + 4 bytes, 2 constants and m residuals
+      nkept = (9*ntotal)/10
+      m = residual_count(full//'/fit.cache', ntotal)
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n '//str(nkept + 1)//' '//full// &
+                   '/fit.journal > '//part//'/fit.journal && head -c '//str(16 + nkept*(8 + 8*(2 + m)))// &
+                   ' '//full//'/fit.cache > '//part//'/fit.cache')
+      call run_command(input, part, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resumed run: '//e%message)
+         return
+      end if
+      call counts(summary(3), ntotal, nrep, nsim)
+      call check(error, nrep == nkept .and. real(nsim, dp) <= 0.15_dp*real(ntotal, dp), &
+                 'resumed at 90 %: '//trim(summary(3)))
+      if (allocated(error)) return
+      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), 'journal identical')
+      if (allocated(error)) return
+      call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
+                 'best.nml identical')
+   contains
+      subroutine counts(line, n, nr, ns)
+         character(len=*), intent(in) :: line
+         integer, intent(out) :: n, nr, ns
+         integer :: k, ios
+         character(len=32) :: w(6)
+         k = index(line, 'evaluations')
+         read (line(k:), *, iostat=ios) w
+         n = -1
+         nr = -1
+         ns = -1
+         if (ios /= 0) return
+         read (w(2), *, iostat=ios) n
+         read (w(3)(2:), *, iostat=ios) nr
+         read (w(5), *, iostat=ios) ns
+      end subroutine counts
+      integer function residual_count(path, nrec) result(mm)
+         character(len=*), intent(in) :: path
+         integer, intent(in) :: nrec
+         integer :: unit
+         integer(8) :: bytes
+         open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='read')
+         inquire (unit=unit, size=bytes)
+         close (unit)
+         mm = int(((bytes - 16)/nrec - 8)/8) - 2
+      end function residual_count
+      function body(text) result(rest)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: rest
+         rest = text(max(index(text, '&constants'), 1):)
+      end function body
+   end subroutine test_resume_cost
+
+   !> SIGTERM during a run: a line in fit.log, exit code 143, and --resume continues
+   subroutine test_sigterm(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, input, dir, log
+      integer :: stat
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'the usharp executable was not found beside the tester')
+         return
+      end if
+      input = deck('sigterm.nml', 'eps=1e-300, max_evals=300', '')
+      dir = scratch_dir//'/sigterm-out'
+      stat = shell('rm -rf '//dir//'; '//exe//' run -q '//input//' -o '//dir//' > /dev/null 2>&1 & pid=$!; n=0; '// &
+                   'while [ "$(cat '//dir//'/fit.journal 2>/dev/null | wc -l)" -lt 20 ] && [ $n -lt 3000 ]; '// &
+                   'do sleep 0.01; n=$((n+1)); done; kill -TERM $pid; wait $pid; echo $? > '//dir//'.rc')
+      call check(error, trim(read_text(dir//'.rc')) == '143'//new_line('a'), 'exit code 143, not '//read_text(dir//'.rc'))
+      if (allocated(error)) return
+      log = read_text(dir//'/fit.log')
+      call check(error, index(log, 'stopped by signal 15 after ') > 0 .and. &
+                 index(log, ' evaluations; continue with --resume') > 0, 'fit.log: '//log)
+      if (allocated(error)) return
+      stat = shell(exe//' run -q --resume '//input//' -o '//dir//' > /dev/null 2>&1')
+      call check(error, stat, 0, 'resumed run')
+   end subroutine test_sigterm
+
+   pure function str(i) result(s)
+      integer, intent(in) :: i
+      character(len=:), allocatable :: s
+      character(len=16) :: buf
+      write (buf, '(i0)') i
+      s = trim(buf)
+   end function str
+end module test_safety
