@@ -7,6 +7,7 @@ program usharp_main
    use usharp_strings, only: str, real_str
    use usharp_cli, only: cli_command, arg_string, parse_arguments, execute_command, &
                          main_help, command_help, version_text
+   use usharp_cli_threads, only: ensure_wait_policy
    implicit none
    type(arg_string), allocatable :: args(:)
    type(cli_command) :: cmd
@@ -22,6 +23,7 @@ program usharp_main
       end function c_isatty
    end interface
 
+   call ensure_wait_policy()
    allocate (args(command_argument_count()))
    do i = 1, size(args)
       call get_command_argument(i, length=length)

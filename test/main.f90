@@ -15,6 +15,7 @@ program tester
    use test_diagnose, only: collect_diagnose
    use test_cli, only: collect_cli
    use test_safety, only: collect_safety
+   use test_cluster, only: collect_cluster
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -35,7 +36,8 @@ program tester
       new_testsuite('design', collect_design), &
       new_testsuite('diagnose', collect_diagnose), &
       new_testsuite('cli', collect_cli), &
-      new_testsuite('safety', collect_safety)]
+      new_testsuite('safety', collect_safety), &
+      new_testsuite('cluster', collect_cluster)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)

@@ -20,6 +20,7 @@ contains
          new_unittest('usage-errors-name-the-argument', test_usage_errors), &
          new_unittest('every-command-has-help', test_help), &
          new_unittest('version-names-the-build', test_version), &
+         new_unittest('passive-wait-unless-chosen', test_wait_policy), &
          new_unittest('folders-import-only-downward', test_layers)]
    end subroutine collect_cli
 
@@ -112,6 +113,26 @@ contains
       call check(error, index(text, 'compiler: GCC') > 0 .and. index(text, 'SUNDIALS: 6.') > 0 &
                  .and. index(text, 'OpenMP: ') > 0, 'version text: '//text)
    end subroutine test_version
+
+   !> Started without OMP_WAIT_POLICY the program runs with passive waiting; a policy the
+   !> user chose is kept
+   subroutine test_wait_policy(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, out
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'usharp executable not found next to the tester')
+         return
+      end if
+      call make_dir(scratch_dir, e)
+      out = scratch_dir//'/version.txt'
+      call execute_command_line('env -u OMP_WAIT_POLICY '//exe//' --version > '//out)
+      call check(error, index(read_text(out), 'wait policy passive') > 0, 'unset: '//read_text(out))
+      if (allocated(error)) return
+      call execute_command_line('OMP_WAIT_POLICY=active '//exe//' --version > '//out)
+      call check(error, index(read_text(out), 'wait policy active') > 0, 'chosen: '//read_text(out))
+   end subroutine test_wait_policy
 
    !> scripts/import-graph.py --check: no folder of src/ uses a module of a folder above it
    subroutine test_layers(error)

@@ -146,8 +146,8 @@ contains
    function version_text() result(text)
       character(len=:), allocatable :: text
       character(kind=c_char) :: buffer(64)
-      character(len=64) :: sundials
-      integer :: i
+      character(len=64) :: sundials, policy
+      integer :: i, status
       sundials = 'unknown'
       if (sundials_get_version(buffer, int(size(buffer), c_int)) == 0) then
          sundials = ''
@@ -156,11 +156,13 @@ contains
             sundials(i:i) = buffer(i)
          end do
       end if
+      call get_environment_variable('OMP_WAIT_POLICY', policy, status=status)
+      if (status /= 0) policy = 'runtime default'
       text = 'usharp '//usharp_version_string//nl// &
          'compiler: '//compiler_version()//nl// &
          'SUNDIALS: '//trim(sundials)//nl// &
          'OpenMP: '//str(openmp_version)//', '//str(omp_get_max_threads())// &
-         ' threads (OMP_NUM_THREADS)'//nl// &
+         ' threads (OMP_NUM_THREADS), wait policy '//trim(policy)//' (OMP_WAIT_POLICY)'//nl// &
          'MPI: none'
    end function version_text
 end module usharp_cli_help

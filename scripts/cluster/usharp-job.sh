@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Run one usharp job so that a scheduler may stop it and start it again: the command runs with
+# --auto-resume (a fresh start, or the continuation of the journal in its output folder), a
+# TERM sent to this script (SLURM's --signal=B:TERM@..., PBS's qdel, a wall-time limit) is
+# passed on to usharp, which ends after the evaluation under way and notes it in fit.log, and
+# the job is then put back in the queue when the scheduler can (USHARP_REQUEUE).
+#
+# usage: usharp-job.sh INPUT.nml [OUT_DIR]
+# environment:
+#   USHARP          the usharp executable (default: usharp on PATH)
+#   USHARP_COMMAND  the command: run (default)
+#   USHARP_THREADS  OpenMP threads (default: the allocation's CPUs, else all cores)
+#   USHARP_REQUEUE  a command that puts this job back in the queue after a stop by TERM
+#                   (the SLURM and PBS scripts set it; empty: none)
+set -uo pipefail
+input=${1:?usage: usharp-job.sh INPUT.nml [OUT_DIR]}
+out=${2:-}
+usharp=${USHARP:-usharp}
+command=${USHARP_COMMAND:-run}
+
+# Threads from the allocation; passive waiting, so that threads that wait give their core away
+# on a node shared with other jobs instead of spinning on it
+threads=${USHARP_THREADS:-${SLURM_CPUS_PER_TASK:-${PBS_NCPUS:-${NCPUS:-$(nproc)}}}}
+export OMP_NUM_THREADS=$threads
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
+export OMP_PROC_BIND=${OMP_PROC_BIND:-false}
+
+args=("$command" --auto-resume -q)
+[ -n "$out" ] && args+=(-o "$out")
+args+=("$input")
+
+echo "usharp-job: $(date -u +%FT%TZ) start: $usharp ${args[*]} ($threads threads)" >&2
+"$usharp" "${args[@]}" &
+pid=$!
+stopped=0
+trap 'stopped=1; kill -TERM "$pid" 2>/dev/null' TERM INT
+while true; do
+  wait "$pid"
+  rc=$?
+  # wait returns early (status > 128) when the trap ran; wait again for usharp itself
+  kill -0 "$pid" 2>/dev/null || break
+done
+if [ "$stopped" -eq 1 ]; then
+  echo "usharp-job: $(date -u +%FT%TZ) stopped by TERM (usharp exit $rc); the next start resumes" >&2
+  if [ -n "${USHARP_REQUEUE:-}" ]; then
+    sh -c "$USHARP_REQUEUE" || echo "usharp-job: requeue failed: $USHARP_REQUEUE" >&2
+  fi
+  exit "$rc"
+fi
+echo "usharp-job: $(date -u +%FT%TZ) end (exit $rc)" >&2
+exit "$rc"
