@@ -54,9 +54,9 @@ program usharp_main
    end if
 
    ! The progress line goes to stderr only on a terminal and without --quiet
-   if (cmd%name == 'run' .and. .not. cmd%quiet .and. c_isatty(2_c_int) == 1) then
-      call execute_command(cmd, lines, error, show_progress)
-      write (error_unit, '(a)') ''
+   if (.not. cmd%quiet .and. c_isatty(2_c_int) == 1) then
+      call execute_command(cmd, lines, error, show_progress, show_stage)
+      if (cmd%name == 'run' .or. cmd%name == 'diagnose') write (error_unit, '(a)') ''
    else
       call execute_command(cmd, lines, error)
    end if
@@ -80,4 +80,13 @@ contains
          ' evaluations, best '//real_str(best, 'es11.4')//', '//real_str(seconds, 'f10.1')//' s   '
       flush (error_unit)
    end subroutine show_progress
+
+   subroutine show_stage(stage, nevals, seconds)
+      character(len=*), intent(in) :: stage
+      integer, intent(in) :: nevals
+      real(dp), intent(in) :: seconds
+      write (error_unit, '(a)', advance='no') achar(13)//'usharp diagnose: '//stage//', '// &
+         str(nevals)//' simulations, '//real_str(seconds, 'f10.1')//' s'//achar(27)//'[K'
+      flush (error_unit)
+   end subroutine show_stage
 end program usharp_main

@@ -4,6 +4,7 @@ module usharp_cli
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, stat_report
    use usharp_fit, only: progress_interface
+   use usharp_diagnose, only: diagnose_progress
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments, command_names
    use usharp_cli_help, only: main_help, command_help, version_text
    use usharp_cmd_simulate, only: simulate_command
@@ -17,13 +18,13 @@ module usharp_cli
 
    public :: cli_command, arg_string, parse_arguments, command_names
    public :: main_help, command_help, version_text
-   public :: execute_command, progress_interface
+   public :: execute_command, progress_interface, diagnose_progress
 
 contains
 
    !> Execute a parsed command. lines returns what to show on stdout; progress, when given,
-   !> is called after every evaluation of a fit.
-   subroutine execute_command(cmd, lines, error, progress)
+   !> is called after every evaluation of a fit, stage at every step of a diagnosis.
+   subroutine execute_command(cmd, lines, error, progress, stage)
       !> the parsed command line
       type(cli_command), intent(in) :: cmd
       !> lines for the user (files written, summaries)
@@ -32,6 +33,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       !> called with (evaluations, best objective, seconds) during a fit
       procedure(progress_interface), optional :: progress
+      !> called with (what it does, simulations, seconds) during a diagnosis
+      procedure(diagnose_progress), optional :: stage
       character(len=256), allocatable :: written(:)
       character(len=200), allocatable :: summary(:)
       integer :: k
@@ -56,7 +59,7 @@ contains
          if (cmd%selfcheck) then
             call selfcheck_command(cmd%input, cmd%out_dir, summary, error)
          else
-            call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+            call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, stage)
          end if
       case ('run')
          call run_command(cmd%input, cmd%out_dir, cmd%constants, cmd%resume, summary, error, progress, &

@@ -18,6 +18,7 @@
 !>    (held-out tests whose residual was already at the noise level must stay there).
 !> 4. The verdict (usharp_diagnose_verdict) and the report (usharp_diagnose_report).
 module usharp_diagnose
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_miller, only: constant_names, get_constant
@@ -98,10 +99,13 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
       procedure(diagnose_progress), optional :: progress
-      call system_clock(ctx%clock0)
-      if (present(progress)) ctx%progress => progress
+      integer(int64) :: clock0
+      call system_clock(clock0)
       call prepare(cfg, opts, ctx, res, error, experiments)
       if (allocated(error)) return
+      ! after prepare, which makes ctx anew
+      ctx%clock0 = clock0
+      if (present(progress)) ctx%progress => progress
       call tell(ctx, 'baseline fit', res%nevals)
       call fit_baseline(ctx, res, error)
       if (allocated(error)) return

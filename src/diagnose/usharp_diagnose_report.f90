@@ -190,12 +190,12 @@ contains
       character(len=*), intent(in) :: text
       integer :: cut
       if (len(text) <= len(lines)) then
-         lines = [lines, text]
+         lines = [character(len=len(lines)) :: lines, text]
          return
       end if
       cut = index(text(1:len(lines)), ' ', back=.true.)
       if (cut <= 1) cut = len(lines)
-      lines = [lines, text(1:cut)]
+      lines = [character(len=len(lines)) :: lines, text(1:cut)]
       call add(lines, '  '//text(cut + 1:))
    end subroutine add
 

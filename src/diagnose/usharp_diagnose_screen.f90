@@ -147,8 +147,12 @@ contains
          xs(nc + 1, 3) = 0.10_dp*ep%p0(2)
          return
       end if
-      if (info%sharing /= param_global .or. np /= size(ep%p0) .or. np > 2 .or. &
-          any(info%plausible(1:np) >= huge(1.0_dp))) then
+      ! (nested: Fortran's .or. may evaluate plausible(1:np) even when np > 2)
+      if (info%sharing /= param_global .or. np /= size(ep%p0) .or. np > 2) then
+         xs = reshape(x0, [size(x0), 1])
+         return
+      end if
+      if (any(info%plausible(1:np) >= huge(1.0_dp))) then
          xs = reshape(x0, [size(x0), 1])
          return
       end if
