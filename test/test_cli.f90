@@ -57,6 +57,9 @@ contains
       call check(error, .not. allocated(e) .and. cmd%test_name == 'lcf' .and. cmd%input == 'decks/x.nml', &
                  'deck takes a test before the input')
       if (allocated(error)) return
+      call parse_arguments(argv('run --auto-resume fit.nml'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%auto_resume .and. .not. cmd%resume, 'auto-resume')
+      if (allocated(error)) return
       call parse_arguments(argv('diagnose --selfcheck'), cmd, e)
       call check(error, .not. allocated(e) .and. cmd%selfcheck .and. cmd%input == '', &
                  'selfcheck needs no input')

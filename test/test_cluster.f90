@@ -32,7 +32,7 @@ contains
       end do
    end subroutine test_syntax
 
-   !> Thesis run 3 (2786 evaluations) through usharp-job.sh: stopped by TERM once 300
+   !> Thesis run 2 (1111 evaluations) through usharp-job.sh: stopped by TERM once 300
    !> evaluations are logged, then the same script again; its objective history and result
    !> are those of an uninterrupted run, bit for bit
    subroutine test_restart(error)
@@ -49,11 +49,11 @@ contains
       a = scratch_dir//'/cluster-whole'
       b = scratch_dir//'/cluster-stopped'
       call execute_command_line('rm -rf '//a//' '//b)
-      call execute_command_line(exe//' run -q -o '//a//' decks/thesis-run3.nml > /dev/null', exitstat=stat)
+      call execute_command_line(exe//' run -q -o '//a//' decks/thesis-run2.nml > /dev/null', exitstat=stat)
       call check(error, stat == 0, 'uninterrupted run')
       if (allocated(error)) return
       ! Start the job, wait for 300 evaluations in FOM.TXT (at most 120 s), send TERM
-      stop_script = 'USHARP='//exe//' bash scripts/cluster/usharp-job.sh decks/thesis-run3.nml '// &
+      stop_script = 'USHARP='//exe//' bash scripts/cluster/usharp-job.sh decks/thesis-run2.nml '// &
          b//' 2> '//b//'.log & p=$!; n=0; '// &
          'while [ "$(cat '//b//'/FOM.TXT 2>/dev/null | wc -l)" -lt 300 ] && [ $n -lt 2400 ]; '// &
          'do sleep 0.05; n=$((n+1)); done; kill -TERM $p; wait $p; echo $? > '//b//'.rc1'
@@ -65,7 +65,7 @@ contains
                  'the stopped run must not have finished')
       if (allocated(error)) return
       call execute_command_line('USHARP='//exe//' bash scripts/cluster/usharp-job.sh '// &
-                                'decks/thesis-run3.nml '//b//' 2>> '//b//'.log', exitstat=stat)
+                                'decks/thesis-run2.nml '//b//' > /dev/null 2>> '//b//'.log', exitstat=stat)
       call check(error, stat == 0, 'second start: '//read_text(b//'.log'))
       if (allocated(error)) return
       call check(error, index(read_text(b//'/fit.log'), 'resumed') > 0, 'second start did not resume')

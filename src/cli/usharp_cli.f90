@@ -63,7 +63,7 @@ contains
          end if
       case ('run')
          call run_command(cmd%input, cmd%out_dir, cmd%constants, cmd%resume, summary, error, progress, &
-                          cmd%force)
+                          cmd%force, cmd%auto_resume)
          ! A fit that is done but whose report failed still shows its summary
          if (allocated(error)) then
             if (error%stat == stat_report) lines = [character(len=1024) :: summary]

@@ -34,6 +34,9 @@ module usharp_cli_args
       logical :: resume = .false.
       !> --force: `run` starts again over an earlier run's journal
       logical :: force = .false.
+      !> --auto-resume: `run` continues from the journal when the output folder holds one,
+      !> else starts (one command for a job script that may be stopped and started again)
+      logical :: auto_resume = .false.
       !> -q, --quiet: no progress line, no list of files written
       logical :: quiet = .false.
       !> --selfcheck: `diagnose` on synthetic data with injected effects
@@ -63,7 +66,7 @@ contains
          ok = .true.
       case ('--test')
          ok = command == 'simulate'
-      case ('--resume', '--force')
+      case ('--resume', '--force', '--auto-resume')
          ok = command == 'run'
       case ('--selfcheck')
          ok = command == 'diagnose'
@@ -152,6 +155,8 @@ contains
             cmd%resume = .true.
          case ('--force')
             cmd%force = .true.
+         case ('--auto-resume')
+            cmd%auto_resume = .true.
          case ('--quiet')
             cmd%quiet = .true.
          case ('--selfcheck')
@@ -193,7 +198,7 @@ contains
          long = '--test'
       case ('-q', '--quiet')
          long = '--quiet'
-      case ('--resume', '--selfcheck', '--force')
+      case ('--resume', '--selfcheck', '--force', '--auto-resume')
          long = arg
       case default
          long = ''

@@ -82,6 +82,8 @@ contains
             '                        the input, constants or data files changed since)'//nl// &
             '      --force           start again, overwriting the fit.journal of an earlier run'//nl// &
             '                        (without --resume or --force such a journal is an error)'//nl// &
+            '      --auto-resume     --resume when the output folder holds a journal, else a'//nl// &
+            '                        fresh start (for job scripts: scripts/cluster)'//nl// &
             '  -q, --quiet           no progress line on stderr'//nl// &
             common_options
       case ('identify')

@@ -28,13 +28,16 @@ contains
    !> The output folder is locked for the run (a second run into it is an error, exit 6).
    !> When the fit finished but its identifiability report failed, the results are written,
    !> the summary says so, and error has stat_report (exit 5).
-   subroutine run_command(path, out_dir, constants_file, resume, summary, error, progress, force)
+   subroutine run_command(path, out_dir, constants_file, resume, summary, error, progress, force, &
+                          auto_resume)
       character(len=*), intent(in) :: path, out_dir, constants_file
       logical, intent(in) :: resume
       character(len=200), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
       procedure(progress_interface), optional :: progress
       logical, intent(in), optional :: force
+      !> resume when the output folder holds a journal, else start
+      logical, intent(in), optional :: auto_resume
       integer :: lock
       logical :: overwrite
 
@@ -72,7 +75,7 @@ contains
                '(it holds '//join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
             return
          end if
-         call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file)
+         call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume)
          if (allocated(error)) return
 
          best = cfg%model

@@ -269,7 +269,7 @@ contains
    !> without resume, an existing journal is an error unless force. constants_file: the
    !> --constants file, part of the fingerprint. progress, when given, hears of every
    !> evaluation. SIGTERM and SIGINT stop the fit between evaluations (see check_stop).
-   subroutine run_fit(prob, dir, resume, outcome, error, progress, force, constants_file)
+   subroutine run_fit(prob, dir, resume, outcome, error, progress, force, constants_file, auto_resume)
       type(fit_problem), intent(in) :: prob
       character(len=*), intent(in) :: dir
       logical, intent(in) :: resume
@@ -277,12 +277,14 @@ contains
       type(error_type), allocatable, intent(out) :: error
       procedure(progress_interface), optional :: progress
       logical, intent(in), optional :: force
+      !> resume when dir holds a journal with records, else start (for job scripts)
+      logical, intent(in), optional :: auto_resume
       character(len=*), intent(in), optional :: constants_file
       type(fit_objective) :: obj
       type(error_type), allocatable :: close_error
       integer(int64) :: now, rate
       character(len=:), allocatable :: fingerprint, old_fingerprint, changed, journal
-      logical :: overwrite
+      logical :: overwrite, resuming
       obj%prob = prob
       allocate (obj%replay(0), obj%replay_jac(0))
       overwrite = .false.
@@ -293,7 +295,11 @@ contains
          fingerprint = fit_fingerprint(prob%cfg, '')
       end if
       journal = join_path(dir, journal_name)
-      if (resume) then
+      resuming = resume
+      if (present(auto_resume)) then
+         if (auto_resume) resuming = journal_has_records(journal)
+      end if
+      if (resuming) then
          call read_journal(journal, size(prob%targets), size(prob%idx), obj%replay, &
                            old_fingerprint, error)
          if (allocated(error)) return
