@@ -303,6 +303,11 @@ contains
          call read_journal(journal, size(prob%targets), size(prob%idx), obj%replay, &
                            old_fingerprint, error)
          if (allocated(error)) return
+         if (len_trim(old_fingerprint) == 0) then
+            call fatal_error(error, journal//': cannot resume: the file has no fingerprint line '// &
+               '(it is not a fit.journal of this usharp); start again with --force', stat_input)
+            return
+         end if
          changed = fingerprint_mismatch(old_fingerprint, fingerprint)
          if (len(changed) > 0) then
             call fatal_error(error, journal//': cannot resume: '//changed// &

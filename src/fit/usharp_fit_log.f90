@@ -170,7 +170,6 @@ contains
       type(journal_record) :: rec
       character(len=:), allocatable :: line
       integer :: unit, ios, k, kk, nrec
-      allocate (records(16))
       fingerprint = ''
       nrec = 0
       if (.not. file_exists(path)) then
@@ -178,6 +177,7 @@ contains
          allocate (records(0))
          return
       end if
+      allocate (records(16))
       open (newunit=unit, file=path, status='old', action='read')
       allocate (rec%per_test(ntest), rec%x(nx))
       k = 0
@@ -273,17 +273,13 @@ contains
    end subroutine read_cache
 
    !> '' when the fingerprints agree, else what changed (the fingerprint is a list of
-   !> name=hash items; see usharp_fit)
+   !> name=hash items; see usharp_fit). old must not be empty.
    function fingerprint_mismatch(old, new) result(what)
       character(len=*), intent(in) :: old, new
       character(len=:), allocatable :: what
       character(len=:), allocatable :: item, name, old_value
       integer :: pos, next, eq
       what = ''
-      if (len_trim(old) == 0) then
-         what = 'the journal has no fingerprint'
-         return
-      end if
       pos = 1
       do while (pos <= len_trim(new))
          next = index(new(pos:), ' ')
