@@ -10,6 +10,8 @@ module test_safety
                              file_exists, make_dir, hash_text, hash_hex
    use usharp_output, only: write_lines
    use usharp_cmd_run, only: run_command
+   use usharp_strings, only: str
+   use usharp_cli_args, only: cli_command, arg_string, parse_arguments
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message
    implicit none
    private
@@ -139,6 +141,7 @@ contains
       type(uerror), allocatable :: e
       character(len=200), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir, journal
+      type(cli_command) :: cmd
       input = deck('journal.nml', 'max_evals=12', '')
       dir = scratch_dir//'/journal-out'
       call run_command(input, dir, '', .false., summary, e, force=.true.)
@@ -157,6 +160,16 @@ contains
       if (allocated(error)) return
       call run_command(input, dir, '', .false., summary, e, force=.true.)
       call check(error, .not. allocated(e), '--force starts again')
+      if (allocated(error)) return
+      ! On the command line: --force is an option of run; with --resume a usage error
+      call parse_arguments([arg_string('run'), arg_string('--force'), arg_string('f.nml')], cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%force, 'run --force parsed')
+      if (allocated(error)) return
+      call parse_arguments([arg_string('run'), arg_string('--resume'), arg_string('--force'), &
+                            arg_string('f.nml')], cmd, e)
+      call check_message(error, e, '--resume continues the journal, --force overwrites it: give one')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'exit code 2')
    end subroutine test_journal_kept
 
    !> While another process holds the folder's lock a run exits 6; the lock file left behind
@@ -446,11 +459,4 @@ contains
       call check(error, stat, 0, 'resumed run')
    end subroutine test_sigterm
 
-   pure function str(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(i0)') i
-      s = trim(buf)
-   end function str
 end module test_safety
