@@ -11,6 +11,7 @@ module usharp_effect_problem
    use usharp_objective, only: fit_problem, test_residuals, simulated
    use usharp_optimiser, only: least_squares_type
    use usharp_simulation, only: sim_result
+   use usharp_history, only: history_type, control_strain
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
    implicit none
@@ -157,6 +158,7 @@ contains
       type(test_effects), allocatable :: eff(:)
       type(error_type), allocatable :: error
       type(sim_result) :: res
+      type(history_type) :: hist
       real(dp), allocatable :: p(:), tout(:), ysim(:)
       integer :: i, it, k0, n, nt
       ok = .false.
@@ -179,13 +181,20 @@ contains
             if (allocated(error)) return
             ! The stress channel lags by shift: the data at t saw the response at t - shift
             tout = min(max(tg%t - eff(i)%shift, test%hist%t(1)), test%hist%end_time())
+            ! An extensometer drift: a strain-controlled specimen follows the command less the
+            ! drift (linear in time, so the corners stay the corners)
+            hist = test%hist
+            if (eff(i)%drift /= 0.0_dp .and. hist%control == control_strain) &
+               hist%v = hist%v - eff(i)%drift*(hist%t - hist%t(1))
             if (self%prob%cfg%solver%integrator == 'cvode') then
-               call simulate_cvode(mt, test%hist, tout, self%prob%cfg%solver, res, error, eff(i))
+               call simulate_cvode(mt, hist, tout, self%prob%cfg%solver, res, error, eff(i))
             else
-               call simulate_rosenbrock(mt, test%hist, tout, self%prob%cfg%solver, res, error, eff(i))
+               call simulate_rosenbrock(mt, hist, tout, self%prob%cfg%solver, res, error, eff(i))
             end if
             if (allocated(error)) return
             n = size(tg%t)
+            ! ... and the measured strain is the specimen's plus the drift
+            if (eff(i)%drift /= 0.0_dp) res%strain = res%strain + eff(i)%drift*(tout - hist%t(1))
             ysim = simulated(test, res)
             r(k0 + 1:k0 + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
                                               tg%y_ex_max)

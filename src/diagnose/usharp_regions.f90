@@ -1,6 +1,7 @@
 !> Where a fit's residual lies: each output point of a test is classed by the segment of its
 !> load history (loading away from zero, unloading towards it, the reversal just after a turn,
-!> hold), by its cycle, and as elastic or inelastic (|response| below or above a threshold).
+!> hold) and its cycle, both from the kinematics of the control with hysteresis against its
+!> noise and quantisation, and as elastic or inelastic from the model's own inelastic rate.
 !> For a set of points: share of the objective, RMS and mean signed error, the Wald-Wolfowitz
 !> runs test on the signs of the error, and the ratio of the residual to the noise expected
 !> from a noise level estimated from the data themselves.
@@ -11,16 +12,55 @@ module usharp_regions
    private
 
    public :: point_classes, region_stat, region_of, noise_sd, runs_z, class_names, gap_se
-   public :: noise_var_rse
+   public :: noise_var_rse, inelastic_points, kinematics_of, control_kinematics
+   public :: serration_stat, serration_of
    public :: class_loading, class_unloading, class_reversal, class_hold
 
    integer, parameter :: class_loading = 1, class_unloading = 2, class_reversal = 3, class_hold = 4
    character(len=9), parameter :: class_names(4) = ['loading  ', 'unloading', 'reversal ', 'hold     ']
 
-   !> A turn counts once the control has come back by this fraction of its range (so the
-   !> noise of a measured control does not make turns); a point is in the reversal while
-   !> the control is within reversal_span of the range from the turn
+   !> A turn counts once the control has come back by this fraction of its range, and by
+   !> turn_quanta quanta and turn_noise noise standard deviations of a measured control (so
+   !> noise, quantisation and the dips of serrations make no turns); a point is in the
+   !> reversal while the control is within reversal_span of the range from the turn
    real(dp), parameter :: turn_hysteresis = 0.05_dp, reversal_span = 0.1_dp
+   real(dp), parameter :: turn_quanta = 10.0_dp, turn_noise = 6.0_dp
+   !> A control is quantised (measured) when its smallest step is below this fraction of its
+   !> range; its noise is estimated when it has at least dense_corners corners
+   real(dp), parameter :: quantum_fraction = 0.01_dp
+   integer, parameter :: dense_corners = 50
+   !> Hold: the control, averaged over +- hold_smooth samples, within hold_quanta quanta
+   !> (hold_noise noise sd) for longer than hold_crossings times the time the moving control
+   !> takes to cross that band, and hold_samples samples (the band holds the extremes of the
+   !> averaged noise over some hundred samples)
+   real(dp), parameter :: hold_quanta = 6.0_dp, hold_noise = 6.0_dp
+   integer, parameter :: hold_smooth = 2
+   real(dp), parameter :: hold_crossings = 10.0_dp, hold_samples = 5.0_dp
+   !> Inelastic: the inelastic strain's change over +- rate_window points exceeds this share
+   !> of the total strain's change, and inelastic_floor of its mean change over a window
+   real(dp), parameter :: inelastic_share = 0.1_dp, inelastic_floor = 1.0e-3_dp
+   integer, parameter :: rate_window = 2
+   !> Serrations: oscillations of periods from 2 to serration_max_period samples
+   integer, parameter :: serration_max_period = 64
+
+   !> Turns, holds and resolution of a test's control
+   type :: control_kinematics
+      real(dp) :: range = 1.0_dp               !< max - min of the control
+      real(dp) :: quantum = 0.0_dp             !< its step (0: not quantised)
+      real(dp) :: noise = 0.0_dp               !< its noise sd (0: not estimated)
+      real(dp) :: band = 0.0_dp                !< band of a hold
+      integer :: dir0 = 1                      !< direction of the first branch
+      real(dp), allocatable :: tturn(:), vturn(:)  !< turns: time (s), value
+      logical, allocatable :: hold(:)          !< each history segment: in a hold
+   end type control_kinematics
+
+   !> An oscillation in a residual (Fisher's g test on its periodogram over short periods)
+   type :: serration_stat
+      integer :: n = 0                 !< points tested
+      real(dp) :: p = 1.0_dp           !< chance that white noise gives so strong a peak
+      real(dp) :: period = 0.0_dp      !< samples
+      real(dp) :: amplitude = 0.0_dp   !< response unit
+   end type serration_stat
 
    !> Relative standard error of noise_sd(y)**2, times sqrt(size(y)), for Gaussian white
    !> noise on a smooth response. Monte Carlo, 6000 draws each: 2.88, 2.83, 2.81 at 300, 600,
@@ -49,43 +89,33 @@ module usharp_regions
 
 contains
 
-   !> Class, cycle (1-based, two turns each) of the points t of a test with control
-   !> history hist; elastic where |y| < threshold
+   !> Class and cycle (1-based, two turns each) of the points t (s) of a test whose control
+   !> (strain or stress) follows hist, from the kinematics alone, robust to a measured
+   !> control's noise and quantisation:
+   !> - a turn counts once the control has come back from its extreme by more than the
+   !>   larger of turn_hysteresis of its range and a multiple of its quantum and noise;
+   !> - a hold is a stretch where the control stays within a band of a few quanta (or noise
+   !>   standard deviations) for longer than it takes the moving control to cross that band
+   !>   hold_crossings times (an exactly constant piece when the control has no noise);
+   !> - loading moves away from zero, unloading towards it, by the direction of the branch
+   !>   between turns (not the local slope, which a quantised signal makes 0 or noisy);
+   !>   reversal: within reversal_span of the range from the last turn.
+   !> elastic (optional, legacy): |y| below threshold; use inelastic_points for the
+   !> classification from the model's inelastic rate.
    pure subroutine point_classes(hist, t, y, threshold, cls, cycle, elastic)
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: t(:), y(:), threshold
       integer, intent(out) :: cls(:), cycle(:)
       logical, intent(out) :: elastic(:)
-      real(dp), allocatable :: tturn(:), vturn(:)
-      real(dp) :: range, v, slope, vext
-      integer :: i, k, nturn, dir, it
-      logical :: near_turn
-      range = maxval(hist%v) - minval(hist%v)
-      if (range <= 0.0_dp) range = 1.0_dp
-      ! Turns: extremes of the control once it has come back by the hysteresis
-      allocate (tturn(0), vturn(0))
-      dir = 0
-      vext = hist%v(1)
-      it = 1
-      do k = 2, size(hist%v)
-         v = hist%v(k)
-         if (dir >= 0 .and. v > vext .or. dir <= 0 .and. v < vext) then
-            if (dir == 0) dir = merge(1, -1, v > vext)
-            vext = v
-            it = k
-         else if (abs(v - vext) > turn_hysteresis*range) then
-            tturn = [tturn, hist%t(it)]
-            vturn = [vturn, vext]
-            dir = -dir
-            vext = v
-            it = k
-         end if
-      end do
+      type(control_kinematics) :: kin
+      real(dp) :: v
+      integer :: i, k, nturn, dir
+      kin = kinematics_of(hist)
       nturn = 0
       k = 1
       do i = 1, size(t)
-         do while (nturn < size(tturn))
-            if (tturn(nturn + 1) > t(i)) exit
+         do while (nturn < size(kin%tturn))
+            if (kin%tturn(nturn + 1) > t(i)) exit
             nturn = nturn + 1
          end do
          do while (k < size(hist%t) - 1)
@@ -94,15 +124,13 @@ contains
          end do
          ! A cycle holds two turns; the rise before a cycle's first turn counts with the last
          cycle(i) = max(1, (nturn + 1)/2)
-         slope = (hist%v(k + 1) - hist%v(k))
-         v = hist%v(k) + slope*(t(i) - hist%t(k))/(hist%t(k + 1) - hist%t(k))
-         near_turn = .false.
-         if (nturn > 0) near_turn = abs(v - vturn(nturn)) < reversal_span*range
-         if (abs(slope) <= 1.0e-9_dp*range) then
+         v = hist%value_at(t(i))
+         dir = kin%dir0*merge(1, -1, mod(nturn, 2) == 0)
+         if (kin%hold(k)) then
             cls(i) = class_hold
-         else if (near_turn) then
+         else if (nturn > 0 .and. abs(v - kin%vturn(max(nturn, 1))) < reversal_span*kin%range) then
             cls(i) = class_reversal
-         else if (v*slope > 0.0_dp) then
+         else if (v*dir > 0.0_dp) then
             cls(i) = class_loading
          else
             cls(i) = class_unloading
@@ -110,6 +138,114 @@ contains
          elastic(i) = abs(y(i)) < threshold
       end do
    end subroutine point_classes
+
+   !> Turns, holds and resolution of a control history (see point_classes)
+   pure function kinematics_of(hist) result(kin)
+      type(history_type), intent(in) :: hist
+      type(control_kinematics) :: kin
+      real(dp), allocatable :: dv(:), vs(:)
+      real(dp) :: v, vext, hyst, travel, rate, tmin, lo, hi
+      integer :: k, n, dir, it, a, b
+      n = size(hist%v)
+      kin%range = maxval(hist%v) - minval(hist%v)
+      if (kin%range <= 0.0_dp) kin%range = 1.0_dp
+      dv = abs(hist%v(2:n) - hist%v(1:n - 1))
+      ! Quantum: the smallest step of a densely sampled control, when far below its range
+      kin%quantum = 0.0_dp
+      if (any(dv > 0.0_dp)) kin%quantum = minval(dv, dv > 0.0_dp)
+      if (kin%quantum > quantum_fraction*kin%range) kin%quantum = 0.0_dp
+      kin%noise = 0.0_dp
+      if (n >= dense_corners) kin%noise = min(noise_sd(hist%v), quantum_fraction*kin%range)
+      hyst = max(turn_hysteresis*kin%range, turn_quanta*kin%quantum, turn_noise*kin%noise)
+      ! Turns: extremes of the control once it has come back by the hysteresis
+      allocate (kin%tturn(0), kin%vturn(0))
+      dir = 0
+      kin%dir0 = 1
+      vext = hist%v(1)
+      it = 1
+      travel = 0.0_dp
+      do k = 2, n
+         v = hist%v(k)
+         if (dir == 0) then
+            if (abs(v - vext) > hyst) then
+               dir = merge(1, -1, v > vext)
+               kin%dir0 = dir
+               vext = v
+               it = k
+            end if
+         else if (dir > 0 .and. v > vext .or. dir < 0 .and. v < vext) then
+            vext = v
+            it = k
+         else if (abs(v - vext) > hyst) then
+            kin%tturn = [kin%tturn, hist%t(it)]
+            kin%vturn = [kin%vturn, vext]
+            dir = -dir
+            vext = v
+            it = k
+         end if
+      end do
+      ! Typical rate of the moving control: its travel between turns over the whole time
+      dv = [hist%v(1), kin%vturn, hist%v(n)]
+      travel = sum(abs(dv(2:) - dv(:size(dv) - 1)))
+      rate = travel/max(hist%t(n) - hist%t(1), tiny(1.0_dp))
+      kin%band = max(hold_quanta*kin%quantum, hold_noise*kin%noise)
+      tmin = 0.0_dp
+      if (kin%band > 0.0_dp) tmin = max(hold_crossings*kin%band/max(rate, tiny(1.0_dp)), &
+                                        hold_samples*(hist%t(n) - hist%t(1))/(n - 1))
+      ! Holds: the longest stretches from each corner within the band, if long enough
+      allocate (vs(n))
+      do k = 1, n
+         vs(k) = sum(hist%v(max(1, k - hold_smooth):min(n, k + hold_smooth)))/ &
+                 (min(n, k + hold_smooth) - max(1, k - hold_smooth) + 1)
+      end do
+      if (kin%band <= 0.0_dp) vs = hist%v
+      allocate (kin%hold(max(n - 1, 1)))
+      kin%hold = .false.
+      a = 1
+      do while (a < n)
+         lo = vs(a)
+         hi = lo
+         b = a
+         do while (b < n)
+            lo = min(lo, vs(b + 1))
+            hi = max(hi, vs(b + 1))
+            if (hi - lo > kin%band) exit
+            b = b + 1
+         end do
+         if (b > a .and. hist%t(b) - hist%t(a) >= tmin) then
+            kin%hold(a:b - 1) = .true.
+            a = b
+         else
+            a = a + 1
+         end if
+      end do
+   end function kinematics_of
+
+   !> Elastic or inelastic points from a simulation at the points: inelastic where the
+   !> inelastic strain changes by more than inelastic_share of the total strain's change
+   !> over a window of +- rate_window points (the window keeps a quantised measured strain
+   !> from deciding), and by more than a floor; a hold (no total change) with relaxation or
+   !> creep is inelastic. Points in time order, one test.
+   pure function inelastic_points(eps, eps_in) result(inel)
+      real(dp), intent(in) :: eps(:)      !< total strain, -
+      real(dp), intent(in) :: eps_in(:)   !< the model's inelastic strain, -
+      logical :: inel(size(eps))
+      real(dp) :: a(size(eps)), b(size(eps)), floor
+      integer :: i, n, i1, i2
+      n = size(eps)
+      inel = .false.
+      if (n < 2) return
+      do i = 1, n
+         i1 = max(1, i - rate_window)
+         i2 = min(n, i + rate_window)
+         a(i) = abs(eps_in(i2) - eps_in(i1))
+         b(i) = abs(eps(i2) - eps(i1))
+      end do
+      ! The floor: a share of the test's mean total change over a window, so that the
+      ! round-off of an elastic stretch is not flow, and a slow relaxation is
+      floor = inelastic_floor*sum(max(a, b))/n
+      inel = a > inelastic_share*b .and. a > floor
+   end function inelastic_points
 
    !> Statistics of the points in mask: r weighted residuals, e = data - model (response
    !> unit), nv the noise variance of each weighted residual
@@ -185,6 +321,48 @@ contains
       end do
       se = sqrt(v)
    end function gap_se
+
+   !> Oscillation in the residual e (data - model, response unit, in time order) at the
+   !> points in mask (the inelastic ones: serrated flow is a discontinuous yielding): the
+   !> periodogram of the differenced residual (so the smooth gap of the fit does not leak into
+   !> short periods), divided by the differencing's gain, over periods of 2 to
+   !> serration_max_period samples; Fisher's g = largest ordinate / their sum, p =
+   !> K (1 - g)**(K - 1) for K ordinates (white noise: g small)
+   pure function serration_of(e, mask) result(st)
+      real(dp), intent(in) :: e(:)
+      logical, intent(in) :: mask(:)
+      type(serration_stat) :: st
+      real(dp), parameter :: pi = acos(-1.0_dp)
+      real(dp), allocatable :: x(:), d(:), pg(:)
+      real(dp) :: w, c, s, g
+      integer :: m, j, j0, j1, kk, jmax
+      x = pack(e, mask)
+      st%n = size(x)
+      if (st%n < 32) return
+      d = x(2:) - x(:st%n - 1)
+      m = size(d)
+      j0 = max(1, ceiling(real(m, dp)/serration_max_period))
+      j1 = (m - 1)/2
+      if (j1 - j0 < 8) return
+      allocate (pg(j0:j1))
+      do j = j0, j1
+         w = 2.0_dp*pi*j/m
+         c = 0.0_dp
+         s = 0.0_dp
+         do kk = 1, m
+            c = c + d(kk)*cos(w*kk)
+            s = s + d(kk)*sin(w*kk)
+         end do
+         pg(j) = (c**2 + s**2)/m/(2.0_dp - 2.0_dp*cos(w))
+      end do
+      jmax = maxloc(pg, 1) + j0 - 1
+      g = pg(jmax)/sum(pg)
+      kk = j1 - j0 + 1
+      st%p = min(1.0_dp, kk*(1.0_dp - g)**(kk - 1))
+      st%period = real(m, dp)/jmax
+      ! A sinusoid of amplitude A gives an ordinate of about A**2 m/4
+      st%amplitude = 2.0_dp*sqrt(pg(jmax)/m)
+   end function serration_of
 
    !> Median (selection by partial sorting of a copy)
    pure real(dp) function median(a) result(med)

@@ -74,6 +74,8 @@ contains
          sat = draw(0.05_dp, 0.12_dp, .false.)*peak
          p = [0.0_dp, draw(150.0_dp, 400.0_dp, .false.)]
          p(1) = sat*p(2)                               ! H3 = saturation * gamma3
+      case (9)
+         p = [(draw(2.0e-6_dp, 6.0e-6_dp, .true.), i=1, nt)]   ! drift, 1/s
       case default
          allocate (p(0))
       end select

@@ -20,7 +20,7 @@ module usharp_effects
    !> How an effect's parameter is shared: one value for all tests, or one per test
    integer, parameter :: param_global = 1, param_per_test = 2
    !> Number of effects in the catalogue
-   integer, parameter :: n_effects = 8
+   integer, parameter :: n_effects = 9
 
    !> What one test's simulation sees (all zero: the plain Miller model)
    type :: test_effects
@@ -36,6 +36,9 @@ module usharp_effects
       real(dp) :: soften = 0.0_dp      !< -, drag in the flow law D*exp(-soften*p)
       real(dp) :: h3 = 0.0_dp          !< model unit, modulus of the second back stress
       real(dp) :: gamma3 = 0.0_dp      !< -, its dynamic recovery: dR2 = H3 deps_in - gamma3 R2 dp
+      !> 1/s, extensometer drift: the measured strain is the specimen's plus drift*(t - t0), t0
+      !> the test's start (a strain-controlled specimen sees the command less the drift)
+      real(dp) :: drift = 0.0_dp
    end type test_effects
 
    !> One catalogue entry
@@ -92,6 +95,12 @@ contains
          'dR2 = H3 deps_in - gamma3 R2 |deps_in|', 2, param_global, ['H3          ', &
          'gamma3      '], ['stress      ', '-           '], [peak, 1000.0_dp], &
          [.true., .true.], [.true., .false.], [huge(1.0_dp), huge(1.0_dp)])
+      ! A drift of 1e-5/s moves a 100 s test's strain by 0.1 %: beyond what a rig that drifts
+      ! (air cooling of an extensometer's arms) shows in one test
+      cat(9) = effect_info('drift', 'extensometer drift per test: measured strain = '// &
+         'specimen strain + d*(t - t0)', 1, param_per_test, ['d           ', '            '], &
+         ['1/s         ', '            '], [1.0e-6_dp, 1.0_dp], [.false., .false.], [.true., .true.], &
+         [1.0e-5_dp, 0.0_dp])
    end function effect_catalogue
 
    !> Catalogue index of an effect by name, 0 when there is none
@@ -148,6 +157,10 @@ contains
       case (8)
          eff%h3 = p(1)
          if (size(p) > 1) eff%gamma3 = p(2)
+      case (9)
+         do i = 1, ntests
+            eff(i)%drift = p(i)
+         end do
       end select
    end function effects_of
 

@@ -1,0 +1,196 @@
+!> Tests of the diagnosis on measured-like data: regions from the kinematics of a noisy,
+!> quantised control, elastic and inelastic points from the model's inelastic rate, the
+!> serrated-flow signature, and the extensometer drift
+module test_diagnose_data
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use usharp_kinds, only: dp
+   use usharp_error, only: uerror => error_type
+   use usharp_history, only: history_type, cyclic_history, output_times, control_strain
+   use usharp_miller, only: miller_model, model_setup
+   use usharp_simulation, only: sim_result, solver_options
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_regions, only: point_classes, inelastic_points, serration_of, serration_stat, &
+                             kinematics_of, control_kinematics, class_loading, class_unloading, &
+                             class_reversal, class_hold
+   use usharp_strings, only: str, real_str
+   use usharp_rng, only: rng_type
+   implicit none
+   private
+   public :: collect_diagnose_data
+
+contains
+
+   subroutine collect_diagnose_data(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('classes-of-a-quantised-noisy-strain', test_quantised), &
+         new_unittest('holds-only-where-the-strain-is-steady', test_measured_hold), &
+         new_unittest('inelastic-from-the-model-rate', test_inelastic), &
+         new_unittest('serration-signature-in-the-residual', test_serration)]
+   end subroutine collect_diagnose_data
+
+   !> A measured strain: the command sampled every dt s with Gaussian noise of sd (strain)
+   !> and rounded to quantum q, as a dense history of its own
+   subroutine measured(cmd, dt, sd, q, seed, hist)
+      type(history_type), intent(in) :: cmd
+      real(dp), intent(in) :: dt, sd, q
+      integer, intent(in) :: seed
+      type(history_type), intent(out) :: hist
+      type(rng_type) :: rng
+      integer :: i
+      call rng%seed(seed)
+      hist%control = control_strain
+      hist%t = output_times(cmd, dt)
+      allocate (hist%v(size(hist%t)))
+      do i = 1, size(hist%t)
+         hist%v(i) = q*nint((cmd%value_at(hist%t(i)) + sd*rng%normal())/q)
+      end do
+   end subroutine measured
+
+   !> Two fully reversed cycles of +-0.15 % at 1e-3/s sampled at 0.03 s, quantised at 1e-5
+   !> with noise of 1e-5 (Alloy 617 B-1): exactly four turns, two cycles, no hold (the old
+   !> slope test called every flat pair of samples a hold), and each branch's class from
+   !> its direction
+   subroutine test_quantised(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(history_type) :: cmd, hist
+      type(control_kinematics) :: kin
+      integer, allocatable :: cls(:), cyc(:)
+      logical, allocatable :: el(:)
+      real(dp), allocatable :: t(:), y(:)
+      integer :: i, nbad
+      real(dp) :: v, tq
+      call cyclic_history(0.003_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 0.0_dp, 0.0_dp, cmd, e)
+      call check(error, .not. allocated(e), 'history failed')
+      if (allocated(error)) return
+      call measured(cmd, 0.03_dp, 1.0e-5_dp, 1.0e-5_dp, 7, hist)
+      kin = kinematics_of(hist)
+      call check(error, size(kin%tturn) == 4, 'turns: '//str(size(kin%tturn))//', expected 4')
+      if (allocated(error)) return
+      call check(error, count(kin%hold) == 0, str(count(kin%hold))//' hold segments in a test without holds')
+      if (allocated(error)) return
+      t = hist%t
+      y = spread(0.0_dp, 1, size(t))
+      allocate (cls(size(t)), cyc(size(t)), el(size(t)))
+      call point_classes(hist, t, y, 1.0_dp, cls, cyc, el)
+      call check(error, maxval(cyc) == 2 .and. minval(cyc) == 1, 'cycles '//str(minval(cyc))//' to '//str(maxval(cyc)))
+      if (allocated(error)) return
+      ! Away from the turns (quarter period 1.5 s) the class follows the command
+      tq = 1.5_dp
+      nbad = 0
+      do i = 1, size(t)
+         v = cmd%value_at(t(i))
+         if (abs(abs(v) - 0.0015_dp) < 0.0004_dp .or. abs(v) < 0.0001_dp) cycle
+         if (modulo(t(i), 4*tq) < tq .or. modulo(t(i), 4*tq) > 2*tq .and. modulo(t(i), 4*tq) < 3*tq) then
+            if (cls(i) /= class_loading) nbad = nbad + 1
+         else
+            if (cls(i) /= class_unloading) nbad = nbad + 1
+         end if
+      end do
+      call check(error, nbad == 0, str(nbad)//' points of a branch in the wrong class')
+   end subroutine test_quantised
+
+   !> A 1 % cycle with a 60 s hold at the peak, sampled at 0.2 s, quantised and noisy: the
+   !> hold and only the hold is one, the points after it are the reversal
+   subroutine test_measured_hold(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(history_type) :: cmd, hist
+      integer, allocatable :: cls(:), cyc(:)
+      logical, allocatable :: el(:)
+      real(dp), allocatable :: t(:), y(:)
+      integer :: i, nbad
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 1, 60.0_dp, 0.0_dp, cmd, e)
+      call check(error, .not. allocated(e), 'history failed')
+      if (allocated(error)) return
+      call measured(cmd, 0.2_dp, 1.0e-5_dp, 1.0e-5_dp, 11, hist)
+      t = hist%t
+      y = spread(0.0_dp, 1, size(t))
+      allocate (cls(size(t)), cyc(size(t)), el(size(t)))
+      call point_classes(hist, t, y, 1.0_dp, cls, cyc, el)
+      nbad = 0
+      do i = 1, size(t)
+         ! the command holds from 5 s to 65 s; allow one sample either side
+         if (t(i) > 5.5_dp .and. t(i) < 64.5_dp) then
+            if (cls(i) /= class_hold) nbad = nbad + 1
+         else if (t(i) < 4.5_dp .or. t(i) > 65.5_dp) then
+            if (cls(i) == class_hold) nbad = nbad + 1
+         end if
+      end do
+      call check(error, nbad == 0, str(nbad)//' points misclassed as to the hold')
+      if (allocated(error)) return
+      do i = 1, size(t)
+         if (t(i) > 65.3_dp .and. t(i) < 65.8_dp .and. cls(i) /= class_reversal) nbad = nbad + 1
+      end do
+      call check(error, nbad == 0, str(nbad)//' points after the hold not in the reversal')
+   end subroutine test_measured_hold
+
+   !> A 1 % cycle with a hold, thesis model (yields near 0.09 % strain): the first loading is
+   !> elastic at 0.03 % and inelastic near the peak, the hold (relaxation) is inelastic, and
+   !> the first 0.03 % of the unloading from the hold is elastic
+   subroutine test_inelastic(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(history_type) :: cmd
+      type(miller_model) :: model
+      type(solver_options) :: opts
+      type(sim_result) :: res
+      logical, allocatable :: inel(:)
+      real(dp), allocatable :: t(:)
+      call model_setup(model, e)
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 1, 60.0_dp, 0.0_dp, cmd, e)
+      t = output_times(cmd, 0.1_dp)
+      call simulate_cvode(model, cmd, t, opts, res, e)
+      call check(error, .not. allocated(e), 'simulation failed')
+      if (allocated(error)) return
+      inel = inelastic_points(res%strain, res%eps_in)
+      call check(error, .not. inel(at(0.3_dp)), 'start of loading inelastic')
+      if (allocated(error)) return
+      call check(error, inel(at(4.5_dp)), 'loading near the peak elastic')
+      if (allocated(error)) return
+      call check(error, inel(at(30.0_dp)), 'relaxation elastic')
+      if (allocated(error)) return
+      call check(error, .not. inel(at(65.3_dp)), 'unloading from the hold inelastic: '// &
+                 real_str(res%stress(at(65.3_dp)), 'es10.3'))
+   contains
+      integer function at(time)
+         real(dp), intent(in) :: time
+         at = minloc(abs(t - time), 1)
+      end function at
+   end subroutine test_inelastic
+
+   !> A residual of a smooth structured gap plus white noise has no serration signature
+   !> (in 20 draws, p > 1e-3 in all but at most one); with an oscillation of 0.7 noise sd
+   !> and a period of 9 samples added, p < 1e-6 and the period and amplitude come back
+   subroutine test_serration(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      type(serration_stat) :: st
+      real(dp), allocatable :: e(:)
+      logical, allocatable :: mask(:)
+      integer :: i, rep, nfalse, n
+      real(dp), parameter :: pi = acos(-1.0_dp)
+      n = 600
+      call rng%seed(5)
+      allocate (e(n), mask(n))
+      mask = .true.
+      nfalse = 0
+      do rep = 1, 20
+         do i = 1, n
+            e(i) = 3.0_dp*sin(2.0_dp*pi*i/n) + 2.0_dp*(real(i, dp)/n)**2 + rng%normal()
+         end do
+         st = serration_of(e, mask)
+         if (st%p < 1.0e-3_dp) nfalse = nfalse + 1
+      end do
+      call check(error, nfalse <= 1, str(nfalse)//' of 20 noise residuals flagged as serrated')
+      if (allocated(error)) return
+      do i = 1, n
+         e(i) = e(i) + 0.7_dp*sin(2.0_dp*pi*i/9.0_dp)
+      end do
+      st = serration_of(e, mask)
+      call check(error, st%p < 1.0e-6_dp .and. abs(st%period - 9.0_dp) < 0.3_dp .and. &
+                 abs(st%amplitude - 0.7_dp) < 0.2_dp, 'oscillation: p '//real_str(st%p, 'es10.2')// &
+                 ', period '//real_str(st%period, 'f0.2')//', amplitude '//real_str(st%amplitude, 'f0.3'))
+   end subroutine test_serration
+end module test_diagnose_data
