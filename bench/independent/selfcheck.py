@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""Self-check of `usharp diagnose` on data it did not make: for each matrix and each injected
+effect (miller_ref.py: the thesis's Miller model and effects in forms of their own), draw a
+magnitude (the first repetition at the low end of the effect's realistic range), make the data
+with 0.5 % noise, write a deck, run the diagnosis and read its verdict. Prints one row per
+matrix and effect: repetitions, how often an accepted effect came first, the held-out
+structured gap removed (median).
+
+usage: selfcheck.py EXE [--reps N] [--matrices a,b] [--rows a,b] [--noise F] [--keep DIR]
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import miller_ref as ref  # noqa: E402
+
+# Matrices: tests (name, output interval s) and the held-out one
+MATRICES = {
+    'thesis-hold-ratchet': ([('lcf', 0.5), ('relax', 1.0), ('ratchet', 1.0)], 'ratchet'),
+    'thesis-hold-relax': ([('lcf', 0.5), ('relax', 1.0), ('ratchet', 1.0)], 'relax'),
+    'thesis-hold-lcf': ([('lcf', 0.5), ('relax', 1.0), ('ratchet', 1.0)], 'lcf'),
+    'creep': ([('lcf', 0.5), ('relax', 1.0), ('creep', 1.0)], 'creep'),
+}
+
+# Rows: the effect drawn at magnitude u in [0, 1] of its realistic range (0: the low end),
+# and the catalogue effects that explain it (the first the exact or nearest form)
+def draw(row, u, rng, tests):
+    sign = 1.0 if rng.uniform() < 0.5 else -1.0
+    lo_hi = lambda lo, hi: lo * (hi / lo) ** u
+    if row == 'clean':
+        return {t: {} for t in tests}, 'none'
+    if row == 'modulus':
+        d = lo_hi(0.03, 0.10)
+        return {t: {'delta': d} for t in tests}, f'E -{100 * d:.1f} %'
+    if row == 'temperature':
+        dT = sign * lo_hi(5.0, 25.0)
+        return {t: {'dT': dT} for t in tests}, f'dT {dT:+.1f} K'
+    if row == 'softening':
+        a = lo_hi(0.05, 0.2)
+        return {t: {'soft_a': a, 'soft_p0': 0.005} for t in tests}, f'a {a:.3f}'
+    if row == 'drift':
+        out = {}
+        for t in tests:
+            _, tc, _ = ref.HISTORIES[t]()
+            tot = (1.0 if rng.uniform() < 0.5 else -1.0) * lo_hi(2e-5, 1e-4)
+            out[t] = {'drift': tot / tc[-1]}
+        return out, 'drift ' + ' '.join(f'{out[t]["drift"]:.1e}' for t in tests) + ' 1/s'
+    if row == 'lag':
+        tau = lo_hi(0.1, 0.5)
+        return {t: {'tau': tau} for t in tests}, f'tau {tau:.2f} s'
+    if row == 'backstress2':
+        g3 = 150.0 + 250.0 * rng.uniform()
+        sat = lo_hi(1.0, 2.5)  # ksi, 5-12 % of the 20 ksi peak
+        return {t: {'H3': sat * g3, 'gamma3': g3} for t in tests}, f'H3/gamma3 {sat:.2f} ksi'
+    raise ValueError(row)
+
+
+ACCEPT = {'clean': ['none'], 'modulus': ['compliance', 'scatter'], 'temperature': ['temperature', 'initial'],
+          'softening': ['softening'], 'drift': ['drift'], 'lag': ['lag'], 'backstress2': ['backstress2']}
+ROWS = list(ACCEPT)
+
+WEIGHTING = {'lcf': "weighting = 'threshold', sig = 14.0", 'relax': "weighting = 'relaxation'",
+             'ratchet': '', 'creep': ''}
+HIST = {'lcf': "history = 'thesis_lcf', amp_first = 0.0005, amp_last = 0.005, npeaks = 12, quarter_time = 10.0",
+        'relax': "history = 'relaxation', levels = 0.00075, 0.001, ramp_time = 1.0, holds = 600.0, 600.0",
+        'ratchet': "history = 'ratchet', up = 0.0005, down = 0.00025, repeats = 15, seg_time = 40.0",
+        'creep': "history = 'creep', stress = 15.0, ramp_time = 1.0, duration = 600.0"}
+
+
+def deck(tests, held, files, out_dir):
+    lines = ["&model name = 'miller', units = 'ksi', temperature = 866.15, tm = 1800.0, youngs = 22.5e3,",
+             "  poisson = 0.3 /",
+             "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0, n = 5.8,",
+             "  q = 91000.0 /",
+             "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', objective = 'eq7' /",
+             f"&diagnose holdout = '{held}' /",
+             f"&output out_dir = '{out_dir}' /"]
+    for name, dt in tests:
+        lines.append(f"&test name = '{name}', {HIST[name]}, dt_out = {dt},")
+        if WEIGHTING[name]:
+            lines.append(f"  {WEIGHTING[name]},")
+        lines.append(f"  data_file = '{files[name]}' /")
+    return '\n'.join(lines) + '\n'
+
+
+def verdict_of(text):
+    """(first effect named by the verdict or 'none' or '?', held-out gap removed % or nan)"""
+    m = re.search(r'\*\*Verdict:\*\*\s*(.*)', text)
+    v = m.group(1) if m else ''
+    if re.match(r'\s*no significant effect', v):
+        lead = 'none'
+    else:
+        m2 = re.match(r'\s*`?([a-z0-9]+)`?', v)
+        lead = m2.group(1) if m2 and m2.group(1) in CATALOGUE else '?'
+    m3 = re.search(r'([0-9.]+) %\s*on the held-out', v)
+    return lead, (float(m3.group(1)) if m3 else float('nan')), v
+
+
+CATALOGUE = ['compliance', 'lag', 'temperature', 'scatter', 'initial', 'shift', 'softening', 'backstress2',
+             'drift']
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('exe')
+    ap.add_argument('--reps', type=int, default=3)
+    ap.add_argument('--matrices', default=','.join(MATRICES))
+    ap.add_argument('--rows', default=','.join(ROWS))
+    ap.add_argument('--noise', type=float, default=0.005)
+    ap.add_argument('--seed', type=int, default=1)
+    ap.add_argument('--keep', default='')
+    a = ap.parse_args()
+    work = a.keep or tempfile.mkdtemp(prefix='usharp-indep-')
+    os.makedirs(work, exist_ok=True)
+    print(f'{"matrix":22s} {"injected":12s} {"reps":>4s} {"first":>6s} {"%":>5s} {"held gap removed %":>18s}  answers')
+    total_ok = total = 0
+    for mname in a.matrices.split(','):
+        tests, held = MATRICES[mname]
+        names = [t for t, _ in tests]
+        for row in a.rows.split(','):
+            rng = np.random.default_rng([a.seed, ROWS.index(row), list(MATRICES).index(mname)])
+            answers, removed = [], []
+            for rep in range(a.reps):
+                u = 0.0 if rep == 0 else rng.uniform()
+                eff, label = draw(row, u, rng, names)
+                case = os.path.join(work, f'{mname}-{row}-{rep}')
+                os.makedirs(case, exist_ok=True)
+                files = {}
+                for name, dt in tests:
+                    t, e, s = ref.make_data(name, dt, eff[name], a.noise, rng)
+                    files[name] = f'{name}.csv'
+                    ref.write_csv(os.path.join(case, files[name]), t, e, s)
+                with open(os.path.join(case, 'diagnose.nml'), 'w') as f:
+                    f.write(deck(tests, held, files, 'out'))
+                p = subprocess.run([a.exe, 'diagnose', 'diagnose.nml', '-o', 'out'], cwd=case,
+                                   capture_output=True, text=True)
+                with open(os.path.join(case, 'report.md'), 'w') as f:
+                    f.write(p.stdout + p.stderr)
+                lead, rem, v = verdict_of(p.stdout)
+                answers.append(lead)
+                removed.append(rem)
+                with open(os.path.join(case, 'truth.txt'), 'w') as f:
+                    f.write(f'{row}: {label}\nverdict: {v}\n')
+            ok = sum(x in ACCEPT[row] for x in answers)
+            total_ok += ok
+            total += len(answers)
+            med = np.nanmedian(removed) if np.any(np.isfinite(removed)) else float('nan')
+            print(f'{mname:22s} {row:12s} {len(answers):4d} {ok:6d} {100.0 * ok / len(answers):5.0f} '
+                  f'{med:18.0f}  {" ".join(answers)}', flush=True)
+    print(f'correct: {total_ok} of {total}; cases in {work}')
+
+
+if __name__ == '__main__':
+    main()

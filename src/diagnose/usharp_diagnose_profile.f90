@@ -1,0 +1,213 @@
+!> Profile-likelihood intervals: where the curvature at an optimum says little (a weak effect,
+!> a parameter that must stay positive, a valley of the objective), the interval of one search
+!> coordinate is where the objective minimised over all the others stays within a threshold
+!> of its minimum. The threshold is the chi-square 95 % point (1 degree of freedom) times the
+!> variance scale of that coordinate: the ratio of its sandwich variance to its naive
+!> (J'J)^-1 entry, so that near the optimum the interval is the Wald interval, and where the
+!> objective is not quadratic the profile follows it. A positive coordinate is profiled in
+!> its logarithm (it cannot cross zero).
+module usharp_diagnose_profile
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_optimiser, only: least_squares_type, optimum_type
+   use usharp_levenberg, only: levenberg_marquardt
+   implicit none
+   private
+
+   public :: profile_interval, profile_result, chi2_95, f1_95
+
+   !> Chi-square 95 % point, 1 degree of freedom
+   real(dp), parameter :: chi2_95 = 3.841459_dp
+   !> Steps out from the optimum on each side before the interval is called open
+   integer, parameter :: max_steps = 14
+
+   !> The interval of one coordinate
+   type :: profile_result
+      real(dp) :: lo = 0.0_dp, hi = 0.0_dp   !< ends, in the coordinate's unit
+      logical :: lo_open = .false.           !< the objective stays below the threshold up
+      logical :: hi_open = .false.           !<   to the bound (or max_steps): not bounded
+      real(dp) :: threshold = 0.0_dp         !< rise of the objective at the ends
+      real(dp) :: f_min = 0.0_dp             !< lowest objective met (below the given one:
+                                             !<   the optimum was not one)
+      integer :: nevals = 0
+   end type profile_result
+
+   !> The problem with coordinate j held at a value: x of the others
+   type, extends(least_squares_type) :: held_problem
+      class(least_squares_type), allocatable :: base
+      integer :: j = 0
+      real(dp) :: value = 0.0_dp
+   contains
+      procedure :: residuals => held_residuals
+      procedure :: nres => held_nres
+      procedure :: eval => held_eval
+   end type held_problem
+
+contains
+
+   !> 95 % point of F(1, nu), the square of Student's t at 97.5 % (Cornish-Fisher expansion
+   !> in 1/nu, within 0.1 % for nu >= 5): the threshold factor when the variance scale is
+   !> estimated from the residual with nu degrees of freedom (chi2_95 as nu grows)
+   pure real(dp) function f1_95(nu) result(f)
+      integer, intent(in) :: nu
+      real(dp), parameter :: z = 1.959964_dp
+      real(dp) :: t, v
+      v = real(max(nu, 1), dp)
+      t = z + (z**3 + z)/(4.0_dp*v) + (5.0_dp*z**5 + 16.0_dp*z**3 + 3.0_dp*z)/(96.0_dp*v**2) + &
+          (3.0_dp*z**7 + 19.0_dp*z**5 + 17.0_dp*z**3 - 15.0_dp*z)/(384.0_dp*v**3)
+      f = t**2
+   end function f1_95
+
+   !> Profile interval of coordinate j of obj at its optimum x_hat (objective f_hat) within
+   !> [lo, hi]: the constants (every other coordinate) refitted by Levenberg-Marquardt
+   !> (difference step h, at most max_evals evaluations each) at each trial value.
+   subroutine profile_interval(obj, x_hat, f_hat, j, lo, hi, h, se, scale, log_scale, max_evals, &
+                               pr, error)
+      class(least_squares_type), intent(in) :: obj
+      real(dp), intent(in) :: x_hat(:), f_hat
+      integer, intent(in) :: j
+      real(dp), intent(in) :: lo(:), hi(:), h
+      !> Wald standard error of coordinate j (its first step), x unit
+      real(dp), intent(in) :: se
+      !> Variance scale: the objective rises by chi2_95*scale at the 95 % ends (give
+      !> f1_95(nu)/chi2_95 times it for a scale estimated with nu degrees of freedom)
+      real(dp), intent(in) :: scale
+      !> Profile log(x(j)) (x(j) > 0 kept)
+      logical, intent(in) :: log_scale
+      integer, intent(in) :: max_evals
+      type(profile_result), intent(out) :: pr
+      type(error_type), allocatable, intent(out) :: error
+      type(held_problem) :: hp
+      integer :: side
+      real(dp) :: ends(2)
+      logical :: open(2)
+      allocate (hp%base, source=obj)
+      hp%j = j
+      pr%threshold = chi2_95*scale
+      pr%f_min = f_hat
+      do side = 1, 2
+         call walk(merge(-1.0_dp, 1.0_dp, side == 1), ends(side), open(side))
+         if (allocated(error)) return
+      end do
+      pr%lo = ends(1)
+      pr%hi = ends(2)
+      pr%lo_open = open(1)
+      pr%hi_open = open(2)
+   contains
+      !> From the optimum in direction d until the objective has risen by the threshold
+      subroutine walk(d, endpoint, is_open)
+         real(dp), intent(in) :: d
+         real(dp), intent(out) :: endpoint
+         logical, intent(out) :: is_open
+         type(optimum_type) :: opt
+         real(dp), allocatable :: xr(:), lor(:), hir(:)
+         real(dp) :: u0, u, un, step, rise, rise_prev, ubound
+         integer :: k
+         logical :: at_bound
+         xr = [x_hat(:j - 1), x_hat(j + 1:)]
+         lor = [lo(:j - 1), lo(j + 1:)]
+         hir = [hi(:j - 1), hi(j + 1:)]
+         u0 = to_u(x_hat(j))
+         if (d < 0.0_dp) then
+            ubound = merge(to_u(lo(j)), -huge(1.0_dp), .not. log_scale .or. lo(j) > 0.0_dp)
+         else
+            ubound = to_u(hi(j))
+         end if
+         step = se
+         if (log_scale) step = se/x_hat(j)
+         if (.not. step > 0.0_dp .or. step > 1.0e6_dp) step = merge(0.1_dp, 0.1_dp*max(abs(u0), 1.0e-3_dp), log_scale)
+         ! Start at half the Wald step: a curved profile may end well inside it
+         step = 0.5_dp*step
+         u = u0
+         rise_prev = 0.0_dp
+         is_open = .true.
+         endpoint = from_u(u0)
+         do k = 1, max_steps
+            un = u + d*step
+            at_bound = d*(un - ubound) >= 0.0_dp
+            if (at_bound) un = ubound
+            hp%value = from_u(un)
+            if (size(xr) > 0) then
+               call levenberg_marquardt(hp, xr, lor, hir, h, 1.0e-10_dp, 60, max_evals, opt, error)
+               if (allocated(error)) return
+            else
+               allocate (opt%x(0))
+               call hp%eval(opt%x, opt%f, error)
+               if (allocated(error)) return
+               opt%nevals = 1
+            end if
+            pr%nevals = pr%nevals + opt%nevals
+            pr%f_min = min(pr%f_min, opt%f)
+            rise = max(opt%f - f_hat, 0.0_dp)
+            if (rise >= pr%threshold) then
+               ! sqrt(rise) is about linear in the coordinate near the end
+               endpoint = from_u(u + (un - u)*(sqrt(pr%threshold) - sqrt(rise_prev))/ &
+                                 (sqrt(rise) - sqrt(rise_prev)))
+               is_open = .false.
+               return
+            end if
+            xr = opt%x
+            u = un
+            rise_prev = rise
+            endpoint = from_u(u)
+            if (at_bound) return
+            ! Longer steps while the objective rises slowly
+            if (rise < 0.25_dp*pr%threshold) step = 2.0_dp*step
+         end do
+      end subroutine walk
+
+      pure real(dp) function to_u(x)
+         real(dp), intent(in) :: x
+         if (log_scale) then
+            to_u = log(max(x, tiny(1.0_dp)))
+         else
+            to_u = x
+         end if
+      end function to_u
+
+      pure real(dp) function from_u(u)
+         real(dp), intent(in) :: u
+         if (log_scale) then
+            from_u = exp(u)
+         else
+            from_u = u
+         end if
+      end function from_u
+   end subroutine profile_interval
+
+   !> The full point of x of the other coordinates
+   pure function full_x(self, x) result(xf)
+      class(held_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp) :: xf(size(x) + 1)
+      xf = [x(:self%j - 1), self%value, x(self%j:)]
+   end function full_x
+
+   subroutine held_residuals(self, xs, rs, fs, ok, error)
+      class(held_problem), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      real(dp), intent(out) :: rs(:, :)
+      real(dp), intent(out) :: fs(:)
+      logical, intent(out) :: ok(:)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: xf(size(xs, 1) + 1, size(xs, 2))
+      integer :: k
+      do k = 1, size(xs, 2)
+         xf(:, k) = full_x(self, xs(:, k))
+      end do
+      call self%base%residuals(xf, rs, fs, ok, error)
+   end subroutine held_residuals
+
+   pure integer function held_nres(self) result(m)
+      class(held_problem), intent(in) :: self
+      m = self%base%nres()
+   end function held_nres
+
+   subroutine held_eval(self, x, f, error)
+      class(held_problem), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(error_type), allocatable, intent(out) :: error
+      call self%base%eval(full_x(self, x), f, error)
+   end subroutine held_eval
+end module usharp_diagnose_profile
