@@ -292,22 +292,18 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       type(history_type) :: hist
-      real(dp), allocatable :: t(:), y(:)
+      real(dp), allocatable :: t(:)
       integer, allocatable :: cls(:), cyc(:)
-      logical, allocatable :: el(:)
       call cycles(hist, e)
       ! Quarter cycle: 5 s to +0.5 %, hold 60 s, 10 s to -0.5 %, 10 s back...
       t = [2.0_dp, 30.0_dp, 65.5_dp, 68.0_dp, 72.0_dp, 76.0_dp, hist%end_time() - 1.0_dp]
-      y = [1.0_dp, 50.0_dp, 50.0_dp, 10.0_dp, -30.0_dp, -50.0_dp, 20.0_dp]
-      allocate (cls(size(t)), cyc(size(t)), el(size(t)))
-      call point_classes(hist, t, y, 15.0_dp, cls, cyc, el)
+      allocate (cls(size(t)), cyc(size(t)))
+      call point_classes(hist, t, cls, cyc)
       call check(error, cls(1) == class_loading .and. cls(2) == class_hold .and. &
                  cls(3) == class_reversal .and. cls(5) == class_loading .and. cls(4) == class_unloading, &
                  'classes wrong')
       if (allocated(error)) return
       call check(error, cyc(1) == 1 .and. cyc(7) == 3, 'cycle count wrong')
-      if (allocated(error)) return
-      call check(error, el(1) .and. el(4) .and. .not. el(2), 'elastic points wrong')
    end subroutine test_classes
 
    subroutine test_bad_inputs(error)

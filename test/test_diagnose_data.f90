@@ -70,8 +70,7 @@ contains
       type(history_type) :: cmd, hist
       type(control_kinematics) :: kin
       integer, allocatable :: cls(:), cyc(:)
-      logical, allocatable :: el(:)
-      real(dp), allocatable :: t(:), y(:)
+      real(dp), allocatable :: t(:)
       integer :: i, nbad
       real(dp) :: v, tq
       call cyclic_history(0.003_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 0.0_dp, 0.0_dp, cmd, e)
@@ -84,9 +83,8 @@ contains
       call check(error, count(kin%hold) == 0, str(count(kin%hold))//' hold segments in a test without holds')
       if (allocated(error)) return
       t = hist%t
-      y = spread(0.0_dp, 1, size(t))
-      allocate (cls(size(t)), cyc(size(t)), el(size(t)))
-      call point_classes(hist, t, y, 1.0_dp, cls, cyc, el)
+      allocate (cls(size(t)), cyc(size(t)))
+      call point_classes(hist, t, cls, cyc)
       call check(error, maxval(cyc) == 2 .and. minval(cyc) == 1, 'cycles '//str(minval(cyc))//' to '//str(maxval(cyc)))
       if (allocated(error)) return
       ! Away from the turns (quarter period 1.5 s) the class follows the command
@@ -111,17 +109,15 @@ contains
       type(uerror), allocatable :: e
       type(history_type) :: cmd, hist
       integer, allocatable :: cls(:), cyc(:)
-      logical, allocatable :: el(:)
-      real(dp), allocatable :: t(:), y(:)
+      real(dp), allocatable :: t(:)
       integer :: i, nbad
       call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 1, 60.0_dp, 0.0_dp, cmd, e)
       call check(error, .not. allocated(e), 'history failed')
       if (allocated(error)) return
       call measured(cmd, 0.2_dp, 1.0e-5_dp, 1.0e-5_dp, 11, hist)
       t = hist%t
-      y = spread(0.0_dp, 1, size(t))
-      allocate (cls(size(t)), cyc(size(t)), el(size(t)))
-      call point_classes(hist, t, y, 1.0_dp, cls, cyc, el)
+      allocate (cls(size(t)), cyc(size(t)))
+      call point_classes(hist, t, cls, cyc)
       nbad = 0
       do i = 1, size(t)
          ! the command holds from 5 s to 65 s; allow one sample either side

@@ -8,7 +8,8 @@ module usharp_diagnose_baseline
    use usharp_objective, only: fit_problem, test_residuals
    use usharp_experiment, only: fits_strain
    use usharp_effect_problem, only: effect_problem, new_effect_problem
-   use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se
+   use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se, &
+                             inelastic_points, serration_of, serration_stat, serration_p
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
@@ -59,20 +60,20 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: base_all
-      real(dp), allocatable :: r0(:), yb(:)
+      real(dp), allocatable :: r0(:), yb(:), eps(:), eps_in(:)
       integer, allocatable :: npts(:)
       integer :: i, m, nt
       logical :: ok
       nt = size(ctx%prob%targets)
       call new_effect_problem(ctx%prob, [(i, i=1, nt)], 0, ctx%eff_base, ctx%peak, base_all)
       m = base_all%nres()
-      allocate (r0(m), yb(m))
-      call base_all%residual_at(base_all%start(), r0, ok, yb)
+      allocate (r0(m), yb(m), eps(m), eps_in(m))
+      call base_all%residual_at(base_all%start(), r0, ok, yb, eps, eps_in)
       if (.not. ok) then
          call fatal_error(error, 'the baseline fit fails to simulate a held-out test', stat_failure)
          return
       end if
-      call points_of(ctx%prob, res)
+      call points_of(ctx%prob, res, eps, eps_in)
       res%y_base = yb
       ctx%nv = noise_variance(ctx%prob, res%noise)
       associate (nv => ctx%nv)
@@ -88,25 +89,24 @@ contains
       end associate
    end subroutine baseline_regions
 
-   !> Every point of every test in one list: time, data, test, history class
-   subroutine points_of(prob, res)
+   !> Every point of every test in one list: time, data, test, history class and cycle from
+   !> the control's kinematics, elastic or inelastic from the baseline's inelastic rate
+   subroutine points_of(prob, res, eps, eps_in)
       type(fit_problem), intent(in) :: prob
       type(diagnose_result), intent(inout) :: res
-      integer :: i, n
+      real(dp), intent(in) :: eps(:), eps_in(:)  !< the baseline's strain and inelastic strain, -
+      integer :: i, n, k0
       integer, allocatable :: cls(:), cyc(:)
       logical, allocatable :: el(:)
-      real(dp) :: thr
       allocate (res%t(0), res%y_ex(0), res%test_of(0), res%cls(0), res%cycle(0), res%elastic(0))
+      k0 = 0
       do i = 1, size(prob%targets)
          associate (tg => prob%targets(i), test => prob%cfg%tests(i))
             n = size(tg%t)
-            ! Elastic below the weighting threshold, else below the model's YS; a strain
-            ! response has no elastic part
-            thr = prob%cfg%model%d0_yield
-            if (test%weighting == 'threshold' .and. test%sig > 0.0_dp) thr = test%sig
-            if (fits_strain(test)) thr = -1.0_dp
             allocate (cls(n), cyc(n), el(n))
-            call point_classes(test%hist, tg%t, tg%y_ex, thr, cls, cyc, el)
+            call point_classes(test%hist, tg%t, cls, cyc)
+            el = .not. inelastic_points(eps(k0 + 1:k0 + n), eps_in(k0 + 1:k0 + n))
+            k0 = k0 + n
             res%t = [res%t, tg%t]
             res%y_ex = [res%y_ex, tg%y_ex]
             res%test_of = [res%test_of, spread(i, 1, n)]
@@ -149,7 +149,8 @@ contains
    end function per_test
 
    !> Regions of every test: the whole test, each history class, each cycle, elastic and
-   !> inelastic points (threshold: the test's weighting threshold, else the model's YS)
+   !> inelastic points, and 'serrated flow' where the inelastic points' residual oscillates
+   !> (serration_p)
    function all_regions(prob, res, r, ysim, nv) result(regs)
       type(fit_problem), intent(in) :: prob
       type(diagnose_result), intent(in) :: res
@@ -158,6 +159,7 @@ contains
       real(dp), allocatable :: e(:)
       integer :: i, k0, n, c
       character(len=:), allocatable :: tag
+      type(serration_stat) :: ser
       allocate (regs(0))
       k0 = 0
       do i = 1, size(prob%targets)
@@ -172,6 +174,13 @@ contains
                if (any(cls == c)) regs = [regs, region_of(tag, trim(class_names(c)), cls == c, rr, e, vv)]
             end do
             if (.not. fits_strain(prob%cfg%tests(i))) then
+               ! periods well below a branch (two per cycle)
+               ser = serration_of(e, .not. el, count(.not. el)/(12*maxval(cyc)))
+               if (ser%p < serration_p) then
+                  ! Ahead of the inelastic region of the same points: the name says what it is
+                  regs = [regs, region_of(tag, 'serrated flow', .not. el, rr, e, vv)]
+                  regs(size(regs))%structured = .true.
+               end if
                regs = [regs, region_of(tag, 'elastic', el, rr, e, vv)]
                regs = [regs, region_of(tag, 'inelastic', .not. el, rr, e, vv)]
             end if

@@ -299,13 +299,13 @@ contains
          end do
       end if
       allocate (rows(size(res%t) + 1))
-      rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id'
+      rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id,cycle,inelastic'
       do i = 1, size(res%t)
          rows(i + 1) = trim(res%names(res%test_of(i)))//','// &
             trim(merge('yes', 'no ', res%held(res%test_of(i))))//','//real_str(res%t(i), 'es14.7')//','// &
             trim(class_names(res%cls(i)))//','//real_str(res%y_ex(i), 'es14.7')//','// &
             real_str(res%y_base(i), 'es14.7')//','//real_str(effect_curve(i), 'es14.7')//','// &
-            str(res%cls(i))
+            str(res%cls(i))//','//str(res%cycle(i))//','//trim(merge('no ', 'yes', res%elastic(i)))
       end do
       call write_lines(join_path(dir, 'residuals.csv'), rows, error)
    contains

@@ -148,12 +148,14 @@ contains
    end subroutine ep_unpack
 
    !> Residuals of the problem's tests at x (test after test); ok false on a failure
-   subroutine ep_residual_at(self, x, r, ok, fitted)
+   subroutine ep_residual_at(self, x, r, ok, fitted, strain, eps_in)
       class(effect_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: r(:)
       logical, intent(out) :: ok
       real(dp), intent(out), optional :: fitted(:)  !< the simulated responses
+      real(dp), intent(out), optional :: strain(:)  !< the specimen's total strain, -
+      real(dp), intent(out), optional :: eps_in(:)  !< its inelastic strain, -
       type(miller_model) :: model, mt
       type(test_effects), allocatable :: eff(:)
       type(error_type), allocatable :: error
@@ -199,6 +201,8 @@ contains
             r(k0 + 1:k0 + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
                                               tg%y_ex_max)
             if (present(fitted)) fitted(k0 + 1:k0 + n) = ysim
+            if (present(strain)) strain(k0 + 1:k0 + n) = res%strain
+            if (present(eps_in)) eps_in(k0 + 1:k0 + n) = res%eps_in
             k0 = k0 + n
          end associate
       end do

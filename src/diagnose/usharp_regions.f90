@@ -40,8 +40,10 @@ module usharp_regions
    !> of the total strain's change, and inelastic_floor of its mean change over a window
    real(dp), parameter :: inelastic_share = 0.1_dp, inelastic_floor = 1.0e-3_dp
    integer, parameter :: rate_window = 2
-   !> Serrations: oscillations of periods from 2 to serration_max_period samples
+   !> Serrations: oscillations of periods from 2 to serration_max_period samples, named when
+   !> white noise gives so strong a peak with a chance below serration_p
    integer, parameter :: serration_max_period = 64
+   real(dp), parameter, public :: serration_p = 1.0e-4_dp
 
    !> Turns, holds and resolution of a test's control
    type :: control_kinematics
@@ -100,13 +102,11 @@ contains
    !> - loading moves away from zero, unloading towards it, by the direction of the branch
    !>   between turns (not the local slope, which a quantised signal makes 0 or noisy);
    !>   reversal: within reversal_span of the range from the last turn.
-   !> elastic (optional, legacy): |y| below threshold; use inelastic_points for the
-   !> classification from the model's inelastic rate.
-   pure subroutine point_classes(hist, t, y, threshold, cls, cycle, elastic)
+   !> Elastic and inelastic points come from the model (inelastic_points).
+   pure subroutine point_classes(hist, t, cls, cycle)
       type(history_type), intent(in) :: hist
-      real(dp), intent(in) :: t(:), y(:), threshold
+      real(dp), intent(in) :: t(:)
       integer, intent(out) :: cls(:), cycle(:)
-      logical, intent(out) :: elastic(:)
       type(control_kinematics) :: kin
       real(dp) :: v
       integer :: i, k, nturn, dir
@@ -135,7 +135,6 @@ contains
          else
             cls(i) = class_unloading
          end if
-         elastic(i) = abs(y(i)) < threshold
       end do
    end subroutine point_classes
 
@@ -323,29 +322,37 @@ contains
    end function gap_se
 
    !> Oscillation in the residual e (data - model, response unit, in time order) at the
-   !> points in mask (the inelastic ones: serrated flow is a discontinuous yielding): the
-   !> periodogram of the differenced residual (so the smooth gap of the fit does not leak into
-   !> short periods), divided by the differencing's gain, over periods of 2 to
-   !> serration_max_period samples; Fisher's g = largest ordinate / their sum, p =
-   !> K (1 - g)**(K - 1) for K ordinates (white noise: g small)
-   pure function serration_of(e, mask) result(st)
+   !> points in mask (the inelastic ones: serrated flow is a discontinuous yielding), over
+   !> periods from 2 samples to max_period (give it well below a branch's length: a smooth
+   !> gap repeated loop after loop has the loops' harmonics). The periodogram of the
+   !> differenced residual (so the smooth gap does not leak into short periods), divided by
+   !> the differencing's gain; each ordinate against the mean of its N neighbours but the
+   !> adjacent ones (a red spectrum of structured misfit is smooth, a serration a narrow
+   !> line). Under a locally flat spectrum the ordinates are exponential and an ordinate
+   !> exceeds x times that mean with chance (1 + x/N)**(-N): p is K times the smallest such
+   !> chance over the K ordinates.
+   pure function serration_of(e, mask, max_period) result(st)
       real(dp), intent(in) :: e(:)
       logical, intent(in) :: mask(:)
+      integer, intent(in), optional :: max_period
       type(serration_stat) :: st
       real(dp), parameter :: pi = acos(-1.0_dp)
-      real(dp), allocatable :: x(:), d(:), pg(:)
-      real(dp) :: w, c, s, g
-      integer :: m, j, j0, j1, kk, jmax
+      integer, parameter :: nb = 12      ! neighbours each side for the background
+      real(dp), allocatable :: x(:), d(:), pg(:), ratio(:), nn(:)
+      real(dp) :: w, c, s
+      integer :: m, j, j0, j1, kk, jmax, pmax, a, b
+      pmax = serration_max_period
+      if (present(max_period)) pmax = min(pmax, max_period)
       x = pack(e, mask)
       st%n = size(x)
-      if (st%n < 32) return
+      if (st%n < 32 .or. pmax < 3) return
       d = x(2:) - x(:st%n - 1)
       m = size(d)
-      j0 = max(1, ceiling(real(m, dp)/serration_max_period))
+      j0 = max(1, ceiling(real(m, dp)/pmax))
       j1 = (m - 1)/2
-      if (j1 - j0 < 8) return
-      allocate (pg(j0:j1))
-      do j = j0, j1
+      if (j1 - j0 < 2*nb) return
+      allocate (pg(max(1, j0 - nb):j1), ratio(j0:j1), nn(j0:j1))
+      do j = lbound(pg, 1), j1
          w = 2.0_dp*pi*j/m
          c = 0.0_dp
          s = 0.0_dp
@@ -355,10 +362,17 @@ contains
          end do
          pg(j) = (c**2 + s**2)/m/(2.0_dp - 2.0_dp*cos(w))
       end do
-      jmax = maxloc(pg, 1) + j0 - 1
-      g = pg(jmax)/sum(pg)
+      do j = j0, j1
+         a = max(lbound(pg, 1), j - nb)
+         b = min(j1, j + nb)
+         nn(j) = real(max(j - 2 - a + 1, 0) + max(b - j - 2 + 1, 0), dp)
+         ratio(j) = pg(j)/max((sum(pg(a:j - 2)) + sum(pg(j + 2:b)))/nn(j), tiny(1.0_dp))
+         ! the chance, as -log
+         ratio(j) = nn(j)*log(1.0_dp + ratio(j)/nn(j))
+      end do
+      jmax = maxloc(ratio, 1) + j0 - 1
       kk = j1 - j0 + 1
-      st%p = min(1.0_dp, kk*(1.0_dp - g)**(kk - 1))
+      st%p = min(1.0_dp, kk*exp(-ratio(jmax)))
       st%period = real(m, dp)/jmax
       ! A sinusoid of amplitude A gives an ordinate of about A**2 m/4
       st%amplitude = 2.0_dp*sqrt(pg(jmax)/m)
