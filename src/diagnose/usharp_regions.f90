@@ -110,6 +110,7 @@ contains
       type(control_kinematics) :: kin
       real(dp) :: v
       integer :: i, k, nturn, dir
+      logical :: near_turn
       kin = kinematics_of(hist)
       nturn = 0
       k = 1
@@ -126,9 +127,11 @@ contains
          cycle(i) = max(1, (nturn + 1)/2)
          v = hist%value_at(t(i))
          dir = kin%dir0*merge(1, -1, mod(nturn, 2) == 0)
+         near_turn = .false.
+         if (nturn > 0) near_turn = abs(v - kin%vturn(nturn)) < reversal_span*kin%range
          if (kin%hold(k)) then
             cls(i) = class_hold
-         else if (nturn > 0 .and. abs(v - kin%vturn(max(nturn, 1))) < reversal_span*kin%range) then
+         else if (near_turn) then
             cls(i) = class_reversal
          else if (v*dir > 0.0_dp) then
             cls(i) = class_loading
