@@ -22,6 +22,7 @@ module usharp_external
    use usharp_table, only: read_columns, merge_repeated_times
    use usharp_units, only: stress_factor
    use usharp_experiment, only: interpolate
+   use usharp_output, only: write_lines
    use usharp_process, only: run_process, process_result, proc_exited, proc_timed_out, &
                              proc_stopped, proc_spawn_failed, proc_signalled
    use usharp_signal, only: stop_signal
@@ -41,30 +42,26 @@ contains
 
    !> Write the constants file: E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, Q, Tm, D0 (stress in
    !> the model unit, Q in cal/mol, Tm in K), one value per line in format fmt
-   subroutine write_constants_file(path, model, fmt, error)
+   subroutine write_constants_file(path, model, fmt, error, sync)
       character(len=*), intent(in) :: path, fmt
       type(miller_model), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
+      logical, intent(in), optional :: sync  !< see result_commit (default true)
       real(dp) :: vals(n_constants_file)
-      integer :: unit, ios, k
+      character(len=64) :: lines(n_constants_file)
+      integer :: ios, k
       character(len=256) :: msg
       vals(:n_constants_file - 1) = upf_props(model)
       vals(n_constants_file) = model%d0
-      open (newunit=unit, file=path, status='replace', action='write', iostat=ios, iomsg=msg)
-      if (ios /= 0) then
-         call fatal_error(error, path//': cannot write the constants file ('//trim(msg)//')')
-         return
-      end if
       do k = 1, n_constants_file
-         if (ios == 0) write (unit, fmt, iostat=ios, iomsg=msg) vals(k)
+         write (lines(k), fmt, iostat=ios, iomsg=msg) vals(k)
+         if (ios /= 0) then
+            call fatal_error(error, path//': constants_format '//fmt//' does not fit a number ('// &
+                             trim(msg)//')')
+            return
+         end if
       end do
-      if (ios == 0) then
-         close (unit, iostat=ios, iomsg=msg)
-      else
-         close (unit)
-      end if
-      if (ios /= 0) call fatal_error(error, path//': cannot write the constants file ('// &
-                                     trim(msg)//')', stat_io)
+      call write_lines(path, lines, error, sync)
    end subroutine write_constants_file
 
    !> The command with its placeholders replaced: {work} {constants} {output} {input_dir} by
@@ -115,7 +112,8 @@ contains
       character(len=256) :: names(5)
       character(len=64) :: cols(2)
       real(dp), allocatable :: vals(:, :)
-      integer :: unit, ios, nmerged
+      integer :: nmerged
+      character(len=:), allocatable :: script(:)
       type(process_result) :: proc
       character(len=len(script_name) + 2) :: argv(2)
       logical :: gone
@@ -137,26 +135,15 @@ contains
          call fatal_error(error, output//': cannot remove an old output file')
          return
       end if
-      call write_constants_file(constants, model, ext%constants_format, error)
+      call write_constants_file(constants, model, ext%constants_format, error, sync=.false.)
       if (allocated(error)) return
       cmd = expand_command(ext%command, work, constants, output, in_dir, test)
-      open (newunit=unit, file=join_path(work, script_name), status='replace', action='write', &
-            iostat=ios)
-      if (ios /= 0) then
-         call fatal_error(error, join_path(work, script_name)//': cannot write')
-         return
-      end if
-      write (unit, '(a)', iostat=ios) '# usharp external backend: test '//test//', evaluation '//tag
-      if (ios == 0) write (unit, '(a)', iostat=ios) cmd
-      if (ios == 0) then
-         close (unit, iostat=ios)
-      else
-         close (unit)
-      end if
-      if (ios /= 0) then
-         call fatal_error(error, join_path(work, script_name)//': write failed', stat_io)
-         return
-      end if
+      ! Written whole (renamed into place): the shell never reads half a script
+      allocate (character(len=max(len(cmd), 200)) :: script(2))
+      script(1) = '# usharp external backend: test '//test//', evaluation '//tag
+      script(2) = cmd
+      call write_lines(join_path(work, script_name), script, error, sync=.false.)
+      if (allocated(error)) return
       ! The script runs in a process group of its own: at the time limit (or when usharp is
       ! asked to stop) the group gets TERM, then KILL 5 s later; what it leaves running is killed
       argv(1) = '/bin/sh'

@@ -56,16 +56,22 @@ contains
    !> Write the file under <path>.part in the same folder (every write, the sync and the
    !> close checked), then rename it into place. On a failure the partial file is removed,
    !> an old file of that name is left as it was, and the error names the file (exit 4).
-   subroutine result_commit(self, error)
+   !> sync (default true): wait until the contents are on the disk before the rename; a
+   !> scratch file that a crash may lose (an external command's input) skips the wait.
+   subroutine result_commit(self, error, sync)
       class(result_file), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
+      logical, intent(in), optional :: sync
       type(raw_file) :: f
+      logical :: durable
       character(len=:), allocatable :: temp
       logical :: gone
+      durable = .true.
+      if (present(sync)) durable = sync
       temp = self%path//'.part'
       call f%create(temp, error)
       if (.not. allocated(error)) call f%put(self%text(:self%used), error)
-      if (.not. allocated(error)) call f%sync(error)
+      if (.not. allocated(error) .and. durable) call f%sync(error)
       if (allocated(error)) then
          call f%close()
       else
@@ -114,11 +120,13 @@ contains
       call out%commit(error)
    end subroutine write_sim_file
 
-   !> Write lines of text (trailing blanks trimmed) to a file, replacing it whole
-   subroutine write_lines(file, lines, error)
+   !> Write lines of text (trailing blanks trimmed) to a file, replacing it whole; sync: see
+   !> result_commit
+   subroutine write_lines(file, lines, error, sync)
       character(len=*), intent(in) :: file
       character(len=*), intent(in) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
+      logical, intent(in), optional :: sync
       type(result_file) :: out
       integer :: k
       call out%open(file, error)
@@ -126,6 +134,6 @@ contains
       do k = 1, size(lines)
          call out%line(lines(k))
       end do
-      call out%commit(error)
+      call out%commit(error, sync)
    end subroutine write_lines
 end module usharp_output
