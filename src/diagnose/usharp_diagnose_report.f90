@@ -3,7 +3,8 @@
 module usharp_diagnose_report
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, gnuplot_string
+   use usharp_process, only: run_process, process_result, proc_exited
    use usharp_effects, only: effect_info, effect_catalogue, n_effects
    use usharp_regions, only: class_names
    use usharp_filesys, only: join_path, make_dir
@@ -324,25 +325,34 @@ contains
       logical, intent(out) :: plotted
       character(len=512), allocatable :: gp(:)
       type(error_type), allocatable :: error
-      integer :: stat, cmdstat, i, nt
+      type(process_result) :: proc
+      character(len=:), allocatable :: base, csv
+      character(len=max(16, len(dir) + 16)) :: argv(3)
+      integer :: i, nt
       nt = size(res%names)
+      ! The folder reaches gnuplot only inside quoted strings, and never as a file name that
+      ! begins with < or | (which gnuplot would run as a command)
+      base = dir
+      if (len(base) == 0) base = '.'
+      if (base(1:1) /= '/') base = './'//base
+      csv = gnuplot_string(join_path(base, 'residuals.csv'))
       allocate (gp(0))
       gp = [character(len=512) :: gp, "set datafile separator ','", &
             "set linetype 1 lc rgb '#c03030'", "set linetype 2 lc rgb '#3050c0'", &
             "set linetype 3 lc rgb '#30a040'", "set linetype 4 lc rgb 'black'", 'set terminal pngcairo size 1200,'// &
-            str(300*nt)//' font ",9"', "set output '"//join_path(dir, 'residuals.png')//"'", &
+            str(300*nt)//' font ",9"', "set output "//gnuplot_string(join_path(base, 'residuals.png')), &
             'set multiplot layout '//str(nt)//',1', 'set key off', 'set xlabel "time (s)"']
       do i = 1, nt
          gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
                trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
-               "plot '"//join_path(dir, 'residuals.csv')//"' every ::1 using 3:(strcol(1) eq '"// &
+               "plot "//csv//" every ::1 using 3:(strcol(1) eq '"// &
                trim(res%names(i))//"' ? $5-$6 : 1/0):8 with points pt 7 ps 0.3 lc variable"]
       end do
-      gp = [character(len=512) :: gp, 'unset multiplot', "set output '"//join_path(dir, 'fit.png')//"'", &
+      gp = [character(len=512) :: gp, 'unset multiplot', "set output "//gnuplot_string(join_path(base, 'fit.png')), &
             'set multiplot layout '//str(nt)//',1', 'set key top right']
       do i = 1, nt
          gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
-               "plot '"//join_path(dir, 'residuals.csv')//"' every ::1 using 3:(strcol(1) eq '"// &
+               "plot "//csv//" every ::1 using 3:(strcol(1) eq '"// &
                trim(res%names(i))//"' ? $5 : 1/0) with dots lc rgb 'black' title 'data', '' every ::1 "// &
                "using 3:(strcol(1) eq '"//trim(res%names(i))//"' ? $6 : 1/0) with lines lc rgb 'blue' "// &
                "title 'baseline', '' every ::1 using 3:(strcol(1) eq '"//trim(res%names(i))// &
@@ -352,8 +362,11 @@ contains
       call write_lines(join_path(dir, 'plots.gp'), gp, error)
       plotted = .false.
       if (allocated(error)) return
-      call execute_command_line('gnuplot '//join_path(dir, 'plots.gp')//' > /dev/null 2>&1', &
-                                exitstat=stat, cmdstat=cmdstat)
-      plotted = cmdstat == 0 .and. stat == 0
+      ! gnuplot found on the PATH by env, the script passed as an argument: no shell
+      argv(1) = '/usr/bin/env'
+      argv(2) = 'gnuplot'
+      argv(3) = join_path(base, 'plots.gp')
+      call run_process(argv, '.', '/dev/null', '/dev/null', 600.0_dp, 5.0_dp, proc)
+      plotted = proc%how == proc_exited .and. proc%code == 0
    end subroutine draw_plots
 end module usharp_diagnose_report

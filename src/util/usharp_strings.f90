@@ -4,7 +4,7 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields, shell_quote
+   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string
 
    !> Text form of a number
    interface str
@@ -117,6 +117,22 @@ contains
          end if
       end do
    end function has_unquoted_comma
+
+   !> A text as a gnuplot single-quoted string: only a quote is special there, and doubled
+   pure function gnuplot_string(text) result(quoted)
+      character(len=*), intent(in) :: text
+      character(len=:), allocatable :: quoted
+      integer :: k
+      quoted = "'"
+      do k = 1, len(text)
+         if (text(k:k) == "'") then
+            quoted = quoted//"''"
+         else
+            quoted = quoted//text(k:k)
+         end if
+      end do
+      quoted = quoted//"'"
+   end function gnuplot_string
 
    !> A text quoted for the POSIX shell: in single quotes, each ' written as '\''
    pure function shell_quote(text) result(quoted)
