@@ -35,6 +35,7 @@ contains
          new_unittest('external-ignores-term-and-leaves-a-child', test_external_term), &
          new_unittest('plot-script-hostile-folder-name', test_plot_script), &
          new_unittest('lm-resume-at-90-percent-replays', test_resume_cost), &
+         new_unittest('external-resume-reruns-no-journalled-command', test_external_resume), &
          new_unittest('sigterm-stops-with-a-note', test_sigterm)]
    end subroutine collect_safety
 
@@ -401,38 +402,108 @@ contains
       if (allocated(error)) return
       call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
                  'best.nml identical')
-   contains
-      subroutine counts(line, n, nr, ns)
-         character(len=*), intent(in) :: line
-         integer, intent(out) :: n, nr, ns
-         integer :: k, ios
-         character(len=32) :: w(6)
-         k = index(line, 'evaluations')
-         read (line(k:), *, iostat=ios) w
-         n = -1
-         nr = -1
-         ns = -1
-         if (ios /= 0) return
-         read (w(2), *, iostat=ios) n
-         read (w(3)(2:), *, iostat=ios) nr
-         read (w(5), *, iostat=ios) ns
-      end subroutine counts
-      integer function residual_count(path, nrec) result(mm)
-         character(len=*), intent(in) :: path
-         integer, intent(in) :: nrec
-         integer :: unit
-         integer(8) :: bytes
-         open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='read')
-         inquire (unit=unit, size=bytes)
-         close (unit)
-         mm = int(((bytes - 16)/nrec - 8)/8) - 2
-      end function residual_count
-      function body(text) result(rest)
-         character(len=*), intent(in) :: text
-         character(len=:), allocatable :: rest
-         rest = text(max(index(text, '&constants'), 1):)
-      end function body
    end subroutine test_resume_cost
+
+   !> An external Levenberg-Marquardt fit resumed at 90 %: the FE command runs again only for
+   !> evaluations the journal does not hold (and once for the best fit's curves)
+   subroutine test_external_resume(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: exe, input, full, part, count, ext
+      integer :: ntotal, nrep, nsim, nkept, m, stat, nruns
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'the usharp executable was not found beside the tester')
+         return
+      end if
+      count = absolute_path(scratch_dir)//'/extresume-count.txt'
+      input = write_text('extresume-internal.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', dt_out=4.0 /"])
+      ext = ", dt_out=4.0, backend='external', constants_format='(ES24.16)', command='echo run >> "// &
+            count//"; sh "//absolute_path('test/ansys_standin.sh')//' '//absolute_path(exe)// &
+            " {input_dir}/extresume-internal.nml {test}'"
+      input = deck('extresume.nml', "method='lm', max_evals=24, identify=.false.", ext)
+      full = scratch_dir//'/extresume-full'
+      part = scratch_dir//'/extresume-part'
+      stat = shell('rm -f '//count)
+      call run_command(input, full, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'uninterrupted run: '//e%message)
+         return
+      end if
+      call counts(summary(3), ntotal, nrep, nsim)
+      nruns = line_count(count)
+      call check(error, ntotal > 10 .and. nruns == ntotal + 1, 'uninterrupted run: '//str(nruns)// &
+                 ' command runs; '//trim(summary(3)))
+      if (allocated(error)) return
+      nkept = (9*ntotal)/10
+      m = residual_count(full//'/fit.cache', ntotal)
+      stat = shell('rm -rf '//part//' '//count//'; mkdir -p '//part//' && head -n '//str(nkept + 1)//' '// &
+                   full//'/fit.journal > '//part//'/fit.journal && head -c '//str(16 + nkept*(8 + 8*(2 + m)))// &
+                   ' '//full//'/fit.cache > '//part//'/fit.cache')
+      call run_command(input, part, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resumed run: '//e%message)
+         return
+      end if
+      nruns = line_count(count)
+      call check(error, nruns == ntotal - nkept + 1, 'resumed at evaluation '//str(nkept)//' of '// &
+                 str(ntotal)//': the command ran '//str(nruns)//' times')
+      if (allocated(error)) return
+      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), 'journal identical')
+   contains
+      integer function line_count(path) result(k)
+         character(len=*), intent(in) :: path
+         integer :: unit, ios
+         character(len=16) :: line
+         k = 0
+         open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+         if (ios /= 0) return
+         do
+            read (unit, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            k = k + 1
+         end do
+         close (unit)
+      end function line_count
+   end subroutine test_external_resume
+
+   !> Evaluations, replayed and simulated from the summary's line
+   subroutine counts(line, n, nr, ns)
+      character(len=*), intent(in) :: line
+      integer, intent(out) :: n, nr, ns
+      integer :: k, ios
+      character(len=32) :: w(6)
+      k = index(line, 'evaluations')
+      read (line(k:), *, iostat=ios) w
+      n = -1
+      nr = -1
+      ns = -1
+      if (ios /= 0) return
+      read (w(2), *, iostat=ios) n
+      read (w(3)(2:), *, iostat=ios) nr
+      read (w(5), *, iostat=ios) ns
+   end subroutine counts
+   !> Residuals per record of a fit.cache of nrec residual records and 2 constants
+   integer function residual_count(path, nrec) result(mm)
+      character(len=*), intent(in) :: path
+      integer, intent(in) :: nrec
+      integer :: unit
+      integer(8) :: bytes
+      open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='read')
+      inquire (unit=unit, size=bytes)
+      close (unit)
+      mm = int(((bytes - 16)/nrec - 8)/8) - 2
+   end function residual_count
+   !> best.nml without its comment lines (which name the output folder)
+   function body(text) result(rest)
+      character(len=*), intent(in) :: text
+      character(len=:), allocatable :: rest
+      rest = text(max(index(text, '&constants'), 1):)
+   end function body
 
    !> SIGTERM during a run: a line in fit.log, exit code 143, and --resume continues
    subroutine test_sigterm(error)
