@@ -17,6 +17,15 @@ module test_diagnose_data
    use usharp_optimiser, only: least_squares_type, optimum_type
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_diagnose_profile, only: profile_interval, profile_result, f1_95, chi2_95
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config
+   use usharp_objective, only: fit_problem, setup_problem
+   use usharp_experiment, only: experiment_type
+   use usharp_effects, only: test_effects
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
+   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report
+   use test_util, only: write_text
    implicit none
    private
    public :: collect_diagnose_data
@@ -39,7 +48,8 @@ contains
          new_unittest('holds-only-where-the-strain-is-steady', test_measured_hold), &
          new_unittest('inelastic-from-the-model-rate', test_inelastic), &
          new_unittest('serration-signature-in-the-residual', test_serration), &
-         new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage)]
+         new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
+         new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift)]
    end subroutine collect_diagnose_data
 
    !> A measured strain: the command sampled every dt s with Gaussian noise of sd (strain)
@@ -250,6 +260,84 @@ contains
       call check(error, abs(real(hits, dp)/nrep - 0.95_dp) <= 0.035_dp, 'profile coverage '// &
                  str(hits)//' of '//str(nrep))
    end subroutine test_profile_coverage
+
+   !> Three cyclic tests of the thesis model, the third with an extensometer drift of 8e-6/s
+   !> (0.04 % over its 48 s) and 0.5 % noise: fitted alone against the constants of the two
+   !> others, drift ranks first and its profile interval holds the truth
+   subroutine test_specimen_drift(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(test_effects) :: base
+      type(experiment_type), allocatable :: exps(:)
+      type(specimen_result) :: sr
+      type(rng_type) :: rng
+      real(dp), allocatable :: r(:), y(:)
+      real(dp), parameter :: d_true = 8.0e-6_dp
+      integer :: i, k0, n, j
+      logical :: ok
+      call read_config(write_text('diag-specimen.nml', [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /", &
+         "&fit fitted = 'B', 'H1', 'n', method = 'lm' /", &
+         "&diagnose specimen = 'c3', effects = 'scatter', 'lag', 'drift' /", &
+         "&test name = 'c1', history = 'cyclic', dt_out = 0.2, strain_range = 0.01,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /", &
+         "&test name = 'c2', history = 'cyclic', dt_out = 0.2, strain_range = 0.006,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /", &
+         "&test name = 'c3', history = 'cyclic', dt_out = 0.2, strain_range = 0.008,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /"]), &
+         cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
+      if (allocated(error)) return
+      if (allocated(error)) return
+      allocate (exps(3))
+      do i = 1, 3
+         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
+      end do
+      call setup_problem(cfg, prob, e, exps)
+      call check(error, .not. allocated(e), 'setup failed')
+      if (allocated(error)) return
+      call new_effect_problem(prob, [1, 2, 3], 9, base, 1.0_dp, ep, free_constants=.false., &
+                              p0=[0.0_dp, 0.0_dp, d_true])
+      ep%pfree = .false.
+      allocate (r(ep%nres()), y(ep%nres()))
+      call ep%residual_at(ep%start(), r, ok, y)
+      call check(error, ok, 'simulation with drift failed')
+      if (allocated(error)) return
+      call rng%seed(23)
+      k0 = 0
+      do i = 1, 3
+         n = size(exps(i)%t)
+         exps(i)%y = y(k0 + 1:k0 + n)
+         do j = 1, n
+            exps(i)%y(j) = exps(i)%y(j) + 0.005_dp*maxval(abs(y(k0 + 1:k0 + n)))*rng%normal()
+         end do
+         k0 = k0 + n
+      end do
+      call specimen_run(cfg, 3, opts, .true., sr, e, exps)
+      call check(error, .not. allocated(e), 'per-specimen diagnosis failed')
+      if (allocated(error)) return
+      if (.not. (sr%effects(1)%name == 'drift' .and. sr%effects(1)%significant)) then
+         block
+            character(len=200), allocatable :: lines(:)
+            lines = specimen_report(sr)
+            write (*, '(a)') (trim(lines(i)), i=1, size(lines))
+         end block
+      end if
+      call check(error, sr%effects(1)%name == 'drift' .and. sr%effects(1)%significant, &
+                 'ranked first: '//trim(sr%effects(1)%name))
+      if (allocated(error)) return
+      call check(error, sr%effects(1)%p_lo(1) <= d_true .and. d_true <= sr%effects(1)%p_hi(1), &
+                 'drift '//real_str(sr%effects(1)%p(1), 'es10.3')//' ['//real_str(sr%effects(1)%p_lo(1), &
+                 'es10.3')//', '//real_str(sr%effects(1)%p_hi(1), 'es10.3')//'] misses 8e-6')
+   end subroutine test_specimen_drift
 
    subroutine decay_residuals(self, xs, rs, fs, ok, error)
       class(decay_problem), intent(inout) :: self

@@ -7,6 +7,8 @@ module usharp_cmd_diagnose
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, write_report, &
                               diagnose_options_of, diagnose_progress
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
+   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
+   use usharp_error, only: fatal_error, stat_input
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
    implicit none
@@ -31,10 +33,49 @@ contains
       if (allocated(error)) return
       call diagnose_options_of(cfg, opts, error)
       if (allocated(error)) return
+      if (len_trim(cfg%diagnose%specimen) > 0) then
+         call specimen_command(cfg, opts, lines, error)
+         return
+      end if
       call diagnose_run(cfg, opts, res, error, progress=progress)
       if (allocated(error)) return
       call write_report(join_path(cfg%out_dir, 'diagnose'), res, opts, lines, error)
    end subroutine diagnose_command
+
+   !> Per-specimen mode: each named specimen (or every test) against its replicates;
+   !> <out_dir>/diagnose/specimen-<name>.md
+   subroutine specimen_command(cfg, opts, lines, error)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      character(len=200), allocatable, intent(out) :: lines(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(specimen_result) :: sr
+      character(len=200), allocatable :: part(:)
+      integer, allocatable :: which(:)
+      integer :: i
+      if (trim(cfg%diagnose%specimen) == 'all') then
+         which = [(i, i=1, size(cfg%tests))]
+      else
+         which = [specimen_index(cfg, cfg%diagnose%specimen)]
+         if (which(1) == 0) then
+            call fatal_error(error, cfg%path//": &diagnose: specimen: no &test is named '"// &
+               trim(cfg%diagnose%specimen)//"' (name a test, or 'all')", stat_input)
+            return
+         end if
+      end if
+      call make_dir(join_path(cfg%out_dir, 'diagnose'), error)
+      if (allocated(error)) return
+      allocate (lines(0))
+      do i = 1, size(which)
+         call specimen_run(cfg, which(i), opts, .true., sr, error)
+         if (allocated(error)) return
+         part = specimen_report(sr)
+         call write_lines(join_path(join_path(cfg%out_dir, 'diagnose'), 'specimen-'// &
+                          trim(sr%name)//'.md'), part, error)
+         if (allocated(error)) return
+         lines = [character(len=200) :: lines, part, '']
+      end do
+   end subroutine specimen_command
 
    !> Self-check of the diagnosis on synthetic data with each effect injected
    subroutine selfcheck_command(path, out_dir, lines, error)

@@ -131,7 +131,7 @@ contains
                call levenberg_marquardt(hp, xr, lor, hir, h, 1.0e-10_dp, 60, max_evals, opt, error)
                if (allocated(error)) return
             else
-               allocate (opt%x(0))
+               opt%x = xr
                call hp%eval(opt%x, opt%f, error)
                if (allocated(error)) return
                opt%nevals = 1

@@ -81,6 +81,9 @@ module usharp_config
       integer :: reps = 10                         !< self-check repetitions per effect
       integer :: seed = 1                          !< self-check seed
       real(dp) :: noise = 0.01_dp                  !< self-check noise, fraction of the peak
+      !> Per-specimen mode: the test diagnosed against the others (its replicates), 'all' for
+      !> each test in turn; blank: the diagnosis of the fit
+      character(len=64) :: specimen = ''
    end type diagnose_config
 
    !> Fit settings (&fit group)

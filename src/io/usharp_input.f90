@@ -444,15 +444,16 @@ contains
       integer, intent(in) :: unit
       type(run_config), intent(inout) :: cfg
       type(error_type), allocatable, intent(out) :: error
-      character(len=64) :: holdout(max_list)
+      character(len=64) :: holdout(max_list), specimen
       character(len=16) :: effects(max_list), rows(max_list)
       real(dp) :: dlnE_dT, gamma3, confirm_shrink, noise
       integer :: n_refit, refit_starts, global_starts, reps, seed, ios
       logical :: cross_starts
       character(len=512) :: msg
       namelist /diagnose/ holdout, effects, rows, n_refit, refit_starts, global_starts, dlnE_dT, gamma3, &
-         cross_starts, confirm_shrink, reps, seed, noise
+         cross_starts, confirm_shrink, reps, seed, noise, specimen
       holdout = cfg%diagnose%holdout
+      specimen = cfg%diagnose%specimen
       effects = cfg%diagnose%effects
       rows = cfg%diagnose%rows
       n_refit = cfg%diagnose%n_refit
@@ -502,6 +503,7 @@ contains
       cfg%diagnose%reps = reps
       cfg%diagnose%seed = seed
       cfg%diagnose%noise = noise
+      cfg%diagnose%specimen = specimen
    end subroutine read_diagnose
 
    subroutine read_design(unit, cfg, error)

@@ -1,0 +1,324 @@
+!> Per-specimen diagnosis: how one specimen differs from its replicates. The constants are
+!> fitted to the other tests (the replicates) alone; the specimen is predicted with them, and
+!> each catalogue effect is then fitted to the specimen alone with the constants fixed (every
+!> parameter of the effect belongs to this specimen: a global effect of the catalogue is
+!> here one more property of this test). Each effect gets its magnitudes with 95 %
+!> profile-likelihood intervals, the fall of BIC on the specimen's points and the share of
+!> the specimen's structured gap it removes; the effects are ranked by BIC.
+module usharp_diagnose_specimen
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_strings, only: str, real_str
+   use usharp_config, only: run_config
+   use usharp_miller, only: constant_names, get_constant
+   use usharp_objective, only: fit_problem, setup_problem, test_residuals
+   use usharp_experiment, only: experiment_type, fits_strain
+   use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
+                             effect_nparams, param_per_test
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_levenberg, only: levenberg_marquardt
+   use usharp_optimiser, only: optimum_type
+   use usharp_identify, only: robust_covariance
+   use usharp_regions, only: noise_sd
+   use usharp_sort, only: order_of
+   use usharp_diagnose_options, only: diagnose_options, bic_margin
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, constants_at
+   use usharp_diagnose_profile, only: profile_interval, profile_result
+   implicit none
+   private
+
+   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
+
+   !> One effect fitted to the specimen
+   type :: specimen_effect
+      integer :: k = 0
+      character(len=16) :: name = ''
+      integer :: q = 0                                   !< its parameters
+      real(dp) :: f_after = 0.0_dp                       !< specimen's objective with it
+      real(dp) :: dbic = 0.0_dp                          !< BIC change on the specimen's points
+      real(dp) :: removed = 0.0_dp                       !< share of the structured gap removed
+      character(len=16), allocatable :: pname(:), punit(:)
+      real(dp), allocatable :: p(:), p_lo(:), p_hi(:)    !< magnitudes, 95 % profile interval
+      logical, allocatable :: lo_open(:), hi_open(:)     !< interval open at that end
+      logical :: plausible = .true.                      !< within the effect's physical limit
+      logical :: significant = .false.                   !< BIC falls by more than bic_margin
+      integer :: nevals = 0
+   end type specimen_effect
+
+   !> The specimen against its replicates
+   type :: specimen_result
+      character(len=40) :: name = ''
+      character(len=40), allocatable :: replicates(:)
+      character(len=2), allocatable :: cnames(:)
+      real(dp), allocatable :: c(:)          !< constants fitted to the replicates
+      real(dp) :: f_rep = 0.0_dp             !< their objective on the replicates
+      integer :: m = 0                       !< the specimen's points
+      real(dp) :: f0 = 0.0_dp                !< the specimen's objective, predicted
+      real(dp) :: noise = 0.0_dp             !< the part of it the noise explains
+      real(dp) :: gap = 0.0_dp               !< structured gap: f0 - noise
+      real(dp) :: noise_sd = 0.0_dp          !< response unit
+      character(len=32) :: unit = ''
+      type(specimen_effect), allocatable :: effects(:)   !< ranked by BIC
+      integer :: nevals = 0
+   end type specimen_result
+
+contains
+
+   !> Index of the test named name in cfg, 0 when there is none
+   pure integer function specimen_index(cfg, name) result(k)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: name
+      integer :: i
+      k = 0
+      do i = 1, size(cfg%tests)
+         if (cfg%tests(i)%name == trim(name)) k = i
+      end do
+   end function specimen_index
+
+   !> Diagnose test ispec of cfg against the others: constants fitted to them from cfg's
+   !> (refit_constants false: cfg's constants as they are), then each of opts's effects
+   !> fitted to the specimen alone
+   subroutine specimen_run(cfg, ispec, opts, refit_constants, sr, error, experiments)
+      type(run_config), intent(in) :: cfg
+      integer, intent(in) :: ispec
+      type(diagnose_options), intent(in) :: opts
+      logical, intent(in) :: refit_constants
+      type(specimen_result), intent(out) :: sr
+      type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(optimum_type) :: opt
+      type(test_effects) :: base
+      type(effect_info) :: cat(n_effects)
+      real(dp), allocatable :: lo(:), hi(:), r0(:), nv(:), dbic(:)
+      type(specimen_effect), allocatable :: all(:)
+      integer, allocatable :: reps(:)
+      integer :: i, nt, j, n
+      real(dp) :: peak
+      logical :: ok
+      nt = size(cfg%tests)
+      if (ispec < 1 .or. ispec > nt .or. nt < 2) then
+         call fatal_error(error, cfg%path//': &diagnose: specimen: a per-specimen diagnosis needs '// &
+            'the specimen and at least one replicate', stat_input)
+         return
+      end if
+      call setup_problem(cfg, prob, error, experiments)
+      if (allocated(error)) return
+      reps = pack([(i, i=1, nt)], [(i, i=1, nt)] /= ispec)
+      sr%name = cfg%tests(ispec)%name
+      allocate (sr%replicates(size(reps)))
+      do i = 1, size(reps)
+         sr%replicates(i) = cfg%tests(reps(i))%name
+      end do
+      peak = maxval([(prob%targets(i)%y_ex_max, i=1, nt)])
+      cat = effect_catalogue(peak)
+      base%dlnE_dT = opts%dlnE_dT
+      base%gamma3 = opts%gamma3
+      ! The constants of the replicates
+      call new_effect_problem(prob, reps, 0, base, peak, ep)
+      if (refit_constants) then
+         call ep%bounds(lo, hi)
+         call levenberg_marquardt(ep, ep%start(), lo, hi, cfg%fit%fd_step, 1.0e-9_dp, 100, &
+                                  opts%max_evals, opt, error)
+         if (allocated(error)) return
+         sr%nevals = sr%nevals + opt%nevals
+         prob%cfg%model%c = constants_at(prob, opt%x)
+         sr%f_rep = opt%f
+      else
+         call ep%eval(ep%start(), sr%f_rep, error)
+         if (allocated(error)) return
+      end if
+      sr%cnames = constant_names(prob%idx)
+      sr%c = [(get_constant(prob%cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+      ! The specimen predicted, and its noise part
+      call new_effect_problem(prob, [ispec], 0, base, peak, ep, free_constants=.false.)
+      sr%m = ep%nres()
+      allocate (r0(sr%m))
+      call ep%residual_at(ep%start(), r0, ok)
+      if (.not. ok) then
+         call fatal_error(error, "the replicates' constants fail to simulate specimen '"// &
+            trim(sr%name)//"'")
+         return
+      end if
+      sr%f0 = sum(r0**2)
+      associate (tg => prob%targets(ispec))
+         n = size(tg%t)
+         sr%noise_sd = noise_sd(tg%exp%y)
+         nv = (sr%noise_sd*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), &
+                                          spread(0.0_dp, 1, n), tg%w, tg%y_ex_max))**2
+      end associate
+      sr%noise = sum(nv)
+      sr%gap = max(sr%f0 - sr%noise, 0.0_dp)
+      sr%unit = merge('strain (-)     ', 'stress ('//prob%cfg%units//')   ', &
+                      fits_strain(prob%cfg%tests(ispec)))
+      ! Each effect on the specimen alone
+      allocate (all(size(opts%effects)))
+      do j = 1, size(opts%effects)
+         call fit_effect(opts%effects(j), all(j), error)
+         if (allocated(error)) return
+         sr%nevals = sr%nevals + all(j)%nevals
+      end do
+      dbic = all%dbic
+      sr%effects = all(order_of(dbic))
+   contains
+      !> Effect k's parameters of the specimen fitted with the constants fixed; Wald and then
+      !> profile intervals
+      subroutine fit_effect(k, se_out, error)
+         integer, intent(in) :: k
+         type(specimen_effect), intent(out) :: se_out
+         type(error_type), allocatable, intent(out) :: error
+         type(effect_problem) :: ek
+         type(optimum_type) :: o
+         type(profile_result) :: pr
+         real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
+         real(dp) :: scale
+         integer :: jj, g, np
+         logical :: okj
+         se_out%k = k
+         se_out%name = cat(k)%name
+         call new_effect_problem(prob, [ispec], k, base, peak, ek, free_constants=.false.)
+         np = size(ek%p0)
+         do jj = 1, np
+            ! per-test parameters: only the specimen's own
+            if (cat(k)%sharing == param_per_test) ek%pfree(jj) = mod(jj - 1, nt) + 1 == ispec
+         end do
+         if (k == 8) ek%p0 = [0.01_dp*peak, opts%gamma3]
+         se_out%q = count(ek%pfree)
+         x0 = ek%start()
+         call ek%bounds(lo, hi)
+         call levenberg_marquardt(ek, x0, lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, opts%max_evals, o, error)
+         if (allocated(error)) return
+         se_out%nevals = o%nevals
+         se_out%f_after = o%f
+         se_out%dbic = sr%m*log(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log(real(sr%m, dp))
+         se_out%significant = se_out%dbic < -bic_margin
+         if (sr%gap > 0.0_dp) se_out%removed = (sr%f0 - o%f)/sr%gap
+         call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
+         naive = pseudo_inverse(matmul(transpose(jac), jac))
+         cov = robust_covariance(jac, r, naive)
+         allocate (se(size(o%x)))
+         do jj = 1, size(o%x)
+            se(jj) = sqrt(max(cov(jj, jj), 0.0_dp))
+         end do
+         p = pack(o%x*pack(ek%pscale, ek%pfree), .true.)
+         se_out%p = p
+         allocate (se_out%p_lo(size(p)), se_out%p_hi(size(p)), se_out%lo_open(size(p)), &
+                   se_out%hi_open(size(p)), se_out%pname(size(p)), se_out%punit(size(p)))
+         se_out%plausible = .true.
+         g = 0
+         do jj = 1, np
+            if (.not. ek%pfree(jj)) cycle
+            g = g + 1
+            associate (grp => merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test))
+               se_out%pname(g) = cat(k)%pname(grp)
+               se_out%punit(g) = cat(k)%punit(grp)
+               se_out%plausible = se_out%plausible .and. abs(p(g)) <= cat(k)%plausible(grp)
+            end associate
+            ! The rise of the objective at the 95 % ends: the sandwich over the naive variance
+            scale = o%f/max(sr%m - se_out%q, 1)
+            if (naive(g, g) > 0.0_dp .and. cov(g, g) > 0.0_dp) scale = cov(g, g)/naive(g, g)
+            call profile_interval(ek, o%x, o%f, g, lo, hi, 1.0e-3_dp, se(g), scale, &
+                                  ek%pnonneg(jj) .and. o%x(g) > 0.0_dp, opts%max_evals, pr, error)
+            if (allocated(error)) return
+            se_out%nevals = se_out%nevals + pr%nevals
+            se_out%p_lo(g) = pr%lo*ek%pscale(jj)
+            se_out%p_hi(g) = pr%hi*ek%pscale(jj)
+            se_out%lo_open(g) = pr%lo_open
+            se_out%hi_open(g) = pr%hi_open
+         end do
+      end subroutine fit_effect
+   end subroutine specimen_run
+
+   !> The per-specimen report (Markdown)
+   function specimen_report(sr) result(lines)
+      type(specimen_result), intent(in) :: sr
+      character(len=200), allocatable :: lines(:)
+      integer :: j, g, lead
+      character(len=:), allocatable :: ln, verdict
+      allocate (lines(0))
+      call add('# Per-specimen diagnosis: '//trim(sr%name))
+      call add('')
+      ln = 'Constants fitted to the replicates'
+      do j = 1, size(sr%replicates)
+         ln = ln//trim(merge(': ', ', ', j == 1))//' '//trim(sr%replicates(j))
+      end do
+      call add(ln//' (objective '//real_str(sr%f_rep, 'es10.3')//'):')
+      ln = ''
+      do j = 1, size(sr%c)
+         if (j > 1) ln = ln//', '
+         ln = ln//trim(sr%cnames(j))//' = '//real_str(sr%c(j), 'es10.4')
+      end do
+      call add(ln//'.')
+      call add('')
+      call add(trim(sr%name)//' predicted with them: objective '//real_str(sr%f0, 'es10.3')//' on '// &
+         str(sr%m)//' points, of which the noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '// &
+         trim(sr%unit)//') explains '//real_str(sr%noise, 'es10.3')//'; structured gap '// &
+         real_str(sr%gap, 'es10.3')//'.')
+      call add('')
+      call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
+         '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'); intervals 95 % '// &
+         'profile likelihood ("open": the data do not bound that end):')
+      call add('')
+      call add('| rank | effect | magnitude [95 % interval] | objective | BIC change | gap removed | verdict |')
+      call add('|---|---|---|---|---|---|---|')
+      do j = 1, size(sr%effects)
+         associate (e => sr%effects(j))
+            ln = ''
+            do g = 1, size(e%p)
+               if (g > 1) ln = ln//'; '
+               ln = ln//trim(e%pname(g))//' = '//real_str(e%p(g), 'es9.2')//' ['// &
+                    end_of(e%p_lo(g), e%lo_open(g))//', '//end_of(e%p_hi(g), e%hi_open(g))//'] '// &
+                    trim(e%punit(g))
+            end do
+            if (e%significant .and. e%plausible) then
+               verdict = 'significant'
+            else if (e%significant) then
+               verdict = 'significant, implausible magnitude'
+            else
+               verdict = 'not significant'
+            end if
+            call add('| '//str(j)//' | '//trim(e%name)//' | '//ln//' | '//real_str(e%f_after, 'es10.3')// &
+               ' | '//real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%removed, 'f0.0')//' % | '// &
+               verdict//' |')
+         end associate
+      end do
+      call add('')
+      verdict = 'no effect explains how '//trim(sr%name)//' differs from its replicates'
+      lead = 0
+      do j = 1, size(sr%effects)
+         if (lead == 0 .and. sr%effects(j)%significant .and. sr%effects(j)%plausible) lead = j
+      end do
+      if (lead > 0) then
+         associate (e => sr%effects(lead))
+            verdict = trim(e%name)//' explains how '//trim(sr%name)//' differs from its replicates: '// &
+               real_str(100.0_dp*e%removed, 'f0.0')//' % of its structured gap, BIC '//real_str(e%dbic, 'f0.1')
+         end associate
+         ! Effects within bic_margin of it explain the difference as well
+         ln = ''
+         do j = lead + 1, size(sr%effects)
+            if (sr%effects(j)%significant .and. sr%effects(j)%plausible .and. &
+                sr%effects(j)%dbic < sr%effects(lead)%dbic + bic_margin) ln = ln//', '//trim(sr%effects(j)%name)
+         end do
+         if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
+      end if
+      if (sr%gap <= 0.0_dp) verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
+      call add('**Verdict:** '//verdict)
+   contains
+      subroutine add(text)
+         character(len=*), intent(in) :: text
+         lines = [character(len=200) :: lines, text]
+      end subroutine add
+
+      function end_of(v, open) result(text)
+         real(dp), intent(in) :: v
+         logical, intent(in) :: open
+         character(len=:), allocatable :: text
+         if (open .and. v /= 0.0_dp) then
+            text = 'open'
+         else
+            text = trim(adjustl(real_str(v, 'es9.2')))
+         end if
+      end function end_of
+   end function specimen_report
+end module usharp_diagnose_specimen
