@@ -11,20 +11,28 @@ module usharp_history
    public :: history_type, control_strain, control_stress, segment_type
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
    public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
-   public :: rate_jump_history
+   public :: rate_jump_history, spline_eval
 
    !> Control modes
    integer, parameter :: control_strain = 1, control_stress = 2
 
-   !> Piecewise-linear history: value v(k) at time t(k); t strictly increasing
+   !> Piecewise-linear history: value v(k) at time t(k); t strictly increasing. A smooth
+   !> history (a measured signal as forcing, usharp_forcing) is instead the cubic spline
+   !> through (t, v) with second derivatives d2, twice continuously differentiable between
+   !> its stops (the turning points, where it has a corner and d2 = 0)
    type :: history_type
       integer :: control = control_strain
-      real(dp), allocatable :: t(:)  !< corner times, s
+      real(dp), allocatable :: t(:)  !< corner times (samples of a smooth history), s
       real(dp), allocatable :: v(:)  !< strain (-) or stress (model unit) at the corners
+      real(dp), allocatable :: d2(:)   !< smooth only: second derivative at t, per s**2
+      integer, allocatable :: stops(:) !< smooth only: indices of the corners, first and last
    contains
       procedure :: value_at => history_value_at
       procedure :: end_time => history_end_time
       procedure :: segment => history_segment
+      procedure :: smooth => history_smooth
+      procedure :: corners => history_corners
+      procedure :: spline_at => history_spline_at
    end type history_type
 
    !> One linear piece of a history: control, start time (s), start value and slope (per s)
@@ -76,15 +84,73 @@ contains
       class(history_type), intent(in) :: self
       real(dp), intent(in) :: t
       integer :: k
+      real(dp) :: rate
       if (t <= self%t(1)) then
          val = self%v(1)
       else if (t >= self%t(size(self%t))) then
          val = self%v(size(self%v))
+      else if (self%smooth()) then
+         call self%spline_at(t, 1, size(self%t), val, rate)
       else
          k = segment_of(self%t, t)
          val = self%v(k) + (self%v(k + 1) - self%v(k))*(t - self%t(k))/(self%t(k + 1) - self%t(k))
       end if
    end function history_value_at
+
+   !> Whether the history is a smooth (spline) forcing
+   pure logical function history_smooth(self)
+      class(history_type), intent(in) :: self
+      history_smooth = allocated(self%d2)
+   end function history_smooth
+
+   !> Indices of the corners where an integrator must stop: every point of a piecewise-linear
+   !> history, the stops of a smooth one
+   pure function history_corners(self) result(idx)
+      class(history_type), intent(in) :: self
+      integer, allocatable :: idx(:)
+      integer :: k
+      if (self%smooth()) then
+         idx = self%stops
+      else
+         idx = [(k, k=1, size(self%t))]
+      end if
+   end function history_corners
+
+   !> Value and rate (per s) of a smooth history at time t, searched between samples k0 and
+   !> k1 (a branch; t outside [t(k0), t(k1)] extends its end intervals' cubics)
+   pure subroutine history_spline_at(self, t, k0, k1, val, rate)
+      class(history_type), intent(in) :: self
+      real(dp), intent(in) :: t
+      integer, intent(in) :: k0, k1
+      real(dp), intent(out) :: val, rate
+      call spline_eval(self%t, self%v, self%d2, k0, k1, t, val, rate)
+   end subroutine history_spline_at
+
+   !> The cubic spline through (tk, vk) with second derivatives mk at time t, its interval
+   !> found by bisection between k0 and k1
+   pure subroutine spline_eval(tk, vk, mk, k0, k1, t, val, rate)
+      real(dp), intent(in) :: tk(:), vk(:), mk(:), t
+      integer, intent(in) :: k0, k1
+      real(dp), intent(out) :: val, rate
+      real(dp) :: h, a, b
+      integer :: lo, hi, mid
+      lo = k0
+      hi = k1
+      do while (hi - lo > 1)
+         mid = (lo + hi)/2
+         if (tk(mid) <= t) then
+            lo = mid
+         else
+            hi = mid
+         end if
+      end do
+      h = tk(lo + 1) - tk(lo)
+      a = (tk(lo + 1) - t)/h
+      b = 1.0_dp - a
+      val = a*vk(lo) + b*vk(lo + 1) + ((a**3 - a)*mk(lo) + (b**3 - b)*mk(lo + 1))*(h*h/6.0_dp)
+      rate = (vk(lo + 1) - vk(lo))/h + ((1.0_dp - 3.0_dp*a*a)*mk(lo) + &
+                                        (3.0_dp*b*b - 1.0_dp)*mk(lo + 1))*(h/6.0_dp)
+   end subroutine spline_eval
 
    !> Segment k of the history, from corner k to corner k+1
    pure type(segment_type) function history_segment(self, k) result(seg)

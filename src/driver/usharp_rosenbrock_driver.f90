@@ -13,7 +13,7 @@ module usharp_rosenbrock_driver
    use usharp_strings, only: str, real_str
    use usharp_miller, only: miller_model, uniaxial_rates
    use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value, lag_corners
-   use usharp_history, only: history_type, control_strain, segment_type
+   use usharp_history, only: history_type, control_strain, segment_type, spline_eval
    use usharp_simulation, only: solver_options, sim_result, check_output_times
    implicit none
    private
@@ -30,6 +30,11 @@ module usharp_rosenbrock_driver
       type(miller_model) :: model
       type(segment_type) :: seg
       integer :: k = 1
+      !> A smooth forcing (plain model): the spline's second derivatives at the samples
+      !> (tc, vc) and the last sample kend of the branch that begins at sample k
+      logical :: smooth = .false.
+      integer :: kend = 1
+      real(dp), allocatable :: mc(:)
       logical :: extended = .false.
       type(test_effects) :: eff
       real(dp) :: stiffness = 0.0_dp
@@ -99,6 +104,12 @@ contains
             [as, ar, ar, as, ar], rtol, res, error)
       else
          sys%stiffness = model%youngs
+         sys%smooth = hist%smooth()
+         if (sys%smooth) then
+            sys%tc = hist%t
+            sys%vc = hist%v
+            sys%mc = hist%d2
+         end if
          call integrate_plain(sys, hist, tout, opts, [0.0_dp, 0.0_dp, model%d0], [as, ar, ar], &
                               rtol, res, error)
       end if
@@ -128,6 +139,8 @@ contains
       real(dp) :: load, rate
       if (sys%extended) then
          call lagged_value(sys%tc, sys%vc, sys%yk, sys%k, sys%eff%lag, t, load, rate)
+      else if (sys%smooth) then
+         call spline_eval(sys%tc, sys%vc, sys%mc, sys%k, sys%kend, t, load, rate)
       else
          load = sys%seg%value(t)
          rate = sys%seg%slope

@@ -7,6 +7,7 @@ module usharp_input
    use usharp_strings, only: lower_text => lower, str
    use usharp_miller, only: miller_model, n_constants, constant_index, model_setup, &
                             miller_constants, literature_low, literature_high, stress_power
+   use usharp_forcing, only: measured_history
    use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
                              thesis_lcf_history, relaxation_history, ratchet_history, &
                              cyclic_history, tensile_history, creep_history, rate_jump_history
@@ -856,7 +857,7 @@ contains
       if (allocated(error)) return
       call merge_repeated_times(vals, spec%file, nmerged, error)
       if (allocated(error)) return
-      call history_from_points(vals(:, 1), vals(:, 2), control_strain, hist, error)
+      call measured_history(vals(:, 1), vals(:, 2), control_strain, hist, error)
       if (allocated(error)) call prefix_error(error, spec%file//': ')
    end subroutine data_history
 

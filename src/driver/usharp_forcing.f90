@@ -1,0 +1,254 @@
+!> A measured control signal (strain, or stress) as the forcing of a simulation: its turning
+!> points found with hysteresis, each branch between two of them smoothed (a discrete
+!> smoothing spline whose residual matches the signal's noise) and interpolated by a cubic
+!> spline, twice continuously differentiable inside a branch with a corner only at the
+!> turning points. The integrators step across the samples with error control and stop at
+!> the turning points only; the noise of the samples (quantisation, extensometer dips) no
+!> longer reaches the simulated response as elastic spikes.
+module usharp_forcing
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_history, only: history_type, history_from_points
+   implicit none
+   private
+
+   public :: measured_history, turning_points, signal_resolution, smooth_branch
+
+   !> A turning point is confirmed once the signal has come back from its extreme by this
+   !> fraction of the signal's whole range (hysteresis against noise and local dips)
+   real(dp), parameter :: turn_fraction = 0.1_dp
+   !> Default noise: the residual RMS left by the smoother, in units of the resolution of
+   !> the recorded values (their smallest non-zero step)
+   real(dp), parameter :: noise_in_steps = 2.0_dp
+
+contains
+
+   !> A history from measured samples (t in s, v strain or stress), as smooth forcing.
+   !> noise: the residual RMS the smoother leaves in each branch (the unit of v); absent or
+   !> negative: twice the resolution of the recorded values; 0: no smoothing, the samples are
+   !> the corners of a piecewise-linear history (the integrators then stop at each of them).
+   pure subroutine measured_history(t, v, control, hist, error, noise)
+      real(dp), intent(in) :: t(:), v(:)
+      integer, intent(in) :: control
+      type(history_type), intent(out) :: hist
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), intent(in), optional :: noise
+      real(dp) :: sigma
+      integer, allocatable :: stops(:)
+      real(dp), allocatable :: z(:), m(:), ends(:, :), mid(:)
+      integer :: j, a, b
+      call history_from_points(t, v, control, hist, error)
+      if (allocated(error)) return
+      sigma = -1.0_dp
+      if (present(noise)) sigma = noise
+      if (sigma < 0.0_dp) sigma = noise_in_steps*signal_resolution(v)
+      if (sigma <= 0.0_dp .or. size(t) < 3) return
+      stops = turning_points(v, turn_fraction*(maxval(v) - minval(v)))
+      allocate (z(size(v)), m(size(v)), ends(2, size(stops) - 1), mid(size(stops)))
+      do j = 1, size(stops) - 1
+         a = stops(j)
+         b = stops(j + 1)
+         z(a:b) = smooth_branch(t(a:b), v(a:b), sigma)
+         ends(:, j) = [z(a), z(b)]
+      end do
+      ! One value at each inner turning point, the mean of its two branches' ends, reached by
+      ! a linear correction of each branch (which leaves its curvature as it is)
+      mid(1) = ends(1, 1)
+      mid(size(stops)) = ends(2, size(stops) - 1)
+      do j = 2, size(stops) - 1
+         mid(j) = 0.5_dp*(ends(2, j - 1) + ends(1, j))
+      end do
+      do j = 1, size(stops) - 1
+         a = stops(j)
+         b = stops(j + 1)
+         ! The shared samples hold the neighbours' values: restore this branch's own ends
+         z(a) = ends(1, j)
+         z(b) = ends(2, j)
+         z(a:b) = z(a:b) + ((mid(j) - ends(1, j))*(t(b) - t(a:b)) + &
+                            (mid(j + 1) - ends(2, j))*(t(a:b) - t(a)))/(t(b) - t(a))
+         m(a:b) = natural_spline(t(a:b), z(a:b))
+      end do
+      hist%v = z
+      hist%d2 = m
+      hist%stops = stops
+   end subroutine measured_history
+
+   !> Indices of the turning points of v (with the first and the last sample): an extreme
+   !> counts once the signal has come back from it by more than delta
+   pure function turning_points(v, delta) result(idx)
+      real(dp), intent(in) :: v(:), delta
+      integer, allocatable :: idx(:)
+      integer :: buf(size(v)), n, k, ext, dir
+      n = 1
+      buf(1) = 1
+      dir = 0
+      ext = 1
+      do k = 2, size(v)
+         select case (dir)
+         case (0)
+            ! Direction not yet known: follow both extremes from the start
+            if (v(k) - v(1) > delta) then
+               dir = 1
+               ext = maxloc(v(:k), 1)
+            else if (v(1) - v(k) > delta) then
+               dir = -1
+               ext = minloc(v(:k), 1)
+            end if
+         case (1)
+            if (v(k) >= v(ext)) then
+               ext = k
+            else if (v(ext) - v(k) > delta) then
+               n = n + 1
+               buf(n) = ext
+               dir = -1
+               ext = k
+            end if
+         case default
+            if (v(k) <= v(ext)) then
+               ext = k
+            else if (v(k) - v(ext) > delta) then
+               n = n + 1
+               buf(n) = ext
+               dir = 1
+               ext = k
+            end if
+         end select
+      end do
+      if (buf(n) /= size(v)) then
+         n = n + 1
+         buf(n) = size(v)
+      end if
+      idx = buf(:n)
+   end function turning_points
+
+   !> Resolution of recorded values: their smallest non-zero step between neighbours
+   !> (0 when all are equal)
+   pure real(dp) function signal_resolution(v) result(q)
+      real(dp), intent(in) :: v(:)
+      real(dp) :: d
+      integer :: k
+      q = huge(1.0_dp)
+      do k = 2, size(v)
+         d = abs(v(k) - v(k - 1))
+         if (d > 0.0_dp) q = min(q, d)
+      end do
+      if (q == huge(1.0_dp)) q = 0.0_dp
+   end function signal_resolution
+
+   !> Discrete smoothing spline of one branch (the Whittaker smoother on uneven times):
+   !> z minimises sum (y - z)**2 + lambda sum_k w_k (z'')_k**2 with z'' the second divided
+   !> differences and w_k their time spans, lambda chosen so that the residual RMS is sigma
+   !> (the discrepancy principle; bisection in log10 lambda). Fewer than 4 samples, or a
+   !> branch that a straight line fits within sigma, are returned as they are or as that line.
+   pure function smooth_branch(t, y, sigma) result(z)
+      real(dp), intent(in) :: t(:), y(:), sigma
+      real(dp) :: z(size(y))
+      real(dp) :: u(size(t)), lo, hi, mid
+      integer :: it, n
+      n = size(y)
+      z = y
+      if (n < 4) return
+      ! Times scaled to [0, 1] keep lambda within a fixed range for any branch
+      u = (t - t(1))/(t(n) - t(1))
+      lo = -16.0_dp
+      hi = 12.0_dp
+      z = whittaker(u, y, 10.0_dp**hi)
+      if (rms(z - y) <= sigma) return
+      do it = 1, 40
+         mid = 0.5_dp*(lo + hi)
+         z = whittaker(u, y, 10.0_dp**mid)
+         if (rms(z - y) > sigma) then
+            hi = mid
+         else
+            lo = mid
+         end if
+      end do
+      z = whittaker(u, y, 10.0_dp**lo)
+   end function smooth_branch
+
+   pure real(dp) function rms(r)
+      real(dp), intent(in) :: r(:)
+      rms = sqrt(sum(r**2)/real(size(r), dp))
+   end function rms
+
+   !> Solve (I + lambda D^T W D) z = y: a symmetric positive definite pentadiagonal system,
+   !> by its banded Cholesky factorisation
+   pure function whittaker(u, y, lambda) result(z)
+      real(dp), intent(in) :: u(:), y(:), lambda
+      real(dp) :: z(size(y))
+      real(dp) :: a0(size(y)), a1(size(y)), a2(size(y)), d(0:2), h1, h2, hm, w
+      real(dp) :: c0(size(y)), c1(size(y)), c2(size(y))
+      integer :: k, n, p, q
+      n = size(y)
+      ! Bands of the matrix: a0(i) = A(i,i), a1(i) = A(i,i-1), a2(i) = A(i,i-2)
+      a0 = 1.0_dp
+      a1 = 0.0_dp
+      a2 = 0.0_dp
+      do k = 1, n - 2
+         h1 = u(k + 1) - u(k)
+         h2 = u(k + 2) - u(k + 1)
+         hm = 0.5_dp*(h1 + h2)
+         d = [1.0_dp/h1, -(1.0_dp/h1 + 1.0_dp/h2), 1.0_dp/h2]/hm
+         w = lambda*hm
+         do p = 0, 2
+            a0(k + p) = a0(k + p) + w*d(p)**2
+            do q = 0, p - 1
+               if (p - q == 1) then
+                  a1(k + p) = a1(k + p) + w*d(p)*d(q)
+               else
+                  a2(k + p) = a2(k + p) + w*d(p)*d(q)
+               end if
+            end do
+         end do
+      end do
+      ! Cholesky: c0 the diagonal of L, c1 and c2 its first and second subdiagonals
+      do k = 1, n
+         c2(k) = 0.0_dp
+         c1(k) = 0.0_dp
+         if (k > 2) c2(k) = a2(k)/c0(k - 2)
+         if (k > 1) then
+            c1(k) = a1(k)
+            if (k > 2) c1(k) = c1(k) - c2(k)*c1(k - 1)
+            c1(k) = c1(k)/c0(k - 1)
+         end if
+         c0(k) = sqrt(a0(k) - c1(k)**2 - c2(k)**2)
+      end do
+      z = y
+      do k = 1, n
+         if (k > 1) z(k) = z(k) - c1(k)*z(k - 1)
+         if (k > 2) z(k) = z(k) - c2(k)*z(k - 2)
+         z(k) = z(k)/c0(k)
+      end do
+      do k = n, 1, -1
+         if (k < n) z(k) = z(k) - c1(k + 1)*z(k + 1)
+         if (k < n - 1) z(k) = z(k) - c2(k + 2)*z(k + 2)
+         z(k) = z(k)/c0(k)
+      end do
+   end function whittaker
+
+   !> Second derivatives at the knots of the natural cubic spline through (t, z)
+   pure function natural_spline(t, z) result(m)
+      real(dp), intent(in) :: t(:), z(:)
+      real(dp) :: m(size(z))
+      real(dp) :: diag(size(z)), rhs(size(z)), h(size(z)), w
+      integer :: k, n
+      n = size(z)
+      m = 0.0_dp
+      if (n < 3) return
+      h(1:n - 1) = t(2:n) - t(1:n - 1)
+      ! Tridiagonal system for m(2:n-1), m(1) = m(n) = 0; Thomas algorithm
+      do k = 2, n - 1
+         diag(k) = 2.0_dp*(h(k - 1) + h(k))
+         rhs(k) = 6.0_dp*((z(k + 1) - z(k))/h(k) - (z(k) - z(k - 1))/h(k - 1))
+      end do
+      do k = 3, n - 1
+         w = h(k - 1)/diag(k - 1)
+         diag(k) = diag(k) - w*h(k - 1)
+         rhs(k) = rhs(k) - w*rhs(k - 1)
+      end do
+      m(n - 1) = rhs(n - 1)/diag(n - 1)
+      do k = n - 2, 2, -1
+         m(k) = (rhs(k) - h(k)*m(k + 1))/diag(k)
+      end do
+   end function natural_spline
+end module usharp_forcing
