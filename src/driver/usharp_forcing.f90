@@ -12,20 +12,24 @@ module usharp_forcing
    implicit none
    private
 
-   public :: measured_history, turning_points, signal_resolution, smooth_branch
+   public :: measured_history, turning_points, signal_resolution, smooth_branch, monotone
 
    !> A turning point is confirmed once the signal has come back from its extreme by this
    !> fraction of the signal's whole range (hysteresis against noise and local dips)
    real(dp), parameter :: turn_fraction = 0.1_dp
    !> Default noise: the residual RMS left by the smoother, in units of the resolution of
-   !> the recorded values (their smallest non-zero step)
-   real(dp), parameter :: noise_in_steps = 2.0_dp
+   !> the recorded values (their smallest non-zero step); rounding to it alone leaves 0.29
+   real(dp), parameter :: noise_in_steps = 0.5_dp
+   !> Samples over which the smoother's residual RMS is bounded by the noise
+   integer, parameter :: window = 10
 
 contains
 
    !> A history from measured samples (t in s, v strain or stress), as smooth forcing.
-   !> noise: the residual RMS the smoother leaves in each branch (the unit of v); absent or
-   !> negative: twice the resolution of the recorded values; 0: no smoothing, the samples are
+   !> Inside a branch the command moves one way: the samples are first made monotone (a dip,
+   !> an extensometer's slip or noise, would load the model elastically back and forth) and
+   !> then smoothed. noise: the residual RMS the smoother leaves in each branch (the unit of
+   !> v); absent or negative: the RMS of rounding to the resolution of the recorded values; 0: no smoothing, the samples are
    !> the corners of a piecewise-linear history (the integrators then stop at each of them).
    pure subroutine measured_history(t, v, control, hist, error, noise)
       real(dp), intent(in) :: t(:), v(:)
@@ -48,7 +52,7 @@ contains
       do j = 1, size(stops) - 1
          a = stops(j)
          b = stops(j + 1)
-         z(a:b) = smooth_branch(t(a:b), v(a:b), sigma)
+         z(a:b) = smooth_branch(t(a:b), monotone(v(a:b), v(b) >= v(a)), sigma)
          ends(:, j) = [z(a), z(b)]
       end do
       ! One value at each inner turning point, the mean of its two branches' ends, reached by
@@ -121,6 +125,33 @@ contains
       idx = buf(:n)
    end function turning_points
 
+   !> The least-squares monotone (rising, or falling) fit of y: pool adjacent violators
+   pure function monotone(y, rising) result(z)
+      real(dp), intent(in) :: y(:)
+      logical, intent(in) :: rising
+      real(dp) :: z(size(y))
+      real(dp) :: val(size(y)), s
+      integer :: cnt(size(y)), nb, k, i
+      s = merge(1.0_dp, -1.0_dp, rising)
+      nb = 0
+      do k = 1, size(y)
+         nb = nb + 1
+         val(nb) = s*y(k)
+         cnt(nb) = 1
+         do while (nb > 1)
+            if (val(nb - 1) <= val(nb)) exit
+            val(nb - 1) = (val(nb - 1)*cnt(nb - 1) + val(nb)*cnt(nb))/real(cnt(nb - 1) + cnt(nb), dp)
+            cnt(nb - 1) = cnt(nb - 1) + cnt(nb)
+            nb = nb - 1
+         end do
+      end do
+      k = 0
+      do i = 1, nb
+         z(k + 1:k + cnt(i)) = s*val(i)
+         k = k + cnt(i)
+      end do
+   end function monotone
+
    !> Resolution of recorded values: their smallest non-zero step between neighbours
    !> (0 when all are equal)
    pure real(dp) function signal_resolution(v) result(q)
@@ -143,33 +174,51 @@ contains
    pure function smooth_branch(t, y, sigma) result(z)
       real(dp), intent(in) :: t(:), y(:), sigma
       real(dp) :: z(size(y))
-      real(dp) :: u(size(t)), lo, hi, mid
+      real(dp) :: u(size(t)), lo, hi, mid, scale, hmin
       integer :: it, n
       n = size(y)
       z = y
       if (n < 4) return
-      ! Times scaled to [0, 1] keep lambda within a fixed range for any branch
+      ! Times scaled to [0, 1]; lambda relative to the penalty's largest entry (about
+      ! 1/hmin**3), from no smoothing (1e-12) to a straight line within rounding (1e10)
       u = (t - t(1))/(t(n) - t(1))
-      lo = -16.0_dp
-      hi = 12.0_dp
-      z = whittaker(u, y, 10.0_dp**hi)
-      if (rms(z - y) <= sigma) return
+      hmin = minval(u(2:n) - u(1:n - 1))
+      scale = hmin**3
+      lo = -12.0_dp
+      hi = 10.0_dp
+      z = whittaker(u, y, scale*10.0_dp**hi)
+      if (local_rms(z - y) <= sigma) return
       do it = 1, 40
          mid = 0.5_dp*(lo + hi)
-         z = whittaker(u, y, 10.0_dp**mid)
-         if (rms(z - y) > sigma) then
+         z = whittaker(u, y, scale*10.0_dp**mid)
+         if (local_rms(z - y) > sigma) then
             hi = mid
          else
             lo = mid
          end if
       end do
-      z = whittaker(u, y, 10.0_dp**lo)
+      z = whittaker(u, y, scale*10.0_dp**lo)
    end function smooth_branch
 
-   pure real(dp) function rms(r)
+   !> The largest RMS of r over windows of window samples (all of r when shorter): a bound on
+   !> the smoother's local bias, which a branch's overall RMS would hide in a long straight
+   !> middle (the rounded turns of a ramp would be cut)
+   pure real(dp) function local_rms(r) result(worst)
       real(dp), intent(in) :: r(:)
-      rms = sqrt(sum(r**2)/real(size(r), dp))
-   end function rms
+      real(dp) :: c(0:size(r))
+      integer :: k, m, n
+      n = size(r)
+      m = min(window, n)
+      c(0) = 0.0_dp
+      do k = 1, n
+         c(k) = c(k - 1) + r(k)**2
+      end do
+      worst = 0.0_dp
+      do k = m, n
+         worst = max(worst, c(k) - c(k - m))
+      end do
+      worst = sqrt(worst/real(m, dp))
+   end function local_rms
 
    !> Solve (I + lambda D^T W D) z = y: a symmetric positive definite pentadiagonal system,
    !> by its banded Cholesky factorisation

@@ -1,0 +1,157 @@
+!> Cost and accuracy of simulating under a measured strain: one objective evaluation of a
+!> measured-strain fit deck against one of the thesis deck, measured in the same run, with
+!> the measured strain as smooth forcing (the default) and as the piecewise-linear history
+!> through every sample (the integrator stops at each); the stress of both against a
+!> tight-tolerance reference under the same forcing; the objective of both. Writes each
+!> test's simulated loops of both treatments to OUT/<test>.forcing.txt for the plots.
+!> Usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT
+program bench_measured
+   use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_history, only: history_type, history_from_points, control_strain
+   use usharp_forcing, only: measured_history
+   use usharp_simulation, only: sim_result, solver_options
+   use usharp_simulate, only: simulate_test
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config_as, read_data_columns
+   use usharp_table, only: merge_repeated_times
+   use usharp_objective, only: fit_problem, setup_problem
+   implicit none
+   type(run_config) :: thesis, smooth, raw
+   type(fit_problem) :: p_thesis, p_smooth, p_raw
+   type(error_type), allocatable :: err
+   character(len=512) :: arg(4)
+   real(dp) :: t_thesis, t_smooth, t_raw, f_smooth, f_raw
+   real(dp), allocatable :: per_smooth(:), per_raw(:)
+   integer :: i, nt
+
+   do i = 1, 4
+      call get_command_argument(i, arg(i))
+   end do
+   if (len_trim(arg(4)) == 0) then
+      write (error_unit, '(a)') 'usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT'
+      stop 2
+   end if
+   call read_config_as(trim(arg(1)), '', '', thesis, err)
+   call check()
+   call read_config_as(trim(arg(2)), trim(arg(3)), '', smooth, err)
+   call check()
+   raw = smooth
+   nt = size(smooth%tests)
+   do i = 1, nt
+      call raw_history(i)
+   end do
+   call setup_problem(thesis, p_thesis, err)
+   call check()
+   call setup_problem(smooth, p_smooth, err)
+   call check()
+   call setup_problem(raw, p_raw, err)
+   call check()
+   allocate (per_smooth(nt), per_raw(nt))
+
+   ! Interleaved batches, best of each: the load of a shared machine falls on all three alike
+   t_thesis = huge(1.0_dp)
+   t_smooth = huge(1.0_dp)
+   t_raw = huge(1.0_dp)
+   do i = 1, 5
+      t_thesis = min(t_thesis, time_eval(p_thesis, 20))
+      t_smooth = min(t_smooth, time_eval(p_smooth, 10, f_smooth, per_smooth))
+      t_raw = min(t_raw, time_eval(p_raw, 2, f_raw, per_raw))
+   end do
+   write (output_unit, '(a)') '# one objective evaluation (ms, best of 5 batches, interleaved)'
+   write (output_unit, '(a,i0,a,f9.3)') 'thesis (', size(thesis%tests), ' tests)            ', &
+      t_thesis
+   write (output_unit, '(a,i0,a,f9.3,a,f6.2)') 'measured, smooth forcing (', nt, ')   ', &
+      t_smooth, '   ratio to thesis ', t_smooth/t_thesis
+   write (output_unit, '(a,i0,a,f9.3,a,f6.2)') 'measured, every sample (', nt, ')     ', &
+      t_raw, '   ratio to thesis ', t_raw/t_thesis
+   write (output_unit, '(a,2f12.4)') 'objective (Eq. 8) smooth, every sample: ', f_smooth, f_raw
+   write (output_unit, '(a)') '# test: steps smooth / every sample; max|stress - tight reference|'// &
+      '/peak smooth, every sample; max|smooth - every sample|/peak; objective smooth, every sample'
+   do i = 1, nt
+      call compare(i)
+   end do
+
+contains
+
+   subroutine check()
+      if (allocated(err)) then
+         write (error_unit, '(a)') err%message
+         stop 1
+      end if
+   end subroutine check
+
+   !> The history through every sample of test i's measured strain, as before smoothing
+   subroutine raw_history(i)
+      integer, intent(in) :: i
+      real(dp), allocatable :: vals(:, :)
+      character(len=128) :: cols(2)
+      integer :: nmerged
+      cols(1) = raw%tests(i)%data%time_col
+      cols(2) = raw%tests(i)%data%strain_col
+      call read_data_columns(raw%tests(i)%data, cols, vals, err)
+      call check()
+      call merge_repeated_times(vals, raw%tests(i)%data%file, nmerged, err)
+      call check()
+      call history_from_points(vals(:, 1), vals(:, 2), control_strain, raw%tests(i)%hist, err)
+      call check()
+   end subroutine raw_history
+
+   !> Mean wall time (ms) of one objective evaluation at the deck's constants over n
+   real(dp) function time_eval(p, n, total, per_test) result(ms)
+      type(fit_problem), intent(in) :: p
+      integer, intent(in) :: n
+      real(dp), intent(out), optional :: total, per_test(:)
+      real(dp) :: x(size(p%idx)), f, per(size(p%targets))
+      integer(int64) :: c0, c1, rate
+      integer :: k, status
+      character(len=:), allocatable :: message
+      x = p%start_point()
+      call system_clock(c0, rate)
+      do k = 1, n
+         call p%evaluate(x, f, per, status, message)
+      end do
+      call system_clock(c1)
+      if (status /= 0) then
+         write (error_unit, '(a)') 'evaluation failed: '//message
+         stop 3
+      end if
+      ms = real(c1 - c0, dp)/real(rate, dp)/real(n, dp)*1.0e3_dp
+      if (present(total)) total = f
+      if (present(per_test)) per_test = per
+   end function time_eval
+
+   !> Test i: both treatments against their tight references, and the loops to a file
+   subroutine compare(i)
+      integer, intent(in) :: i
+      type(solver_options) :: tight
+      type(sim_result) :: rs, rr, ts, tr
+      real(dp) :: peak
+      integer :: u, k
+      tight = smooth%solver
+      tight%rtol = 1.0e-10_dp
+      tight%atol_strain = 1.0e-14_dp
+      call simulate_test(smooth%model, smooth%solver, smooth%tests(i), rs, err)
+      call check()
+      call simulate_test(smooth%model, tight, smooth%tests(i), ts, err)
+      call check()
+      call simulate_test(raw%model, raw%solver, raw%tests(i), rr, err)
+      call check()
+      call simulate_test(raw%model, tight, raw%tests(i), tr, err)
+      call check()
+      peak = maxval(abs(ts%stress))
+      write (output_unit, '(a20,2i7,3es11.2,2f10.3)') smooth%tests(i)%name, rs%nsteps, rr%nsteps, &
+         maxval(abs(rs%stress - ts%stress))/peak, maxval(abs(rr%stress - tr%stress))/peak, &
+         maxval(abs(rs%stress - rr%stress))/peak, per_smooth(i), per_raw(i)
+      open (newunit=u, file=trim(arg(4))//'/'//smooth%tests(i)%name//'.forcing.txt', &
+            status='replace', action='write')
+      write (u, '(a)') '# time (s), measured strain, smoothed strain (-), measured stress, '// &
+         'simulated stress every sample, smooth forcing (MPa)'
+      do k = 1, size(rs%t)
+         write (u, '(f10.3,2es14.6,3f10.3)') rs%t(k), rr%strain(k), rs%strain(k), &
+            p_smooth%targets(i)%y_ex(k), rr%stress(k), rs%stress(k)
+      end do
+      close (u)
+   end subroutine compare
+end program bench_measured
