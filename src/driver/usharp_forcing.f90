@@ -19,7 +19,7 @@ module usharp_forcing
    real(dp), parameter :: turn_fraction = 0.1_dp
    !> Default noise: the residual RMS left by the smoother, in units of the resolution of
    !> the recorded values (their smallest non-zero step); rounding to it alone leaves 0.29
-   real(dp), parameter :: noise_in_steps = 0.5_dp
+   real(dp), parameter :: noise_in_steps = 1.0_dp
    !> Samples over which the smoother's residual RMS is bounded by the noise
    integer, parameter :: window = 10
 
@@ -166,45 +166,58 @@ contains
       if (q == huge(1.0_dp)) q = 0.0_dp
    end function signal_resolution
 
-   !> Discrete smoothing spline of one branch (the Whittaker smoother on uneven times):
-   !> z minimises sum (y - z)**2 + lambda sum_k w_k (z'')_k**2 with z'' the second divided
-   !> differences and w_k their time spans, lambda chosen so that the residual RMS is sigma
-   !> (the discrepancy principle; bisection in log10 lambda). Fewer than 4 samples, or a
-   !> branch that a straight line fits within sigma, are returned as they are or as that line.
+   !> Discrete smoothing spline of one branch (the Whittaker smoother on uneven times),
+   !> spatially adaptive: z minimises sum w (y - z)**2 + lambda sum_k h_k (z'')_k**2 with z''
+   !> the second divided differences and h_k their time spans. lambda makes the branch's
+   !> residual RMS sigma (the discrepancy principle; bisection in log10 lambda); then, where
+   !> the residual over a window of samples exceeds twice that (the bias of a stiff curve at
+   !> a rounded turn or a real feature), the weights rise until it does not. So the curve is
+   !> stiff along the straight ramps, which the integrator then crosses in long steps, and
+   !> follows the signal where it bends. Fewer than 4 samples are returned as they are.
    pure function smooth_branch(t, y, sigma) result(z)
       real(dp), intent(in) :: t(:), y(:), sigma
       real(dp) :: z(size(y))
-      real(dp) :: u(size(t)), lo, hi, mid, scale, hmin
+      real(dp) :: u(size(t)), w(size(y)), lo, hi, mid, scale, lambda
+      logical :: biased(size(y))
       integer :: it, n
       n = size(y)
       z = y
-      if (n < 4) return
+      if (n < 4 .or. sigma <= 0.0_dp) return
       ! Times scaled to [0, 1]; lambda relative to the penalty's largest entry (about
       ! 1/hmin**3), from no smoothing (1e-12) to a straight line within rounding (1e10)
       u = (t - t(1))/(t(n) - t(1))
-      hmin = minval(u(2:n) - u(1:n - 1))
-      scale = hmin**3
+      scale = minval(u(2:n) - u(1:n - 1))**3
+      w = 1.0_dp
       lo = -12.0_dp
       hi = 10.0_dp
-      z = whittaker(u, y, scale*10.0_dp**hi)
-      if (local_rms(z - y) <= sigma) return
       do it = 1, 40
          mid = 0.5_dp*(lo + hi)
-         z = whittaker(u, y, scale*10.0_dp**mid)
-         if (local_rms(z - y) > sigma) then
+         z = whittaker(u, y, w, scale*10.0_dp**mid)
+         if (rms(z - y) > sigma) then
             hi = mid
          else
             lo = mid
          end if
       end do
-      z = whittaker(u, y, scale*10.0_dp**lo)
+      lambda = scale*10.0_dp**lo
+      do it = 1, 20
+         z = whittaker(u, y, w, lambda)
+         biased = local_excess(z - y, 2.0_dp*sigma)
+         if (.not. any(biased)) exit
+         where (biased) w = 4.0_dp*w
+      end do
    end function smooth_branch
 
-   !> The largest RMS of r over windows of window samples (all of r when shorter): a bound on
-   !> the smoother's local bias, which a branch's overall RMS would hide in a long straight
-   !> middle (the rounded turns of a ramp would be cut)
-   pure real(dp) function local_rms(r) result(worst)
+   pure real(dp) function rms(r)
       real(dp), intent(in) :: r(:)
+      rms = sqrt(sum(r**2)/real(size(r), dp))
+   end function rms
+
+   !> The samples of the windows (of window samples, or all of r when shorter) in which the
+   !> RMS of r exceeds bound
+   pure function local_excess(r, bound) result(flag)
+      real(dp), intent(in) :: r(:), bound
+      logical :: flag(size(r))
       real(dp) :: c(0:size(r))
       integer :: k, m, n
       n = size(r)
@@ -213,24 +226,23 @@ contains
       do k = 1, n
          c(k) = c(k - 1) + r(k)**2
       end do
-      worst = 0.0_dp
+      flag = .false.
       do k = m, n
-         worst = max(worst, c(k) - c(k - m))
+         if (c(k) - c(k - m) > real(m, dp)*bound**2) flag(k - m + 1:k) = .true.
       end do
-      worst = sqrt(worst/real(m, dp))
-   end function local_rms
+   end function local_excess
 
-   !> Solve (I + lambda D^T W D) z = y: a symmetric positive definite pentadiagonal system,
+   !> Solve (W + lambda D^T H D) z = W y: a symmetric positive definite pentadiagonal system,
    !> by its banded Cholesky factorisation
-   pure function whittaker(u, y, lambda) result(z)
-      real(dp), intent(in) :: u(:), y(:), lambda
+   pure function whittaker(u, y, wt, lambda) result(z)
+      real(dp), intent(in) :: u(:), y(:), wt(:), lambda
       real(dp) :: z(size(y))
       real(dp) :: a0(size(y)), a1(size(y)), a2(size(y)), d(0:2), h1, h2, hm, w
       real(dp) :: c0(size(y)), c1(size(y)), c2(size(y))
       integer :: k, n, p, q
       n = size(y)
       ! Bands of the matrix: a0(i) = A(i,i), a1(i) = A(i,i-1), a2(i) = A(i,i-2)
-      a0 = 1.0_dp
+      a0 = wt
       a1 = 0.0_dp
       a2 = 0.0_dp
       do k = 1, n - 2
@@ -262,7 +274,7 @@ contains
          end if
          c0(k) = sqrt(a0(k) - c1(k)**2 - c2(k)**2)
       end do
-      z = y
+      z = wt*y
       do k = 1, n
          if (k > 1) z(k) = z(k) - c1(k)*z(k - 1)
          if (k > 2) z(k) = z(k) - c2(k)*z(k - 2)
