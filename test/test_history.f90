@@ -4,6 +4,7 @@ module test_history
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_history
+   use usharp_forcing, only: measured_history, turning_points, monotone, signal_resolution
    implicit none
    private
    public :: collect_history
@@ -20,7 +21,11 @@ contains
          new_unittest('tensile-and-creep', test_tensile_creep), &
          new_unittest('value-between-corners', test_value), &
          new_unittest('output-times-include-corners', test_output_times), &
-         new_unittest('time-not-increasing-rejected', test_bad_points)]
+         new_unittest('time-not-increasing-rejected', test_bad_points), &
+         new_unittest('turning-points-with-hysteresis', test_turning), &
+         new_unittest('monotone-pools-violators', test_monotone), &
+         new_unittest('measured-forcing-noisy-triangle', test_measured), &
+         new_unittest('measured-forcing-noise-zero-is-linear', test_measured_raw)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -135,4 +140,80 @@ contains
       if (allocated(error)) return
       call check(error, index(uerr%message, 'not increasing at point 3') > 0, uerr%message)
    end subroutine test_bad_points
+
+   !> Reversals count once the signal has come back by more than delta: a dip smaller than
+   !> that inside a ramp is not a turning point
+   subroutine test_turning(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer, allocatable :: idx(:)
+      idx = turning_points([0.0_dp, 1.0_dp, 2.0_dp, 1.8_dp, 3.0_dp, 4.0_dp, 2.0_dp, 0.0_dp, &
+                            -1.0_dp, 0.5_dp], 0.5_dp)
+      call check(error, size(idx), 4, 'start, peak at 4, valley at -1, end')
+      if (allocated(error)) return
+      call check(error, all(idx == [1, 6, 9, 10]), 'turning points at samples 1, 6, 9, 10')
+   end subroutine test_turning
+
+   !> Pool adjacent violators by hand: [1, 3, 2, 4] rising is [1, 2.5, 2.5, 4]
+   subroutine test_monotone(error)
+      type(error_type), allocatable, intent(out) :: error
+      call same(error, monotone([1.0_dp, 3.0_dp, 2.0_dp, 4.0_dp], .true.), &
+                [1.0_dp, 2.5_dp, 2.5_dp, 4.0_dp], 'rising')
+      if (allocated(error)) return
+      call same(error, monotone([4.0_dp, 2.0_dp, 3.0_dp, 1.0_dp], .false.), &
+                [4.0_dp, 2.5_dp, 2.5_dp, 1.0_dp], 'falling')
+      if (allocated(error)) return
+      call check(error, signal_resolution([0.0_dp, 3.0e-5_dp, 4.0e-5_dp, 4.0e-5_dp]), 1.0e-5_dp, &
+                 'smallest non-zero step', thr=1.0e-18_dp)
+   end subroutine test_monotone
+
+   !> A triangle of strain (amplitude 0.005, 0.1 s samples) rounded to 1e-5 with a dip of
+   !> 5e-5 in a ramp: the forcing stops at the two turning points only, stays within two
+   !> resolution steps of the true triangle, its ramps are monotone (the dip gone) and its
+   !> rate is the command's 1e-3/s along the ramps
+   subroutine test_measured(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      real(dp) :: t(201), v(201), truth, val, rate, worst, prev
+      integer :: k
+      do k = 1, 201
+         t(k) = 0.1_dp*real(k - 1, dp)
+         truth = merge(1.0e-3_dp*t(k), 1.0e-2_dp - 1.0e-3_dp*t(k), t(k) <= 5.0_dp)
+         v(k) = 1.0e-5_dp*anint(truth/1.0e-5_dp)
+      end do
+      v(21:23) = v(21:23) - 5.0e-5_dp
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'built')
+      if (allocated(error)) return
+      call check(error, h%smooth(), 'a smooth forcing')
+      if (allocated(error)) return
+      call check(error, all(h%corners() == [1, 51, 201]), 'corners: start, peak, end')
+      if (allocated(error)) return
+      worst = 0.0_dp
+      prev = -1.0_dp
+      do k = 1, 500
+         val = h%value_at(0.01_dp*real(k, dp))
+         worst = max(worst, abs(val - 1.0e-3_dp*0.01_dp*real(k, dp)))
+         if (val < prev - 1.0e-12_dp) call test_failed(error, 'rising ramp not monotone at '// &
+                                                        'sample of 0.01 s '//'x')
+         if (allocated(error)) return
+         prev = val
+      end do
+      call check(error, worst <= 2.0e-5_dp, 'within two resolution steps of the triangle')
+      if (allocated(error)) return
+      call h%spline_at(2.5_dp, 1, 51, val, rate)
+      call check(error, rate, 1.0e-3_dp, 'rate along the ramp', thr=1.0e-4_dp)
+   end subroutine test_measured
+
+   !> noise = 0 keeps every sample as a corner of a piecewise-linear history
+   subroutine test_measured_raw(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      call measured_history([0.0_dp, 1.0_dp, 2.0_dp, 3.0_dp], [0.0_dp, 1.0_dp, 0.5_dp, 2.0_dp], &
+                            control_strain, h, uerr, noise=0.0_dp)
+      call check(error, .not. h%smooth(), 'piecewise linear')
+      if (allocated(error)) return
+      call same(error, h%v, [0.0_dp, 1.0_dp, 0.5_dp, 2.0_dp], 'samples kept')
+   end subroutine test_measured_raw
 end module test_history

@@ -173,7 +173,8 @@ contains
    !> the residual over a window of samples exceeds twice that (the bias of a stiff curve at
    !> a rounded turn or a real feature), the weights rise until it does not. So the curve is
    !> stiff along the straight ramps, which the integrator then crosses in long steps, and
-   !> follows the signal where it bends. Fewer than 4 samples are returned as they are.
+   !> follows the signal where it bends. The end samples are held (weight 1e8). Fewer than 4
+   !> samples are returned as they are.
    pure function smooth_branch(t, y, sigma) result(z)
       real(dp), intent(in) :: t(:), y(:), sigma
       real(dp) :: z(size(y))
@@ -187,7 +188,9 @@ contains
       ! 1/hmin**3), from no smoothing (1e-12) to a straight line within rounding (1e10)
       u = (t - t(1))/(t(n) - t(1))
       scale = minval(u(2:n) - u(1:n - 1))**3
+      ! The ends, the turning points, are kept: the measured extremes of the strain
       w = 1.0_dp
+      w([1, n]) = 1.0e8_dp
       lo = -12.0_dp
       hi = 10.0_dp
       do it = 1, 40
