@@ -18,7 +18,7 @@ module usharp_fit
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
                              journal_name, cache_name, fingerprint_mismatch
    use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex
-   use usharp_signal, only: catch_stop_signals, stop_signal
+   use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
    implicit none
@@ -332,6 +332,8 @@ contains
       if (present(progress)) obj%progress => progress
       call system_clock(obj%clock0, rate)
       call search(obj, outcome%opt, outcome%nstarts, error)
+      ! Past the search a signal ends the process at once (the results are written whole)
+      call release_stop_signals()
       call system_clock(now)
       outcome%seconds = real(now - obj%clock0, dp)/real(rate, dp)
       outcome%f_start = obj%first

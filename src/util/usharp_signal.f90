@@ -7,11 +7,11 @@
 !> it only ever stores the signal's number (an async-signal-safe act) and is read in
 !> between evaluations.
 module usharp_signal
-   use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
+   use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc, c_null_funptr
    implicit none
    private
 
-   public :: catch_stop_signals, stop_signal, sigterm, sigint
+   public :: catch_stop_signals, release_stop_signals, stop_signal, sigterm, sigint
 
    integer(c_int), parameter :: sigint = 2, sigterm = 15
 
@@ -35,6 +35,13 @@ contains
       previous = c_signal(sigterm, c_funloc(on_signal))
       previous = c_signal(sigint, c_funloc(on_signal))
    end subroutine catch_stop_signals
+
+   !> SIGTERM and SIGINT end the process again (SIG_DFL), e.g. once a fit is over
+   subroutine release_stop_signals()
+      type(c_funptr) :: previous
+      previous = c_signal(sigterm, c_null_funptr)
+      previous = c_signal(sigint, c_null_funptr)
+   end subroutine release_stop_signals
 
    !> The stop signal received since catch_stop_signals (0: none)
    integer function stop_signal()
