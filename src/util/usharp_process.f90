@@ -182,6 +182,13 @@ contains
       do
          r = c_waitpid(pid, status, wnohang)
          if (r == pid) exit
+         if (r < 0) then
+            ! The status is lost (reaped elsewhere): report the program as failed
+            r = c_kill(-pid, sigkill)
+            res%how = proc_signalled
+            res%code = 0
+            return
+         end if
          call system_clock(now)
          if (.not. terminating) then
             if (may_stop .and. stop_signal() /= 0) then
