@@ -17,7 +17,7 @@ module usharp_fit
    use usharp_rng, only: rng_type
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
                              journal_name, cache_name, fingerprint_mismatch
-   use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex
+   use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
@@ -374,7 +374,8 @@ contains
 
    !> The fingerprint of everything that decides a fit's result: the program version and the
    !> FNV-1a 64-bit hashes of the input file's, the constants file's and every test's data
-   !> file's contents, as space-separated name=value items
+   !> file's contents and of every test's control history (which a history file decides), as
+   !> space-separated name=value items
    function fit_fingerprint(cfg, constants_file) result(fp)
       type(run_config), intent(in) :: cfg
       character(len=*), intent(in) :: constants_file
@@ -383,12 +384,20 @@ contains
       fp = 'version='//usharp_version_string//' input='//hashed(cfg%path)
       if (len_trim(constants_file) > 0) fp = fp//' constants='//hashed(constants_file)
       do i = 1, size(cfg%tests)
+         ! The control history itself (a history file's contents reach the fit only through it)
+         if (allocated(cfg%tests(i)%hist%t)) fp = fp//' history:'//trim(cfg%tests(i)%name)//'='// &
+            hash_hex(hash_text(history_bytes(cfg%tests(i)%hist%t, cfg%tests(i)%hist%v)))
          if (allocated(cfg%tests(i)%data%file)) then
             if (len_trim(cfg%tests(i)%data%file) > 0) &
                fp = fp//' data:'//trim(cfg%tests(i)%name)//'='//hashed(cfg%tests(i)%data%file)
          end if
       end do
    contains
+      pure function history_bytes(t, v) result(bytes)
+         real(dp), intent(in) :: t(:), v(:)
+         character(len=8*(size(t) + size(v))) :: bytes
+         bytes = transfer([t, v], bytes)
+      end function history_bytes
       function hashed(path) result(hex)
          character(len=*), intent(in) :: path
          character(len=:), allocatable :: hex
