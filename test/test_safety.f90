@@ -205,7 +205,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=200), allocatable :: summary(:)
-      character(len=:), allocatable :: input, dir, data
+      character(len=:), allocatable :: input, dir, data, hist
       character(len=4000) :: edited(1)
       integer :: stat
       dir = scratch_dir//'/fingerprint-out'
@@ -241,6 +241,23 @@ contains
       ! A constants file given with -c is part of the fingerprint
       call run_command(input, dir, 'decks/thesis-run2.nml', .true., summary, e)
       call check_message(error, e, 'the constants file (--constants)')
+      if (allocated(error)) return
+      ! A history file: its contents reach the fit through the control history
+      hist = write_text('fingerprint-hist.csv', [character(len=20) :: '0 0', '120 0.005', '240 0'])
+      input = write_text('fingerprint-hist.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', max_evals=5, identify=.false. /", &
+         "&test name='h', history='file', file='fingerprint-hist.csv', data_file='"//thesis// &
+         "lcf.sim.txt' /"])
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'run on a history file: '//e%message)
+         return
+      end if
+      hist = write_text('fingerprint-hist.csv', [character(len=20) :: '0 0', '120 0.006', '240 0'])
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, "cannot resume: the control history of test 'h' changed")
    end subroutine test_fingerprint
 
    !> A fit whose identifiability report fails: results written, warning in summary.txt and

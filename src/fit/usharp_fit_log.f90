@@ -322,7 +322,7 @@ contains
             if (index(name, 'data:') == 1) then
                text = "the data file of test '"//name(6:)//"'"
             else if (index(name, 'history:') == 1) then
-               text = "the history file of test '"//name(9:)//"'"
+               text = "the control history of test '"//name(9:)//"'"
             else
                text = name
             end if
