@@ -48,7 +48,10 @@ build_ccx() {
 [ -x "$ccx" ] || skip "no CalculiX binary with external behaviours"
 
 rm -rf "$work"; mkdir -p "$work"
-bash "$here/scripts/build-umat.sh" "$work/lib" MILLER >/dev/null || fail "the UMAT library did not build"
+# The library from the single-file CalculiX source, compiled in fixed form as a user would
+bash "$here/scripts/build-umat.sh" --check "$work/umat" MILLER >/dev/null || fail "the UMAT library did not build"
+mkdir -p "$work/lib" && cp "$work/umat/check-umat_miller_calculix/libMILLER.so" "$work/lib/" \
+  || fail "the single-file UMAT library is missing"
 
 # usharp's uniaxial driver on the same histories, output every 0.05 s
 (cd "$here" && fpm build --profile release --flag "-I/usr/include/sundials/fortran" >/dev/null 2>&1) \

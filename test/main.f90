@@ -9,6 +9,7 @@ program tester
    use test_table, only: collect_table
    use test_fit, only: collect_fit
    use test_update, only: collect_update
+   use test_upf, only: collect_upf
    use test_external, only: collect_external
    use test_optimise, only: collect_optimise
    use test_design, only: collect_design
@@ -32,6 +33,7 @@ program tester
       new_testsuite('input', collect_input), &
       new_testsuite('fit', collect_fit), &
       new_testsuite('update', collect_update), &
+      new_testsuite('upf', collect_upf), &
       new_testsuite('external', collect_external), &
       new_testsuite('optimise', collect_optimise), &
       new_testsuite('design', collect_design), &

@@ -13,7 +13,6 @@ module usharp_miller_update
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_miller, only: miller_model, rate_terms, rate_terms_at
-   use usharp_lapack, only: solve_dense
    implicit none
    private
 
@@ -30,6 +29,8 @@ module usharp_miller_update
    !> thesis's deck) are too coarse for first-order accuracy across the knee of the sinh law
    integer, parameter, public :: default_substeps = 8
    real(dp), parameter :: m_vec(6) = [1.0_dp, 1.0_dp, 1.0_dp, 0.0_dp, 0.0_dp, 0.0_dp]
+   ! The local systems are solved in place (13 unknowns) rather than through LAPACK, so that
+   ! the drop-in user material links into an FE code without a LAPACK library
 
 contains
 
@@ -211,4 +212,38 @@ contains
       drde(7:12, :) = -2.0_dp*g*dt*model%c%h1*matmul(dphi, p)
       drde(13, :) = -3.0_dp*g*dt*model%c%h2*w*f_x*matmul(nh, p)
    end subroutine residual
+
+   !> Solve a x = b (b overwritten by x) by Gaussian elimination with partial pivoting;
+   !> info = 1 when a pivot is zero (a singular matrix)
+   pure subroutine solve_dense(a, b, info)
+      real(dp), intent(in) :: a(:, :)
+      real(dp), intent(inout) :: b(:, :)
+      integer, intent(out) :: info
+      real(dp) :: lu(size(a, 1), size(a, 2)), row(size(a, 2)), rhs(size(b, 2)), f
+      integer :: n, i, k, piv
+      n = size(a, 1)
+      lu = a
+      info = 1
+      do k = 1, n
+         piv = k - 1 + maxloc(abs(lu(k:n, k)), 1)
+         if (.not. abs(lu(piv, k)) > 0.0_dp) return  ! also a NaN
+         if (piv /= k) then
+            row = lu(k, :)
+            lu(k, :) = lu(piv, :)
+            lu(piv, :) = row
+            rhs = b(k, :)
+            b(k, :) = b(piv, :)
+            b(piv, :) = rhs
+         end if
+         do i = k + 1, n
+            f = lu(i, k)/lu(k, k)
+            lu(i, k + 1:n) = lu(i, k + 1:n) - f*lu(k, k + 1:n)
+            b(i, :) = b(i, :) - f*b(k, :)
+         end do
+      end do
+      do k = n, 1, -1
+         b(k, :) = (b(k, :) - matmul(lu(k, k + 1:n), b(k + 1:n, :)))/lu(k, k)
+      end do
+      info = 0
+   end subroutine solve_dense
 end module usharp_miller_update

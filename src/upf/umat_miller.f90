@@ -1,15 +1,20 @@
 !> Abaqus-style UMAT for the Miller model (also CalculiX, through @ABAQUS_<LIB> materials).
-!> Build it with usharp_kinds, usharp_error, usharp_strings, usharp_lapack, usharp_miller,
-!> usharp_miller_update and usharp_upf (see the README). Material: *USER MATERIAL,
-!> CONSTANTS=13 with E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, Q, Tm; *DEPVAR 13 (layout in
-!> usharp_upf). 3-D elements (NTENS = 6): components 11, 22, 33, 12, 13, 23 with engineering
-!> shear strains. A failed local solution sets PNEWDT = 0.25 and leaves the state unchanged.
+!> Material: *USER MATERIAL, CONSTANTS=13 with E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n,
+!> Q, Tm; *DEPVAR 13 (layout in usharp_upf). Elements: 3-D (NTENS = 6: 11, 22, 33, 12, 13,
+!> 23), plane strain and axisymmetric (NTENS = 4: 11, 22, 33, 12), plane stress and shells
+!> (NTENS = 3: 11, 22, 12); engineering shear strains. SSE: elastic strain energy density,
+!> SPD: inelastic work (the viscoplastic dissipation, rate-dependent and rate-independent
+!> alike), SCD unchanged. A failed local solution sets PNEWDT = 0.25 and leaves stress and
+!> state unchanged, DDSDDE elastic; an unusable material is reported (usharp_upf_report)
+!> and PNEWDT set to 1e-6, so that the analysis stops.
 subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpldt, stran, &
                 dstran, time, dtime, temp, dtemp, predef, dpred, cmname, ndi, nshr, ntens, &
                 nstatv, props, nprops, coords, drot, pnewdt, celent, dfgrd0, dfgrd1, noel, npt, &
                 layer, kspt, kstep, kinc)
    use usharp_kinds, only: dp
-   use usharp_upf, only: upf_update, perm_abaqus, n_upf_props, n_upf_state
+   use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_abaqus, &
+                         n_upf_props, n_upf_state, upf_ok, upf_cut
+   use usharp_upf_report, only: upf_report_invalid
    implicit none
    integer, intent(in) :: ndi, nshr, ntens, nstatv, nprops, noel, npt, layer, kspt, kstep, kinc
    character(len=80), intent(in) :: cmname
@@ -19,22 +24,36 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
    real(dp), intent(in) :: predef(*), dpred(*), props(nprops), coords(3), drot(3, 3)
    real(dp), intent(inout) :: pnewdt
    real(dp), intent(in) :: celent, dfgrd0(3, 3), dfgrd1(3, 3)
-   real(dp) :: dwork
-   logical :: cut
-   if (ntens /= 6 .or. ndi /= 3 .or. nshr /= 3 .or. nprops < n_upf_props .or. &
-       nstatv < n_upf_state) then
-      pnewdt = 0.25_dp
-      return
-   end if
-   call upf_update(props(1:n_upf_props), temp + dtemp, dtime, perm_abaqus, stran, dstran, stress, &
-                   statev(1:n_upf_state), ddsdde, cut, dwork)
-   if (cut) then
-      pnewdt = 0.25_dp
-      return
-   end if
-   scd = scd + dwork
+   !> Increment factors asked for after a failed local solution and for an unusable material
+   real(dp), parameter :: cut_factor = 0.25_dp, stop_factor = 1.0e-6_dp
+   type(upf_result) :: res
    rpl = 0.0_dp
    ddsddt = 0.0_dp
    drplde = 0.0_dp
    drpldt = 0.0_dp
+   if (nprops < n_upf_props) then
+      write (res%message, '(a,i0)') 'needs 13 constants (*USER MATERIAL, CONSTANTS=13), got ', &
+         nprops
+   else if (nstatv < n_upf_state) then
+      write (res%message, '(a,i0)') 'needs 13 state variables (*DEPVAR), got ', nstatv
+   else if (.not. ((ndi == 3 .and. (nshr == 3 .or. nshr == 1)) .or. (ndi == 2 .and. nshr == 1))) &
+      then
+      write (res%message, '(a,i0,a,i0,a)') 'elements with NDI = ', ndi, ', NSHR = ', nshr, &
+         ' are not supported (3-D, plane strain, axisymmetric, plane stress only)'
+   else
+      call upf_update(props(1:n_upf_props), temp + dtemp, dtime, perm_abaqus, ntens, stran, &
+                      dstran, stress, statev(1:n_upf_state), ddsdde, res)
+      if (res%status == upf_ok) then
+         sse = res%sse
+         spd = spd + res%dspd
+         return
+      else if (res%status == upf_cut) then
+         pnewdt = min(pnewdt, cut_factor)
+         return
+      end if
+   end if
+   call upf_elastic_tangent(props, perm_abaqus, ntens, ddsdde)
+   ! One line per element (its first integration point), not per point
+   if (npt == 1) call upf_report_invalid(cmname, res%message)
+   pnewdt = min(pnewdt, stop_factor)
 end subroutine umat

@@ -1,16 +1,21 @@
-!> ANSYS USERMAT for the Miller model (3-D solids such as SOLID185). Build it into the ANSYS
-!> user-programmable-feature library with usharp_kinds, usharp_error, usharp_strings,
-!> usharp_lapack, usharp_miller, usharp_miller_update and usharp_upf. Material:
-!> TB,USER,mat,1,13 with E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, Q, Tm;
-!> TB,STATE,mat,,13 (see usharp_upf for the layout). Components 11, 22, 33, 12, 23, 13 with
-!> engineering shear strains. A failed local solution sets keycut = 1 so that ANSYS bisects.
+!> ANSYS USERMAT for the Miller model. Material: TB,USER,mat,1,13 with E, Poisson, A1, A2, B,
+!> C1, C2, k, H1, H2, n, Q, Tm; TB,STATE,mat,,13 (layout in usharp_upf). Elements: 3-D
+!> solids (ncomp = 6: 11, 22, 33, 12, 23, 13), plane strain and axisymmetric (ncomp = 4: 11,
+!> 22, 33, 12), plane stress (ncomp = 3, nDirect = 2: 11, 22, 12; epsZZ returns the thickness
+!> strain); engineering shear strains. sedEl: elastic strain energy density, sedPl:
+!> inelastic work, epseq: accumulated equivalent inelastic strain, epsPl: inelastic strain.
+!> A failed local solution sets keycut = 1 and cutFactor = 0.25 (ANSYS bisects), leaving
+!> stress and state unchanged and dsdePl elastic; an unusable material is reported
+!> (usharp_upf_report) and keycut set to 1.
 subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, keycut, &
                    nDirect, nShear, ncomp, nStatev, nProp, Time, dTime, Temp, dTemp, &
                    stress, ustatev, dsdePl, sedEl, sedPl, epseq, Strain, dStrain, epsPl, &
                    prop, coords, var0, defGrad_t, defGrad, tsstif, epsZZ, cutFactor, &
                    var1, var2, var3, var4, var5, var6, var7)
    use usharp_kinds, only: dp
-   use usharp_upf, only: upf_update, perm_ansys, n_upf_props, n_upf_state
+   use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_ansys, &
+                         n_upf_props, n_upf_state, upf_ok, upf_cut
+   use usharp_upf_report, only: upf_report_invalid
    implicit none
    integer, intent(in) :: matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst
    integer, intent(out) :: keycut
@@ -26,22 +31,44 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
    real(dp), intent(inout) :: tsstif(2), epsZZ
    real(dp), intent(inout) :: cutFactor
    real(dp), intent(inout) :: var1, var2, var3, var4, var5, var6, var7
-   real(dp) :: dwork, ddsdde(6, 6)
-   logical :: cut
+   type(upf_result) :: res
+   character(len=12) :: mat
+   integer :: i
    keycut = 0
-   if (ncomp /= 6 .or. nProp < n_upf_props .or. nStatev < n_upf_state) then
-      keycut = 1
-      return
+   if (nProp < n_upf_props) then
+      write (res%message, '(a,i0)') 'needs 13 constants (TB,USER,mat,1,13), got ', nProp
+   else if (nStatev < n_upf_state) then
+      write (res%message, '(a,i0)') 'needs 13 state variables (TB,STATE,mat,,13), got ', nStatev
+   else if (.not. ((nDirect == 3 .and. (nShear == 3 .or. nShear == 1)) .or. &
+                   (nDirect == 2 .and. nShear == 1))) then
+      write (res%message, '(a,i0,a,i0,a)') 'elements with nDirect = ', nDirect, ', nShear = ', &
+         nShear, ' are not supported (3-D, plane strain, axisymmetric, plane stress only)'
+   else
+      call upf_update(prop(1:n_upf_props), Temp + dTemp, dTime, perm_ansys, ncomp, Strain, &
+                      dStrain, stress, ustatev(1:n_upf_state), dsdePl, res)
+      if (res%status == upf_ok) then
+         sedEl = res%sse
+         sedPl = sedPl + res%dspd
+         epseq = epseq + res%deqin
+         ! Inelastic strain in the element's components (the state holds all six)
+         if (ncomp == 3) then
+            epsPl = ustatev([1, 2, 4])
+            epsZZ = res%eps33
+            ! Transverse shear stiffness of shells: elastic, G
+            tsstif = prop(1)/(2.0_dp*(1.0_dp + prop(2)))
+         else
+            epsPl = [(ustatev(i), i = 1, ncomp)]
+         end if
+         return
+      else if (res%status == upf_cut) then
+         keycut = 1
+         cutFactor = 0.25_dp
+         return
+      end if
    end if
-   ddsdde = 0.0_dp
-   call upf_update(prop(1:n_upf_props), Temp + dTemp, dTime, perm_ansys, Strain, dStrain, stress, &
-                   ustatev(1:n_upf_state), ddsdde, cut, dwork)
-   if (cut) then
-      keycut = 1
-      cutFactor = 0.25_dp
-      return
-   end if
-   dsdePl = ddsdde
-   epsPl(1:6) = ustatev(1:6)
-   sedPl = sedPl + dwork
+   call upf_elastic_tangent(prop, perm_ansys, ncomp, dsdePl)
+   keycut = 1
+   cutFactor = 0.25_dp
+   write (mat, '(i0)') matId
+   if (kDomIntPt == 1) call upf_report_invalid(mat, res%message)
 end subroutine usermat

@@ -1,31 +1,63 @@
-!> What the ANSYS USERMAT and Abaqus UMAT adapters share: the property list, the conversion
-!> between the FE codes' Voigt vectors (engineering shear strains) and the update's Mandel
-!> vectors, the state-variable layout, and the call of the Miller stress update.
+!> What the ANSYS USERMAT and Abaqus UMAT adapters share: the property list and its checks,
+!> the conversion between the FE codes' Voigt vectors (engineering shear strains) and the
+!> update's Mandel vectors for 3-D, plane strain, axisymmetric and plane stress elements, the
+!> state-variable layout, the energies, and the call of the Miller stress update.
 !>
 !> Properties (the original's TB,USER table, 13 values): 1 E, 2 Poisson, 3 A1, 4 A2, 5 B,
 !> 6 C1 (carried for compatibility, not used by the published equations), 7 C2,
 !> 8 k (gas constant, cal/(mol K): theta uses Q/k), 9 H1, 10 H2, 11 n, 12 Q (cal/mol),
 !> 13 Tm (K). Temperature in K. Stresses in the unit of E and the constants.
 !>
-!> State variables (13, in the code's component order): 1-6 inelastic strain (engineering
-!> shear), 7 drag stress D (0 at the start: D0 is computed from the constants, as the
-!> original's TB,STATE initialised it), 8-13 back stress.
+!> State variables (13, in the code's 3-D component order whatever the element): 1-6
+!> inelastic strain (engineering shear), 7 drag stress D (0 at the start: D0 is computed from
+!> the constants, as the original's TB,STATE initialised it), 8-13 back stress.
+!>
+!> Element families (ntens components of stress and strain in the code's vectors):
+!> 6: 3-D (code order perm), 4: plane strain and axisymmetric (11, 22, 33, 12),
+!> 3: plane stress and shells (11, 22, 12; the out-of-plane strain is solved for s33 = 0).
 module usharp_upf
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_miller, only: miller_model, miller_constants, model_setup, gas_constant
-   use usharp_miller_update, only: miller_update, update_status_ok, n_state
+   use usharp_miller_update, only: miller_update, update_status_ok, update_status_cut, n_state, &
+                                   elastic_moduli
    implicit none
    private
 
-   public :: upf_update, upf_props, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
+   public :: upf_update, upf_props, upf_material, upf_material_setup, upf_elastic_tangent
+   public :: upf_result, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
+   public :: upf_ok, upf_cut, upf_invalid, upf_prop_names
 
    integer, parameter :: n_upf_props = 13, n_upf_state = 13
    !> Position in the code's 6-vector of each Mandel component (11, 22, 33, 12, 23, 13)
    integer, parameter :: perm_ansys(6) = [1, 2, 3, 4, 5, 6]   ! 11 22 33 12 23 13
    integer, parameter :: perm_abaqus(6) = [1, 2, 3, 4, 6, 5]  ! 11 22 33 12 13 23
+   !> Names of the 13 properties, as the messages give them
+   character(len=7), parameter :: upf_prop_names(n_upf_props) = [character(len=7) :: 'E', &
+      'Poisson', 'A1', 'A2', 'B', 'C1', 'C2', 'k', 'H1', 'H2', 'n', 'Q', 'Tm']
+   !> Outcome of an increment: done, repeat it smaller, or the material cannot be used
+   integer, parameter :: upf_ok = 0, upf_cut = 1, upf_invalid = 2
    real(dp), parameter :: s2 = sqrt(2.0_dp)
    real(dp), parameter :: w_mandel(6) = [1.0_dp, 1.0_dp, 1.0_dp, s2, s2, s2]
+   !> Out-of-plane stress accepted by the plane-stress solution, relative to the largest of
+   !> the stress and 1e-3 E; Newton iterations allowed for it
+   real(dp), parameter :: tol_plane_stress = 1.0e-12_dp
+   integer, parameter :: max_plane_stress_iterations = 30
+
+   !> The model of one material at one temperature, built from the property list
+   type :: upf_material
+      type(miller_model) :: model
+   end type upf_material
+
+   !> What an increment returns besides stress, state and tangent
+   type :: upf_result
+      integer :: status = upf_cut        !< upf_ok, upf_cut or upf_invalid
+      real(dp) :: sse = 0.0_dp           !< elastic strain energy density at the end, sigma:eps_el/2
+      real(dp) :: dspd = 0.0_dp          !< inelastic work of the increment (trapezoid rule)
+      real(dp) :: deqin = 0.0_dp         !< equivalent inelastic strain increment
+      real(dp) :: eps33 = 0.0_dp         !< plane stress: out-of-plane strain at the end
+      character(len=200) :: message = '' !< why the material is invalid (upf_invalid)
+   end type upf_result
 
 contains
 
@@ -37,53 +69,203 @@ contains
                gas_constant, model%c%h1, model%c%h2, model%c%n, model%c%q, model%tm]
    end function upf_props
 
-   !> One increment for a 3-D stress state (ntens = 6) given in the code's order perm.
-   !> stran: strain at the start, dstran: increment (engineering shear), dt: s, temp: K at
-   !> the end of the increment. On return stress, statev and ddsdde hold the new values and
-   !> cut is .true. when the increment must be repeated smaller (then nothing was changed).
-   pure subroutine upf_update(props, temp, dt, perm, stran, dstran, stress, statev, ddsdde, cut, &
-                              scd)
-      real(dp), intent(in) :: props(n_upf_props), temp, dt
-      integer, intent(in) :: perm(6)
-      real(dp), intent(in) :: stran(6), dstran(6)
-      real(dp), intent(inout) :: stress(6), statev(n_upf_state), ddsdde(6, 6)
-      logical, intent(out) :: cut
-      real(dp), intent(out) :: scd  !< inelastic work of the increment, sigma : d(eps_in)
-      type(miller_model) :: model
+   !> The material from the 13 properties at temperature temp (K); message is empty when
+   !> the properties can be used, else one line naming the offending constant
+   pure subroutine upf_material_setup(props, temp, mat, message)
+      real(dp), intent(in) :: props(n_upf_props), temp
+      type(upf_material), intent(out) :: mat
+      character(len=*), intent(out) :: message
       type(error_type), allocatable :: error
-      real(dp) :: eps0(6), deps(6), y0(n_state), y(n_state), sig(6), c(6, 6)
-      integer :: status, nsub, i, j
-      cut = .true.
-      scd = 0.0_dp
-      model%youngs = props(1)
-      model%poisson = props(2)
-      model%c = miller_constants(a1=props(3), a2=props(4), b=props(5), c2=props(7), h1=props(9), &
-                                 h2=props(10), n=props(11), q=props(12)*gas_constant/props(8))
-      model%tm = props(13)
-      model%temperature = temp
-      call model_setup(model, error)
-      if (allocated(error)) return
-      ! Code order, engineering shear -> Mandel
+      message = ''
+      if (.not. (props(8) > 0.0_dp .and. props(8) < huge(1.0_dp))) then
+         message = 'property 8, k (gas constant, cal/(mol K)), must be > 0'
+         return
+      end if
+      mat%model%youngs = props(1)
+      mat%model%poisson = props(2)
+      mat%model%c = miller_constants(a1=props(3), a2=props(4), b=props(5), c2=props(7), &
+                                     h1=props(9), h2=props(10), n=props(11), &
+                                     q=props(12)*gas_constant/props(8))
+      mat%model%tm = props(13)
+      mat%model%temperature = temp
+      call model_setup(mat%model, error)
+      if (allocated(error)) message = error%message
+   end subroutine upf_material_setup
+
+   !> Isotropic elastic tangent in the code's order for ntens components (plane stress
+   !> condensed; for other ntens a diagonal of E) from the first two properties, E and
+   !> Poisson, replaced by 1 and 0 when absent or unusable: a cut-back or a rejected material
+   !> always returns a finite, positive definite matrix
+   pure subroutine upf_elastic_tangent(props, perm, ntens, ddsdde)
+      real(dp), intent(in) :: props(:)
+      integer, intent(in) :: perm(6), ntens
+      real(dp), intent(out) :: ddsdde(ntens, ntens)
+      type(miller_model) :: m
+      real(dp) :: c(6, 6), g, k
+      integer :: i, j
+      m%youngs = 1.0_dp
+      m%poisson = 0.0_dp
+      if (size(props) >= 2) then
+         if (props(1) > 0.0_dp .and. props(1) < huge(1.0_dp)) m%youngs = props(1)
+         if (props(2) > -1.0_dp .and. props(2) < 0.5_dp) m%poisson = props(2)
+      end if
+      if (ntens /= 6 .and. ntens /= 4 .and. ntens /= 3) then
+         ddsdde = 0.0_dp
+         do i = 1, ntens
+            ddsdde(i, i) = m%youngs
+         end do
+         return
+      end if
+      call elastic_moduli(m, g, k)
+      c = 0.0_dp
+      do i = 1, 3
+         do j = 1, 3
+            c(i, j) = k - 2.0_dp*g/3.0_dp
+         end do
+         c(i, i) = k + 4.0_dp*g/3.0_dp
+         c(3 + i, 3 + i) = 2.0_dp*g
+      end do
+      call tangent_to_code(c, positions(perm, ntens), ntens, ddsdde)
+   end subroutine upf_elastic_tangent
+
+   !> Code position of each Mandel component (0 when the element has none): 3-D in the
+   !> code's order, ntens 4 as 11 22 33 12, ntens 3 as 11 22 12
+   pure function positions(perm, ntens) result(pos)
+      integer, intent(in) :: perm(6), ntens
+      integer :: pos(6)
+      select case (ntens)
+      case (6); pos = perm
+      case (4); pos = [1, 2, 3, 4, 0, 0]
+      case default; pos = [1, 2, 0, 3, 0, 0]
+      end select
+   end function positions
+
+   !> The Mandel tangent (for ntens = 3 condensed so that s33 = 0) in the code's order
+   pure subroutine tangent_to_code(c, pos, ntens, ddsdde)
+      real(dp), intent(in) :: c(6, 6)
+      integer, intent(in) :: pos(6), ntens
+      real(dp), intent(out) :: ddsdde(ntens, ntens)
+      real(dp) :: cc(6, 6)
+      integer :: i, j
+      cc = c
+      if (ntens == 3) then
+         do j = 1, 6
+            cc(:, j) = c(:, j) - c(:, 3)*c(3, j)/c(3, 3)
+         end do
+      end if
+      ddsdde = 0.0_dp
+      do j = 1, 6
+         if (pos(j) == 0) cycle
+         do i = 1, 6
+            if (pos(i) == 0) cycle
+            ddsdde(pos(i), pos(j)) = cc(i, j)/w_mandel(i)*merge(1.0_dp, 1.0_dp/s2, j <= 3)
+         end do
+      end do
+   end subroutine tangent_to_code
+
+   !> One increment of a material point. props: the 13 properties; temp: K at the end of the
+   !> increment; dt: s; perm: the code's 3-D order (perm_ansys or perm_abaqus); ntens: 6, 4
+   !> or 3 (see the module header). stran: strain at the start, dstran: its increment
+   !> (engineering shear), in the code's order for ntens components. On return with
+   !> res%status = upf_ok, stress, statev and ddsdde hold the end values; otherwise stress
+   !> and statev are unchanged and ddsdde is the elastic tangent (upf_cut: repeat the
+   !> increment smaller; upf_invalid: res%message says which property is unusable).
+   pure subroutine upf_update(props, temp, dt, perm, ntens, stran, dstran, stress, statev, &
+                              ddsdde, res)
+      real(dp), intent(in) :: props(n_upf_props), temp, dt
+      integer, intent(in) :: perm(6), ntens
+      real(dp), intent(in) :: stran(ntens), dstran(ntens)
+      real(dp), intent(inout) :: stress(ntens), statev(n_upf_state)
+      real(dp), intent(out) :: ddsdde(ntens, ntens)
+      type(upf_result), intent(out) :: res
+      type(upf_material) :: mat
+      real(dp) :: eps0(6), deps(6), y0(n_state), y(n_state), sig(6), sig0(6), c(6, 6), g, k
+      real(dp) :: dein(6)
+      integer :: pos(6), i, status, nsub
+      call upf_elastic_tangent(props, perm, ntens, ddsdde)
+      res%status = upf_invalid
+      if (ntens /= 6 .and. ntens /= 4 .and. ntens /= 3) then
+         write (res%message, '(a,i0,a)') 'elements with ', ntens, &
+            ' stress components are not supported (6: 3-D, 4: plane strain or axisymmetric, '// &
+            '3: plane stress)'
+         return
+      end if
+      call upf_material_setup(props, temp, mat, res%message)
+      if (len_trim(res%message) > 0) return
+      res%status = upf_cut
+      pos = positions(perm, ntens)
+      ! Code order, engineering shear -> Mandel; absent components are zero
+      eps0 = 0.0_dp
+      deps = 0.0_dp
       do i = 1, 6
-         eps0(i) = stran(perm(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
-         deps(i) = dstran(perm(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
+         if (pos(i) > 0) then
+            eps0(i) = stran(pos(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
+            deps(i) = dstran(pos(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
+         end if
          y0(i) = statev(perm(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
          y0(6 + i) = statev(7 + perm(i))*w_mandel(i)
       end do
       y0(13) = statev(7)
-      if (y0(13) <= 0.0_dp) y0(13) = model%d0
-      call miller_update(model, eps0, deps, dt, y0, sig, y, c, status, nsub)
+      if (y0(13) <= 0.0_dp) y0(13) = mat%model%d0
+      call elastic_moduli(mat%model, g, k)
+      if (ntens == 3) then
+         call plane_stress_update(mat%model, g, k, dt, y0, eps0, deps, sig, y, c, status)
+      else
+         call miller_update(mat%model, eps0, deps, dt, y0, sig, y, c, status, nsub)
+      end if
       if (status /= update_status_ok) return
-      cut = .false.
-      scd = dot_product(sig, y(1:6) - y0(1:6))
+      res%status = upf_ok
+      ! Energies: the elastic one at the end; the inelastic work by the trapezoid rule, so that
+      ! with the same rule for the external work of the increments the balance closes exactly
+      sig0 = elastic_stress(g, k, eps0, y0(1:6))
+      dein = y(1:6) - y0(1:6)
+      res%sse = 0.5_dp*dot_product(sig, eps0 + deps - y(1:6))
+      res%dspd = 0.5_dp*dot_product(sig0 + sig, dein)
+      res%deqin = sqrt(2.0_dp/3.0_dp*dot_product(dein, dein))
+      res%eps33 = eps0(3) + deps(3)
       do i = 1, 6
-         stress(perm(i)) = sig(i)/w_mandel(i)
+         if (pos(i) > 0) stress(pos(i)) = sig(i)/w_mandel(i)
          statev(perm(i)) = y(i)*merge(1.0_dp, s2, i <= 3)
          statev(7 + perm(i)) = y(6 + i)/w_mandel(i)
-         do j = 1, 6
-            ddsdde(perm(i), perm(j)) = c(i, j)/w_mandel(i)*merge(1.0_dp, 1.0_dp/s2, j <= 3)
-         end do
       end do
       statev(7) = y(13)
+      call tangent_to_code(c, pos, ntens, ddsdde)
    end subroutine upf_update
+
+   !> Stress from total and inelastic strain (Mandel)
+   pure function elastic_stress(g, k, eps, ein) result(sig)
+      real(dp), intent(in) :: g, k, eps(6), ein(6)
+      real(dp) :: sig(6), tr
+      tr = sum(eps(1:3))
+      sig = 2.0_dp*(g*(eps - ein))
+      sig(1:3) = sig(1:3) + (k - 2.0_dp*g/3.0_dp)*tr
+   end function elastic_stress
+
+   !> Plane stress: the 3-D update with the out-of-plane strain found by Newton's method on
+   !> s33 = 0 with the consistent tangent. eps0(3) and deps(3) come in as zero and leave as
+   !> the solution: the start value from s33 = 0 at the start state, exactly, the increment
+   !> from the elastic guess on.
+   pure subroutine plane_stress_update(model, g, k, dt, y0, eps0, deps, sig, y, c, status)
+      type(miller_model), intent(in) :: model
+      real(dp), intent(in) :: g, k, dt, y0(n_state)
+      real(dp), intent(inout) :: eps0(6), deps(6)
+      real(dp), intent(out) :: sig(6), y(n_state), c(6, 6)
+      integer, intent(out) :: status
+      real(dp) :: lam, stiff33, tol
+      integer :: it, nsub
+      lam = k - 2.0_dp*g/3.0_dp
+      stiff33 = k + 4.0_dp*g/3.0_dp
+      ! s33 = stiff33 e33 + lam (e11 + e22) - 2G ein33 = 0 (the inelastic strain is deviatoric)
+      eps0(3) = (2.0_dp*g*y0(3) - lam*(eps0(1) + eps0(2)))/stiff33
+      deps(3) = (2.0_dp*g*y0(3) - lam*(eps0(1) + deps(1) + eps0(2) + deps(2)))/stiff33 - eps0(3)
+      status = update_status_cut
+      do it = 1, max_plane_stress_iterations
+         call miller_update(model, eps0, deps, dt, y0, sig, y, c, status, nsub)
+         if (status /= update_status_ok) return
+         tol = tol_plane_stress*max(maxval(abs(sig)), 1.0e-3_dp*model%youngs)
+         if (abs(sig(3)) <= tol) return
+         deps(3) = deps(3) - sig(3)/c(3, 3)
+      end do
+      status = update_status_cut
+   end subroutine plane_stress_update
 end module usharp_upf
