@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Proof inside a real FE code: build CalculiX (Debian's own source package) with external
 # behaviour support once, cached outside the repository, load the Miller UMAT as
-# @ABAQUS_MILLER from libMILLER.so, run a single C3D8 unit cube under the thesis's LCF and
-# relaxation histories and compare its stresses with usharp's uniaxial driver.
+# @ABAQUS_MILLER from libMILLER.so (built from the single-file fixed-form CalculiX source),
+# run the shipped examples: a C3D8 unit cube under the thesis's LCF and relaxation histories,
+# compared with usharp's uniaxial driver, and the axisymmetric notched bar under cyclic load,
+# compared with a refined-increment reference, with the Newton iterations measured.
 # Exit 0: compared and within limits; 77: skipped (the reason is printed); other: failed.
 # The cache folder: $USHARP_CCX_CACHE (default ~/.cache/usharp-ccx).
 set -uo pipefail
@@ -67,34 +69,9 @@ cat > "$work/driver.nml" <<'NML'
 NML
 (cd "$work" && "$exe" simulate driver.nml -q) || fail "usharp simulate failed"
 
-# One C3D8 unit cube: uniaxial stress by symmetry planes, axial displacement on the top face
-write_deck() { # name, corner points (time,strain per line)
-  {
-    echo "*NODE"
-    echo "1,0,0,0"; echo "2,1,0,0"; echo "3,1,1,0"; echo "4,0,1,0"
-    echo "5,0,0,1"; echo "6,1,0,1"; echo "7,1,1,1"; echo "8,0,1,1"
-    echo "*ELEMENT,TYPE=C3D8,ELSET=CUBE"
-    echo "1,1,2,3,4,5,6,7,8"
-    echo "*NSET,NSET=TOP"; echo "5,6,7,8"
-    echo "*NSET,NSET=ALL"; echo "1,2,3,4,5,6,7,8"
-    echo "*BOUNDARY"
-    echo "1,1,3"; echo "2,2,3"; echo "3,3,3"; echo "4,1,1"; echo "4,3,3"; echo "5,1,2"; echo "6,2,2"; echo "8,1,1"
-    echo "*MATERIAL,NAME=@ABAQUS_MILLER"
-    echo "*USER MATERIAL,CONSTANTS=13"
-    echo "22500.,0.3,0.8,7.42E-5,1.E15,0.,0.1,1.9859,"
-    echo "280.,100.,5.8,91000.,1800."
-    echo "*DEPVAR"; echo "13"
-    echo "*SOLID SECTION,ELSET=CUBE,MATERIAL=@ABAQUS_MILLER"
-    echo "*INITIAL CONDITIONS,TYPE=TEMPERATURE"; echo "ALL,866.15"
-    # One *STEP per segment of the history, as the thesis's APDL deck had one load step per
-    # segment: the displacement ramps linearly within a step, so no increment straddles a corner
-    printf '%s\n' "$2" | awk -F, 'NR > 1 { printf "*STEP,INC=1000000\n*STATIC\n%.10g,%.10g,1.E-8,0.15\n*BOUNDARY\nTOP,3,3,%.12g\n*TEMPERATURE\nALL,866.15\n*EL PRINT,ELSET=CUBE\nS\n*END STEP\n", ($1 - t0 < 0.1 ? $1 - t0 : 0.1), $1 - t0, $2 } { t0 = $1 }'
-  } > "$work/$1.inp"
-}
-lcf_amp=$(awk 'BEGIN { m = 10^(1/11); printf "0.,0.\n"; for (k = 0; k < 12; k++) { a = 0.0005*m^k*(k%2==0?1:-1); printf "%g,%.12g\n%g,0.\n", (2*k+1)*10, a, (2*k+2)*10 } }')
-write_deck lcf "$lcf_amp"
-write_deck relax "$(printf '0.,0.\n1.,0.00075\n601.,0.00075\n602.,0.001\n1202.,0.001')"
-
+# The shipped C3D8 unit-cube decks (examples/fe/cube): uniaxial stress by symmetry planes,
+# axial displacement on the top face, one *STEP per segment of the history
+for t in lcf relax; do cp "$here/examples/fe/cube/cube-$t.inp" "$work/$t.inp" || fail "examples/fe/cube/cube-$t.inp missing"; done
 status=0
 for t in lcf relax; do
   (cd "$work" && LD_LIBRARY_PATH="$work/lib:${LD_LIBRARY_PATH:-}" OMP_NUM_THREADS=1 timeout 1200 "$ccx" -i "$t" > "$t.log" 2>&1) \
@@ -116,4 +93,70 @@ for t in lcf relax; do
        "$work/driver/$t.sim.txt" "$work/$t.ccx.txt" || status=1
 done
 [ $status -eq 0 ] || fail "CalculiX and the uniaxial driver differ by more than 1 % of peak, or lateral stress not zero"
+# The expected table shipped with the cube (axial stress at the ends of the history's segments)
+[ -s "$here/examples/fe/cube/expected.txt" ] || fail "examples/fe/cube/expected.txt missing"
+awk 'FILENAME ~ /expected/ { if ($1 !~ /^#/ && NF >= 3) e[$1 " " sprintf("%.4f", $2)] = $3; next }
+     { np = split(FILENAME, p, "/"); t = p[np]; sub(/\.ccx\.txt$/, "", t); k = t " " sprintf("%.4f", $1)
+       if (k in e) { n++; d = $2 - e[k]; if (d < 0) d = -d; if (d > dm) dm = d } }
+     END { printf "calculix-check: cube: %d segment ends against examples/fe/cube/expected.txt, max diff %.2e ksi\n", n, dm
+           exit (n >= 20 && dm <= 1e-3) ? 0 : 1 }' "$here/examples/fe/cube/expected.txt" "$work/lcf.ccx.txt" "$work/relax.ccx.txt" \
+  || fail "the cube differs from examples/fe/cube/expected.txt"
+
+# An unusable constant (A1 < 0): one line naming it on standard output per element and attempt,
+# then CalculiX cuts the increment below its minimum and stops with an error
+mkdir -p "$work/bad"
+sed 's/^22500.,0.3,0.8,/22500.,0.3,-0.8,/' "$work/relax.inp" > "$work/bad/bad.inp"
+(cd "$work/bad" && LD_LIBRARY_PATH="$work/lib:${LD_LIBRARY_PATH:-}" OMP_NUM_THREADS=1 timeout 300 "$ccx" -i bad > ccx.log 2>&1)
+rc=$?
+nmsg=$(grep -c "usharp Miller material @ABAQUS_MILLER: constant A1 must be > 0" "$work/bad/ccx.log")
+echo "calculix-check: A1 < 0: ccx exit $rc, $nmsg message lines: $(grep -m1 'usharp Miller material' "$work/bad/ccx.log")"
+[ "$rc" -ne 0 ] && [ "$nmsg" -ge 1 ] && [ "$nmsg" -le 4 ] && grep -q "increment size smaller than minimum" "$work/bad/ccx.log" \
+  || fail "a material with A1 < 0 did not stop CalculiX with a message naming A1"
+
+# The axisymmetric notched bar (examples/fe/notched-bar): the shipped deck (fixed 1.5 s
+# increments, CalculiX's default Newton tolerances) against a reference with 0.5 s
+# increments and tolerances of 1e-9, whose residuals show the Newton's order near the solution
+nb="$here/examples/fe/notched-bar"
+mkdir -p "$work/nb" "$work/nb-gen" "$work/nb-ref"
+bash "$nb/make-notched-bar.sh" "$work/nb-gen" >/dev/null || fail "make-notched-bar.sh failed"
+for f in notched-bar.inp notched-bar-abaqus.inp notched-bar-ansys.mac; do
+  cmp -s "$nb/$f" "$work/nb-gen/$f" || fail "examples/fe/notched-bar/$f is not what make-notched-bar.sh writes"
+done
+cp "$nb/notched-bar.inp" "$work/nb/"
+bash "$nb/make-notched-bar.sh" "$work/nb-ref" 0.5 tight >/dev/null || fail "make-notched-bar.sh failed"
+for d in nb nb-ref; do
+  (cd "$work/$d" && LD_LIBRARY_PATH="$work/lib:${LD_LIBRARY_PATH:-}" OMP_NUM_THREADS=1 timeout 1200 "$ccx" -i notched-bar > ccx.log 2>&1) \
+    || { tail -5 "$work/$d/ccx.log"; fail "ccx did not finish the notched bar in $work/$d"; }
+done
+# Axial reaction force of the top per time: 'total force (fx,fy,fz) for set TOP and time T', a
+# blank line, then the three components
+rf() { awk '/total force .* for set TOP/ { t = $NF; getline; getline; printf "%.10g %.10g\n", t, $2 }' "$1"; }
+rf "$work/nb/notched-bar.dat" > "$work/nb/rf.txt"
+rf "$work/nb-ref/notched-bar.dat" > "$work/nb-ref/rf.txt"
+[ -s "$work/nb/rf.txt" ] && [ -s "$work/nb-ref/rf.txt" ] || fail "no reaction forces in the notched-bar .dat files"
+awk 'NR == FNR { ref[sprintf("%.4f", $1)] = $2; if (($2 < 0 ? -$2 : $2) > peak) peak = ($2 < 0 ? -$2 : $2); next }
+     { k = sprintf("%.4f", $1); if (!(k in ref)) next; d = $2 - ref[k]; if (d < 0) d = -d; if (d > dmax) dmax = d; n++ }
+     END { printf "calculix-check: notched bar: %d increments compared, max |RF(1.5 s) - RF(0.5 s)| / peak = %.3e (peak %.4f ksi mm^2 on the 2-degree segment)\n", n, dmax / peak, peak
+           exit (n >= 40 && dmax / peak <= 0.01) ? 0 : 1 }' "$work/nb-ref/rf.txt" "$work/nb/rf.txt" || status=1
+# Newton iterations per increment (.sta: STEP INC ATT ITRS ...)
+for d in nb nb-ref; do
+  awk -v d="$d" 'NR > 2 && NF >= 7 { n++; s += $4; if ($4 > m) m = $4; h[$4]++ }
+       END { printf "calculix-check: notched bar %s: %d increments, Newton iterations per increment mean %.2f, max %d (", d, n, s / n, m
+             for (k = 1; k <= m; k++) if (h[k]) printf " %dx%d", h[k], k; print " )" }' "$work/$d/notched-bar.sta"
+done
+# Order near the solution from the reference's residual forces (.cvg, % of the mean force):
+# p = log(r[k+1]) / log(r[k]) for consecutive iterations once r[k] < 1 %
+awk 'NR > 4 && NF >= 9 { key = $1 " " $2 " " $3; r = $6 / 100
+       if (key == last && prev > 0 && prev < 0.01 && r > 0) { p[++n] = log(r) / log(prev) }
+       last = key; prev = r }
+     END { if (n == 0) { print "calculix-check: notched bar: no residual pairs to measure the order"; exit 1 }
+           for (i = 1; i <= n; i++) for (j = i + 1; j <= n; j++) if (p[j] < p[i]) { t = p[i]; p[i] = p[j]; p[j] = t }
+           printf "calculix-check: notched bar reference: order of the global Newton near the solution, median %.2f (quartiles %.2f, %.2f; %d pairs)\n", p[int((n + 1) / 2)], p[int((n + 3) / 4)], p[int((3 * n + 1) / 4)], n
+           exit (p[int((n + 1) / 2)] >= 1.6) ? 0 : 1 }' "$work/nb-ref/notched-bar.cvg" || status=1
+# The expected table shipped with the example (reaction force at the ramp ends)
+awk 'NR == FNR { if ($1 !~ /^#/ && NF >= 2) e[sprintf("%.4f", $1)] = $2; next }
+     { k = sprintf("%.4f", $1); if (k in e) { n++; d = ($2 - e[k]) / e[k]; if (d < 0) d = -d; if (d > dm) dm = d } }
+     END { printf "calculix-check: notched bar: %d ramp ends against examples/fe/notched-bar/expected.txt, max rel. diff %.2e\n", n, dm
+           exit (n == 3 && dm <= 1e-3) ? 0 : 1 }' "$nb/expected.txt" "$work/nb/rf.txt" || status=1
+[ $status -eq 0 ] || fail "notched bar: increments not converged to 1 %, Newton not quadratic, or results differ from expected.txt"
 echo "calculix-check: PASS"

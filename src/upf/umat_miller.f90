@@ -25,6 +25,7 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
    real(dp), intent(inout) :: pnewdt
    real(dp), intent(in) :: celent, dfgrd0(3, 3), dfgrd1(3, 3)
    !> Increment factors asked for after a failed local solution and for an unusable material
+   !> (small enough that the code stops at its minimum increment)
    real(dp), parameter :: cut_factor = 0.25_dp, stop_factor = 1.0e-6_dp
    type(upf_result) :: res
    rpl = 0.0_dp
@@ -48,12 +49,20 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
          spd = spd + res%dspd
          return
       else if (res%status == upf_cut) then
-         pnewdt = min(pnewdt, cut_factor)
+         call ask_smaller(pnewdt, cut_factor)
          return
       end if
    end if
    call upf_elastic_tangent(props, perm_abaqus, ntens, ddsdde)
    ! One line per element (its first integration point), not per point
    if (npt == 1) call upf_report_invalid(cmname, res%message)
-   pnewdt = min(pnewdt, stop_factor)
+   call ask_smaller(pnewdt, stop_factor)
+contains
+   !> Ask for the increment scaled by factor unless a smaller one is asked already. Abaqus
+   !> passes PNEWDT large, CalculiX -1 (no request): both read a value in (0, 1) as a cut.
+   pure subroutine ask_smaller(pnewdt, factor)
+      real(dp), intent(inout) :: pnewdt
+      real(dp), intent(in) :: factor
+      if (.not. (pnewdt > 0.0_dp .and. pnewdt <= factor)) pnewdt = factor
+   end subroutine ask_smaller
 end subroutine umat
