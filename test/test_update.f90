@@ -13,6 +13,8 @@ module test_update
    implicit none
    private
    public :: collect_update
+   !> The adapters' interfaces, for the other suites that call them
+   public :: umat, usermat
 
    real(dp), parameter :: s2 = sqrt(2.0_dp)
 

@@ -312,30 +312,17 @@ contains
                  'cut-back with an elastic plane-stress tangent: status '//achar(48 + res%status))
    end subroutine test_cutback
 
-   !> The adapters given bad input (too few properties, beam elements) return an elastic
+   !> The adapters given bad input (a negative n, beam elements) return an elastic
    !> tangent and ask to stop: Abaqus PNEWDT <= 1e-6, ANSYS keycut = 1
    subroutine test_adapter_reject(error)
+      use test_update, only: umat, usermat
       type(error_type), allocatable, intent(out) :: error
-      interface
-         subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpldt, stran, &
-                         dstran, time, dtime, temp, dtemp, predef, dpred, cmname, ndi, nshr, ntens, &
-                         nstatv, props, nprops, coords, drot, pnewdt, celent, dfgrd0, dfgrd1, noel, &
-                         npt, layer, kspt, kstep, kinc)
-            import :: dp
-            integer, intent(in) :: ndi, nshr, ntens, nstatv, nprops, noel, npt, layer, kspt, kstep, kinc
-            character(len=80), intent(in) :: cmname
-            real(dp), intent(inout) :: stress(ntens), statev(nstatv), ddsdde(ntens, ntens)
-            real(dp), intent(inout) :: sse, spd, scd, rpl, ddsddt(ntens), drplde(ntens), drpldt
-            real(dp), intent(in) :: stran(ntens), dstran(ntens), time(2), dtime, temp, dtemp
-            real(dp), intent(in) :: predef(*), dpred(*), props(nprops), coords(3), drot(3, 3)
-            real(dp), intent(inout) :: pnewdt
-            real(dp), intent(in) :: celent, dfgrd0(3, 3), dfgrd1(3, 3)
-         end subroutine umat
-      end interface
       real(dp) :: s(4), v(13), c(4, 4), ce(4, 4), z, z2(2), z4(4), zz(4), z4b(4), z4c(4), z3(3)
       real(dp) :: z33(3, 3), pnewdt, sse, spd, scd, rpl, drpldt, bad(13), c3(3, 3), s3(3)
+      real(dp) :: o(11), cutf
+      integer :: keycut
       character(len=80) :: cm
-      s = 0; v = 0; z = 0; z2 = 0; z4 = 0; zz = 0; z3 = 0; z33 = 0; z4b = 0; z4c = 0
+      o = 0; s = 0; v = 0; z = 0; z2 = 0; z4 = 0; zz = 0; z3 = 0; z33 = 0; z4b = 0; z4c = 0
       sse = 0; spd = 0; scd = 0; rpl = 0; drpldt = 0
       cm = 'BADMAT'
       bad = props
@@ -357,6 +344,21 @@ contains
                 z3, z33, pnewdt, z, z33, z33, 1, 2, 1, 1, 1, 1)
       call check(error, pnewdt <= 1.0e-6_dp .and. all(c3 /= -1.0_dp) .and. all(s3 == 0.0_dp), &
                  'Abaqus UMAT, beam (NDI = 1): PNEWDT small, DDSDDE set')
+      if (allocated(error)) return
+      ! CalculiX passes PNEWDT = -1 (no request): a cut must still be asked for
+      pnewdt = -1.0_dp
+      call umat(s, v, c, sse, spd, scd, rpl, z4b, z4c, drpldt, zz, [1.0e-4_dp, 0.0_dp, 0.0_dp, 0.0_dp], &
+                z2, 0.1_dp, temp, z, z4, z4, cm, 3, 1, 4, 13, bad, 13, z3, z33, pnewdt, z, z33, z33, &
+                1, 1, 1, 1, 1, 1)
+      call check(error, pnewdt > 0.0_dp .and. pnewdt <= 1.0e-6_dp, 'Abaqus UMAT, PNEWDT = -1 on entry')
+      if (allocated(error)) return
+      c = -1.0_dp
+      cutf = 1.0_dp
+      call usermat(7, 1, 1, 1, 1, 1, 1, keycut, 3, 1, 4, 13, 13, z, 0.1_dp, temp, z, s, v, c, o(1), &
+                   o(2), o(3), zz, [1.0e-4_dp, 0.0_dp, 0.0_dp, 0.0_dp], z4, bad, z3, z, z33, z33, z2, &
+                   o(4), cutf, o(5), o(6), o(7), o(8), o(9), o(10), o(11))
+      call check(error, keycut == 1 .and. all(c == ce) .and. all(s == 0.0_dp), &
+                 'ANSYS USERMAT, n < 0: keycut = 1, dsdePl elastic')
    end subroutine test_adapter_reject
 
    !> Eight material points with different histories (3-D, plane strain and plane stress),

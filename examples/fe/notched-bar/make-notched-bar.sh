@@ -5,11 +5,11 @@
 # displacement (0 -> +0.05 -> -0.05 -> +0.05 mm on a 15 mm half-length, 24 s per ramp).
 # Lengths mm, stress ksi (the constants' unit), forces ksi*mm^2, time s, temperature K.
 # usage: examples/fe/make-notched-bar.sh OUTDIR [DT [tight]]
-#   DT: fixed time increment, s (1.5); tight: CalculiX and Abaqus Newton tolerances 1e-9
+#   DT: fixed time increment, s (0.75); tight: CalculiX and Abaqus Newton tolerances 1e-9
 #   (to follow the global Newton's convergence to the end)
 set -euo pipefail
 out="${1:?usage: make-notched-bar.sh OUTDIR [DT]}"
-dt="${2:-1.5}"
+dt="${2:-0.75}"
 tight="${3:-}"
 mkdir -p "$out"
 # Mesh: nr x nz elements over r in [0, R(z)], z in [0, L] (half the bar: symmetry at z = 0),
@@ -48,7 +48,8 @@ mesh() { # format: ccx | abaqus | ansys
       print "*NSET,NSET=AXIS"; for (j = 0; j <= NJ; j++) print j * (NI + 1) + 1
       print "*NSET,NSET=BOTTOM"; for (i = 0; i <= NI; i++) print i + 1
       print "*NSET,NSET=TOP"; for (i = 0; i <= NI; i++) print NJ * (NI + 1) + i + 1
-      print "*NSET,NSET=ALLN,GENERATE"; printf "1,%d\n", (NJ + 1) * (NI + 1)
+      print "*NSET,NSET=ALLN"
+      for (j = 0; j <= NJ; j++) for (i = 0; i <= NI; i++) if (!(i % 2 == 1 && j % 2 == 1)) print j * (NI + 1) + i + 1
     }
   }'
 }
@@ -63,39 +64,30 @@ controls() {
 props1="22500.,0.3,0.8,7.42E-5,1.E15,0.,0.1,1.9859,"
 props2="280.,100.,5.8,91000.,1800."
 
-{ echo "** Miller user material: axisymmetric notched bar, cyclic axial displacement (CalculiX)"
-  echo "** written by examples/fe/make-notched-bar.sh; run: ccx -i notched-bar (libMILLER.so on LD_LIBRARY_PATH)"
-  mesh ccx
+# The CalculiX and Abaqus inputs share the keyword syntax: code, material name, run line
+abaqus_style() {
+  local code="$1" mat="$2" run="$3" k=0
+  echo "** Miller user material: axisymmetric notched bar, cyclic axial displacement ($code)"
+  echo "** written by examples/fe/notched-bar/make-notched-bar.sh; $run"
+  [ "$code" = CalculiX ] || { echo "*HEADING"; echo "Notched bar, Miller viscoplastic UMAT"; }
+  mesh "$([ "$code" = CalculiX ] && echo ccx || echo abaqus)"
   echo "*BOUNDARY"; echo "AXIS,1,1"; echo "BOTTOM,2,2"
-  echo "*MATERIAL,NAME=@ABAQUS_MILLER"; echo "*USER MATERIAL,CONSTANTS=13"; echo "$props1"; echo "$props2"
+  echo "*MATERIAL,NAME=$mat"; echo "*USER MATERIAL,CONSTANTS=13"; echo "$props1"; echo "$props2"
   echo "*DEPVAR"; echo "13"
-  echo "*SOLID SECTION,ELSET=BAR,MATERIAL=@ABAQUS_MILLER"
+  echo "*SOLID SECTION,ELSET=BAR,MATERIAL=$mat"
   echo "*INITIAL CONDITIONS,TYPE=TEMPERATURE"; echo "ALLN,866.15"
-  for u in $ramps; do
-    echo "*STEP,INC=100000"; echo "*STATIC,DIRECT"; echo "$dt,$ramp_t"; controls
-    echo "*BOUNDARY"; echo "TOP,2,2,$u"; echo "*TEMPERATURE"; echo "ALLN,866.15"
-    echo "*NODE PRINT,NSET=TOP,TOTALS=ONLY"; echo "RF"; echo "*END STEP"
-  done
-} > "$out/notched-bar.inp"
-
-{ echo "** Miller user material: axisymmetric notched bar, cyclic axial displacement (Abaqus/Standard)"
-  echo "** written by examples/fe/make-notched-bar.sh; run: abaqus job=notched-bar-abaqus user=umat_miller_abaqus.f"
-  echo "*HEADING"; echo "Notched bar, Miller viscoplastic UMAT"
-  mesh abaqus
-  echo "*BOUNDARY"; echo "AXIS,1,1"; echo "BOTTOM,2,2"
-  echo "*MATERIAL,NAME=MILLER"; echo "*USER MATERIAL,CONSTANTS=13"; echo "$props1"; echo "$props2"
-  echo "*DEPVAR"; echo "13"
-  echo "*SOLID SECTION,ELSET=BAR,MATERIAL=MILLER"
-  echo "*INITIAL CONDITIONS,TYPE=TEMPERATURE"; echo "ALLN,866.15"
-  k=0
   for u in $ramps; do
     k=$((k + 1))
-    echo "*STEP,NAME=RAMP-$k,INC=100000"; echo "*STATIC,DIRECT"; echo "$dt,$ramp_t"; controls
+    echo "*STEP,INC=100000"; echo "*STATIC,DIRECT"; echo "$dt,$ramp_t"; controls
     echo "*BOUNDARY"; echo "TOP,2,2,$u"; echo "*TEMPERATURE"; echo "ALLN,866.15"
     echo "*NODE PRINT,NSET=TOP,TOTALS=ONLY"; echo "RF"
-    echo "*OUTPUT,FIELD"; echo "*ELEMENT OUTPUT"; echo "S,SDV,ENER"; echo "*END STEP"
+    [ "$code" = CalculiX ] || { echo "*OUTPUT,FIELD"; echo "*ELEMENT OUTPUT"; echo "S,SDV,ENER"; }
+    echo "*END STEP"
   done
-} > "$out/notched-bar-abaqus.inp"
+}
+abaqus_style CalculiX @ABAQUS_MILLER "run: ccx -i notched-bar (libMILLER.so on LD_LIBRARY_PATH)" > "$out/notched-bar.inp"
+abaqus_style Abaqus/Standard MILLER "run: abaqus job=notched-bar-abaqus user=umat_miller_abaqus.f" \
+  > "$out/notched-bar-abaqus.inp"
 
 { echo "! Miller user material: axisymmetric notched bar, cyclic axial displacement (ANSYS APDL)"
   echo "! written by examples/fe/make-notched-bar.sh; needs an ANSYS built with usermat_miller_ansys.F"
@@ -116,6 +108,7 @@ props2="280.,100.,5.8,91000.,1800."
     echo "TIME,$t"; echo "DELTIM,$dt,$dt,$dt"; echo "D,TOP,UY,$u"; echo "SOLVE"
   done
   echo "FINISH"
-  echo "/POST26"; echo "RFORCE,2,$(( (2*8) * (2*4+1) + 1 )),F,Y,RF_NODE1   ! one node; sum TOP with FSUM in /POST1"
-  echo "/POST1"; echo "SET,LAST"; echo "CMSEL,S,TOP"; echo "FSUM"
+  echo "/POST1                ! axial reaction of the loaded end at the end of each ramp (360 degrees)"
+  echo "*DO,LS,1,3"; echo "SET,LS,LAST"; echo "CMSEL,S,TOP"; echo "PRRSOL,FY"; echo "*ENDDO"
+  echo "ALLSEL"; echo "FINISH"
 } > "$out/notched-bar-ansys.mac"
