@@ -19,6 +19,8 @@ module test_diagnose
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
+   use usharp_diagnose_types, only: effect_outcome
+   use usharp_diagnose_verdict, only: conclude
    use usharp_rng, only: rng_type
    use test_util, only: write_text, check_message
    implicit none
@@ -59,6 +61,8 @@ contains
          new_unittest('diagnose-bad-inputs', test_bad_inputs), &
          new_unittest('baseline-ignores-held-out-data', test_held_out_unused), &
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
+         new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
+         new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
    end subroutine collect_diagnose
 
@@ -213,6 +217,15 @@ contains
          e(i) = rng%normal()
       end do
       call check(error, abs(runs_z(e)) < 3.0_dp, 'white noise flagged')
+      if (allocated(error)) return
+      ! One sign throughout (a bias, however smooth) is not noise: one run of 209
+      call check(error, abs(runs_z(abs(e(1:209)) + 1.0_dp) + sqrt(208.0_dp)) < 1.0e-12_dp, &
+                 'a residual of one sign: z '//real_str(runs_z(abs(e(1:209)) + 1.0_dp), 'f0.2'))
+      if (allocated(error)) return
+      ! Nearly one sign: the counts alone leave the Wald-Wolfowitz test no room
+      e(1:209) = abs(e(1:209)) + 1.0_dp
+      e(100) = -1.0_dp
+      call check(error, runs_z(e(1:209)) < -10.0_dp, 'one negative in 209: not seen')
    end subroutine test_runs
 
    !> A smooth signal sampled densely plus white noise of sd 0.1: the estimate within 5 %
@@ -436,6 +449,71 @@ contains
       call check(error, abs(res%c(1)/1.0e15_dp - 1.0_dp) < 1.0e-3_dp, 'baseline B = '// &
                  real_str(res%c(1), 'es12.5')//', data made with 1e15')
    end subroutine test_unconverged_start
+
+   !> Parsimony of the verdict: two confirmed effects, compliance (1 parameter) and scatter
+   !> (4, per test, BIC 14 lower): both leave only noise, so the simpler leads and the report
+   !> says they cannot be told apart; when compliance leaves a structured gap and scatter is
+   !> 14 lower, scatter leads alone; within 10 of BIC, the simpler leads
+   subroutine test_parsimony(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      res%names = [character(len=40) :: 'a', 'b', 'c']
+      res%held = [.false., .false., .true.]
+      res%gap_fit = 10.0_dp
+      res%floor_fit = 1.0_dp
+      res%gap_held = 5.0_dp
+      res%floor_held = 1.0_dp
+      allocate (res%regions(0))
+      allocate (res%effects(2))
+      res%effects(1) = outcome(4, 'scatter', 4, -114.0_dp, 0.999_dp, 0.01_dp)
+      res%effects(2) = outcome(1, 'compliance', 1, -100.0_dp, 0.999_dp, 0.01_dp)
+      call conclude(res)
+      call check(error, res%leading == 2 .and. size(res%alike) == 2, 'both leave noise: '// &
+                 'compliance must lead, alike with scatter; verdict: '//res%verdict)
+      if (allocated(error)) return
+      call check(error, index(res%verdict, 'cannot tell them apart') > 0, res%verdict)
+      if (allocated(error)) return
+      ! Compliance leaves a structured gap (70 % removed): strong evidence for scatter
+      res%effects(2)%shrink_fit = 0.7_dp
+      res%effects(2)%held_gap = 2.0_dp
+      call conclude(res)
+      call check(error, res%leading == 1 .and. size(res%alike) == 1, 'strong evidence: scatter '// &
+                 'must lead alone; verdict: '//res%verdict)
+      if (allocated(error)) return
+      ! Within 10 of BIC: the simpler leads, and its partial removal is said so
+      res%effects(1)%dbic = -105.0_dp
+      call conclude(res)
+      call check(error, res%leading == 2 .and. index(res%verdict, 'compliance partly explains') == 1, &
+                 'within 10 of BIC: '//res%verdict)
+   contains
+      function outcome(k, name, q, dbic, shrink, held_gap) result(e)
+         integer, intent(in) :: k, q
+         character(len=*), intent(in) :: name
+         real(dp), intent(in) :: dbic, shrink, held_gap
+         type(effect_outcome) :: e
+         e%k = k
+         e%name = name
+         e%q = q
+         e%dbic = dbic
+         e%refitted = .true.
+         e%significant = .true.
+         e%confirmed = .true.
+         e%shrink_fit = shrink
+         e%shrink_held = 1.0_dp - held_gap/res%gap_held
+         e%held_gap = held_gap
+         e%worse = [.false., .false., .false.]
+      end function outcome
+   end subroutine test_parsimony
+
+   !> Zero-width F descriptors print a leading zero and no bare point
+   subroutine test_number_format(error)
+      type(error_type), allocatable, intent(out) :: error
+      call check(error, real_str(0.55_dp, 'f0.2') == '0.55' .and. real_str(-0.55_dp, 'f0.2') == '-0.55' &
+                 .and. real_str(6.0_dp, 'f0.0') == '6' .and. real_str(0.0_dp, 'f0.2') == '0.00' .and. &
+                 real_str(-0.2_dp, 'f0.0') == '0' .and. real_str(12.5_dp, 'f0.1') == '12.5' .and. &
+                 real_str(0.5_dp, 'f6.2') == '0.50', 'real_str: '//real_str(0.55_dp, 'f0.2')//' '// &
+                 real_str(6.0_dp, 'f0.0')//' '//real_str(-0.55_dp, 'f0.2'))
+   end subroutine test_number_format
 
    !> One noisy repetition each of clean data, compliance, lag and shift on a small
    !> matrix: every injected effect ranks first and clean data give no effect

@@ -16,7 +16,10 @@
 !>    bic_margin; confirmed: also plausible in magnitude, the fit tests had a structured gap,
 !>    and the structured gap of the held-out tests shrinks by at least confirm_shrink
 !>    (held-out tests whose residual was already at the noise level must stay there).
-!> 4. The verdict (usharp_diagnose_verdict) and the report (usharp_diagnose_report).
+!> 4. The verdict (usharp_diagnose_verdict): among confirmed effects without strong evidence
+!>    between them the simplest leads; the refits that decide it run again from further
+!>    starts. Last, when effects explain the gap equally well, the candidate test that would
+!>    separate them (usharp_diagnose_separate). The report: usharp_diagnose_report.
 module usharp_diagnose
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
@@ -27,14 +30,16 @@ module usharp_diagnose
    use usharp_experiment, only: experiment_type, fits_strain
    use usharp_effects, only: effect_catalogue
    use usharp_regions, only: noise_sd
+   use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     fit_structured, diagnose_progress, tell
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
-   use usharp_diagnose_refit, only: refit_candidates, refit_global
+   use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding
    use usharp_diagnose_verdict, only: conclude
+   use usharp_diagnose_separate, only: separate
    use usharp_diagnose_report, only: diagnose_report, write_report
    implicit none
    private
@@ -42,6 +47,9 @@ module usharp_diagnose
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
    public :: write_report, gn_decrease, diagnose_options_of, held_quiet
    public :: diagnose_baseline, diagnose_context, diagnose_progress
+
+   !> Latin-hypercube starts of the constants for each refit that decides the verdict
+   integer, parameter :: deciding_lhs = 2
 
 contains
 
@@ -85,6 +93,15 @@ contains
          if (allocated(error)) return
          call conclude(res)
       end if
+      ! The refits that decide the verdict, from further starts
+      if (any(res%effects%refitted .and. (res%effects%confirmed .or. res%effects%dbic < 0.0_dp))) then
+         call tell(ctx, 'refits that decide the verdict, from further starts', res%nevals)
+         call refit_deciding(ctx, res, deciding_lhs, error)
+         if (allocated(error)) return
+         call conclude(res)
+      end if
+      ! Last: when effects explain the gap equally well, the test that would separate them
+      call separate(ctx, res)
       call tell(ctx, 'done', res%nevals)
    end subroutine diagnose_run
 
@@ -166,7 +183,28 @@ contains
       ctx%eff_base%dlnE_dT = opts%dlnE_dT
       ctx%eff_base%gamma3 = opts%gamma3
       ctx%cat = effect_catalogue(ctx%peak)
+      res%dt_sample = sampling_interval(ctx)
       res%cnames = constant_names(ctx%prob%idx)
       res%c0 = [(get_constant(cfg%model%c, ctx%prob%idx(j)), j=1, size(ctx%prob%idx))]
    end subroutine prepare
+
+   !> Sampling interval (s) of the fit tests: the finest of their median intervals between
+   !> data points (a delay the finest-sampled test resolves counts)
+   function sampling_interval(ctx) result(dt)
+      type(diagnose_context), intent(in) :: ctx
+      real(dp) :: dt
+      real(dp), allocatable :: d(:)
+      integer :: i, n
+      dt = huge(1.0_dp)
+      do i = 1, size(ctx%ifit)
+         associate (t => ctx%prob%targets(ctx%ifit(i))%t)
+            n = size(t)
+            if (n < 2) cycle
+            d = t(2:n) - t(1:n - 1)
+            d = d(order_of(d))
+            dt = min(dt, d((size(d) + 1)/2))
+         end associate
+      end do
+      if (dt == huge(1.0_dp)) dt = 0.0_dp
+   end function sampling_interval
 end module usharp_diagnose

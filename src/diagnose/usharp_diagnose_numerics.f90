@@ -176,16 +176,20 @@ contains
    end function global_points
 
    !> Levenberg-Marquardt (100 steps) from every column of xs; opt becomes the lowest end
-   !> point when it is lower than opt already is. A start where the model fails is passed over.
-   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals)
+   !> point when it is lower than opt already is. A start where the model fails is passed
+   !> over (its fs: huge).
+   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals, fs)
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: xs(:, :), lo(:), hi(:), h
       integer, intent(in) :: max_evals
       type(optimum_type), intent(inout) :: opt
       integer, intent(inout) :: nevals
+      !> Objective at the end of each start
+      real(dp), intent(out), optional :: fs(:)
       type(optimum_type) :: alt
       type(error_type), allocatable :: error
       integer :: j
+      if (present(fs)) fs = huge(1.0_dp)
       do j = 1, size(xs, 2)
          call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
                                   max_evals, alt, error)
@@ -194,6 +198,7 @@ contains
             cycle
          end if
          nevals = nevals + alt%nevals
+         if (present(fs)) fs(j) = alt%f
          if (alt%f < opt%f) opt = alt
       end do
    end subroutine best_of_starts

@@ -5,7 +5,6 @@ module usharp_diagnose_report
    use usharp_error, only: error_type
    use usharp_strings, only: str, real_str, gnuplot_string
    use usharp_process, only: run_process, process_result, proc_exited
-   use usharp_effects, only: effect_info, effect_catalogue, n_effects
    use usharp_regions, only: class_names
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
@@ -20,7 +19,6 @@ module usharp_diagnose_report
 contains
 
    !> The report in Markdown (also what `diagnose` prints)
-   !> The report in Markdown (also what `diagnose` prints)
    function diagnose_report(res, opts) result(lines)
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
@@ -33,6 +31,9 @@ contains
       call where_section(lines, res)
       call which_section(lines, res, opts)
       call shrink_section(lines, res, opts)
+      call separate_section(lines, res)
+      call add(lines, '')
+      call add(lines, str(res%nevals)//' simulations of the test set.')
    end function diagnose_report
 
    !> Section 1: the baseline per test, the floors, the regions ranked by structured gap
@@ -44,7 +45,13 @@ contains
       call add(lines, '## 1. Where the gap lies')
       call add(lines, '')
       call add(lines, 'Baseline: the model without any effect fitted to the fit tests (objective '// &
-               real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals); held-out tests predicted.')
+               real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals, best of '//str(res%baseline_starts)// &
+               ' start'//trim(merge('s', ' ', res%baseline_starts > 1))//'); held-out tests predicted.')
+      if (allocated(res%c_bound)) then
+         if (any(res%c_bound)) call add(lines, '**Flag:** the baseline fit ran away: '// &
+            bound_list(res%cnames, res%c, res%c_bound)//' at a search bound of &fit (lower, upper); '// &
+            'its figures describe a fit that did not converge inside the bounds.')
+      end if
       call add(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
       call add(lines, 'explains is set against the residual. Structured gap = objective - noise part.')
       call add(lines, '')
@@ -104,7 +111,8 @@ contains
       call add(lines, '')
       call add(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
                'effect''s parameters; dAIC, dBIC < 0: better; significant: dBIC < -'// &
-               real_str(bic_margin, 'f0.0')//'):')
+               real_str(bic_margin, 'f0.0')//'; those that lower BIC ran again from the baseline''s '// &
+               'constants, the best other refit''s and Latin-hypercube points, the lowest end kept):')
       if (count(res%effects%refitted) > opts%n_refit) call add(lines, '(beyond the leading '// &
          str(opts%n_refit)//': none of those was confirmed while a structured gap remained)')
       if (res%global) call add(lines, '(no significant local refit brought the fit tests'' structured gap '// &
@@ -134,21 +142,30 @@ contains
       character(len=200), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(in) :: e
-      type(effect_info) :: cat1(n_effects)
-      character(len=:), allocatable :: what
       integer, allocatable :: order(:)
       integer :: i, k
-      cat1 = effect_catalogue(1.0_dp)
       order = top_regions(res%regions, 15)
       call add(lines, '')
-      what = '|value|'
-      if (cat1(e%k)%relative) what = '|value - mean of the fit tests|'
-      call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest '//what//' is '// &
-         real_str(e%worst, 'f0.2')//' of the physical limit of the catalogue):')
+      if (len_trim(e%worst_what) > 0) then
+         call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest against the '// &
+            'physical limit of the catalogue: '//trim(e%worst_what)//', '//real_str(e%worst, 'f0.2')//' of it):')
+      else
+         call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; no physical limit):')
+      end if
       do k = 1, size(e%p)
          call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
             real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']')
       end do
+      if (.not. e%resolved .and. e%significant) call add(lines, '- the delay is below the sampling '// &
+         'interval of the fit tests, '//real_str(res%dt_sample, 'g0.3')//' s: a finding only when it '// &
+         'removes most of the structured gap on both sets')
+      if (allocated(e%c_bound)) then
+         if (any(e%c_bound)) call add(lines, '- **flag:** the refit ran away: '// &
+            bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit')
+      end if
+      if (e%nstarts > 1) call add(lines, '- refitted from '//str(e%nstarts)//' starts (its screening end '// &
+         'point and further starts of the constants): objective '// &
+         real_str(e%f_lo, 'es10.3')//' to '//real_str(e%f_hi, 'es10.3')//', the lowest is used')
       call add(lines, '- objective per test, before -> after:')
       do k = 1, size(res%names)
          call add(lines, '  - '//trim(res%names(k))//trim(merge(' (held out)', '           ', res%held(k)))// &
@@ -181,9 +198,52 @@ contains
             real_str(100.0_dp*opts%confirm_shrink, 'f0.0')//' % of the held-out structured gap, '// &
             'or opening none where there was none).')
       end if
-      call add(lines, '')
-      call add(lines, str(res%nevals)//' simulations of the test set.')
    end subroutine shrink_section
+
+   !> Section 4, when effects explain the gap equally well: the candidate tests that would
+   !> separate them
+   subroutine separate_section(lines, res)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      integer :: j, c
+      if (.not. allocated(res%seps)) return
+      if (size(res%seps) == 0) return
+      call add(lines, '')
+      call add(lines, '## 4. Which test would tell them apart')
+      call add(lines, '')
+      call add(lines, 'Each candidate simulated with each effect''s refit (a per-test parameter at the fit '// &
+         'tests'' mean); D = sum of the squared difference of the two responses over the noise '// &
+         'variance of the fit tests'' data scaled to the candidate''s peak (expected discrimination, '// &
+         'a chi-square: above about 10 the test separates them at that noise; the constants are not '// &
+         'refitted to the candidate, so D is an upper estimate).')
+      do j = 1, size(res%seps)
+         associate (sp => res%seps(j))
+            call add(lines, '')
+            call add(lines, '| candidate test | D: '//trim(res%effects(sp%a)%name)//' vs '// &
+                     trim(res%effects(sp%b)%name)//' |')
+            call add(lines, '|---|---|')
+            do c = 1, size(sp%d)
+               call add(lines, '| '//trim(sp%names(c))//trim(merge(' (best)', '       ', c == sp%best))// &
+                  ' | '//real_str(sp%d(c), 'es9.2')//' |')
+            end do
+         end associate
+      end do
+   end subroutine separate_section
+
+   !> 'n = 170, H2 = 1.0e+04' for the constants in mask
+   function bound_list(names, c, mask) result(text)
+      character(len=*), intent(in) :: names(:)
+      real(dp), intent(in) :: c(:)
+      logical, intent(in) :: mask(:)
+      character(len=:), allocatable :: text
+      integer :: j
+      text = ''
+      do j = 1, size(mask)
+         if (.not. mask(j)) cycle
+         if (len(text) > 0) text = text//', '
+         text = text//trim(names(j))//' = '//real_str(c(j), 'es10.3')
+      end do
+   end function bound_list
 
    !> One line, wrapped at a space when longer than the lines hold
    recursive subroutine add(lines, text)
@@ -345,18 +405,15 @@ contains
       do i = 1, nt
          gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
                trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
-               "plot "//csv//" every ::1 using 3:(strcol(1) eq '"// &
-               trim(res%names(i))//"' ? $5-$6 : 1/0):8 with points pt 7 ps 0.3 lc variable"]
+               "plot "//csv//" every ::1 using "//own_x(i)//":($5-$6):8 with points pt 7 ps 0.3 lc variable"]
       end do
       gp = [character(len=512) :: gp, 'unset multiplot', "set output "//gnuplot_string(join_path(base, 'fit.png')), &
             'set multiplot layout '//str(nt)//',1', 'set key top right']
       do i = 1, nt
          gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
-               "plot "//csv//" every ::1 using 3:(strcol(1) eq '"// &
-               trim(res%names(i))//"' ? $5 : 1/0) with dots lc rgb 'black' title 'data', '' every ::1 "// &
-               "using 3:(strcol(1) eq '"//trim(res%names(i))//"' ? $6 : 1/0) with lines lc rgb 'blue' "// &
-               "title 'baseline', '' every ::1 using 3:(strcol(1) eq '"//trim(res%names(i))// &
-               "' ? $7 : 1/0) with lines lc rgb 'red' title 'with effect'"]
+               "plot "//csv//" every ::1 using "//own_x(i)//":5 with dots "// &
+               "lc rgb 'black' title 'data', '' every ::1 using "//own_x(i)//":6 with lines lc rgb 'blue' "// &
+               "title 'baseline', '' every ::1 using "//own_x(i)//":7 with lines lc rgb 'red' title 'with effect'"]
       end do
       gp = [character(len=512) :: gp, 'unset multiplot']
       call write_lines(join_path(dir, 'plots.gp'), gp, error)
@@ -368,5 +425,12 @@ contains
       argv(3) = join_path(base, 'plots.gp')
       call run_process(argv, '.', '/dev/null', '/dev/null', 600.0_dp, 5.0_dp, proc)
       plotted = proc%how == proc_exited .and. proc%code == 0
+   contains
+      !> Time of test i's points only (other tests' undefined): each panel spans its own test
+      function own_x(i) result(text)
+         integer, intent(in) :: i
+         character(len=:), allocatable :: text
+         text = "(strcol(1) eq '"//trim(res%names(i))//"' ? $3 : 1/0)"
+      end function own_x
    end subroutine draw_plots
 end module usharp_diagnose_report

@@ -11,7 +11,23 @@ module usharp_diagnose_types
    private
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
-   public :: diagnose_progress, tell
+   public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
+
+   !> An effect "explains" the gap when it removes at least this share of the structured
+   !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
+   !> self-check asks the same of the held-out gap
+   real(dp), parameter :: most = 0.8_dp
+
+   !> Candidate tests of the separation step
+   integer, parameter :: n_candidates = 5
+
+   !> Which candidate test separates two effects that explain the gap equally well
+   type :: separation_type
+      integer :: a = 0, b = 0                  !< indices into the result's effects
+      character(len=80) :: names(n_candidates) = ''
+      real(dp) :: d(n_candidates) = 0.0_dp     !< expected discrimination (chi-square) per candidate
+      integer :: best = 0                      !< the candidate with the largest d
+   end type separation_type
 
    abstract interface
       !> Told at each step of a diagnosis: what it is doing, simulations so far, elapsed s
@@ -50,9 +66,10 @@ module usharp_diagnose_types
       real(dp) :: f_after = 0.0_dp
       real(dp), allocatable :: per_test_after(:)
       real(dp), allocatable :: p(:), p_lo(:), p_hi(:)  !< fitted parameters, 95 % interval
+      real(dp), allocatable :: p_all(:)      !< every parameter, all tests (held-out ones fitted)
       real(dp), allocatable :: x(:)          !< search point after screening
       real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
-      character(len=24), allocatable :: pname(:)
+      character(len=64), allocatable :: pname(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
       real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
       logical, allocatable :: c_bound(:)     !< its constants at a search bound
@@ -62,6 +79,13 @@ module usharp_diagnose_types
       logical :: significant = .false., confirmed = .false.
       logical :: plausible = .true.          !< every magnitude within the effect's physical limit
       real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
+      character(len=64) :: worst_what = ''   !< which magnitude that is
+      !> A delay (shift, lag) resolved by the data: not below their sampling interval
+      logical :: resolved = .true.
+      logical, allocatable :: worse(:)       !< fit tests it makes worse beyond their noise
+      !> Objectives of the refit from its further starts (the best is kept): the spread
+      real(dp) :: f_lo = 0.0_dp, f_hi = 0.0_dp
+      integer :: nstarts = 0
       integer :: nevals = 0
       type(region_stat), allocatable :: regions(:)
       real(dp), allocatable :: y(:)          !< responses with the effect, all tests
@@ -88,6 +112,10 @@ module usharp_diagnose_types
       type(region_stat), allocatable :: regions(:)
       type(effect_outcome), allocatable :: effects(:)  !< sorted by pred_dbic
       integer :: leading = 0                      !< index into effects, 0: none confirmed
+      !> Confirmed effects that explain the gap as well as the leading one (it included)
+      integer, allocatable :: alike(:)
+      real(dp) :: dt_sample = 0.0_dp              !< s, median sampling interval of the fit tests
+      type(separation_type), allocatable :: seps(:)   !< tests that would separate alike effects
       character(len=:), allocatable :: verdict
       integer :: nevals = 0
       ! For the plots: every point of every test
@@ -125,4 +153,21 @@ contains
       type(diagnose_result), intent(in) :: res
       held_quiet = res%gap_held <= res%floor_held
    end function held_quiet
+
+   !> True when e leaves both sets' structured gap at the noise level (at or below the floors)
+   pure logical function leaves_noise(e, res)
+      type(effect_outcome), intent(in) :: e
+      type(diagnose_result), intent(in) :: res
+      leaves_noise = (1.0_dp - e%shrink_fit)*res%gap_fit <= res%floor_fit .and. &
+                     e%held_gap <= res%floor_held
+   end function leaves_noise
+
+   !> True when e removes most of the structured gap on both sets (a set without one at the
+   !> baseline must stay without)
+   pure logical function explains_most(e, res)
+      type(effect_outcome), intent(in) :: e
+      type(diagnose_result), intent(in) :: res
+      explains_most = (e%shrink_fit >= most .or. .not. fit_structured(res)) .and. &
+                      (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held)
+   end function explains_most
 end module usharp_diagnose_types

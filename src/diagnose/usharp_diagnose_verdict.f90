@@ -1,11 +1,15 @@
-!> The verdict of a diagnosis: the leading confirmed effect and the words for it, each
-!> refit's verdict, and the regions that carry the structured gap
+!> The verdict of a diagnosis: which confirmed effect leads (the simplest of those the
+!> evidence cannot tell apart), which explain the gap equally well, the words for it scaled
+!> with the evidence, each refit's verdict, and the regions that carry the structured gap
 module usharp_diagnose_verdict
    use usharp_kinds, only: dp
    use usharp_strings, only: real_str
    use usharp_sort, only: order_of
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet
+   use usharp_diagnose_options, only: bic_margin
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
+                                    leaves_noise, explains_most
    implicit none
    private
 
@@ -13,41 +17,101 @@ module usharp_diagnose_verdict
 
 contains
 
-   !> The leading effect (confirmed, lowest BIC) and the verdict in words
+   !> The leading effect and the verdict in words. Among the confirmed effects, those whose
+   !> BIC lies within bic_margin of the lowest (below it: no strong evidence, Kass and Raftery
+   !> 1995, a Bayes factor under 150) or that leave both sets' structured gap at the noise
+   !> level (nothing structured is left for a richer effect to explain) explain the gap
+   !> equally well; the simplest of them leads (fewer parameters, global before per-test),
+   !> then the lowest BIC
    subroutine conclude(res)
       type(diagnose_result), intent(inout) :: res
-      integer :: j, k
-      integer, allocatable :: top(:)
-      character(len=:), allocatable :: where
+      integer :: j, best
+      integer, allocatable :: conf(:), keys(:)
+      logical, allocatable :: confirmed(:)
       res%leading = 0
-      do j = 1, size(res%effects)
-         if (.not. res%effects(j)%confirmed) cycle
-         if (res%leading == 0) then
-            res%leading = j
-         else if (res%effects(j)%dbic < res%effects(res%leading)%dbic) then
-            res%leading = j
-         end if
-      end do
-      if (res%leading > 0) then
-         associate (e => res%effects(res%leading))
-            res%verdict = trim(e%name)//' explains the gap: BIC '//real_str(e%dbic, 'f0.1')// &
-               ', structured gap removed '//real_str(100.0_dp*e%shrink_fit, 'f0.0')//' % on the fit tests'
-            if (held_quiet(res)) then
-               res%verdict = res%verdict//'; the held-out tests had none and still have none'
-            else
-               res%verdict = res%verdict//' and '//real_str(100.0_dp*e%shrink_held, 'f0.0')// &
-                  ' % on the held-out tests'
-            end if
-         end associate
+      res%alike = [integer ::]
+      ! The flags copied: a component of an array of derived type is not contiguous
+      confirmed = res%effects%confirmed
+      conf = pack([(j, j=1, size(res%effects))], confirmed)
+      if (size(conf) == 0) then
+         call no_effect(res)
          return
       end if
-      k = 0
-      do j = 1, size(res%effects)
-         if (res%effects(j)%significant) k = j
+      best = conf(1)
+      do j = 2, size(conf)
+         if (res%effects(conf(j))%dbic < res%effects(best)%dbic) best = conf(j)
       end do
+      do j = 1, size(conf)
+         associate (e => res%effects(conf(j)))
+            if (e%dbic < res%effects(best)%dbic + bic_margin .or. leaves_noise(e, res)) &
+               res%alike = [res%alike, conf(j)]
+         end associate
+      end do
+      ! Simplest first, ties by BIC (atan keeps its order within a step of the key)
+      allocate (keys(size(res%alike)))
+      do j = 1, size(res%alike)
+         keys(j) = complexity(res%effects(res%alike(j)))
+      end do
+      res%alike = res%alike(order_of(real(keys, dp) + 1.0e-6_dp*atan(res%effects(res%alike)%dbic)))
+      res%leading = res%alike(1)
+      call effect_verdict(res)
+   end subroutine conclude
+
+   !> Complexity of an effect's refit: twice its free parameters, one more when they are per test
+   pure integer function complexity(e) result(key)
+      type(effect_outcome), intent(in) :: e
+      type(effect_info) :: cat(n_effects)
+      cat = effect_catalogue(1.0_dp)
+      key = 2*e%q + merge(1, 0, cat(e%k)%sharing == param_per_test)
+   end function complexity
+
+   !> The verdict when an effect leads: how much of the gap it explains, on which sets, what
+   !> explains it as well, and which fit tests it makes worse
+   subroutine effect_verdict(res)
+      type(diagnose_result), intent(inout) :: res
+      character(len=:), allocatable :: text, others
+      integer :: j
+      associate (e => res%effects(res%leading))
+         if (explains_most(e, res)) then
+            text = trim(e%name)//' explains the gap'
+         else
+            text = trim(e%name)//' partly explains the gap'
+         end if
+         text = text//': BIC '//real_str(e%dbic, 'f0.1')//', structured gap removed '// &
+                real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % on the fit tests'
+         if (held_quiet(res)) then
+            text = text//'; the held-out tests had none and still have none'
+         else
+            text = text//' and '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % on the held-out tests'
+         end if
+         if (size(res%alike) > 1) then
+            others = ''
+            do j = 2, size(res%alike)
+               if (j > 2) others = others//', '
+               others = others//trim(res%effects(res%alike(j))%name)
+            end do
+            text = text//'; '//trim(others)//' explain'//trim(merge('s', ' ', size(res%alike) == 2))// &
+                   ' it equally well (BIC within '//real_str(bic_margin, 'f0.0')// &
+                   ' or only noise left): the tests cannot tell them apart; '//trim(e%name)// &
+                   ' is the simplest'
+         end if
+         if (any(e%worse)) text = text//'; it makes '//test_list(res, e%worse)//' worse'
+      end associate
+      res%verdict = text
+   end subroutine effect_verdict
+
+   !> The verdict when no effect is confirmed
+   subroutine no_effect(res)
+      type(diagnose_result), intent(inout) :: res
+      integer :: j
+      integer, allocatable :: top(:)
+      character(len=:), allocatable :: where
       if (.not. any(res%regions%structured)) then
          res%verdict = 'no significant effect: the residual is at the noise level'
-         if (k > 0) res%verdict = res%verdict//' (refits that lower BIC do not carry to the held-out tests)'
+         do j = 1, size(res%effects)
+            if (res%effects(j)%significant) res%verdict = res%verdict//'; '// &
+               trim(res%effects(j)%name)//' lowers BIC, but '//why_not(res%effects(j), res)
+         end do
          return
       end if
       where = ''
@@ -59,11 +123,41 @@ contains
       end do
       res%verdict = 'no catalogue effect is confirmed; the structured residual lies in: '//where
       do j = 1, size(res%effects)
-         if (res%effects(j)%significant .and. .not. res%effects(j)%plausible) res%verdict = &
-            res%verdict//'; '//trim(res%effects(j)%name)//' lowers BIC only at an implausible magnitude'
-
+         if (res%effects(j)%significant) res%verdict = res%verdict//'; '// &
+            trim(res%effects(j)%name)//' lowers BIC, but '//why_not(res%effects(j), res)
       end do
-   end subroutine conclude
+   end subroutine no_effect
+
+   !> Why a significant effect is not confirmed, briefly
+   function why_not(e, res) result(text)
+      type(effect_outcome), intent(in) :: e
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      if (.not. e%plausible) then
+         text = 'its '//trim(e%worst_what)//' is '//real_str(e%worst, 'f0.1')//' x its physical limit'
+      else if (.not. e%resolved) then
+         text = 'its delay is below the sampling interval ('//real_str(res%dt_sample, 'g0.3')// &
+                ' s) and it does not remove most of the gap'
+      else if (.not. fit_structured(res) .and. held_quiet(res)) then
+         text = 'there is no structured gap to explain'
+      else
+         text = 'it does not carry to the held-out tests'
+      end if
+   end function why_not
+
+   !> Names of the tests in mask, comma-separated
+   function test_list(res, mask) result(text)
+      type(diagnose_result), intent(in) :: res
+      logical, intent(in) :: mask(:)
+      character(len=:), allocatable :: text
+      integer :: i
+      text = ''
+      do i = 1, size(mask)
+         if (.not. mask(i)) cycle
+         if (len(text) > 0) text = text//', '
+         text = text//trim(res%names(i))
+      end do
+   end function test_list
 
    !> Regions other than whole tests, by structured gap, largest first; at most nmax
    pure function top_regions(regs, nmax) result(idx)
@@ -75,21 +169,38 @@ contains
       idx = idx(1:min(nmax, size(idx)))
    end function top_regions
 
-   pure function verdict_of(e, res) result(text)
+   !> One refit's verdict, in words scaled with the evidence
+   function verdict_of(e, res) result(text)
       type(effect_outcome), intent(in) :: e
       type(diagnose_result), intent(in) :: res
       character(len=:), allocatable :: text
-      if (e%confirmed) then
-         text = 'confirmed'
-      else if (e%significant .and. .not. e%plausible) then
-         text = 'significant, but the magnitude is '//real_str(e%worst, 'f0.1')// &
-                'x its physical limit: stands in for something else'
-      else if (e%significant .and. .not. fit_structured(res) .and. held_quiet(res)) then
-         text = 'significant, but no structured gap to explain'
+      integer :: i, j
+      if (e%confirmed .and. explains_most(e, res)) then
+         text = 'confirmed: explains the gap'
+      else if (e%confirmed) then
+         text = 'confirmed: partly explains the gap'
       else if (e%significant) then
-         text = 'significant, not confirmed on held-out'
+         text = 'lowers BIC, but '//why_not(e, res)
+         if (.not. e%plausible) text = text//': stands in for something else'
+         if (e%plausible .and. .not. e%resolved) text = text//': not a finding'
       else
          text = 'not significant'
+      end if
+      j = 0
+      do i = 1, size(res%effects)
+         if (res%effects(i)%k == e%k) j = i
+      end do
+      if (e%confirmed .and. allocated(res%alike) .and. res%leading > 0) then
+         if (j == res%leading .and. size(res%alike) > 1) then
+            text = text//', leads as the simplest of those that explain it equally well'
+         else if (any(res%alike == j) .and. j /= res%leading) then
+            text = text//', as well as '//trim(res%effects(res%leading)%name)//': the tests cannot tell them apart'
+         else if (j /= res%leading) then
+            text = text//', but '//trim(res%effects(res%leading)%name)//' is better by BIC'
+         end if
+      end if
+      if (allocated(e%worse)) then
+         if (any(e%worse)) text = text//'; makes '//test_list(res, e%worse)//' worse'
       end if
    end function verdict_of
 end module usharp_diagnose_verdict

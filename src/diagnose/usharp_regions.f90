@@ -272,7 +272,11 @@ contains
       st%structured = st%z < -3.0_dp .and. st%ratio > 1.1_dp
    end function region_of
 
-   !> Wald-Wolfowitz runs test on the signs of e: (runs - mean)/sd; 0 if one sign only
+   !> Runs test on the signs of e, z = (runs - mean)/sd (negative: fewer runs than noise
+   !> gives): the lower of the Wald-Wolfowitz z (given the counts of each sign) and the z
+   !> against independent signs of even odds (runs - 1 binomial(n - 1, 1/2)). The first alone
+   !> is blind to a residual of one sign (one run is all it allows: z 0 at 209 of 209 points);
+   !> the second sees it (z = -sqrt(n - 1)).
    pure real(dp) function runs_z(e) result(z)
       real(dp), intent(in) :: e(:)
       real(dp) :: np, nm, n, mu, var
@@ -281,15 +285,17 @@ contains
       np = count(e > 0.0_dp)
       nm = count(e <= 0.0_dp)
       n = np + nm
-      if (np < 1.0_dp .or. nm < 1.0_dp) return
+      if (n < 2.0_dp) return
       runs = 1
       do i = 2, size(e)
          if ((e(i) > 0.0_dp) .neqv. (e(i - 1) > 0.0_dp)) runs = runs + 1
       end do
+      z = (real(runs, dp) - 0.5_dp*(n + 1.0_dp))/sqrt(0.25_dp*(n - 1.0_dp))
+      if (np < 1.0_dp .or. nm < 1.0_dp) return
       mu = 2.0_dp*np*nm/n + 1.0_dp
       var = (mu - 1.0_dp)*(mu - 2.0_dp)/(n - 1.0_dp)
       if (var <= 0.0_dp) return
-      z = (real(runs, dp) - mu)/sqrt(var)
+      z = min(z, (real(runs, dp) - mu)/sqrt(var))
    end function runs_z
 
    !> Noise standard deviation of a sampled signal from its second differences, robustly

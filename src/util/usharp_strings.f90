@@ -40,7 +40,9 @@ contains
       res = real_str(val, 'g0.6')
    end function str_real
 
-   !> Real number written with a given edit descriptor, trimmed
+   !> Real number written with a given edit descriptor, trimmed. A zero-width F descriptor
+   !> gets the leading zero the processor leaves out ('0.55', '-0.55', not '.55') and loses a
+   !> bare trailing point ('6', not '6.').
    pure function real_str(val, fmt) result(res)
       real(dp), intent(in) :: val
       character(len=*), intent(in) :: fmt
@@ -48,6 +50,16 @@ contains
       character(len=64) :: buf
       write (buf, '('//fmt//')') val
       res = trim(adjustl(buf))
+      if (len(fmt) < 2) return
+      if (.not. (scan(fmt(1:1), 'fF') == 1 .and. fmt(2:2) == '0')) return
+      if (len(res) == 0) return
+      if (res(1:1) == '.') then
+         res = '0'//res
+      else if (len(res) > 1) then
+         if (res(1:2) == '-.') res = '-0'//res(2:)
+      end if
+      if (res(len(res):len(res)) == '.') res = res(1:len(res) - 1)
+      if (res == '-0') res = '0'
    end function real_str
 
    !> Split a line into fields: by commas when the line holds one, else by white space.

@@ -1,0 +1,183 @@
+!> The last step of a diagnosis: when several effects explain the gap equally well, which
+!> test would tell them apart. Candidates come from a standard set scaled to the fit tests
+!> (tension at two rates, relaxation holds, cycling with holds at a smaller and a larger
+!> range); each is simulated with every such effect's refit (its constants and parameters;
+!> a per-test parameter at the fit tests' mean), and candidates are ranked for each pair by
+!> the expected discrimination D = sum((y_a - y_b)**2)/s**2, s the noise the fit tests' data
+!> show (relative to their peak) times the candidate's peak: the T-optimal criterion of
+!> model discrimination (Atkinson and Fedorov 1975). D is a chi-square: above about 10 the
+!> candidate would separate the pair at the noise of the data.
+module usharp_diagnose_separate
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_strings, only: real_str
+   use usharp_miller, only: miller_model, set_constant
+   use usharp_history, only: history_type, control_strain, tensile_history, relaxation_history, &
+                             cyclic_history, output_times
+   use usharp_simulation, only: sim_result
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
+   use usharp_effects, only: test_effects, effects_of, effect_model, param_per_test, effect_nparams
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, &
+                                    separation_type, n_candidates
+   implicit none
+   private
+
+   public :: separate
+
+
+contains
+
+   !> For each pair of the effects that explain the gap equally well (res%alike, at most the
+   !> first three), the discrimination of each candidate test: res%seps
+   subroutine separate(ctx, res)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(history_type) :: hist(n_candidates)
+      character(len=80) :: names(n_candidates)
+      type(separation_type), allocatable :: seps(:)
+      real(dp) :: rel_noise
+      integer :: na, i, j, c, npair
+      allocate (seps(0))
+      res%seps = seps
+      if (.not. allocated(res%alike)) return
+      na = min(size(res%alike), 3)
+      if (na < 2) return
+      call tell(ctx, 'which test would separate the effects', res%nevals)
+      call candidates(ctx, hist, names)
+      ! Relative noise of the fit tests' data
+      rel_noise = sum(res%noise/res%peak, .not. res%held)/max(count(.not. res%held), 1)
+      npair = 0
+      do i = 1, na - 1
+         do j = i + 1, na
+            npair = npair + 1
+         end do
+      end do
+      deallocate (seps)
+      allocate (seps(npair))
+      npair = 0
+      do i = 1, na - 1
+         do j = i + 1, na
+            npair = npair + 1
+            seps(npair)%a = res%alike(i)
+            seps(npair)%b = res%alike(j)
+            seps(npair)%names = names
+            do c = 1, n_candidates
+               call discrimination(ctx, res, hist(c), res%effects(res%alike(i)), &
+                                   res%effects(res%alike(j)), rel_noise, seps(npair)%d(c), res%nevals)
+            end do
+            seps(npair)%best = maxloc(seps(npair)%d, 1)
+         end do
+      end do
+      res%seps = seps
+      associate (sp => seps(1))
+         if (sp%d(sp%best) > 0.0_dp) res%verdict = res%verdict//'; a '//trim(sp%names(sp%best))// &
+            ' would tell '//trim(res%effects(sp%a)%name)//' from '//trim(res%effects(sp%b)%name)// &
+            ' (expected chi-square difference '//real_str(sp%d(sp%best), 'es9.2')//')'
+      end associate
+   end subroutine separate
+
+   !> The standard candidates scaled to the fit tests: their largest strain amplitude emax
+   !> (strain-controlled tests; 0.5 % when none)
+   subroutine candidates(ctx, hist, names)
+      type(diagnose_context), intent(in) :: ctx
+      type(history_type), intent(out) :: hist(:)
+      character(len=80), intent(out) :: names(:)
+      type(error_type), allocatable :: error
+      real(dp) :: emax
+      integer :: i
+      emax = 0.0_dp
+      do i = 1, size(ctx%ifit)
+         associate (h => ctx%prob%cfg%tests(ctx%ifit(i))%hist)
+            if (h%control == control_strain) emax = max(emax, maxval(abs(h%v)))
+         end associate
+      end do
+      if (emax <= 0.0_dp) emax = 0.005_dp
+      call tensile_history(1.0e-3_dp, 2.0_dp*emax, hist(1), error)
+      names(1) = 'tension at 1e-3 /s to '//real_str(200.0_dp*emax, 'f0.2')//' % strain'
+      call tensile_history(1.0e-5_dp, 2.0_dp*emax, hist(2), error)
+      names(2) = 'tension at 1e-5 /s to '//real_str(200.0_dp*emax, 'f0.2')//' % strain'
+      call relaxation_history([0.5_dp*emax, emax], 1.0_dp, [600.0_dp, 600.0_dp], hist(3), error)
+      names(3) = 'relaxation holds of 600 s at '//real_str(50.0_dp*emax, 'f0.2')//' and '// &
+                 real_str(100.0_dp*emax, 'f0.2')//' % strain'
+      call cyclic_history(emax, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 300.0_dp, 300.0_dp, hist(4), error)
+      names(4) = 'cycling at 1e-3 /s, range '//real_str(100.0_dp*emax, 'f0.2')//' %, 300 s holds, 3 cycles'
+      call cyclic_history(3.0_dp*emax, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 300.0_dp, 300.0_dp, hist(5), error)
+      names(5) = 'cycling at 1e-3 /s, range '//real_str(300.0_dp*emax, 'f0.2')//' %, 300 s holds, 3 cycles'
+   end subroutine candidates
+
+   !> Expected discrimination of the candidate history between the refits of effects ea and
+   !> eb (0 when either fails to simulate)
+   subroutine discrimination(ctx, res, hist, ea, eb, rel_noise, d, nevals)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(in) :: res
+      type(history_type), intent(in) :: hist
+      type(effect_outcome), intent(in) :: ea, eb
+      real(dp), intent(in) :: rel_noise
+      real(dp), intent(out) :: d
+      integer, intent(inout) :: nevals
+      real(dp), allocatable :: tout(:), ya(:), yb(:)
+      real(dp) :: s
+      logical :: oka, okb
+      d = 0.0_dp
+      tout = output_times(hist, max(hist%end_time()/400.0_dp, 0.1_dp))
+      call response(ctx, res, hist, tout, ea, ya, oka)
+      call response(ctx, res, hist, tout, eb, yb, okb)
+      nevals = nevals + 2
+      if (.not. (oka .and. okb)) return
+      s = rel_noise*max(maxval(abs(ya)), tiny(1.0_dp))
+      if (s <= 0.0_dp) return
+      d = sum((ya - yb)**2)/s**2
+   end subroutine discrimination
+
+   !> Stress response to the strain history hist at times tout with effect e's refit
+   subroutine response(ctx, res, hist, tout, e, y, ok)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(in) :: res
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: tout(:)
+      type(effect_outcome), intent(in) :: e
+      real(dp), allocatable, intent(out) :: y(:)
+      logical, intent(out) :: ok
+      type(miller_model) :: model, mt
+      type(test_effects) :: eff(1)
+      type(error_type), allocatable :: error
+      type(sim_result) :: sim
+      real(dp), allocatable :: p(:)
+      integer :: j, g, nt, np
+      ok = .false.
+      allocate (y(size(tout)))
+      y = 0.0_dp
+      if (.not. allocated(e%p_all) .or. .not. allocated(e%c)) return
+      model = ctx%prob%cfg%model
+      do j = 1, size(ctx%prob%idx)
+         call set_constant(model%c, ctx%prob%idx(j), e%c(j))
+      end do
+      ! A per-test parameter of a new test: the fit tests' mean
+      nt = size(ctx%prob%targets)
+      associate (info => ctx%cat(e%k))
+         np = info%nparam
+         if (info%sharing == param_per_test) then
+            allocate (p(np))
+            do g = 1, np
+               p(g) = sum(e%p_all((g - 1)*nt + 1:g*nt), .not. res%held)/max(count(.not. res%held), 1)
+            end do
+         else
+            p = e%p_all(1:effect_nparams(info, 1))
+         end if
+      end associate
+      eff = effects_of(e%k, p, 1, ctx%eff_base)
+      call effect_model(model, eff(1), mt, error)
+      if (allocated(error)) return
+      if (ctx%prob%cfg%solver%integrator == 'cvode') then
+         call simulate_cvode(mt, hist, min(max(tout - eff(1)%shift, hist%t(1)), hist%end_time()), &
+                             ctx%prob%cfg%solver, sim, error, eff(1))
+      else
+         call simulate_rosenbrock(mt, hist, min(max(tout - eff(1)%shift, hist%t(1)), hist%end_time()), &
+                                  ctx%prob%cfg%solver, sim, error, eff(1))
+      end if
+      if (allocated(error)) return
+      y = sim%stress
+      ok = all(abs(y) < huge(1.0_dp))
+   end subroutine response
+end module usharp_diagnose_separate
