@@ -9,6 +9,7 @@ module usharp_cli
    use usharp_cli_help, only: main_help, command_help, version_text
    use usharp_cmd_simulate, only: simulate_command
    use usharp_cmd_run, only: run_command
+   use usharp_cmd_predict, only: predict_command
    use usharp_cmd_deck, only: deck_command
    use usharp_cmd_identify, only: identify_command
    use usharp_cmd_design, only: design_command
@@ -51,6 +52,8 @@ contains
          if (cmd%quiet) return
          lines = [character(len=1024) :: ('wrote '//trim(written(k)), k=1, size(written))]
          return
+      case ('predict')
+         call predict_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
       case ('identify')
          call identify_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
       case ('design')

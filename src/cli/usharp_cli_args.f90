@@ -14,7 +14,7 @@ module usharp_cli_args
 
    !> The commands, in the order the help lists them
    character(len=*), parameter :: command_list(*) = [character(len=8) :: &
-      'run', 'simulate', 'deck', 'identify', 'design', 'diagnose']
+      'run', 'predict', 'simulate', 'deck', 'identify', 'design', 'diagnose']
 
    !> A parsed command line
    type :: cli_command

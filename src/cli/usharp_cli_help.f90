@@ -51,6 +51,7 @@ contains
          'tests given in a namelist input file.'//nl//nl// &
          'commands:'//nl// &
          '  run        fit the constants of &fit to the data of every &test'//nl// &
+         '  predict    apply a fit''s constants (-c best.nml) to other tests: errors, curves'//nl// &
          '  simulate   simulate every &test, write <out_dir>/<test>.sim.txt'//nl// &
          '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl// &
          '  identify   identifiability of the &fit constants at the input''s constants'//nl// &
@@ -130,6 +131,16 @@ contains
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
             '  -q, --quiet           do not list the files written'//nl// &
+            common_options
+      case ('predict')
+         text = 'usage: usharp predict -c best.nml [options] <input.nml>'//nl//nl// &
+            'Reads the input''s &model, &solver and &test groups (with their data files) and the'//nl// &
+            '&constants of FILE (a best.nml of run: the fitted constants); simulates every test'//nl// &
+            'and compares it with its data: RMS error, RMS error / peak of the data and largest'//nl// &
+            'error per test. Writes <out_dir>/<test>.sim.txt, <test>.fit.txt (data beside the'//nl// &
+            'prediction) and summary.txt (the table), as run does for the tests it fits.'//nl//nl// &
+            'options:'//nl// &
+            '  -c, --constants FILE  the fitted constants (required)'//nl// &
             common_options
       case default
          text = 'usage: usharp simulate [options] <input.nml>'//nl//nl// &

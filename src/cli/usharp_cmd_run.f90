@@ -2,7 +2,7 @@
 !> best.nml, the best fit's curves beside the data, and a summary
 module usharp_cmd_run
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy
+   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input
    use usharp_strings, only: str, real_str
    use usharp_miller, only: n_constants, constant_names, get_constant, miller_model
    use usharp_config, only: run_config
@@ -18,7 +18,7 @@ module usharp_cmd_run
    implicit none
    private
 
-   public :: run_command
+   public :: run_command, write_curves
 
 contains
 
@@ -64,6 +64,13 @@ contains
          call read_config_as(path, constants_file, out_dir, cfg, error)
          if (allocated(error)) return
          dir = cfg%out_dir
+         if (len_trim(constants_file) > 0 .and. cfg%fit%multistart > 0) then
+            ! The starts are drawn over the box: constants to start from would not be used
+            call fatal_error(error, path//': &fit: multistart = '//str(cfg%fit%multistart)// &
+               ' draws its own starts, so -c '//constants_file//' would be ignored; remove '// &
+               'multistart to start from those constants, or -c to search from the starts', stat_input)
+            return
+         end if
          call setup_problem(cfg, prob, error)
          if (allocated(error)) return
          call make_dir(dir, error)

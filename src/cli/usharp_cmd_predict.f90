@@ -1,0 +1,74 @@
+!> `usharp predict`: the constants of a fit (-c best.nml) applied to tests that were not in
+!> it: each test's error figures, the same curves as a fit writes and a summary
+module usharp_cmd_predict
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_strings, only: real_str
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config_as
+   use usharp_objective, only: fit_problem, setup_problem, simulated
+   use usharp_simulation, only: sim_result
+   use usharp_output, only: write_lines
+   use usharp_filesys, only: make_dir, join_path
+   use usharp_cmd_run, only: write_curves
+   implicit none
+   private
+
+   public :: predict_command, prediction_errors
+
+contains
+
+   !> Simulate every &test of path with the &constants of constants_file (required) and
+   !> compare with the tests' data: RMS error, RMS error / peak of the data, largest error per
+   !> test (the fitted response's unit). Writes <test>.sim.txt, <test>.fit.txt and summary.txt
+   !> into out_dir (&output out_dir when empty); summary returns the table.
+   subroutine predict_command(path, out_dir, constants_file, summary, error)
+      character(len=*), intent(in) :: path, out_dir, constants_file
+      character(len=200), allocatable, intent(out) :: summary(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(sim_result), allocatable :: res(:)
+      real(dp) :: rms, rel, worst
+      character(len=200) :: row
+      integer :: i
+      allocate (summary(0))
+      if (len_trim(constants_file) == 0) then
+         call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_input)
+         return
+      end if
+      call read_config_as(path, constants_file, out_dir, cfg, error)
+      if (allocated(error)) return
+      ! Nothing is fitted; the problem's set-up asks for one fitted constant, unused here
+      if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.
+      call setup_problem(cfg, prob, error)
+      if (allocated(error)) return
+      call make_dir(cfg%out_dir, error)
+      if (allocated(error)) return
+      allocate (res(size(cfg%tests)))
+      call prob%simulate_all(cfg%model, res, error)
+      if (allocated(error)) return
+      summary = [character(len=200) :: 'usharp predict '//path//' with the constants of '// &
+         constants_file, '  test                              RMS error    RMS/peak   max error']
+      do i = 1, size(cfg%tests)
+         call prediction_errors(prob%targets(i)%y_ex, simulated(cfg%tests(i), res(i)), rms, rel, worst)
+         write (row, '(2x,a32,es12.4,f10.2,a,es12.4)') cfg%tests(i)%name, rms, 100.0_dp*rel, ' %', worst
+         summary = [character(len=200) :: summary, row]
+      end do
+      summary = [character(len=200) :: summary, '  (errors in '//cfg%units// &
+         ', strain for stress-controlled tests; peak: the largest |value| of the data)', &
+         '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
+      call write_curves(prob, cfg%model, cfg%out_dir, error)
+      if (allocated(error)) return
+      call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
+   end subroutine predict_command
+
+   !> RMS error, RMS error over the peak |measured| and the largest |error| of a prediction
+   pure subroutine prediction_errors(y_ex, y_sim, rms, rel, worst)
+      real(dp), intent(in) :: y_ex(:), y_sim(:)
+      real(dp), intent(out) :: rms, rel, worst
+      rms = sqrt(sum((y_ex - y_sim)**2)/real(size(y_ex), dp))
+      rel = rms/max(maxval(abs(y_ex)), tiny(1.0_dp))
+      worst = maxval(abs(y_ex - y_sim))
+   end subroutine prediction_errors
+end module usharp_cmd_predict
