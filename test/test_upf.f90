@@ -36,6 +36,7 @@ contains
          new_unittest('invalid-property-named-elastic-tangent', test_invalid), &
          new_unittest('cut-back-leaves-elastic-tangent', test_cutback), &
          new_unittest('adapters-reject-with-elastic-tangent', test_adapter_reject), &
+         new_unittest('adapters-plane-elements-agree', test_adapters_plane), &
          new_unittest('openmp-threads-bit-for-bit', test_threads), &
          new_unittest('single-file-sources-compile-as-vendors', test_single_files)]
    end subroutine collect_upf
@@ -360,6 +361,68 @@ contains
       call check(error, keycut == 1 .and. all(c == ce) .and. all(s == 0.0_dp), &
                  'ANSYS USERMAT, n < 0: keycut = 1, dsdePl elastic')
    end subroutine test_adapter_reject
+
+   !> Plane strain (4 components) and plane stress (3) increments through the Abaqus UMAT and
+   !> the ANSYS USERMAT: stresses, tangents and states equal each other (bit for bit: the
+   !> 2-D component orders agree and the states differ by the 13/23 swap) and the core
+   !> update's; the energies and the ANSYS extras are filled in
+   subroutine test_adapters_plane(error)
+      use test_update, only: umat, usermat
+      integer, parameter :: swap(13) = [1, 2, 3, 4, 6, 5, 7, 8, 9, 10, 11, 13, 12]
+      type(error_type), allocatable, intent(out) :: error
+      type(upf_result) :: res
+      real(dp) :: sa(4), sb(4), sc(4), va(13), vb(13), vc(13), ca(4, 4), cb(4, 4), cc(4, 4)
+      real(dp) :: e(4), d(4), z, z2(2), z3(3), z33(3, 3), z4(4), zb(4), zc(4), pnewdt, cutf
+      real(dp) :: sse, spd, scd, rpl, drpldt, sedel, sedpl, epseq, epspl(4), epszz
+      integer :: nt, k, keycut, ndi
+      logical :: ok
+      character(len=80) :: cm
+      character(len=120) :: buf
+      cm = 'MILLER'
+      z = 0; z2 = 0; z3 = 0; z33 = 0; z4 = 0; zb = 0; zc = 0
+      do nt = 4, 3, -1
+         ndi = merge(3, 2, nt == 4)
+         sa = 0; sb = 0; sc = 0; va = 0; vb = 0; vc = 0; e = 0
+         sse = 0; spd = 0; scd = 0; rpl = 0; drpldt = 0; sedel = 0; sedpl = 0; epseq = 0
+         epspl = 0; epszz = 0
+         d = 0
+         d(1:2) = [3.0e-4_dp, -1.0e-4_dp]
+         d(nt) = 1.0e-4_dp
+         do k = 1, 30
+            pnewdt = 1.0e36_dp
+            cutf = 1.0_dp
+            call umat(sa(:nt), va, ca(:nt, :nt), sse, spd, scd, rpl, zb(:nt), zc(:nt), drpldt, e(:nt), &
+                      d(:nt), z2, 0.5_dp, temp, z, z4, z4, cm, ndi, 1, nt, 13, props, 13, z3, z33, &
+                      pnewdt, z, z33, z33, 1, 1, 1, 1, 1, k)
+            call usermat(1, 1, 1, 1, 1, 1, 1, keycut, ndi, 1, nt, 13, 13, z, 0.5_dp, temp, z, &
+                         sb(:nt), vb, cb(:nt, :nt), sedel, sedpl, epseq, e(:nt), d(:nt), epspl(:nt), &
+                         props, z3, z, z33, z33, z2, epszz, cutf, z, z, z, z, z, z, z)
+            call upf_update(props, temp, 0.5_dp, perm_abaqus, nt, e(:nt), d(:nt), sc(:nt), vc, &
+                            cc(:nt, :nt), res)
+            if (pnewdt < 1.0_dp .or. keycut /= 0 .or. res%status /= upf_ok) then
+               call test_failed(error, 'an increment was cut')
+               return
+            end if
+            e = e + d
+            if (any(sa(:nt) /= sb(:nt)) .or. any(sa(:nt) /= sc(:nt)) .or. &
+                any(ca(:nt, :nt) /= cb(:nt, :nt)) .or. any(ca(:nt, :nt) /= cc(:nt, :nt)) .or. &
+                any(va /= vc) .or. any(va /= vb(swap)) .or. sse /= sedel .or. spd /= sedpl) then
+               write (buf, '(a,i0,a,i0)') 'adapters differ for ntens ', nt, ' at increment ', k
+               call test_failed(error, trim(buf))
+               return
+            end if
+         end do
+         write (buf, '(a,i0,a,2es11.3,a,es11.3)') 'ntens ', nt, ': SPD, epseq ', spd, epseq, &
+            ', epsZZ ', epszz
+         if (nt == 3) then
+            ok = epszz < -1.0e-3_dp .and. all(epspl(1:3) == vb([1, 2, 4]))
+         else
+            ok = all(epspl == vb(1:4))
+         end if
+         call check(error, ok .and. spd > 0.0_dp .and. epseq > 1.0e-3_dp .and. sse > 0.0_dp, trim(buf))
+         if (allocated(error)) return
+      end do
+   end subroutine test_adapters_plane
 
    !> Eight material points with different histories (3-D, plane strain and plane stress),
    !> updated from four OpenMP threads, give the serial results bit for bit
