@@ -7,7 +7,7 @@ rem
 rem Settings (edit here or set in the environment):
 rem   ANSYS_EXE      the ANSYS Mechanical APDL executable
 rem   ANS_USER_PATH  the folder of the user-programmable-features library built with the
-rem                  usharp USERMAT (see the README, "Fitting with ANSYS")
+rem                  usharp USERMAT (docs/user-guide.md, "a fit with ANSYS")
 rem   ANSYS_OPTS     further options, e.g. a licence: -p ansys
 if "%ANSYS_EXE%"=="" set "ANSYS_EXE=C:\Program Files\ANSYS Inc\v242\ansys\bin\winx64\MAPDL.exe"
 if "%ANS_USER_PATH%"=="" set "ANS_USER_PATH=%USERPROFILE%\usharp-upf"

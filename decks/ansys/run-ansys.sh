@@ -7,7 +7,7 @@
 # Settings (edit here or set in the environment):
 #   ANSYS_EXE      the ANSYS Mechanical APDL executable
 #   ANS_USER_PATH  the folder of the user-programmable-features library built with the usharp
-#                  USERMAT (see the README, "Fitting with ANSYS")
+#                  USERMAT (see docs/user-guide.md, "Step by step: a fit with ANSYS")
 #   ANSYS_OPTS     further options, e.g. a licence: -p ansys
 ANSYS_EXE=${ANSYS_EXE:-/ansys_inc/v242/ansys/bin/mapdl}
 ANS_USER_PATH=${ANS_USER_PATH:-$HOME/usharp-upf}
