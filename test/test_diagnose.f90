@@ -457,7 +457,7 @@ contains
    subroutine test_parsimony(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      res%names = [character(len=40) :: 'a', 'b', 'c']
+      res%names = [character(len=64) :: 'a', 'b', 'c']
       res%held = [.false., .false., .true.]
       res%gap_fit = 10.0_dp
       res%floor_fit = 1.0_dp

@@ -93,7 +93,7 @@ module usharp_diagnose_types
 
    !> The whole diagnosis
    type :: diagnose_result
-      character(len=40), allocatable :: names(:)
+      character(len=64), allocatable :: names(:)
       character(len=32), allocatable :: unit(:)   !< response and unit per test
       logical, allocatable :: held(:)
       real(dp), allocatable :: noise(:)           !< noise sd per test, response unit

@@ -76,8 +76,8 @@ module usharp_regions
 
    !> Statistics of one region of the residual
    type :: region_stat
-      character(len=40) :: test = ''
-      character(len=24) :: label = ''
+      character(len=80) :: test = ''  !< the test's name, "(held out)" appended
+      character(len=48) :: label = ''
       integer :: n = 0
       real(dp) :: ssr = 0.0_dp        !< its part of the objective
       real(dp) :: noise = 0.0_dp      !< the part the noise level explains
