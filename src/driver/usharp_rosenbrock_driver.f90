@@ -14,7 +14,7 @@ module usharp_rosenbrock_driver
    use usharp_miller, only: miller_model, uniaxial_rates
    use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value, lag_corners
    use usharp_history, only: history_type, control_strain, segment_type, spline_eval
-   use usharp_simulation, only: solver_options, sim_result, check_output_times
+   use usharp_simulation, only: solver_options, sim_result, check_output_times, rodas4_smooth_rtol
    implicit none
    private
 
@@ -89,6 +89,7 @@ contains
       call check_output_times(hist, tout, error)
       if (allocated(error)) return
       call opts%tolerances('rodas4', rtol, atol_strain)
+      if (hist%smooth() .and. .not. opts%rtol > 0.0_dp) rtol = rodas4_smooth_rtol
       as = atol_strain
       ar = atol_strain*model%youngs
       sys%model = model
