@@ -4,7 +4,8 @@
 !> through every sample (the integrator stops at each); the stress of both against a
 !> tight-tolerance reference under the same forcing; the objective of both. Writes each
 !> test's simulated loops of both treatments to OUT/<test>.forcing.txt for the plots.
-!> Usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT
+!> Usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT, or bench_measured
+!> THESIS.nml for the thesis deck's time per evaluation alone.
 program bench_measured
    use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
    use usharp_kinds, only: dp
@@ -29,6 +30,19 @@ program bench_measured
    do i = 1, 4
       call get_command_argument(i, arg(i))
    end do
+   if (command_argument_count() == 1) then
+      call read_config_as(trim(arg(1)), '', '', thesis, err)
+      call check()
+      call setup_problem(thesis, p_thesis, err)
+      call check()
+      t_thesis = huge(1.0_dp)
+      do i = 1, 5
+         t_thesis = min(t_thesis, time_eval(p_thesis, 50))
+      end do
+      write (output_unit, '(a,i0,a,f9.4)') 'thesis (', size(thesis%tests), &
+         ' tests): ms per evaluation ', t_thesis
+      stop
+   end if
    if (len_trim(arg(4)) == 0) then
       write (error_unit, '(a)') 'usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT'
       stop 2

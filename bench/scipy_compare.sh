@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The thesis's run 2 objective per evaluation (decks/thesis-run2.nml at its start constants):
+# usharp (release, one core) against a scipy Radau script of the same model at the same
+# accuracy, measured side by side (bench/scipy_compare.py; numpy and scipy needed).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FLAGS="-I/usr/include/sundials/fortran"
+fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
+exe=$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)
+tmp=$(mktemp -d)
+"$exe" simulate decks/thesis-run2.nml -q -o "$tmp"
+ms=$(OMP_NUM_THREADS=1 fpm run --profile release --flag "$FLAGS" --example bench_measured -- \
+  decks/thesis-run2.nml 2>/dev/null | sed -n 's/.*ms per evaluation *//p')
+python3 -W ignore bench/scipy_compare.py "$ms" "$tmp/lcf.sim.txt" "$tmp/relax.sim.txt"
+rm -rf "$tmp"
