@@ -24,7 +24,8 @@ module usharp_upf
    implicit none
    private
 
-   public :: upf_update, upf_props, upf_material, upf_material_setup, upf_elastic_tangent
+   public :: upf_update, upf_update_material, upf_props, upf_material, upf_material_setup
+   public :: upf_elastic_tangent
    public :: upf_result, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
    public :: upf_ok, upf_cut, upf_invalid, upf_prop_names
 
@@ -179,10 +180,28 @@ contains
       real(dp), intent(out) :: ddsdde(ntens, ntens)
       type(upf_result), intent(out) :: res
       type(upf_material) :: mat
+      call upf_elastic_tangent(props, perm, ntens, ddsdde)
+      res%status = upf_invalid
+      call upf_material_setup(props, temp, mat, res%message)
+      if (len_trim(res%message) > 0) return
+      call upf_update_material(mat, dt, perm, ntens, stran, dstran, stress, statev, ddsdde, res)
+   end subroutine upf_update
+
+   !> The same increment for a material already set up (upf_material_setup): the entry
+   !> point that holds no property list. On upf_cut and upf_invalid ddsdde is elastic.
+   pure subroutine upf_update_material(mat, dt, perm, ntens, stran, dstran, stress, statev, &
+                                       ddsdde, res)
+      type(upf_material), intent(in) :: mat
+      real(dp), intent(in) :: dt
+      integer, intent(in) :: perm(6), ntens
+      real(dp), intent(in) :: stran(ntens), dstran(ntens)
+      real(dp), intent(inout) :: stress(ntens), statev(n_upf_state)
+      real(dp), intent(out) :: ddsdde(ntens, ntens)
+      type(upf_result), intent(out) :: res
       real(dp) :: eps0(6), deps(6), y0(n_state), y(n_state), sig(6), sig0(6), c(6, 6), g, k
       real(dp) :: dein(6)
       integer :: pos(6), i, status, nsub
-      call upf_elastic_tangent(props, perm, ntens, ddsdde)
+      call upf_elastic_tangent([mat%model%youngs, mat%model%poisson], perm, ntens, ddsdde)
       res%status = upf_invalid
       if (ntens /= 6 .and. ntens /= 4 .and. ntens /= 3) then
          write (res%message, '(a,i0,a)') 'elements with ', ntens, &
@@ -190,8 +209,6 @@ contains
             '3: plane stress)'
          return
       end if
-      call upf_material_setup(props, temp, mat, res%message)
-      if (len_trim(res%message) > 0) return
       res%status = upf_cut
       pos = positions(perm, ntens)
       ! Code order, engineering shear -> Mandel; absent components are zero
@@ -230,7 +247,7 @@ contains
       end do
       statev(7) = y(13)
       call tangent_to_code(c, pos, ntens, ddsdde)
-   end subroutine upf_update
+   end subroutine upf_update_material
 
    !> Stress from total and inelastic strain (Mandel)
    pure function elastic_stress(g, k, eps, ein) result(sig)
