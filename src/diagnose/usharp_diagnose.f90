@@ -41,6 +41,7 @@ module usharp_diagnose
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_separate, only: separate
    use usharp_diagnose_report, only: diagnose_report, write_report
+   use usharp_diagnose_profile, only: profile_leading
    implicit none
    private
 
@@ -100,6 +101,10 @@ contains
          if (allocated(error)) return
          call conclude(res)
       end if
+      ! The leading effect's intervals where the curvature says little: profile likelihood
+      call tell(ctx, 'profile', res%nevals)
+      call profile_leading(ctx, res, error)
+      if (allocated(error)) return
       ! Last: when effects explain the gap equally well, the test that would separate them
       call separate(ctx, res)
       call tell(ctx, 'done', res%nevals)

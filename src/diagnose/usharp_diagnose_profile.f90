@@ -11,15 +11,24 @@ module usharp_diagnose_profile
    use usharp_error, only: error_type
    use usharp_optimiser, only: least_squares_type, optimum_type
    use usharp_levenberg, only: levenberg_marquardt
+   use usharp_identify, only: robust_covariance
+   use usharp_effect_problem, only: effect_problem
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, effect_fit
    implicit none
    private
 
-   public :: profile_interval, profile_result, chi2_95, f1_95
+   public :: profile_interval, profile_result, chi2_95, f1_95, profile_leading
 
    !> Chi-square 95 % point, 1 degree of freedom
    real(dp), parameter :: chi2_95 = 3.841459_dp
    !> Steps out from the optimum on each side before the interval is called open
    integer, parameter :: max_steps = 14
+   !> The leading effect's Wald interval is replaced by the profile when it crosses zero for
+   !> a parameter that cannot, or its half-width exceeds this share of the value
+   real(dp), parameter :: wald_rel_limit = 0.5_dp
+   !> Evaluations of each refit of the constants along a profile
+   integer, parameter :: profile_evals = 400
 
    !> The interval of one coordinate
    type :: profile_result
@@ -174,6 +183,53 @@ contains
          end if
       end function from_u
    end subroutine profile_interval
+
+   !> The leading effect's 95 % intervals from the profile likelihood where the curvature
+   !> at its refit says little (see wald_rel_limit): the constants and the effect's other
+   !> parameters refitted at each trial value; res%effects(leading)%p_profiled marks them
+   subroutine profile_leading(ctx, res, error)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_problem) :: ep
+      type(profile_result) :: pr
+      real(dp), allocatable :: r(:), jac(:, :), naive(:, :), cov(:, :), lo(:), hi(:), pscale(:)
+      logical, allocatable :: nonneg(:)
+      real(dp) :: se, scale
+      integer :: nc, g, j
+      logical :: ok
+      if (res%leading == 0) return
+      associate (e => res%effects(res%leading))
+         if (.not. allocated(e%x_fit)) return
+         allocate (e%p_profiled(size(e%p)))
+         e%p_profiled = .false.
+         call effect_fit(ctx, e%k, ep)
+         if (size(e%x_fit) /= ep%nx()) return
+         nc = size(ctx%prob%idx)
+         call ep%bounds(lo, hi)
+         call jacobian(ep, e%x_fit, ctx%h, r, jac, ok)
+         if (.not. ok) return
+         naive = pseudo_inverse(matmul(transpose(jac), jac))
+         cov = robust_covariance(jac, r, naive)
+         pscale = pack(ep%pscale, ep%pfree)
+         nonneg = pack(ep%pnonneg, ep%pfree)
+         do g = 1, size(e%p)
+            j = nc + g
+            se = sqrt(max(cov(j, j), 0.0_dp))
+            if (.not. ((nonneg(g) .and. e%p_lo(g) < 0.0_dp) .or. &
+                       1.959964_dp*se*pscale(g) > wald_rel_limit*abs(e%p(g)))) cycle
+            scale = e%f_after/max(size(r) - size(e%x_fit), 1)
+            if (naive(j, j) > 0.0_dp .and. cov(j, j) > 0.0_dp) scale = cov(j, j)/naive(j, j)
+            call profile_interval(ep, e%x_fit, e%f_after, j, lo, hi, ctx%h, se, scale, &
+                                  nonneg(g) .and. e%x_fit(j) > 0.0_dp, profile_evals, pr, error)
+            if (allocated(error)) return
+            res%nevals = res%nevals + pr%nevals
+            e%p_lo(g) = pr%lo*pscale(g)
+            e%p_hi(g) = pr%hi*pscale(g)
+            e%p_profiled(g) = .true.
+         end do
+      end associate
+   end subroutine profile_leading
 
    !> The full point of x of the other coordinates
    pure function full_x(self, x) result(xf)

@@ -153,8 +153,12 @@ contains
          call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; no physical limit):')
       end if
       do k = 1, size(e%p)
+         what = ''
+         if (allocated(e%p_profiled)) then
+            if (e%p_profiled(k)) what = ' (profile likelihood)'
+         end if
          call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
-            real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']')
+            real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']'//what)
       end do
       if (.not. e%resolved .and. e%significant) call add(lines, '- the delay is below the sampling '// &
          'interval of the fit tests, '//real_str(res%dt_sample, 'g0.3')//' s: a finding only when it '// &

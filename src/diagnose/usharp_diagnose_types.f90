@@ -67,6 +67,7 @@ module usharp_diagnose_types
       real(dp), allocatable :: per_test_after(:)
       real(dp), allocatable :: p(:), p_lo(:), p_hi(:)  !< fitted parameters, 95 % interval
       real(dp), allocatable :: p_all(:)      !< every parameter, all tests (held-out ones fitted)
+      logical, allocatable :: p_profiled(:)  !< that interval from the profile likelihood
       real(dp), allocatable :: x(:)          !< search point after screening
       real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
       character(len=64), allocatable :: pname(:)
