@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install what usharp needs to build and test, without prompts; a no-op when all is present.
-# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, gnuplot. PyPI: fpm.
+# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, gnuplot. PyPI: fpm,
+# numpy and scipy (independent reference data for the diagnosis tests).
 set -euo pipefail
 
 command -v python3 >/dev/null 2>&1 || need_py=1
@@ -27,6 +28,14 @@ if ! command -v fpm >/dev/null 2>&1; then
   python3 -m pip install --quiet --disable-pip-version-check 'fpm>=0.12,<0.13' 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages 'fpm>=0.12,<0.13'
   hash -r
+fi
+# numpy and scipy make the independent reference data of the diagnosis (bench/independent,
+# and its short version in the tests, which is skipped without them)
+if ! python3 -c 'import numpy, scipy' >/dev/null 2>&1; then
+  echo "setup: installing numpy and scipy from PyPI" >&2
+  python3 -m pip install --quiet --disable-pip-version-check numpy scipy 2>/dev/null \
+    || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages numpy scipy \
+    || echo "setup: numpy/scipy not installed: the independent-data test will be skipped" >&2
 fi
 command -v pyenv >/dev/null 2>&1 && pyenv rehash 2>/dev/null || true
 command -v fpm >/dev/null 2>&1 || { echo "setup: fpm not on PATH after install" >&2; exit 1; }

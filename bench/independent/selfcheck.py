@@ -7,6 +7,7 @@ matrix and effect: repetitions, how often an accepted effect came first, the hel
 structured gap removed (median).
 
 usage: selfcheck.py EXE [--reps N] [--matrices a,b] [--rows a,b] [--noise F] [--keep DIR]
+       selfcheck.py --make MATRIX ROW U SEED DIR   (one case's data and deck, no diagnosis)
 """
 import argparse
 import os
@@ -106,7 +107,27 @@ CATALOGUE = ['compliance', 'lag', 'temperature', 'scatter', 'initial', 'shift', 
              'drift']
 
 
+def make_case(mname, row, u, rng, case, noise):
+    """Data (CSV) and deck (diagnose.nml) of one case in folder case; returns the truth's label"""
+    tests, held = MATRICES[mname]
+    eff, label = draw(row, u, rng, [t for t, _ in tests])
+    os.makedirs(case, exist_ok=True)
+    files = {}
+    for name, dt in tests:
+        t, e, s = ref.make_data(name, dt, eff[name], noise, rng)
+        files[name] = f'{name}.csv'
+        ref.write_csv(os.path.join(case, files[name]), t, e, s)
+    with open(os.path.join(case, 'diagnose.nml'), 'w') as f:
+        f.write(deck(tests, held, files, 'out'))
+    return label
+
+
 def main():
+    if len(sys.argv) > 1 and sys.argv[1] == '--make':
+        mname, row, u, seed, case = sys.argv[2:7]
+        label = make_case(mname, row, float(u), np.random.default_rng(int(seed)), case, 0.005)
+        print(label)
+        return
     ap = argparse.ArgumentParser()
     ap.add_argument('exe')
     ap.add_argument('--reps', type=int, default=3)
@@ -121,23 +142,13 @@ def main():
     print(f'{"matrix":22s} {"injected":12s} {"reps":>4s} {"first":>6s} {"%":>5s} {"held gap removed %":>18s}  answers')
     total_ok = total = 0
     for mname in a.matrices.split(','):
-        tests, held = MATRICES[mname]
-        names = [t for t, _ in tests]
         for row in a.rows.split(','):
             rng = np.random.default_rng([a.seed, ROWS.index(row), list(MATRICES).index(mname)])
             answers, removed = [], []
             for rep in range(a.reps):
                 u = 0.0 if rep == 0 else rng.uniform()
-                eff, label = draw(row, u, rng, names)
                 case = os.path.join(work, f'{mname}-{row}-{rep}')
-                os.makedirs(case, exist_ok=True)
-                files = {}
-                for name, dt in tests:
-                    t, e, s = ref.make_data(name, dt, eff[name], a.noise, rng)
-                    files[name] = f'{name}.csv'
-                    ref.write_csv(os.path.join(case, files[name]), t, e, s)
-                with open(os.path.join(case, 'diagnose.nml'), 'w') as f:
-                    f.write(deck(tests, held, files, 'out'))
+                label = make_case(mname, row, u, rng, case, a.noise)
                 p = subprocess.run([a.exe, 'diagnose', 'diagnose.nml', '-o', 'out'], cwd=case,
                                    capture_output=True, text=True)
                 with open(os.path.join(case, 'report.md'), 'w') as f:
