@@ -102,13 +102,15 @@ def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):
     def rates(t, y, k):
         eps_in, R, D, p, R2 = y[:5]
         s = sigma_of(t, y, k) - R - R2
-        dflow = D * (1.0 - a_soft * (1.0 - math.exp(-p / p0)))
-        x = min((abs(s) / dflow) ** 1.5, 700.0)
+        # Trial states of the implicit solver can lie far outside the physical ones: the
+        # arguments are capped where the rates are already astronomically large
+        dflow = max(D * (1.0 - a_soft * (1.0 - math.exp(-max(p, 0.0) / p0))), 1e-6)
+        x = min((abs(s) / dflow) ** 1.5, 50.0)
         f = bth * math.sinh(x) ** c['n']
         de = math.copysign(f, s)
-        dR = c['H1'] * de - c['H1'] * bth * math.sinh(min(c['A1'] * abs(R), 700.0)) ** c['n'] * np.sign(R)
+        dR = c['H1'] * de - c['H1'] * bth * math.sinh(min(c['A1'] * abs(R), 50.0)) ** c['n'] * np.sign(R)
         dD = c['H2'] * f * (c['C2'] + abs(R) - c['A2'] / c['A1'] * D ** 3) \
-            - c['H2'] * c['C2'] * bth * math.sinh(min(c['A2'] * D ** 3, 700.0)) ** c['n']
+            - c['H2'] * c['C2'] * bth * math.sinh(min(c['A2'] * abs(D) ** 3, 50.0)) ** c['n']
         dR2 = h3 * de - g3 * R2 * f
         out = [de, dR, dD, f, dR2]
         if tau > 0.0:

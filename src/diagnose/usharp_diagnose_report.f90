@@ -144,6 +144,7 @@ contains
       type(effect_outcome), intent(in) :: e
       integer, allocatable :: order(:)
       integer :: i, k
+      character(len=:), allocatable :: what
       order = top_regions(res%regions, 15)
       call add(lines, '')
       if (len_trim(e%worst_what) > 0) then
