@@ -41,6 +41,7 @@ contains
       counted = sum(res%effects%nevals)
       do j = j1, j2
          if (res%effects(j)%pred_drop <= 0.0_dp) cycle
+         call tell_refit(ctx, res, j, counted)
          call refit(ctx, res, res%effects(j), error)
          if (allocated(error)) return
       end do
@@ -54,6 +55,7 @@ contains
             do o = 1, size(lower)
                xc(:, o) = log10(res%effects(lower(o))%c)
             end do
+            call tell_refit(ctx, res, j, counted)
             call refit(ctx, res, res%effects(j), error, xc)
             deallocate (xc)
             if (allocated(error)) return
@@ -84,6 +86,7 @@ contains
       counted = sum(res%effects%nevals)
       do j = 1, size(res%effects)
          if (.not. res%effects(j)%refitted) cycle
+         call tell_refit(ctx, res, j, counted)
          call refit(ctx, res, res%effects(j), error, res%x_global)
          if (allocated(error)) return
       end do
@@ -122,11 +125,21 @@ contains
             if (.not. res%global .and. n_lhs > 0) &
                xc = reshape([xc, lhs], [size(res%c), size(xc, 2) + n_lhs])
          end associate
+         call tell_refit(ctx, res, j, counted)
          call refit(ctx, res, res%effects(j), error, xc)
          if (allocated(error)) return
       end do
       res%nevals = res%nevals + sum(res%effects%nevals) - counted
    end subroutine refit_deciding
+
+   !> Tell the listener of the refit of effect j: simulations so far, the refits' not yet
+   !> added to res%nevals included (counted: those already added)
+   subroutine tell_refit(ctx, res, j, counted)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: j, counted
+      call tell(ctx, 'refit '//trim(res%effects(j)%name), res%nevals + sum(res%effects%nevals) - counted)
+   end subroutine tell_refit
 
    !> Refit of the constants with effect e on, its interval, AIC/BIC and the held-out check
    subroutine refit(ctx, res, e, error, starts)
@@ -142,7 +155,6 @@ contains
       type(miller_model) :: mdl
       real(dp), allocatable :: p(:)
       logical :: moved
-      call tell(ctx, 'refit '//trim(ctx%cat(e%k)%name), res%nevals)
       call effect_fit(ctx, e%k, ep)
       call fit_constants(ctx, res, ep, e, opt, moved, error, starts)
       if (allocated(error)) return
