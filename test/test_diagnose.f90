@@ -21,6 +21,7 @@ module test_diagnose
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_diagnose_types, only: effect_outcome
    use usharp_diagnose_verdict, only: conclude
+   use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use test_util, only: write_text, check_message
    implicit none
@@ -63,6 +64,7 @@ contains
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
+         new_unittest('separating-test-for-effects-alike', test_separate), &
          new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
    end subroutine collect_diagnose
 
@@ -504,6 +506,50 @@ contains
          e%worse = [.false., .false., .false.]
       end function outcome
    end subroutine test_parsimony
+
+   !> The separating step: two refits that predict alike give D = 0 on every candidate; a
+   !> compliance of 0.2 against none is told apart (D far above 10) by the best candidate,
+   !> which the verdict names
+   subroutine test_separate(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      call write_relaxation_data('a.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text('diag-separate.nml', [character(len=100) :: &
+         model_groups, "&fit fitted = 'B', method = 'lm' /", "&diagnose holdout = 'b' /", &
+         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
+         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call check(error, .not. allocated(e), 'baseline failed')
+      if (allocated(error)) return
+      allocate (res%effects(2))
+      res%effects%k = 1
+      res%effects(1)%name = 'compliance'
+      res%effects(2)%name = 'compliance'
+      res%effects(1)%p_all = [0.0_dp]
+      res%effects(2)%p_all = [0.0_dp]
+      res%effects(1)%c = res%c
+      res%effects(2)%c = res%c
+      res%alike = [1, 2]
+      res%verdict = 'v'
+      call separate(ctx, res)
+      call check(error, size(res%seps) == 1, 'one pair expected')
+      if (allocated(error)) return
+      call check(error, all(res%seps(1)%d == 0.0_dp) .and. res%verdict == 'v', &
+                 'identical refits told apart')
+      if (allocated(error)) return
+      res%effects(2)%p_all = [0.2_dp]
+      call separate(ctx, res)
+      associate (sp => res%seps(1))
+         call check(error, sp%d(sp%best) > 100.0_dp .and. sp%d(sp%best) == maxval(sp%d) .and. &
+                    index(res%verdict, trim(sp%names(sp%best))) > 0, 'compliance 0.2 not told apart: D '// &
+                    real_str(sp%d(sp%best), 'es10.3')//'; '//res%verdict)
+      end associate
+   end subroutine test_separate
 
    !> Zero-width F descriptors print a leading zero and no bare point
    subroutine test_number_format(error)
