@@ -161,10 +161,10 @@ contains
       open (newunit=u, file=trim(arg(4))//'/'//smooth%tests(i)%name//'.forcing.txt', &
             status='replace', action='write')
       write (u, '(a)') '# time (s), measured strain, smoothed strain (-), measured stress, '// &
-         'simulated stress every sample, smooth forcing (MPa)'
+         'simulated stress every sample, smooth forcing, its tight reference (MPa)'
       do k = 1, size(rs%t)
-         write (u, '(f10.3,2es14.6,3f10.3)') rs%t(k), rr%strain(k), rs%strain(k), &
-            p_smooth%targets(i)%y_ex(k), rr%stress(k), rs%stress(k)
+         write (u, '(f10.3,2es14.6,4f10.3)') rs%t(k), rr%strain(k), rs%strain(k), &
+            p_smooth%targets(i)%y_ex(k), rr%stress(k), rs%stress(k), ts%stress(k)
       end do
       close (u)
    end subroutine compare

@@ -8,7 +8,9 @@ command -v python3 >/dev/null 2>&1 || need_py=1
 need_apt=()
 [ -n "${need_py:-}" ] && need_apt+=(python3 python3-pip)
 command -v gfortran >/dev/null 2>&1 || need_apt+=(gfortran)
-[ -e /usr/include/sundials/fortran/fcvode_mod.mod ] || need_apt+=(libsundials-fortran-dev libsundials-dev)
+# CVODE(S) and ARKODE (ARKStep) with their Fortran 2003 modules
+{ [ -e /usr/include/sundials/fortran/fcvode_mod.mod ] && [ -e /usr/include/sundials/fortran/farkode_arkstep_mod.mod ]; } ||
+  need_apt+=(libsundials-fortran-dev libsundials-dev)
 ls /usr/lib/x86_64-linux-gnu/liblapack.so* >/dev/null 2>&1 || ls /usr/lib/*/liblapack.so >/dev/null 2>&1 || need_apt+=(liblapack-dev)
 ls /usr/lib/*/libblas.so >/dev/null 2>&1 || need_apt+=(libblas-dev)
 # gnuplot draws the fit plots (scripts/plot-fit.sh); usharp itself runs without it

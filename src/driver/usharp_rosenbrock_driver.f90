@@ -63,6 +63,13 @@ module usharp_rosenbrock_driver
    real(dp), parameter :: m(ns) = [0.1221224509226641e1_dp, 0.6019134481288629e1_dp, &
       0.1253708332932087e2_dp, -0.6878860361058950_dp, 1.0_dp, 1.0_dp]
 
+   !> The continuous extension's coefficients (rodas.f, d21..d25 and d31..d35): column k
+   !> weighs the stages K_1..K_5 of the k-th correction term
+   real(dp), parameter :: dense_d(5, 2) = reshape([10.12623508344586_dp, &
+      -7.487995877610167_dp, -34.80091861555747_dp, -7.992771707568823_dp, &
+      1.025137723295662_dp, -0.6762803392801253_dp, 6.087714651680015_dp, &
+      16.43084320892478_dp, 24.76722511418386_dp, -6.594389125716872_dp], [5, 2])
+
    !> Step-size control: safety factor, bounds of the change, and the order of the estimate
    real(dp), parameter :: safety = 0.9_dp, fac_min = 0.2_dp, fac_max = 6.0_dp, elo = 4.0_dp
 
