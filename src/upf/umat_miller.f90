@@ -13,7 +13,7 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
                 layer, kspt, kstep, kinc)
    use usharp_kinds, only: dp
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_abaqus, &
-                         n_upf_props, n_upf_state, upf_ok, upf_cut
+                         n_upf_props, n_upf_state, upf_ok, upf_cut, upf_call_problem
    use usharp_upf_report, only: upf_report_invalid
    implicit none
    integer, intent(in) :: ndi, nshr, ntens, nstatv, nprops, noel, npt, layer, kspt, kstep, kinc
@@ -32,16 +32,9 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
    ddsddt = 0.0_dp
    drplde = 0.0_dp
    drpldt = 0.0_dp
-   if (nprops < n_upf_props) then
-      write (res%message, '(a,i0)') 'needs 13 constants (*USER MATERIAL, CONSTANTS=13), got ', &
-         nprops
-   else if (nstatv < n_upf_state) then
-      write (res%message, '(a,i0)') 'needs 13 state variables (*DEPVAR), got ', nstatv
-   else if (.not. ((ndi == 3 .and. (nshr == 3 .or. nshr == 1)) .or. (ndi == 2 .and. nshr == 1))) &
-      then
-      write (res%message, '(a,i0,a,i0,a)') 'elements with NDI = ', ndi, ', NSHR = ', nshr, &
-         ' are not supported (3-D, plane strain, axisymmetric, plane stress only)'
-   else
+   res%message = upf_call_problem(nprops, nstatv, ndi, nshr, '*USER MATERIAL, CONSTANTS=13', &
+                                  '*DEPVAR', 'NDI', 'NSHR')
+   if (len_trim(res%message) == 0) then
       call upf_update(props(1:n_upf_props), temp + dtemp, dtime, perm_abaqus, ntens, stran, &
                       dstran, stress, statev(1:n_upf_state), ddsdde, res)
       if (res%status == upf_ok) then

@@ -14,7 +14,7 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
                    var1, var2, var3, var4, var5, var6, var7)
    use usharp_kinds, only: dp
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_ansys, &
-                         n_upf_props, n_upf_state, upf_ok, upf_cut
+                         n_upf_props, n_upf_state, upf_ok, upf_cut, upf_call_problem
    use usharp_upf_report, only: upf_report_invalid
    implicit none
    integer, intent(in) :: matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst
@@ -35,15 +35,9 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
    character(len=12) :: mat
    integer :: i
    keycut = 0
-   if (nProp < n_upf_props) then
-      write (res%message, '(a,i0)') 'needs 13 constants (TB,USER,mat,1,13), got ', nProp
-   else if (nStatev < n_upf_state) then
-      write (res%message, '(a,i0)') 'needs 13 state variables (TB,STATE,mat,,13), got ', nStatev
-   else if (.not. ((nDirect == 3 .and. (nShear == 3 .or. nShear == 1)) .or. &
-                   (nDirect == 2 .and. nShear == 1))) then
-      write (res%message, '(a,i0,a,i0,a)') 'elements with nDirect = ', nDirect, ', nShear = ', &
-         nShear, ' are not supported (3-D, plane strain, axisymmetric, plane stress only)'
-   else
+   res%message = upf_call_problem(nProp, nStatev, nDirect, nShear, 'TB,USER,mat,1,13', &
+                                  'TB,STATE,mat,,13', 'nDirect', 'nShear')
+   if (len_trim(res%message) == 0) then
       call upf_update(prop(1:n_upf_props), Temp + dTemp, dTime, perm_ansys, ncomp, Strain, &
                       dStrain, stress, ustatev(1:n_upf_state), dsdePl, res)
       if (res%status == upf_ok) then

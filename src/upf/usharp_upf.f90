@@ -25,7 +25,7 @@ module usharp_upf
    private
 
    public :: upf_update, upf_update_material, upf_props, upf_material, upf_material_setup
-   public :: upf_elastic_tangent
+   public :: upf_elastic_tangent, upf_call_problem
    public :: upf_result, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
    public :: upf_ok, upf_cut, upf_invalid, upf_prop_names
 
@@ -92,6 +92,28 @@ contains
       call model_setup(mat%model, error)
       if (allocated(error)) message = error%message
    end subroutine upf_material_setup
+
+   !> What is wrong with a call before any property is read: too few properties or state
+   !> variables, or an element family the update does not serve (ndi direct and nshr shear
+   !> components). Empty when the call can go ahead. The cards and names are the code's own,
+   !> so that the message says what to change in its input.
+   pure function upf_call_problem(nprops, nstatv, ndi, nshr, props_card, state_card, ndi_name, &
+                                  nshr_name) result(message)
+      integer, intent(in) :: nprops, nstatv, ndi, nshr
+      character(len=*), intent(in) :: props_card, state_card, ndi_name, nshr_name
+      character(len=200) :: message
+      message = ''
+      if (nprops < n_upf_props) then
+         write (message, '(a,i0)') 'needs 13 constants ('//props_card//'), got ', nprops
+      else if (nstatv < n_upf_state) then
+         write (message, '(a,i0)') 'needs 13 state variables ('//state_card//'), got ', nstatv
+      else if (.not. ((ndi == 3 .and. (nshr == 3 .or. nshr == 1)) .or. &
+                      (ndi == 2 .and. nshr == 1))) then
+         write (message, '(a,i0,a,i0,a)') 'elements with '//ndi_name//' = ', ndi, ', '// &
+            nshr_name//' = ', nshr, ' are not supported (3-D, plane strain, axisymmetric, '// &
+            'plane stress only)'
+      end if
+   end function upf_call_problem
 
    !> Isotropic elastic tangent in the code's order for ntens components (plane stress
    !> condensed; for other ntens a diagonal of E) from the first two properties, E and
