@@ -70,7 +70,7 @@ contains
                   ' s')
          call add('! units: stress '//cfg%units//' (E and the constants), time s, temperature K;')
          call add('! the cube has unit edges, so the top displacement is the axial strain.')
-         call add('! needs an ANSYS linked with the usharp USERMAT (src/upf, see the README).')
+         call add('! needs an ANSYS linked with the usharp USERMAT (docs/guide/fe-users.md).')
          call add('! reads '//ext%constants_file//' (E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, '// &
                   'Q, Tm, D0), writes '//ext%output_file)
          call add('/BATCH')
