@@ -23,7 +23,7 @@ module usharp_arkode_driver
    use usharp_miller, only: miller_model
    use usharp_history, only: history_type
    use usharp_simulation, only: solver_options, sim_result, check_output_times
-   use usharp_rosenbrock_driver, only: rate_system, rates, rates_jacobian
+   use usharp_rosenbrock_driver, only: rate_system, rates, rates_jacobian, plain_system
    implicit none
    private
 
@@ -63,14 +63,7 @@ contains
       call check_output_times(hist, tout, error)
       if (allocated(error)) return
       call opts%tolerances('rodas4', rtol, atol_strain)
-      sys%model = model
-      sys%stiffness = model%youngs
-      sys%smooth = hist%smooth()
-      if (sys%smooth) then
-         sys%tc = hist%t
-         sys%vc = hist%v
-         sys%mc = hist%d2
-      end if
+      call plain_system(model, hist, sys)
       corner = hist%corners()
       sys%seg = hist%segment(1)
       sys%k = 1

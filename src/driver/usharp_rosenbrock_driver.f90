@@ -18,7 +18,7 @@ module usharp_rosenbrock_driver
    implicit none
    private
 
-   public :: simulate_rosenbrock, rates, rates_jacobian, rate_system
+   public :: simulate_rosenbrock, rates, rates_jacobian, rate_system, plain_system
 
    !> Stages of RODAS4; states of the plain model (eps_in, R, D)
    integer, parameter :: ns = 6, n_plain = 3
@@ -111,17 +111,26 @@ contains
             model%d0*(1.0_dp + effects%strength) + effects%dd0, 0.0_dp, 0.0_dp], &
             [as, ar, ar, as, ar], rtol, res, error)
       else
-         sys%stiffness = model%youngs
-         sys%smooth = hist%smooth()
-         if (sys%smooth) then
-            sys%tc = hist%t
-            sys%vc = hist%v
-            sys%mc = hist%d2
-         end if
+         call plain_system(model, hist, sys)
          call integrate_plain(sys, hist, tout, opts, [0.0_dp, 0.0_dp, model%d0], [as, ar, ar], &
                               rtol, res, error)
       end if
    end subroutine simulate_rosenbrock
+
+   !> The rates of the plain model under the load of hist (its smooth forcing, if it is one)
+   pure subroutine plain_system(model, hist, sys)
+      type(miller_model), intent(in) :: model
+      type(history_type), intent(in) :: hist
+      type(rate_system), intent(inout) :: sys
+      sys%model = model
+      sys%stiffness = model%youngs
+      sys%smooth = hist%smooth()
+      if (sys%smooth) then
+         sys%tc = hist%t
+         sys%vc = hist%v
+         sys%mc = hist%d2
+      end if
+   end subroutine plain_system
 
    !> The integration from y0 (absolute tolerances atol) of the plain model. Its body is
    !> shared with the extended model and compiled for each number of states n, so that its
