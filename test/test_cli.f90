@@ -7,6 +7,7 @@ module test_cli
                          version_text
    use test_util, only: usharp_exe, read_text, scratch_dir
    use usharp_filesys, only: make_dir
+   use usharp_kinds, only: dp
    implicit none
    private
    public :: collect_cli
@@ -21,7 +22,9 @@ contains
          new_unittest('every-command-has-help', test_help), &
          new_unittest('version-names-the-build', test_version), &
          new_unittest('passive-wait-unless-chosen', test_wait_policy), &
-         new_unittest('folders-import-only-downward', test_layers)]
+         new_unittest('folders-import-only-downward', test_layers), &
+         new_unittest('predict-with-the-constants-that-made-the-data', test_predict), &
+         new_unittest('predict-needs-constants', test_predict_needs_constants)]
    end subroutine collect_cli
 
    !> The argument list of a command line given as one string split at blanks
@@ -154,4 +157,49 @@ contains
       log = read_text(scratch_dir//'/import-graph.txt')
       call check(error, cmdstat == 0 .and. stat == 0, 'scripts/import-graph.py --check: '//log)
    end subroutine test_layers
+
+   !> predict of the thesis's run 2 tests with the constants that made their data (Table 4):
+   !> RMS error under 1e-5 of the peak stress, and the files of a fit written
+   subroutine test_predict(error)
+      use usharp_cmd_predict, only: predict_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=*), parameter :: dir = scratch_dir//'/predict-out'
+      real(dp) :: rms, rel
+      character(len=32) :: name
+      logical :: exists
+      integer :: k, ios
+      call predict_command('decks/thesis-run2.nml', dir, 'decks/thesis-data.nml', summary, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      do k = 3, 4
+         read (summary(k), *, iostat=ios) name, rms, rel
+         call check(error, ios == 0 .and. rel < 1.0e-3_dp, 'RMS/peak (%) of '//trim(summary(k)))
+         if (allocated(error)) return
+      end do
+      inquire (file=dir//'/summary.txt', exist=exists)
+      call check(error, exists, 'summary.txt written')
+      if (allocated(error)) return
+      inquire (file=dir//'/relax.fit.txt', exist=exists)
+      call check(error, exists, 'relax.fit.txt written')
+      if (allocated(error)) return
+      inquire (file=dir//'/lcf.sim.txt', exist=exists)
+      call check(error, exists, 'lcf.sim.txt written')
+   end subroutine test_predict
+
+   !> predict without -c is an input error that says what is missing
+   subroutine test_predict_needs_constants(error)
+      use usharp_cmd_predict, only: predict_command
+      use usharp_error, only: stat_input
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      call predict_command('decks/thesis-run2.nml', scratch_dir//'/predict-none', '', summary, e)
+      call check(error, allocated(e), 'an error')
+      if (allocated(error)) return
+      call check(error, e%stat == stat_input .and. index(e%message, '-c') > 0, e%message)
+   end subroutine test_predict_needs_constants
 end module test_cli

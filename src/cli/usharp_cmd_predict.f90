@@ -31,6 +31,7 @@ contains
       type(sim_result), allocatable :: res(:)
       real(dp) :: rms, rel, worst
       character(len=200) :: row
+      character(len=32) :: name
       integer :: i
       allocate (summary(0))
       if (len_trim(constants_file) == 0) then
@@ -52,7 +53,8 @@ contains
          constants_file, '  test                              RMS error    RMS/peak   max error']
       do i = 1, size(cfg%tests)
          call prediction_errors(prob%targets(i)%y_ex, simulated(cfg%tests(i), res(i)), rms, rel, worst)
-         write (row, '(2x,a32,es12.4,f10.2,a,es12.4)') cfg%tests(i)%name, rms, 100.0_dp*rel, ' %', worst
+         name = cfg%tests(i)%name
+         write (row, '(2x,a32,es12.4,f10.2,a,es12.4)') name, rms, 100.0_dp*rel, ' %', worst
          summary = [character(len=200) :: summary, row]
       end do
       summary = [character(len=200) :: summary, '  (errors in '//cfg%units// &
