@@ -4,6 +4,8 @@ module test_input
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type, stat_input, stat_io, stat_usage
    use usharp_config, only: run_config
+   use usharp_namelist, only: nml_file, scan_namelist_file
+   use usharp_input, only: known_groups
    use usharp_input, only: read_config
    use usharp_cmd_simulate, only: simulate_command
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message
@@ -36,7 +38,13 @@ contains
          new_unittest('integrator-chosen-in-namelist', test_integrator_choice), &
          new_unittest('history-from-measured-strain-column', test_data_history), &
          new_unittest('thesis-data-reproducible-bit-for-bit', test_data_reproducible), &
-         new_unittest('cli-exit-codes-and-one-line-errors', test_cli)]
+         new_unittest('cli-exit-codes-and-one-line-errors', test_cli), &
+         new_unittest('text-between-groups-is-an-error', test_text_between), &
+         new_unittest('group-given-twice-is-an-error', test_group_twice), &
+         new_unittest('test-names-are-unique', test_unique_names), &
+         new_unittest('long-values-kept-whole-or-refused', test_long_values), &
+         new_unittest('model-units-plausible', test_plausible_units), &
+         new_unittest('reading-work-linear-in-groups', test_linear_reading)]
    end subroutine collect_input
 
    !> An input file of the model, the constants and the given extra lines
@@ -336,4 +344,186 @@ contains
          call check(error, stat, code, "exit code of 'usharp "//args//"'")
       end subroutine expect_exit
    end subroutine test_cli
+
+   !> A group whose '&' is missing, or any other text outside the groups, would be skipped by
+   !> the namelist read (a test fewer, without a word): an error naming the line and column
+   subroutine test_text_between(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: pull = &
+         "&test name='a', history='tensile', strain_rate=1e-4, final_strain=0.002 /"
+      call expect_config_error(error, 'nomark.nml', [character(len=90) :: pull, &
+         "  ! a comment and a blank line are fine", "", &
+         "test name='b', history='tensile', strain_rate=1e-4, final_strain=0.002 /"], &
+         "nomark.nml:6:1: text outside a namelist group, which starts with '&' and ends with '/'"// &
+         " (is '&' missing before test?)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'stray.nml', [character(len=90) :: pull, "   use tests a and b"], &
+         'stray.nml:4:4: text outside a namelist group')
+      if (allocated(error)) return
+      call expect_config_error(error, 'after.nml', [character(len=90) :: pull(:len(pull) - 1)// &
+         "/ name='c' /"], 'after.nml:3:75: text after the end of &test')
+   end subroutine test_text_between
+
+   !> A second copy of a group the file holds once would be ignored: an error at its line
+   subroutine test_group_twice(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: pull = &
+         "&test name='a', history='tensile', strain_rate=1e-4, final_strain=0.002 /"
+      character(len=90) :: groups(7), lines(5)
+      integer :: i
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      groups = [character(len=90) :: base_model, base_constants, '&solver /', '&output /', &
+                "&fit fitted = 'B' /", '&design /', '&diagnose /']
+      do i = 1, size(groups)
+         ! model, constants, the group (a test for model and constants), a test, the group again
+         ! (element by element: gfortran 12 miscompiles such a mixed array constructor)
+         lines(1) = base_model
+         lines(2) = base_constants
+         lines(3) = groups(i)
+         if (i <= 2) lines(3) = pull
+         lines(4) = pull
+         lines(5) = groups(i)
+         call read_config(write_text('twice.nml', lines), cfg, uerr)
+         call check_message(error, uerr, 'twice.nml:5:1: a second &'//known_name(groups(i))// &
+            ' group (the first is at line '//achar(iachar('0') + min(i, 3))//'); a file holds one')
+         if (allocated(error)) return
+      end do
+   contains
+      pure function known_name(group) result(name)
+         character(len=*), intent(in) :: group
+         character(len=:), allocatable :: name
+         name = group(2:index(group, ' ') - 1)
+      end function known_name
+   end subroutine test_group_twice
+
+   !> Each test's files are named after it: two tests of one name are an error naming both
+   subroutine test_unique_names(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'samename.nml', [character(len=90) :: &
+         "&test name='a', history='tensile', strain_rate=1e-4, final_strain=0.002 /", &
+         "&test name='b', history='tensile', strain_rate=1e-4, final_strain=0.002 /", &
+         "&test name='a', history='creep', stress=15.0, ramp_time=1, duration=100 /"], &
+         "samename.nml:5: &test #3 'a': name: &test #1 (line 3) has this name")
+   end subroutine test_unique_names
+
+   !> Paths and names are never cut: a long one is kept whole, one beyond the limit is refused
+   !> naming the variable and the limit
+   subroutine test_long_values(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: long, too_long, pull
+      character(len=5200), allocatable :: lines(:)
+      long = repeat('d', 300)
+      too_long = repeat('x', 5000)
+      pull = "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002"
+      allocate (lines(4))
+      lines(1) = base_model
+      lines(2) = base_constants
+      lines(3) = "&output out_dir = '"//long//"' /"
+      lines(4) = pull//' /'
+      call read_config(write_text('long.nml', lines), cfg, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, cfg%out_dir == scratch_dir//'/'//long, 'a 300-character out_dir is kept whole')
+      if (allocated(error)) return
+      lines(3) = "&output out_dir = '"//too_long//"' /"
+      call read_config(write_text('toolong.nml', lines), cfg, uerr)
+      call check_message(error, uerr, 'toolong.nml: &output: out_dir: the value is longer than 4095 characters')
+      if (allocated(error)) return
+      call expect(pull//", data_file = '"//too_long//"' /", "&test #1 't': data_file: the value is longer than 4095")
+      if (allocated(error)) return
+      call expect(pull//", backend = 'external', command = '"//too_long//"' /", &
+                  "&test #1 't': command: the value is longer than 4095")
+      if (allocated(error)) return
+      call expect(pull//", filter = 'Cycle 1', '"//repeat('c', 200)//"' /", &
+                  "&test #1 't': filter: the value is longer than 128 characters")
+   contains
+      subroutine expect(test_line, text)
+         character(len=*), intent(in) :: test_line, text
+         type(run_config) :: c
+         character(len=5200) :: deck(3)
+         deck(1) = base_model
+         deck(2) = base_constants
+         deck(3) = test_line
+         call read_config(write_text('toolong.nml', deck), c, uerr)
+         call check_message(error, uerr, text)
+      end subroutine expect
+   end subroutine test_long_values
+
+   !> Values no metal test has are a wrong unit, named with the unit expected
+   subroutine test_plausible_units(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: pull = &
+         "&test name='a', history='tensile', strain_rate=1e-4, final_strain=0.002 /"
+      call expect_model("&model temperature = 20.0, tm = 1800.0, youngs = 22.5e3 /", &
+         'temperature = 20.0000 K is below 0.100000 tm = 180.000 K: temperature is in kelvin')
+      if (allocated(error)) return
+      call expect_model("&model temperature = 1900.0, tm = 1800.0, youngs = 22.5e3 /", &
+         'temperature = 1900.00 K: must lie between 0 K and the melting temperature tm = 1800.00 K')
+      if (allocated(error)) return
+      call expect_model("&model units = 'MPa', temperature = 1223.15, tm = 1630.0, youngs = 144 /", &
+         "youngs = 144.000 MPa is no metal's Young's modulus (10000.0 to 700000. MPa): youngs is"// &
+         ' in the model stress unit, MPa (1 GPa = 1000 MPa)')
+      if (allocated(error)) return
+      call expect_model("&model units = 'ksi', temperature = 1223.15, tm = 1630.0, youngs = 144000 /", &
+         "youngs = 144000. ksi is no metal's Young's modulus")
+   contains
+      subroutine expect_model(model, text)
+         character(len=*), intent(in) :: model, text
+         type(run_config) :: cfg
+         type(uerror), allocatable :: uerr
+         character(len=100) :: lines(3)
+         lines(1) = model
+         lines(2) = base_constants
+         lines(3) = pull
+         call read_config(write_text('units.nml', lines), cfg, uerr)
+         call check_message(error, uerr, 'units.nml: &model: '//text)
+      end subroutine expect_model
+   end subroutine test_plausible_units
+
+   !> Splitting a file into groups visits each character once: the work of 8000 groups is 8
+   !> times that of 1000 (the whole read, 10,000 groups, is timed by bench/input.sh)
+   subroutine test_linear_reading(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(nml_file) :: file
+      type(uerror), allocatable :: uerr
+      integer :: work(2), ngroups(2), k
+      ngroups = [1000, 8000]
+      do k = 1, 2
+         call scan_namelist_file(write_text('many.nml', many_tests(ngroups(k))), known_groups, &
+                                 ['test'], file, uerr)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         call check(error, size(file%groups), ngroups(k) + 2, 'every group found')
+         if (allocated(error)) return
+         work(k) = file%work
+      end do
+      call check(error, real(work(2), dp)/work(1) < 8.1_dp, 'work of 8000 groups / work of 1000 = '// &
+                 trim(adjustl(real_text(real(work(2), dp)/work(1)))))
+   contains
+      function many_tests(n) result(lines)
+         integer, intent(in) :: n
+         character(len=100), allocatable :: lines(:)
+         integer :: i
+         character(len=6) :: name
+         allocate (lines(n + 2))
+         lines(1) = base_model
+         lines(2) = base_constants
+         do i = 1, n
+            write (name, '(a,i5.5)') 't', i
+            lines(i + 2) = "&test name='"//name//"', history='tensile', final_strain=0.002 /"
+         end do
+      end function many_tests
+      function real_text(x) result(text)
+         real(dp), intent(in) :: x
+         character(len=32) :: text
+         write (text, '(f0.4)') x
+      end function real_text
+   end subroutine test_linear_reading
 end module test_input

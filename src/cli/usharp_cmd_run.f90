@@ -98,7 +98,7 @@ contains
 
          summary = [character(len=200) :: &
             'usharp run '//path//': '//out%opt%reason, &
-            '  objective ('//cfg%fit%objective//'): start '//real_str(out%f_start, 'es12.5')// &
+            '  objective ('//trim(cfg%fit%objective)//'): start '//real_str(out%f_start, 'es12.5')// &
             ', best '//real_str(out%opt%f, 'es12.5'), &
             '  evaluations '//str(out%opt%nevals)//' ('//str(out%nreplayed)//' replayed, '// &
             str(out%nsimulated)//' simulated), iterations '// &

@@ -26,6 +26,7 @@ module usharp_diagnose
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_miller, only: constant_names, get_constant
    use usharp_config, only: run_config
+   use usharp_input_diagnose, only: check_holdout
    use usharp_objective, only: setup_problem
    use usharp_experiment, only: experiment_type, fits_strain
    use usharp_effects, only: effect_catalogue
@@ -157,21 +158,11 @@ contains
             return
          end if
       end do
-      allocate (res%held(nt))
-      res%held = .false.
-      res%held(opts%holdout) = .true.
+      call check_holdout(cfg%diagnose, cfg%path, error)
+      if (allocated(error)) return
+      res%held = cfg%diagnose%holdout
       ctx%ifit = pack([(i, i=1, nt)], .not. res%held)
       ctx%ihold = pack([(i, i=1, nt)], res%held)
-      if (size(ctx%ihold) == 0) then
-         call fatal_error(error, cfg%path//': &diagnose: holdout: the held-out set is empty; '// &
-            'name the tests to predict (held out of the fit)', stat_input)
-         return
-      end if
-      if (size(ctx%ifit) == 0) then
-         call fatal_error(error, cfg%path//': &diagnose: holdout: every test is held out; '// &
-            'nothing is left to fit', stat_input)
-         return
-      end if
       allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt), strain_fit(nt))
       do i = 1, nt
          res%names(i) = cfg%tests(i)%name

@@ -17,50 +17,36 @@ module usharp_diagnose_options
    !> part: a fixed fraction of the noise part is no measure of it)
    real(dp), parameter :: gap_z = 3.0_dp
 
-   !> Settings of a diagnosis (&diagnose group)
+   !> Settings of a diagnosis: the &diagnose group's (cfg%diagnose, where their defaults are;
+   !> the held-out tests are cfg%diagnose%holdout) with names resolved, and the algorithm's own
    type :: diagnose_options
-      integer, allocatable :: holdout(:)     !< tests held out of the fit
       integer, allocatable :: effects(:)     !< catalogue effects considered
       integer, allocatable :: rows(:)        !< self-check: effects injected (0: clean data)
-      integer :: n_refit = 3                 !< leading candidates refitted
-      real(dp) :: dlnE_dT = -4.0e-4_dp       !< 1/K, temperature slope of ln E
-      real(dp) :: gamma3 = 200.0_dp          !< -, second back stress recovery in screening
-      real(dp) :: confirm_shrink = 0.5_dp    !< held-out structured gap removed to confirm
+      integer :: n_refit                     !< leading candidates refitted
+      real(dp) :: dlnE_dT                    !< 1/K, temperature slope of ln E
+      real(dp) :: gamma3                     !< -, second back stress recovery in screening
+      real(dp) :: confirm_shrink             !< held-out structured gap removed to confirm
       integer :: max_evals = 3000            !< per refit
-      integer :: refit_starts = 1            !< screening end points a refit starts from
+      integer :: refit_starts                !< screening end points a refit starts from
       !> Latin-hypercube starts of the constants over the &fit multi-start box, run for the
       !> baseline and for every refit when no significant local refit brings the fit tests'
       !> structured gap down to the noise level (0: local only)
-      integer :: global_starts = 4
+      integer :: global_starts
       !> A refit that ends above another runs again from that one's constants
-      logical :: cross_starts = .true.
+      logical :: cross_starts
    end type diagnose_options
 
 contains
 
-   !> The options of cfg's &diagnose group with names resolved: unknown effects or tests are
-   !> errors naming the file, group and variable; no effects given: the whole catalogue
+   !> The options of cfg's &diagnose group with names resolved: unknown effects are errors
+   !> naming the file, group and variable; no effects given: the whole catalogue
    subroutine diagnose_options_of(cfg, opts, error)
       !> Configuration read from the deck
       type(run_config), intent(in) :: cfg
       !> Resolved settings
       type(diagnose_options), intent(out) :: opts
       type(error_type), allocatable, intent(out) :: error
-      integer :: i, j, k
-      allocate (opts%holdout(0), opts%effects(0))
-      do i = 1, size(cfg%diagnose%holdout)
-         if (len_trim(cfg%diagnose%holdout(i)) == 0) cycle
-         k = 0
-         do j = 1, size(cfg%tests)
-            if (cfg%tests(j)%name == trim(cfg%diagnose%holdout(i))) k = j
-         end do
-         if (k == 0) then
-            call fatal_error(error, cfg%path//": &diagnose: holdout: no &test is named '"// &
-               trim(cfg%diagnose%holdout(i))//"'", stat_input)
-            return
-         end if
-         opts%holdout = [opts%holdout, k]
-      end do
+      integer :: k
       call effect_numbers(cfg, cfg%diagnose%effects, 'effects', .false., opts%effects, error)
       if (allocated(error)) return
       call effect_numbers(cfg, cfg%diagnose%rows, 'rows', .true., opts%rows, error)

@@ -1,0 +1,220 @@
+!> The &model group (material, temperature, elastic constants, stress unit) and the &constants
+!> group (the eight Miller constants). Defaults are those of miller_model.
+module usharp_input_model
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: lower, str
+   use usharp_miller, only: miller_model, miller_constants
+   use usharp_units, only: stress_factor
+   use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
+                              value_len, unset
+   implicit none
+   private
+
+   public :: read_model_group, read_constants_group, write_model_defaults, write_constants_defaults
+
+   !> Plausible Young's moduli of metals at the temperature of any test, ksi and MPa: a value
+   !> outside is another unit (GPa, psi) rather than a material
+   real(dp), parameter :: youngs_ksi(2) = [1.0e3_dp, 1.0e5_dp], youngs_mpa(2) = [1.0e4_dp, 7.0e5_dp]
+   !> Below this fraction of the melting temperature no test is viscoplastic: the temperature
+   !> was given in Celsius (room temperature 20 reads as 20 K)
+   real(dp), parameter :: lowest_homologous = 0.1_dp
+   !> The model named by default
+   character(len=*), parameter :: default_name = 'miller', default_units = 'ksi'
+
+   !> The &model variables as given
+   type :: model_values
+      character(len=value_len) :: name, units
+      real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
+   end type model_values
+
+contains
+
+   !> Read &model into model (temperature, elastic and D0 settings) and model_units (ksi or MPa)
+   subroutine read_model_group(file, model, model_units, error)
+      type(nml_file), intent(in) :: file
+      type(miller_model), intent(inout) :: model
+      character(len=:), allocatable, intent(out) :: model_units
+      type(error_type), allocatable, intent(out) :: error
+      type(model_values) :: v
+      type(miller_model) :: defaults
+      integer :: ios, k
+      character(len=512) :: msg
+      character(len=:), allocatable :: lines(:)
+      character(len=:), allocatable :: where
+      k = find_group(file, 'model')
+      if (k == 0) then
+         call fatal_error(error, file%path//': group &model is missing')
+         return
+      end if
+      call group_text(file, k, lines)
+      call model_namelist(v, ios, msg, text=lines)
+      if (ios /= 0) then
+         call read_error(error, file%path, 'model', ios, msg)
+         return
+      end if
+      where = file%path//': &model: '
+      call check_length(error, where, 'name', v%name)
+      call check_length(error, where, 'units', v%units)
+      if (allocated(error)) return
+      if (lower(trim(v%name)) /= 'miller') then
+         call fatal_error(error, where//"name = '"//trim(v%name)//"' is not known (known: miller)")
+         return
+      end if
+      model_units = lower(trim(v%units))
+      if (model_units == 'mpa') model_units = 'MPa'
+      if (model_units /= 'ksi' .and. model_units /= 'MPa') then
+         call fatal_error(error, where//"units = '"//trim(v%units)//"' is not known (ksi or MPa)")
+         return
+      end if
+      if (required(v%temperature, 'temperature')) return
+      if (required(v%tm, 'tm')) return
+      if (required(v%youngs, 'youngs')) return
+      call check_plausible(where, model_units, v%temperature, v%tm, v%youngs, error)
+      if (allocated(error)) return
+      model%temperature = v%temperature
+      model%tm = v%tm
+      model%youngs = v%youngs
+      model%poisson = v%poisson
+      model%d0_fixed = v%d0
+      ! The thesis's YS = 18 ksi, in the model's unit unless given
+      if (v%d0_yield == unset) v%d0_yield = defaults%d0_yield*stress_factor('ksi', model_units)
+      model%d0_yield = v%d0_yield
+      model%d0_rate = v%d0_rate
+   contains
+      logical function required(val, var) result(missing)
+         real(dp), intent(in) :: val
+         character(len=*), intent(in) :: var
+         missing = val == unset
+         if (missing) call fatal_error(error, where//var//' is not set')
+      end function required
+   end subroutine read_model_group
+
+   !> Write &model with its starting values (unset reals: -huge) to unit
+   subroutine write_model_defaults(unit)
+      integer, intent(in) :: unit
+      type(model_values) :: v
+      integer :: ios
+      character(len=512) :: msg
+      call model_namelist(v, ios, msg, unit=unit)
+   end subroutine write_model_defaults
+
+   !> The &model namelist, starting from miller_model's defaults (temperature, tm and youngs
+   !> must be given; d0_yield unset is 18 ksi in the model's unit): read from text or
+   !> written to unit
+   subroutine model_namelist(v, ios, msg, text, unit)
+      type(model_values), intent(out) :: v
+      integer, intent(out) :: ios
+      character(len=*), intent(out) :: msg
+      character(len=*), intent(in), optional :: text(:)
+      integer, intent(in), optional :: unit
+      type(miller_model) :: defaults
+      character(len=value_len) :: name, units
+      real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
+      namelist /model/ name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
+      name = default_name
+      units = default_units
+      temperature = unset
+      tm = unset
+      youngs = unset
+      poisson = defaults%poisson
+      d0 = defaults%d0_fixed
+      d0_yield = unset
+      d0_rate = defaults%d0_rate
+      ios = 0
+      msg = ''
+      if (present(text)) read (text, nml=model, iostat=ios, iomsg=msg)
+      if (present(unit)) write (unit, nml=model, iostat=ios, iomsg=msg)
+      v = model_values(name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate)
+   end subroutine model_namelist
+
+   !> Values no metal test has are a wrong unit: temperatures are in K, youngs in the model's
+   !> stress unit
+   pure subroutine check_plausible(where, units, temperature, tm, youngs, error)
+      character(len=*), intent(in) :: where, units
+      real(dp), intent(in) :: temperature, tm, youngs
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: range(2)
+      if (.not. (tm > 0.0_dp)) then
+         call fatal_error(error, where//'tm = '//str(tm)//': the melting temperature is in K, > 0')
+      else if (.not. (temperature > 0.0_dp .and. temperature < tm)) then
+         call fatal_error(error, where//'temperature = '//str(temperature)// &
+            ' K: must lie between 0 K and the melting temperature tm = '//str(tm)//' K')
+      else if (temperature < lowest_homologous*tm) then
+         call fatal_error(error, where//'temperature = '//str(temperature)//' K is below '// &
+            str(lowest_homologous)//' tm = '//str(lowest_homologous*tm)// &
+            ' K: temperature is in kelvin (K = Celsius + 273.15)')
+      end if
+      if (allocated(error)) return
+      range = merge(youngs_ksi, youngs_mpa, units == 'ksi')
+      if (.not. (youngs >= range(1) .and. youngs <= range(2))) then
+         call fatal_error(error, where//'youngs = '//str(youngs)//' '//units// &
+            " is no metal's Young's modulus ("//str(range(1))//' to '//str(range(2))//' '// &
+            units//'): youngs is in the model stress unit, '//units// &
+            trim(merge(' (1 GPa = 145.04 ksi)', ' (1 GPa = 1000 MPa)  ', units == 'ksi')))
+      end if
+   end subroutine check_plausible
+
+   !> Read &constants into model%c; every constant must be given
+   subroutine read_constants_group(file, model, error)
+      type(nml_file), intent(in) :: file
+      type(miller_model), intent(inout) :: model
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: c(8)
+      character(len=2), parameter :: names(8) = ['a1', 'a2', 'b ', 'c2', 'h1', 'h2', 'n ', 'q ']
+      integer :: ios, k, i
+      character(len=512) :: msg
+      character(len=:), allocatable :: lines(:)
+      character(len=:), allocatable :: missing
+      k = find_group(file, 'constants')
+      if (k == 0) then
+         call fatal_error(error, file%path//': group &constants is missing')
+         return
+      end if
+      call group_text(file, k, lines)
+      call constants_namelist(c, ios, msg, text=lines)
+      if (ios /= 0) then
+         call read_error(error, file%path, 'constants', ios, msg)
+         return
+      end if
+      if (any(c == unset)) then
+         missing = ''
+         do i = 1, size(c)
+            if (c(i) == unset) missing = missing//' '//trim(names(i))
+         end do
+         call group_error(error, file%path, 'constants', 'every constant must be set '// &
+            '(missing: '//adjustl(missing)//')')
+         return
+      end if
+      model%c = miller_constants(c(1), c(2), c(3), c(4), c(5), c(6), c(7), c(8))
+   end subroutine read_constants_group
+
+   !> Write &constants (no defaults: every constant is unset, -huge) to unit
+   subroutine write_constants_defaults(unit)
+      integer, intent(in) :: unit
+      real(dp) :: c(8)
+      integer :: ios
+      character(len=512) :: msg
+      call constants_namelist(c, ios, msg, unit=unit)
+   end subroutine write_constants_defaults
+
+   !> The &constants namelist, every constant unset: read from text or written to unit; c in
+   !> the order A1, A2, B, C2, H1, H2, n, Q
+   subroutine constants_namelist(c, ios, msg, text, unit)
+      real(dp), intent(out) :: c(8)
+      integer, intent(out) :: ios
+      character(len=*), intent(out) :: msg
+      character(len=*), intent(in), optional :: text(:)
+      integer, intent(in), optional :: unit
+      real(dp) :: a1, a2, b, c2, h1, h2, n, q
+      namelist /constants/ a1, a2, b, c2, h1, h2, n, q
+      a1 = unset; a2 = unset; b = unset; c2 = unset
+      h1 = unset; h2 = unset; n = unset; q = unset
+      ios = 0
+      msg = ''
+      if (present(text)) read (text, nml=constants, iostat=ios, iomsg=msg)
+      if (present(unit)) write (unit, nml=constants, iostat=ios, iomsg=msg)
+      c = [a1, a2, b, c2, h1, h2, n, q]
+   end subroutine constants_namelist
+
+end module usharp_input_model

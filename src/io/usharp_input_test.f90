@@ -1,0 +1,528 @@
+!> The &test groups, one per test: its load history, output interval, measured data and
+!> weighting, and the external program that simulates it instead of the internal integrator
+module usharp_input_test
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error, prefix_error
+   use usharp_strings, only: lower_text => lower, str
+   use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
+                             thesis_lcf_history, relaxation_history, ratchet_history, &
+                             cyclic_history, tensile_history, creep_history, rate_jump_history
+   use usharp_forcing, only: measured_history
+   use usharp_table, only: read_columns, merge_repeated_times
+   use usharp_namelist, only: nml_file, group_text, check_length, value_len, max_list, unset, &
+                              resolve_path
+   implicit none
+   private
+
+   public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
+   public :: read_data_columns
+
+   !> Longest filter value (a text in a data file's filter column)
+   integer, parameter :: filter_len = 128
+
+   !> Where a test's measured data come from and how to read them
+   type :: data_spec
+      character(len=:), allocatable :: file         !< path (relative to the namelist file)
+      character(len=:), allocatable :: time_col     !< column name or position
+      character(len=:), allocatable :: stress_col
+      character(len=:), allocatable :: strain_col
+      character(len=:), allocatable :: weight_col   !< optional user weight column
+      character(len=:), allocatable :: unit         !< stress unit of the file: ksi or MPa
+      character(len=:), allocatable :: filter_col   !< optional row filter column
+      character(len=filter_len), allocatable :: filter_values(:)
+      character(len=:), allocatable :: format       !< optional Fortran format for fixed files
+   end type data_spec
+
+   !> How a test is simulated by an external program (an FE code in batch mode) instead of
+   !> the internal integrator: the command, what it writes, and the constants file it reads
+   type :: external_spec
+      logical :: enabled = .false.                     !< backend = 'external'
+      character(len=:), allocatable :: command         !< shell command, placeholders {work} ...
+      character(len=:), allocatable :: output_file     !< written by the command in its work folder
+      character(len=:), allocatable :: output_format   !< prvar or columns
+      character(len=:), allocatable :: time_title      !< column title (or position) of time, s
+      character(len=:), allocatable :: stress_title    !< column title (or position) of stress
+      character(len=:), allocatable :: unit            !< stress unit of the output: ksi or MPa
+      character(len=:), allocatable :: constants_file  !< name of the constants file in the work folder
+      character(len=:), allocatable :: constants_format !< Fortran format of one constant, (E12.5)
+      real(dp) :: time_limit = 3600.0_dp               !< s, then the command is killed
+   end type external_spec
+
+   !> One test: its load history, output interval and (for fits) its data and weighting
+   type :: test_config
+      character(len=:), allocatable :: name
+      character(len=:), allocatable :: history_kind
+      type(history_type) :: hist
+      real(dp) :: dt_out = 1.0_dp           !< output interval, s
+      real(dp) :: noise = 0.0_dp            !< relative Gaussian noise on stress (synthetic data)
+      integer :: seed = 1                   !< noise seed
+      logical :: has_data = .false.
+      type(data_spec) :: data
+      character(len=:), allocatable :: weighting  !< threshold, relaxation, none, column
+      real(dp) :: sig = 0.0_dp              !< threshold stress for 'threshold' weighting
+      type(external_spec) :: ext            !< external backend (when ext%enabled)
+      logical :: candidate = .false.        !< a candidate test of `usharp design`
+      integer :: line = 0                   !< line of its group in the input file
+   end type test_config
+
+   !> The variables of one &test group as given
+   type :: test_values
+      character(len=value_len) :: name, history, file, control, data_file, time_column, &
+                                  stress_column, strain_column, weight_column, data_unit, &
+                                  filter_column, data_format, weighting, backend, output_file, &
+                                  output_format, output_time, output_stress, output_unit, &
+                                  constants_file, constants_format, command
+      character(len=filter_len + 1) :: filter(max_list)
+      real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
+                  holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
+                  period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
+                  time_limit, rates(max_list)
+      logical :: candidate
+      integer :: npeaks, repeats, cycles, seed
+   end type test_values
+
+contains
+
+   !> Read every &test group of file (at least one) into tests, in file order; units: the
+   !> model's stress unit (the default of data_unit and output_unit)
+   subroutine read_test_groups(file, units, tests, error)
+      type(nml_file), intent(in) :: file
+      character(len=*), intent(in) :: units
+      type(test_config), allocatable, intent(out) :: tests(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(test_values) :: v
+      integer :: k, n, ios
+      character(len=512) :: msg
+      character(len=:), allocatable :: lines(:)
+      character(len=:), allocatable :: where
+      ! Counted first, allocated once: reading stays linear in the number of tests
+      n = count(file%groups%name == 'test')
+      if (n == 0) then
+         call fatal_error(error, file%path//': no &test group: at least one test is needed')
+         return
+      end if
+      allocate (tests(n))
+      n = 0
+      do k = 1, size(file%groups)
+         if (file%groups(k)%name /= 'test') cycle
+         n = n + 1
+         call group_text(file, k, lines)
+         call test_namelist(v, ios, msg, text=lines)
+         where = file%path//': &test #'//str(n)
+         if (len_trim(v%name) > 0) where = where//" '"//trim(v%name(:min(len_trim(v%name), 64)))//"'"
+         if (ios /= 0) then
+            call fatal_error(error, where//': '//trim(msg)//' (iostat '//str(ios)//')')
+            return
+         end if
+         call build_test(v, file%base_dir, units, tests(n), error)
+         if (allocated(error)) then
+            call prefix_error(error, where//': ')
+            return
+         end if
+         tests(n)%line = file%groups(k)%line
+      end do
+      call check_unique_names(file%path, tests, error)
+   end subroutine read_test_groups
+
+   !> Each test writes files named after it: two tests of one name are an error naming both
+   subroutine check_unique_names(path, tests, error)
+      character(len=*), intent(in) :: path
+      type(test_config), intent(in) :: tests(:)
+      type(error_type), allocatable, intent(out) :: error
+      integer, allocatable :: order(:)
+      integer :: i, a, b
+      order = name_order(tests)
+      do i = 2, size(order)
+         if (tests(order(i))%name /= tests(order(i - 1))%name) cycle
+         a = min(order(i - 1), order(i))
+         b = max(order(i - 1), order(i))
+         call fatal_error(error, path//':'//str(tests(b)%line)//": &test #"//str(b)//" '"// &
+            tests(b)%name//"': name: &test #"//str(a)//' (line '//str(tests(a)%line)// &
+            ') has this name; each test needs its own (its output files are named after it)')
+         return
+      end do
+   end subroutine check_unique_names
+
+   !> The permutation that sorts the tests by name (merge sort: n log n for many tests)
+   function name_order(tests) result(order)
+      type(test_config), intent(in) :: tests(:)
+      integer, allocatable :: order(:)
+      integer, allocatable :: tmp(:)
+      integer :: n, width, lo, mid, hi, i, j, k
+      n = size(tests)
+      order = [(i, i=1, n)]
+      allocate (tmp(n))
+      width = 1
+      do while (width < n)
+         do lo = 1, n, 2*width
+            mid = min(lo + width - 1, n)
+            hi = min(lo + 2*width - 1, n)
+            i = lo
+            j = mid + 1
+            do k = lo, hi
+               if (j > hi) then
+                  tmp(k) = order(i); i = i + 1
+               else if (i > mid) then
+                  tmp(k) = order(j); j = j + 1
+               else if (llt(tests(order(j))%name, tests(order(i))%name)) then
+                  tmp(k) = order(j); j = j + 1
+               else
+                  tmp(k) = order(i); i = i + 1
+               end if
+            end do
+         end do
+         order = tmp
+         width = 2*width
+      end do
+   end function name_order
+
+   !> One test from its group's values, checked; its history is built here
+   subroutine build_test(v, base_dir, units, t, error)
+      type(test_values), intent(inout) :: v
+      character(len=*), intent(in) :: base_dir, units
+      type(test_config), intent(out) :: t
+      type(error_type), allocatable, intent(out) :: error
+      integer :: nlev, nhold, i
+      call check_lengths(v, error)
+      if (allocated(error)) return
+      if (len_trim(v%name) == 0) then
+         call fatal_error(error, 'name is not set')
+         return
+      end if
+      if (verify(trim(v%name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.') /= 0) then
+         call fatal_error(error, "name = '"//trim(v%name)//"' may hold only letters, digits, _ - .")
+         return
+      end if
+      t%name = trim(v%name)
+      t%candidate = v%candidate
+      t%history_kind = lower_text(trim(v%history))
+      if (.not. (v%dt_out >= 0.0_dp)) then
+         call fatal_error(error, 'dt_out must be >= 0 s')
+         return
+      end if
+      t%dt_out = v%dt_out
+      if (v%noise < 0.0_dp) then
+         call fatal_error(error, 'noise must be >= 0')
+         return
+      end if
+      t%noise = v%noise
+      t%seed = v%seed
+      t%sig = v%sig
+      t%weighting = lower_text(trim(v%weighting))
+      select case (t%weighting)
+      case ('none', 'threshold', 'relaxation', 'column')
+      case default
+         call fatal_error(error, "weighting = '"//trim(v%weighting)// &
+            "' is not known (none, threshold, relaxation, column)")
+         return
+      end select
+      if (t%weighting == 'column' .and. len_trim(v%weight_column) == 0) then
+         call fatal_error(error, "weighting = 'column' needs weight_column")
+         return
+      end if
+      t%has_data = len_trim(v%data_file) > 0
+      t%data%file = resolve_path(base_dir, trim(v%data_file))
+      t%data%time_col = trim(v%time_column)
+      t%data%stress_col = trim(v%stress_column)
+      t%data%strain_col = trim(v%strain_column)
+      t%data%weight_col = trim(v%weight_column)
+      t%data%unit = trim(v%data_unit)
+      if (len_trim(v%data_unit) == 0) t%data%unit = units
+      if (lower_text(t%data%unit) == 'mpa') t%data%unit = 'MPa'
+      if (t%data%unit /= 'ksi' .and. t%data%unit /= 'MPa') then
+         call fatal_error(error, "data_unit = '"//trim(v%data_unit)//"' is not known (ksi or MPa)")
+         return
+      end if
+      t%data%filter_col = trim(v%filter_column)
+      allocate (t%data%filter_values(count(len_trim(v%filter) > 0)))
+      nlev = 0
+      do i = 1, max_list
+         if (len_trim(v%filter(i)) == 0) cycle
+         nlev = nlev + 1
+         t%data%filter_values(nlev) = v%filter(i)
+      end do
+      t%data%format = trim(v%data_format)
+      call build_external(v, t%name, units, t%ext, error)
+      if (allocated(error)) return
+      nlev = count(v%levels /= unset)
+      nhold = count(v%holds /= unset)
+      select case (t%history_kind)
+      case ('thesis_lcf')
+         call thesis_lcf_history(v%amp_first, v%amp_last, v%npeaks, v%quarter_time, t%hist, error)
+      case ('relaxation')
+         if (nlev == 0) then
+            v%levels(1:2) = [0.00075_dp, 0.001_dp]
+            nlev = 2
+         end if
+         if (nhold == 0) then
+            v%holds(1:nlev) = 600.0_dp
+            nhold = nlev
+         end if
+         call relaxation_history(v%levels(:nlev), v%ramp_time, v%holds(:nhold), t%hist, error)
+      case ('ratchet')
+         call ratchet_history(v%up, v%down, v%repeats, v%seg_time, t%hist, error)
+      case ('cyclic')
+         if (v%strain_range == unset) then
+            call fatal_error(error, "history 'cyclic' needs strain_range")
+            return
+         end if
+         call cyclic_history(v%strain_range, v%mean_strain, v%strain_rate, v%period, v%cycles, &
+                             v%hold_max, v%hold_min, t%hist, error)
+      case ('tensile')
+         if (v%final_strain == unset) then
+            call fatal_error(error, "history 'tensile' needs final_strain")
+            return
+         end if
+         call tensile_history(v%strain_rate, v%final_strain, t%hist, error)
+      case ('rate_jump')
+         if (v%final_strain == unset .or. count(v%rates /= unset) == 0) then
+            call fatal_error(error, "history 'rate_jump' needs rates and final_strain")
+            return
+         end if
+         call rate_jump_history(pack(v%rates, v%rates /= unset), v%final_strain, t%hist, error)
+      case ('creep')
+         if (v%stress == unset .or. v%duration == unset) then
+            call fatal_error(error, "history 'creep' needs stress and duration")
+            return
+         end if
+         call creep_history(v%stress, v%ramp_time, v%duration, t%hist, error)
+      case ('file')
+         call file_history(resolve_path(base_dir, trim(v%file)), lower_text(trim(v%control)), &
+                           t%hist, error)
+      case ('data')
+         if (.not. t%has_data) then
+            call fatal_error(error, "history 'data' needs data_file")
+            return
+         end if
+         call data_history(t%data, t%hist, error)
+      case ('')
+         call fatal_error(error, 'history is not set (thesis_lcf, relaxation, ratchet, '// &
+            'cyclic, tensile, rate_jump, creep, file, data)')
+      case default
+         call fatal_error(error, "history = '"//trim(v%history)//"' is not known (thesis_lcf, "// &
+            'relaxation, ratchet, cyclic, tensile, rate_jump, creep, file, data)')
+      end select
+   end subroutine build_test
+
+   !> No character value may have been cut at its buffer's length
+   subroutine check_lengths(v, error)
+      type(test_values), intent(in) :: v
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i
+      call check_length(error, '', 'name', v%name)
+      call check_length(error, '', 'history', v%history)
+      call check_length(error, '', 'file', v%file)
+      call check_length(error, '', 'control', v%control)
+      call check_length(error, '', 'data_file', v%data_file)
+      call check_length(error, '', 'time_column', v%time_column)
+      call check_length(error, '', 'stress_column', v%stress_column)
+      call check_length(error, '', 'strain_column', v%strain_column)
+      call check_length(error, '', 'weight_column', v%weight_column)
+      call check_length(error, '', 'data_unit', v%data_unit)
+      call check_length(error, '', 'filter_column', v%filter_column)
+      call check_length(error, '', 'data_format', v%data_format)
+      call check_length(error, '', 'weighting', v%weighting)
+      call check_length(error, '', 'backend', v%backend)
+      call check_length(error, '', 'command', v%command)
+      call check_length(error, '', 'output_file', v%output_file)
+      call check_length(error, '', 'output_format', v%output_format)
+      call check_length(error, '', 'output_time', v%output_time)
+      call check_length(error, '', 'output_stress', v%output_stress)
+      call check_length(error, '', 'output_unit', v%output_unit)
+      call check_length(error, '', 'constants_file', v%constants_file)
+      call check_length(error, '', 'constants_format', v%constants_format)
+      do i = 1, max_list
+         call check_length(error, '', 'filter', v%filter(i))
+      end do
+   end subroutine check_lengths
+
+   !> The external backend's settings, checked
+   subroutine build_external(v, test_name, units, ext, error)
+      type(test_values), intent(in) :: v
+      character(len=*), intent(in) :: test_name, units
+      type(external_spec), intent(out) :: ext
+      type(error_type), allocatable, intent(out) :: error
+      character(len=64) :: probe
+      integer :: ios
+      select case (lower_text(trim(v%backend)))
+      case ('internal')
+         ext%enabled = .false.
+      case ('external')
+         ext%enabled = .true.
+      case default
+         call fatal_error(error, "backend = '"//trim(v%backend)//"' is not known (internal or external)")
+         return
+      end select
+      ext%command = trim(v%command)
+      ext%output_file = trim(v%output_file)
+      if (len_trim(v%output_file) == 0) ext%output_file = test_name//'_prvar.txt'
+      ext%output_format = lower_text(trim(v%output_format))
+      ext%time_title = trim(v%output_time)
+      ext%stress_title = trim(v%output_stress)
+      ext%unit = trim(v%output_unit)
+      if (len_trim(v%output_unit) == 0) ext%unit = units
+      if (lower_text(ext%unit) == 'mpa') ext%unit = 'MPa'
+      ext%constants_file = trim(v%constants_file)
+      ext%constants_format = trim(v%constants_format)
+      ext%time_limit = v%time_limit
+      if (.not. ext%enabled) return
+      if (len_trim(v%command) == 0) then
+         call fatal_error(error, "backend = 'external' needs command")
+      else if (ext%output_format /= 'prvar' .and. ext%output_format /= 'columns') then
+         call fatal_error(error, "output_format = '"//trim(v%output_format)// &
+            "' is not known (prvar or columns)")
+      else if (ext%unit /= 'ksi' .and. ext%unit /= 'MPa') then
+         call fatal_error(error, "output_unit = '"//trim(v%output_unit)//"' is not known (ksi or MPa)")
+      else if (.not. (v%time_limit > 0.0_dp)) then
+         call fatal_error(error, 'time_limit must be > 0 s')
+      else if (len_trim(v%constants_file) == 0 .or. index(v%constants_file, '/') > 0) then
+         call fatal_error(error, "constants_file = '"//trim(v%constants_file)// &
+            "' must be a plain file name (it is written into the work folder)")
+      else if (index(ext%output_file, '/') > 0 .or. index(ext%output_file, '..') > 0) then
+         call fatal_error(error, "output_file = '"//ext%output_file// &
+            "' must be a plain file name inside the work folder")
+      end if
+      if (allocated(error)) return
+      write (probe, ext%constants_format, iostat=ios) 1.0_dp
+      if (ios /= 0 .or. verify(ext%constants_format, '()0123456789.EeSsDdGg') /= 0) then
+         call fatal_error(error, "constants_format = '"//ext%constants_format// &
+            "' is not a Fortran format for one real such as (E12.5)")
+      end if
+   end subroutine build_external
+
+   !> Write &test with its defaults to unit (reals without a default: -huge)
+   subroutine write_test_defaults(unit)
+      integer, intent(in) :: unit
+      type(test_values) :: v
+      integer :: ios
+      character(len=512) :: msg
+      call test_namelist(v, ios, msg, unit=unit)
+   end subroutine write_test_defaults
+
+   !> The &test namelist with its defaults (those test_config and external_spec hold come
+   !> from them): read from text or written to unit
+   subroutine test_namelist(v, ios, msg, text, unit)
+      type(test_values), intent(out) :: v
+      integer, intent(out) :: ios
+      character(len=*), intent(out) :: msg
+      character(len=*), intent(in), optional :: text(:)
+      integer, intent(in), optional :: unit
+      type(test_config) :: d
+      character(len=value_len) :: name, history, file, control, data_file, time_column, &
+                                  stress_column, strain_column, weight_column, data_unit, &
+                                  filter_column, data_format, weighting, backend, output_file, &
+                                  output_format, output_time, output_stress, output_unit, &
+                                  constants_file, constants_format, command
+      character(len=filter_len + 1) :: filter(max_list)
+      real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
+                  holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
+                  period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
+                  time_limit, rates(max_list)
+      logical :: candidate
+      integer :: npeaks, repeats, cycles, seed
+      namelist /test/ name, history, dt_out, amp_first, amp_last, npeaks, quarter_time, levels, &
+         ramp_time, holds, up, down, repeats, seg_time, strain_range, mean_strain, strain_rate, &
+         period, cycles, hold_max, hold_min, final_strain, stress, duration, file, control, &
+         data_file, time_column, stress_column, strain_column, weight_column, data_unit, &
+         filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
+         output_file, output_format, output_time, output_stress, output_unit, constants_file, &
+         constants_format, time_limit, candidate, rates
+      name = ''
+      history = ''
+      file = ''
+      control = 'strain'
+      data_file = ''
+      time_column = 'time'
+      stress_column = 'stress'
+      strain_column = 'strain'
+      weight_column = ''
+      data_unit = ''
+      filter_column = ''
+      filter = ''
+      data_format = ''
+      weighting = 'none'
+      dt_out = d%dt_out
+      amp_first = 0.0005_dp; amp_last = 0.005_dp; npeaks = 12; quarter_time = 10.0_dp
+      levels = unset; holds = unset; ramp_time = 1.0_dp
+      up = 0.0005_dp; down = 0.00025_dp; repeats = 15; seg_time = 40.0_dp
+      strain_range = unset; mean_strain = 0.0_dp; strain_rate = 0.0_dp; period = 0.0_dp
+      cycles = 1; hold_max = 0.0_dp; hold_min = 0.0_dp
+      final_strain = unset; stress = unset; duration = unset
+      noise = d%noise; seed = d%seed; sig = d%sig
+      backend = 'internal'; command = ''; output_file = ''; output_format = 'prvar'
+      output_time = 'TIME'; output_stress = 'STRESS'; output_unit = ''
+      constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = d%ext%time_limit
+      candidate = d%candidate; rates = unset
+      ios = 0
+      msg = ''
+      if (present(text)) read (text, nml=test, iostat=ios, iomsg=msg)
+      if (present(unit)) write (unit, nml=test, iostat=ios, iomsg=msg)
+      v%name = name; v%history = history; v%file = file; v%control = control
+      v%data_file = data_file; v%time_column = time_column; v%stress_column = stress_column
+      v%strain_column = strain_column; v%weight_column = weight_column; v%data_unit = data_unit
+      v%filter_column = filter_column; v%data_format = data_format; v%weighting = weighting
+      v%backend = backend; v%output_file = output_file; v%output_format = output_format
+      v%output_time = output_time; v%output_stress = output_stress; v%output_unit = output_unit
+      v%constants_file = constants_file; v%constants_format = constants_format
+      v%command = command; v%filter = filter
+      v%dt_out = dt_out; v%amp_first = amp_first; v%amp_last = amp_last
+      v%quarter_time = quarter_time; v%levels = levels; v%ramp_time = ramp_time
+      v%holds = holds; v%up = up; v%down = down; v%seg_time = seg_time
+      v%strain_range = strain_range; v%mean_strain = mean_strain; v%strain_rate = strain_rate
+      v%period = period; v%hold_max = hold_max; v%hold_min = hold_min
+      v%final_strain = final_strain; v%stress = stress; v%duration = duration
+      v%noise = noise; v%sig = sig; v%time_limit = time_limit; v%rates = rates
+      v%candidate = candidate; v%npeaks = npeaks; v%repeats = repeats; v%cycles = cycles
+      v%seed = seed
+   end subroutine test_namelist
+
+   !> History from a file of (time, value) points; control is 'strain' or 'stress'
+   subroutine file_history(path, control, hist, error)
+      character(len=*), intent(in) :: path, control
+      type(history_type), intent(out) :: hist
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: vals(:, :)
+      integer :: mode
+      select case (control)
+      case ('strain'); mode = control_strain
+      case ('stress'); mode = control_stress
+      case default
+         call fatal_error(error, "control = '"//control//"' is not known (strain or stress)")
+         return
+      end select
+      call read_columns(path, ['1', '2'], vals, error)
+      if (allocated(error)) return
+      call history_from_points(vals(:, 1), vals(:, 2), mode, hist, error)
+      if (allocated(error)) call prefix_error(error, path//': ')
+   end subroutine file_history
+
+   !> Strain-controlled history from a measured file's time and strain columns
+   subroutine data_history(spec, hist, error)
+      type(data_spec), intent(in) :: spec
+      type(history_type), intent(out) :: hist
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: vals(:, :)
+      integer :: nmerged
+      character(len=:), allocatable :: cols(:)
+      allocate (character(len=max(len(spec%time_col), len(spec%strain_col))) :: cols(2))
+      cols(1) = spec%time_col
+      cols(2) = spec%strain_col
+      call read_data_columns(spec, cols, vals, error)
+      if (allocated(error)) return
+      call merge_repeated_times(vals, spec%file, nmerged, error)
+      if (allocated(error)) return
+      call measured_history(vals(:, 1), vals(:, 2), control_strain, hist, error)
+      if (allocated(error)) call prefix_error(error, spec%file//': ')
+   end subroutine data_history
+
+   !> Read columns of a data_spec's file with its filter and format
+   subroutine read_data_columns(spec, columns, vals, error)
+      type(data_spec), intent(in) :: spec
+      character(len=*), intent(in) :: columns(:)
+      real(dp), allocatable, intent(out) :: vals(:, :)
+      type(error_type), allocatable, intent(out) :: error
+      call read_columns(spec%file, columns, vals, error, spec%filter_col, spec%filter_values, &
+                        spec%format)
+   end subroutine read_data_columns
+
+end module usharp_input_test
