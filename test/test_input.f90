@@ -44,7 +44,8 @@ contains
          new_unittest('test-names-are-unique', test_unique_names), &
          new_unittest('long-values-kept-whole-or-refused', test_long_values), &
          new_unittest('model-units-plausible', test_plausible_units), &
-         new_unittest('reading-work-linear-in-groups', test_linear_reading)]
+         new_unittest('reading-work-linear-in-groups', test_linear_reading), &
+         new_unittest('namelist-reference-complete', test_reference_complete)]
    end subroutine collect_input
 
    !> An input file of the model, the constants and the given extra lines
@@ -362,6 +363,15 @@ contains
       if (allocated(error)) return
       call expect_config_error(error, 'after.nml', [character(len=90) :: pull(:len(pull) - 1)// &
          "/ name='c' /"], 'after.nml:3:75: text after the end of &test')
+      if (allocated(error)) return
+      ! A group left open runs into the next one, or a quote left open to the end of the file
+      call expect_config_error(error, 'open.nml', [character(len=90) :: pull(:len(pull) - 1), &
+         "&test name='b', history='tensile', final_strain=0.002 /"], &
+         "open.nml: &test #1 is not terminated by '/' (it starts at line 3; the next group starts at line 4)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'quote.nml', [character(len=90) :: &
+         "&test name='a, history='tensile', final_strain=0.002 /"], &
+         "quote.nml: &test #1 is not terminated by '/' (it starts at line 3; a quote opened on line 3 is not closed)")
    end subroutine test_text_between
 
    !> A second copy of a group the file holds once would be ignored: an error at its line
@@ -526,4 +536,116 @@ contains
          write (text, '(f0.4)') x
       end function real_text
    end subroutine test_linear_reading
+
+   !> Every variable of every group (taken from the namelist the reader reads, written with its
+   !> defaults) has a row in the group's section of docs/reference/namelist.md
+   subroutine test_reference_complete(error)
+      use usharp_input_model, only: write_model_defaults, write_constants_defaults
+      use usharp_input_solver, only: write_solver_defaults
+      use usharp_input_output, only: write_output_defaults
+      use usharp_input_fit, only: write_fit_defaults
+      use usharp_input_design, only: write_design_defaults
+      use usharp_input_diagnose, only: write_diagnose_defaults
+      use usharp_input_test, only: write_test_defaults
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: reference = 'docs/reference/namelist.md'
+      character(len=:), allocatable :: doc, missing
+      character(len=16), allocatable :: names(:)
+      integer :: g, i, unit
+      logical :: exists
+      inquire (file=reference, exist=exists)
+      if (.not. exists) then
+         call test_failed(error, reference//' is missing')
+         return
+      end if
+      doc = read_text(reference)
+      missing = ''
+      do g = 1, size(known_groups)
+         open (newunit=unit, file=scratch_dir//'/defaults.nml', status='replace', action='readwrite', &
+               delim='apostrophe')
+         select case (trim(known_groups(g)))
+         case ('model'); call write_model_defaults(unit)
+         case ('constants'); call write_constants_defaults(unit)
+         case ('solver'); call write_solver_defaults(unit)
+         case ('output'); call write_output_defaults(unit)
+         case ('fit'); call write_fit_defaults(unit)
+         case ('design'); call write_design_defaults(unit)
+         case ('diagnose'); call write_diagnose_defaults(unit)
+         case ('test'); call write_test_defaults(unit)
+         end select
+         rewind (unit)
+         call dumped_names(unit, names)
+         close (unit, status='delete')
+         if (size(names) == 0) then
+            missing = missing//' &'//trim(known_groups(g))//' (no variables dumped)'
+            cycle
+         end if
+         do i = 1, size(names)
+            if (.not. has_row(section(doc, '## &'//trim(known_groups(g))), names(i))) &
+               missing = missing//' &'//trim(known_groups(g))//'%'//trim(names(i))
+         end do
+      end do
+      call check(error, len(missing) == 0, 'not in '//reference//':'//missing)
+   contains
+      !> Variable names of a namelist dump: lines ' NAME=...' (lower case)
+      subroutine dumped_names(unit, names)
+         integer, intent(in) :: unit
+         character(len=16), allocatable, intent(out) :: names(:)
+         character(len=:), allocatable :: line
+         character(len=16) :: one(1)
+         integer :: e
+         allocate (names(0))
+         do
+            call read_line(unit, line)
+            if (.not. allocated(line)) exit
+            e = index(line, '=')
+            if (len(line) < 2 .or. e < 3) cycle
+            if (line(1:1) /= ' ' .or. verify(line(2:e - 1), 'ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) cycle
+            one(1) = lower_case(line(2:e - 1))
+            names = [names, one]
+         end do
+      end subroutine dumped_names
+      subroutine read_line(unit, line)
+         integer, intent(in) :: unit
+         character(len=:), allocatable, intent(out) :: line
+         character(len=1024) :: chunk
+         integer :: ios, n
+         line = ''
+         do
+            read (unit, '(a)', advance='no', iostat=ios, size=n) chunk
+            if (is_iostat_end(ios)) then
+               deallocate (line)
+               return
+            end if
+            line = line//chunk(:n)
+            if (ios /= 0) exit   ! end of record
+         end do
+      end subroutine read_line
+      pure function lower_case(text) result(res)
+         character(len=*), intent(in) :: text
+         character(len=len(text)) :: res
+         integer :: i
+         res = text
+         do i = 1, len(text)
+            if (text(i:i) >= 'A' .and. text(i:i) <= 'Z') res(i:i) = achar(iachar(text(i:i)) + 32)
+         end do
+      end function lower_case
+      !> The text of the section headed exactly `heading` (up to the next '## ')
+      function section(text, heading) result(part)
+         character(len=*), intent(in) :: text, heading
+         character(len=:), allocatable :: part
+         integer :: a, b
+         part = ''
+         a = index(new_line('a')//text, new_line('a')//heading//new_line('a'))
+         if (a == 0) return
+         part = text(a + len(heading):)
+         b = index(part, new_line('a')//'## ')
+         if (b > 0) part = part(:b)
+      end function section
+      !> A table row of the variable: a line starting '| `name` |' (case as in the docs)
+      logical function has_row(text, name)
+         character(len=*), intent(in) :: text, name
+         has_row = index(lower_case(new_line('a')//text), new_line('a')//'| `'//trim(name)//'` |') > 0
+      end function has_row
+   end subroutine test_reference_complete
 end module test_input

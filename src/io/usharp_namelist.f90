@@ -128,7 +128,7 @@ contains
                if (text(k:k) == '&') then
                   word = group_word(text, k + 1, b)
                   if (len(word) > 0 .and. word /= 'end') then
-                     call unterminated(' (the next group starts at line '//str(l)//')')
+                     call unterminated('; the next group starts at line '//str(l))
                      return
                   end if
                end if
@@ -154,7 +154,7 @@ contains
       end do
       if (inside) then
          if (quote /= ' ') then
-            call unterminated(' (a quote opened on line '//str(quote_line)//' is not closed)')
+            call unterminated('; a quote opened on line '//str(quote_line)//' is not closed')
          else
             call unterminated('')
          end if
@@ -184,7 +184,7 @@ contains
          character(len=*), intent(in) :: why
          call fatal_error(error, path//': &'//trim(file%groups(ngroup)%name)//' #'// &
             str(file%groups(ngroup)%number)//" is not terminated by '/'"//' (it starts at line '// &
-            str(open_line)//')'//why)
+            str(open_line)//why//')')
       end subroutine unterminated
    end subroutine scan_namelist_file
 
