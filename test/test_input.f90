@@ -592,18 +592,19 @@ contains
          integer, intent(in) :: unit
          character(len=16), allocatable, intent(out) :: names(:)
          character(len=:), allocatable :: line
-         character(len=16) :: one(1)
-         integer :: e
-         allocate (names(0))
+         character(len=16) :: found(200)
+         integer :: e, n
+         n = 0
          do
             call read_line(unit, line)
             if (.not. allocated(line)) exit
             e = index(line, '=')
             if (len(line) < 2 .or. e < 3) cycle
             if (line(1:1) /= ' ' .or. verify(line(2:e - 1), 'ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_') /= 0) cycle
-            one(1) = lower_case(line(2:e - 1))
-            names = [names, one]
+            n = min(n + 1, size(found))
+            found(n) = lower_case(line(2:e - 1))
          end do
+         names = found(:n)
       end subroutine dumped_names
       subroutine read_line(unit, line)
          integer, intent(in) :: unit
