@@ -9,7 +9,7 @@ FLAGS="-I/usr/include/sundials/fortran"
 exe=${1:-}
 if [ -z "$exe" ]; then
    fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
-   exe=$(fpm run --profile release --flag "$FLAGS" --runner echo usharp 2>/dev/null | tail -1)
+   exe=$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -29,7 +29,7 @@ seconds() {  # wall time of reading deck n$1.nml
    t0=$(date +%s.%N)
    "$exe" simulate "$work/n$1.nml" --test t1 -o "$work/out$1" >/dev/null
    t1=$(date +%s.%N)
-   echo "$t1 - $t0" | bc -l
+   awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }'
 }
 deck 1000
 deck 10000
@@ -37,4 +37,4 @@ t1k=$(seconds 1000)
 t10k=$(seconds 10000)
 printf 'groups    read time (s)\n'
 printf '%6d    %8.3f\n' 1000 "$t1k" 10000 "$t10k"
-printf 'ratio 10000/1000: %.1f (linear: 10, quadratic: 100)\n' "$(echo "$t10k / $t1k" | bc -l)"
+awk -v a="$t1k" -v b="$t10k" 'BEGIN { printf "ratio 10000/1000: %.1f (linear: 10, quadratic: 100)\n", b / a }'
