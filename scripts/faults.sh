@@ -42,6 +42,7 @@ put() {
   n=$((n + 1))
   local msg=${3//$tmp\//}
   msg=${msg//$root\//}
+  [ -z "${long:-}" ] || msg=$(printf '%s' "${msg//$long/<the 300-character name>}" | sed -E 's/d{40,}/d...d/g')
   msg=${msg//|/\\|}
   printf '| %d | %s | %s | `%s`%s |\n' "$n" "$1" "$2" "${msg:0:170}" "${4:-}"
 }

@@ -257,23 +257,34 @@ contains
    subroutine make_dir(path, error)
       character(len=*), intent(in) :: path
       type(error_type), allocatable, intent(out) :: error
-      integer :: k, stat, unit, ios
-      character(len=256) :: msg
+      integer :: k, stat
+      type(raw_file) :: probe
+      logical :: gone
       do k = 2, len_trim(path) + 1
          if (k <= len_trim(path)) then
             if (path(k:k) /= '/') cycle
          end if
          stat = c_mkdir(path(:k - 1)//c_null_char, int(o'755', c_int))
       end do
-      ! Prove the folder is writable by creating and deleting a file in it
-      open (newunit=unit, file=join_path(path, '.usharp-write-test'), status='replace', &
-            action='write', iostat=ios, iomsg=msg)
-      if (ios /= 0) then
-         call fatal_error(error, path//': output folder cannot be created or written ('// &
-            trim(msg)//')', stat_io)
+      ! Prove the folder is writable by creating and deleting a file in it (the C library's
+      ! reason when not: "Not a directory", "File name too long", ...)
+      call probe%create(join_path(path, '.usharp-write-test'), error)
+      if (allocated(error)) then
+         error%message = path//': output folder cannot be created or written ('// &
+            reason(error%message)//')'
          return
       end if
-      close (unit, status='delete')
+      call probe%close()
+      gone = remove_file(join_path(path, '.usharp-write-test'))
+   contains
+      !> The text in the last parentheses of a message
+      pure function reason(message) result(text)
+         character(len=*), intent(in) :: message
+         character(len=:), allocatable :: text
+         integer :: i
+         i = index(message, '(', back=.true.)
+         text = message(i + 1:len(message) - 1)
+      end function reason
    end subroutine make_dir
 
    !> dir/name
