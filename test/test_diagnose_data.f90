@@ -5,7 +5,7 @@ module test_diagnose_data
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
-   use usharp_history, only: history_type, cyclic_history, output_times, control_strain
+   use usharp_history, only: history_type, cyclic_history, output_times, control_strain, ratchet_history
    use usharp_miller, only: miller_model, model_setup
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
@@ -47,6 +47,7 @@ contains
       testsuite = [ &
          new_unittest('classes-of-a-quantised-noisy-strain', test_quantised), &
          new_unittest('holds-only-where-the-strain-is-steady', test_measured_hold), &
+         new_unittest('ratchet-steps-are-not-all-reversal', test_ratchet_classes), &
          new_unittest('inelastic-from-the-model-rate', test_inelastic), &
          new_unittest('serration-signature-in-the-residual', test_serration), &
          new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
@@ -146,6 +147,27 @@ contains
       end do
       call check(error, nbad == 0, str(nbad)//' points after the hold not in the reversal')
    end subroutine test_measured_hold
+
+   !> The thesis ratcheting test (steps of +0.05 % and -0.025 % in a 0.4 % range): 30 turns,
+   !> and the reversal is the first 30 % of each step, not the whole test (10 % of the range
+   !> is more than a step)
+   subroutine test_ratchet_classes(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(history_type) :: hist
+      integer, allocatable :: cls(:), cyc(:)
+      real(dp), allocatable :: t(:)
+      real(dp) :: share
+      call ratchet_history(0.0005_dp, 0.00025_dp, 15, 40.0_dp, hist, e)
+      call check(error, .not. allocated(e), 'history failed')
+      if (allocated(error)) return
+      t = output_times(hist, 1.0_dp)
+      allocate (cls(size(t)), cyc(size(t)))
+      call point_classes(hist, t, cls, cyc)
+      share = real(count(cls == class_reversal), dp)/size(t)
+      call check(error, share > 0.2_dp .and. share < 0.4_dp .and. maxval(cyc) == 15, &
+                 'reversal share '//real_str(share, 'f0.3')//', cycles '//str(maxval(cyc)))
+   end subroutine test_ratchet_classes
 
    !> A 1 % cycle with a hold, thesis model (yields near 0.09 % strain): the first loading is
    !> elastic at 0.03 % and inelastic near the peak, the hold (relaxation) is inelastic, and

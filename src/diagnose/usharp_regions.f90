@@ -24,6 +24,8 @@ module usharp_regions
    !> noise, quantisation and the dips of serrations make no turns); a point is in the
    !> reversal while the control is within reversal_span of the range from the turn
    real(dp), parameter :: turn_hysteresis = 0.05_dp, reversal_span = 0.1_dp
+   !> ... and within this share of the travel of its branch (turn to turn)
+   real(dp), parameter :: reversal_branch = 0.3_dp
    real(dp), parameter :: turn_quanta = 10.0_dp, turn_noise = 6.0_dp
    !> A control is quantised (measured) when its smallest step is below this fraction of its
    !> range; its noise is estimated when it has at least dense_corners corners
@@ -101,14 +103,15 @@ contains
    !>   hold_crossings times (an exactly constant piece when the control has no noise);
    !> - loading moves away from zero, unloading towards it, by the direction of the branch
    !>   between turns (not the local slope, which a quantised signal makes 0 or noisy);
-   !>   reversal: within reversal_span of the range from the last turn.
+   !>   reversal: within reversal_span of the range and reversal_branch of the branch's
+   !>   travel from the last turn.
    !> Elastic and inelastic points come from the model (inelastic_points).
    pure subroutine point_classes(hist, t, cls, cycle)
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: t(:)
       integer, intent(out) :: cls(:), cycle(:)
       type(control_kinematics) :: kin
-      real(dp) :: v
+      real(dp) :: v, vnext
       integer :: i, k, nturn, dir
       logical :: near_turn
       kin = kinematics_of(hist)
@@ -127,8 +130,15 @@ contains
          cycle(i) = max(1, (nturn + 1)/2)
          v = hist%value_at(t(i))
          dir = kin%dir0*merge(1, -1, mod(nturn, 2) == 0)
+         ! The reversal: near the last turn, against the whole range and the branch's own
+         ! travel (a ratcheting test's short steps are not all reversal)
          near_turn = .false.
-         if (nturn > 0) near_turn = abs(v - kin%vturn(nturn)) < reversal_span*kin%range
+         if (nturn > 0) then
+            vnext = hist%v(size(hist%v))
+            if (nturn < size(kin%vturn)) vnext = kin%vturn(nturn + 1)
+            near_turn = abs(v - kin%vturn(nturn)) < min(reversal_span*kin%range, &
+                                                         reversal_branch*abs(vnext - kin%vturn(nturn)))
+         end if
          if (kin%hold(k)) then
             cls(i) = class_hold
          else if (near_turn) then
