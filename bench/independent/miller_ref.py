@@ -100,6 +100,14 @@ def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):
         return u
 
     def rates(t, y, k):
+        try:
+            return rates_at(t, y, k)
+        except OverflowError:
+            # a trial state of the implicit solver far outside the physical ones: rates so
+            # large that its Newton iteration fails and the step is cut
+            return [1e100] * len(y)
+
+    def rates_at(t, y, k):
         eps_in, R, D, p, R2 = y[:5]
         s = sigma_of(t, y, k) - R - R2
         # Trial states of the implicit solver can lie far outside the physical ones: the
