@@ -470,7 +470,8 @@ contains
       character(len=*), parameter :: pull = &
          "&test name='a', history='tensile', strain_rate=1e-4, final_strain=0.002 /"
       call expect_model("&model temperature = 20.0, tm = 1800.0, youngs = 22.5e3 /", &
-         'temperature = 20.0000 K is below 0.100000 tm = 180.000 K: temperature is in kelvin')
+         'temperature = 20.0000 K is below a tenth of tm = 1800.00 K, where no metal is '// &
+         'viscoplastic: temperature is in kelvin (K = Celsius + 273.15)')
       if (allocated(error)) return
       call expect_model("&model temperature = 1900.0, tm = 1800.0, youngs = 22.5e3 /", &
          'temperature = 1900.00 K: must lie between 0 K and the melting temperature tm = 1800.00 K')

@@ -16,8 +16,8 @@ module usharp_input_model
    !> Plausible Young's moduli of metals at the temperature of any test, ksi and MPa: a value
    !> outside is another unit (GPa, psi) rather than a material
    real(dp), parameter :: youngs_ksi(2) = [1.0e3_dp, 1.0e5_dp], youngs_mpa(2) = [1.0e4_dp, 7.0e5_dp]
-   !> Below this fraction of the melting temperature no test is viscoplastic: the temperature
-   !> was given in Celsius (room temperature 20 reads as 20 K)
+   !> Below a tenth of the melting temperature no metal is viscoplastic: the temperature was
+   !> given in Celsius (room temperature 20 reads as 20 K)
    real(dp), parameter :: lowest_homologous = 0.1_dp
    !> The model named by default
    character(len=*), parameter :: default_name = 'miller', default_units = 'ksi'
@@ -141,9 +141,9 @@ contains
          call fatal_error(error, where//'temperature = '//str(temperature)// &
             ' K: must lie between 0 K and the melting temperature tm = '//str(tm)//' K')
       else if (temperature < lowest_homologous*tm) then
-         call fatal_error(error, where//'temperature = '//str(temperature)//' K is below '// &
-            str(lowest_homologous)//' tm = '//str(lowest_homologous*tm)// &
-            ' K: temperature is in kelvin (K = Celsius + 273.15)')
+         call fatal_error(error, where//'temperature = '//str(temperature)//' K is below a tenth '// &
+            'of tm = '//str(tm)//' K, where no metal is viscoplastic: temperature is in kelvin '// &
+            '(K = Celsius + 273.15)')
       end if
       if (allocated(error)) return
       range = merge(youngs_ksi, youngs_mpa, units == 'ksi')

@@ -124,7 +124,7 @@ contains
          else
             ! A line that starts a group inside a group: the group before lacks its '/'
             k = first_nonblank(text, a, b)
-            if (quote == ' ' .and. k < b) then
+            if (quote == ' ' .and. k <= b) then
                if (text(k:k) == '&') then
                   word = group_word(text, k + 1, b)
                   if (len(word) > 0 .and. word /= 'end') then
