@@ -477,7 +477,7 @@ contains
          'temperature = 1900.00 K: must lie between 0 K and the melting temperature tm = 1800.00 K')
       if (allocated(error)) return
       call expect_model("&model units = 'MPa', temperature = 1223.15, tm = 1630.0, youngs = 144 /", &
-         "youngs = 144.000 MPa is no metal's Young's modulus (10000.0 to 700000. MPa): youngs is"// &
+         "youngs = 144.000 MPa is no metal's Young's modulus (1.0E+04 to 7.0E+05 MPa): youngs is"// &
          ' in the model stress unit, MPa (1 GPa = 1000 MPa)')
       if (allocated(error)) return
       call expect_model("&model units = 'ksi', temperature = 1223.15, tm = 1630.0, youngs = 144000 /", &

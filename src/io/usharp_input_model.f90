@@ -3,7 +3,7 @@
 module usharp_input_model
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
-   use usharp_strings, only: lower, str
+   use usharp_strings, only: lower, str, real_str
    use usharp_miller, only: miller_model, miller_constants
    use usharp_units, only: stress_factor
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
@@ -149,7 +149,8 @@ contains
       range = merge(youngs_ksi, youngs_mpa, units == 'ksi')
       if (.not. (youngs >= range(1) .and. youngs <= range(2))) then
          call fatal_error(error, where//'youngs = '//str(youngs)//' '//units// &
-            " is no metal's Young's modulus ("//str(range(1))//' to '//str(range(2))//' '// &
+            " is no metal's Young's modulus ("//real_str(range(1), 'es7.1')//' to '// &
+            real_str(range(2), 'es7.1')//' '// &
             units//'): youngs is in the model stress unit, '//units// &
             trim(merge(' (1 GPa = 145.04 ksi)', ' (1 GPa = 1000 MPa)  ', units == 'ksi')))
       end if
