@@ -12,7 +12,7 @@ program usharp_main
    type(arg_string), allocatable :: args(:)
    type(cli_command) :: cmd
    type(error_type), allocatable :: error
-   character(len=1024), allocatable :: lines(:)
+   character(len=4200), allocatable :: lines(:)
    integer :: i, length
 
    interface

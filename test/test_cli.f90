@@ -5,7 +5,7 @@ module test_cli
    use usharp_error, only: uerror => error_type, stat_usage
    use usharp_cli, only: cli_command, arg_string, parse_arguments, command_names, command_help, &
                          version_text
-   use test_util, only: usharp_exe, read_text, scratch_dir
+   use test_util, only: require_exe, read_text, scratch_dir
    use usharp_filesys, only: make_dir
    use usharp_kinds, only: dp
    implicit none
@@ -126,11 +126,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=:), allocatable :: exe, out
-      exe = usharp_exe()
-      if (len(exe) == 0) then
-         call skip_test(error, 'usharp executable not found next to the tester')
-         return
-      end if
+      call require_exe(exe, error)
+      if (allocated(error)) return
       call make_dir(scratch_dir, e)
       out = scratch_dir//'/version.txt'
       call execute_command_line('env -u OMP_WAIT_POLICY '//exe//' --version > '//out)

@@ -4,7 +4,7 @@ module test_cluster
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
-   use test_util, only: usharp_exe, read_text, scratch_dir
+   use test_util, only: require_exe, read_text, scratch_dir
    implicit none
    private
    public :: collect_cluster
@@ -40,11 +40,8 @@ contains
       type(uerror), allocatable :: e
       character(len=:), allocatable :: exe, a, b, stop_script, fom_a, fom_b, log
       integer :: stat
-      exe = usharp_exe()
-      if (len(exe) == 0) then
-         call skip_test(error, 'usharp executable not found next to the tester')
-         return
-      end if
+      call require_exe(exe, error)
+      if (allocated(error)) return
       call make_dir(scratch_dir, e)
       a = scratch_dir//'/cluster-whole'
       b = scratch_dir//'/cluster-stopped'

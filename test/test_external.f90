@@ -178,7 +178,7 @@ contains
       use usharp_cmd_deck, only: deck_command
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=256), allocatable :: written(:)
+      character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: new, old
       integer :: k
       call deck_command('decks/thesis-data.nml', '', scratch_dir//'/decks', '', written, e)

@@ -169,7 +169,7 @@ contains
    subroutine test_unwritable(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=256), allocatable :: written(:)
+      character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: path
       path = write_text('unwritable.nml', deck_lines([character(len=80) :: &
          "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002 /"]))
@@ -182,7 +182,7 @@ contains
    subroutine test_simulate_ok(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=256), allocatable :: written(:)
+      character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: path, text
       path = write_text('ok.nml', deck_lines([character(len=120) :: &
          "&test name='pull', history='tensile', strain_rate=1e-4, final_strain=0.002, dt_out=2 /", &
@@ -239,7 +239,7 @@ contains
    subroutine test_integrator_choice(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=256), allocatable :: written(:)
+      character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: text_u, text_c
       character(len=120), parameter :: pull = &
          "&test name='pull', history='tensile', strain_rate=1e-4, final_strain=0.003, dt_out=30 /"
@@ -266,7 +266,7 @@ contains
    subroutine test_data_reproducible(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=256), allocatable :: written(:)
+      character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: fresh, kept
       character(len=*), parameter :: sets(2) = ['thesis       ', 'thesis-noise1']
       character(len=*), parameter :: tests(3) = ['lcf    ', 'relax  ', 'ratchet']

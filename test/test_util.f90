@@ -1,11 +1,11 @@
 !> Helpers for the tests: scratch files and locating the usharp executable
 module test_util
-   use testdrive, only: error_type, test_failed
+   use testdrive, only: error_type, test_failed, skip_test
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
    implicit none
    private
-   public :: scratch_dir, write_text, usharp_exe, read_text, check_message
+   public :: scratch_dir, write_text, usharp_exe, require_exe, read_text, check_message
 
    !> Scratch folder for test files (inside the build tree, never in the sources)
    character(len=*), parameter :: scratch_dir = 'build/test-scratch'
@@ -72,4 +72,13 @@ contains
       inquire (file=path, exist=exists)
       if (.not. exists) path = ''
    end function usharp_exe
+
+   !> The usharp executable next to this test program; when it is missing the test is
+   !> skipped (error set) with the reason
+   subroutine require_exe(exe, error)
+      character(len=:), allocatable, intent(out) :: exe
+      type(error_type), allocatable, intent(out) :: error
+      exe = usharp_exe()
+      if (len(exe) == 0) call skip_test(error, 'usharp executable not found next to the tester')
+   end subroutine require_exe
 end module test_util

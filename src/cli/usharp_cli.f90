@@ -29,14 +29,14 @@ contains
       !> the parsed command line
       type(cli_command), intent(in) :: cmd
       !> lines for the user (files written, summaries)
-      character(len=1024), allocatable, intent(out) :: lines(:)
+      character(len=4200), allocatable, intent(out) :: lines(:)
       !> what went wrong; its stat is the exit code
       type(error_type), allocatable, intent(out) :: error
       !> called with (evaluations, best objective, seconds) during a fit
       procedure(progress_interface), optional :: progress
       !> called with (what it does, simulations, seconds) during a diagnosis
       procedure(diagnose_progress), optional :: stage
-      character(len=256), allocatable :: written(:)
+      character(len=4096), allocatable :: written(:)
       character(len=200), allocatable :: summary(:)
       integer :: k
 
@@ -50,7 +50,7 @@ contains
          if (allocated(error)) return
          allocate (lines(0))
          if (cmd%quiet) return
-         lines = [character(len=1024) :: ('wrote '//trim(written(k)), k=1, size(written))]
+         lines = [character(len=4200) :: ('wrote '//trim(written(k)), k=1, size(written))]
          return
       case ('predict')
          call predict_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
@@ -69,10 +69,10 @@ contains
                           cmd%force, cmd%auto_resume)
          ! A fit that is done but whose report failed still shows its summary
          if (allocated(error)) then
-            if (error%stat == stat_report) lines = [character(len=1024) :: summary]
+            if (error%stat == stat_report) lines = [character(len=4200) :: summary]
          end if
       end select
       if (allocated(error)) return
-      lines = [character(len=1024) :: summary]
+      lines = [character(len=4200) :: summary]
    end subroutine execute_command
 end module usharp_cli

@@ -18,7 +18,7 @@ contains
    !> Write the decks. test_name '' means every test; out_dir '' means &output out_dir.
    subroutine deck_command(path, test_name, out_dir, constants_file, written, error)
       character(len=*), intent(in) :: path, test_name, out_dir, constants_file
-      character(len=256), allocatable, intent(out) :: written(:)
+      character(len=4096), allocatable, intent(out) :: written(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       character(len=line_len), allocatable :: lines(:)
@@ -58,12 +58,12 @@ contains
          file = join_path(dir, cfg%tests(i)%name//'.inp')
          call write_lines(file, lines, error)
          if (allocated(error)) return
-         written = [character(len=256) :: written, file]
+         written = [character(len=4096) :: written, file]
          ! The constants file the deck reads, from the input's constants
          file = join_path(dir, cfg%tests(i)%ext%constants_file)
          call write_constants_file(file, cfg%model, cfg%tests(i)%ext%constants_format, error)
          if (allocated(error)) return
-         if (.not. any(written == file)) written = [character(len=256) :: written, file]
+         if (.not. any(written == file)) written = [character(len=4096) :: written, file]
       end do
    end subroutine deck_command
 end module usharp_cmd_deck

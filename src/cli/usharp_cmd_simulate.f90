@@ -26,7 +26,7 @@ contains
       character(len=*), intent(in) :: out_dir
       character(len=*), intent(in), optional :: constants_file  !< a best.nml to use
       character(len=*), intent(in), optional :: only_test       !< simulate only this test
-      character(len=256), allocatable, intent(out) :: written(:)
+      character(len=4096), allocatable, intent(out) :: written(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(sim_result) :: res
@@ -89,7 +89,7 @@ contains
          call write_sim_file(file, res, header, cfg%units, error)
          deallocate (header)
          if (allocated(error)) return
-         written = [character(len=256) :: written, file]
+         written = [character(len=4096) :: written, file]
       end do
    end subroutine simulate_command
 end module usharp_cmd_simulate
