@@ -11,6 +11,7 @@ module usharp_diagnose_report
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_types, only: diagnose_result, effect_outcome
    use usharp_diagnose_verdict, only: verdict_of, top_regions
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
    private
 
@@ -143,9 +144,11 @@ contains
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(in) :: e
       integer, allocatable :: order(:)
-      integer :: i, k
+      integer :: i, k, g
       character(len=:), allocatable :: what
+      type(effect_info) :: cat(n_effects)
       order = top_regions(res%regions, 15)
+      cat = effect_catalogue(1.0_dp)
       call add(lines, '')
       if (len_trim(e%worst_what) > 0) then
          call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest against the '// &
@@ -161,6 +164,20 @@ contains
          call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
             real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']'//what)
       end do
+      ! The held-out tests' own values of a per-test effect (fitted to each with the constants
+      ! fixed)
+      associate (info => cat(e%k))
+         if (allocated(e%p_all) .and. info%sharing == param_per_test) then
+            do g = 1, info%nparam
+               do i = 1, size(res%names)
+                  if (res%held(i) .and. (g - 1)*size(res%names) + i <= size(e%p_all)) &
+                     call add(lines, '- '//trim(info%pname(g))//' '//trim(res%names(i))// &
+                        ' (held out, fitted to it with the constants fixed) = '// &
+                        real_str(e%p_all((g - 1)*size(res%names) + i), 'es11.4'))
+               end do
+            end do
+         end if
+      end associate
       if (.not. e%resolved .and. e%significant) call add(lines, '- the delay is below the sampling '// &
          'interval of the fit tests, '//real_str(res%dt_sample, 'g0.3')//' s: a finding only when it '// &
          'removes most of the structured gap on both sets')
