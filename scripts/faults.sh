@@ -63,7 +63,7 @@ row() {
 # journal_at DIR N: wait (at most 30 s) until DIR/fit.journal has N lines
 journal_at() {
   local k=0
-  while [ "$(wc -l < "$1/fit.journal" 2>/dev/null || echo 0)" -lt "$2" ] && [ $k -lt 3000 ]; do
+  while [ "$({ wc -l < "$1/fit.journal"; } 2>/dev/null || echo 0)" -lt "$2" ] && [ $k -lt 3000 ]; do
     sleep 0.01; k=$((k + 1))
   done
 }
