@@ -134,31 +134,29 @@ contains
    pure function gnuplot_string(text) result(quoted)
       character(len=*), intent(in) :: text
       character(len=:), allocatable :: quoted
-      integer :: k
-      quoted = "'"
-      do k = 1, len(text)
-         if (text(k:k) == "'") then
-            quoted = quoted//"''"
-         else
-            quoted = quoted//text(k:k)
-         end if
-      end do
-      quoted = quoted//"'"
+      quoted = single_quoted(text, "''")
    end function gnuplot_string
 
    !> A text quoted for the POSIX shell: in single quotes, each ' written as '\''
    pure function shell_quote(text) result(quoted)
       character(len=*), intent(in) :: text
       character(len=:), allocatable :: quoted
+      quoted = single_quoted(text, "'\''")
+   end function shell_quote
+
+   !> A text in single quotes, each quote inside it written as escaped
+   pure function single_quoted(text, escaped) result(quoted)
+      character(len=*), intent(in) :: text, escaped
+      character(len=:), allocatable :: quoted
       integer :: k
       quoted = "'"
       do k = 1, len(text)
          if (text(k:k) == "'") then
-            quoted = quoted//"'\''"
+            quoted = quoted//escaped
          else
             quoted = quoted//text(k:k)
          end if
       end do
       quoted = quoted//"'"
-   end function shell_quote
+   end function single_quoted
 end module usharp_strings
