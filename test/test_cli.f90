@@ -79,11 +79,13 @@ contains
       type(error_type), allocatable, intent(out) :: error
       character(len=*), parameter :: lines(*) = [character(len=40) :: &
          'frobnicate x.nml', 'run --resum x.nml', 'simulate --resume x.nml', 'run', &
-         'run a.nml b.nml', 'deck a b c', 'run x.nml -o', 'identify --selfcheck x.nml']
-      character(len=*), parameter :: expect(*) = [character(len=30) :: &
+         'run a.nml b.nml', 'deck a b c', 'run x.nml -o', 'identify --selfcheck x.nml', '-v', &
+         'predict x.nml']
+      character(len=*), parameter :: expect(*) = [character(len=60) :: &
          "unknown command 'frobnicate'", 'unknown option --resum', 'unknown option --resume', &
          'no input file given', 'more than one input file', 'more than one input file', &
-         '-o needs a value', 'unknown option --selfcheck']
+         '-o needs a value', 'unknown option --selfcheck', 'unknown option -v', &
+         'predict needs the constants of a fit: -c best.nml']
       type(cli_command) :: cmd
       type(uerror), allocatable :: e
       integer :: k

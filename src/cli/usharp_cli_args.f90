@@ -107,7 +107,11 @@ contains
          return
       end select
       if (.not. any(command_list == args(1)%s)) then
-         call fatal_error(error, "unknown command '"//args(1)%s//"'", stat_usage)
+         if (index(args(1)%s, '-') == 1) then
+            call fatal_error(error, 'unknown option '//args(1)%s, stat_usage)
+         else
+            call fatal_error(error, "unknown command '"//args(1)%s//"'", stat_usage)
+         end if
          return
       end if
       cmd%name = args(1)%s
@@ -184,6 +188,8 @@ contains
       else if (.not. cmd%selfcheck) then
          call fatal_error(error, 'no input file given', stat_usage)
       end if
+      if (.not. allocated(error) .and. cmd%name == 'predict' .and. len(cmd%constants) == 0) &
+         call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_usage)
    end subroutine parse_arguments
 
    !> The long name of an option given in its short or long form; empty when arg is none

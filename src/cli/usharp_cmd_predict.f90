@@ -2,7 +2,7 @@
 !> it: each test's error figures, the same curves as a fit writes and a summary
 module usharp_cmd_predict
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
+   use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: real_str
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
@@ -35,7 +35,7 @@ contains
       integer :: i
       allocate (summary(0))
       if (len_trim(constants_file) == 0) then
-         call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_usage)
+         call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_input)
          return
       end if
       call read_config_as(path, constants_file, out_dir, cfg, error)
