@@ -17,7 +17,7 @@ module usharp_fit
    use usharp_rng, only: rng_type
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
                              journal_name, cache_name, fingerprint_mismatch
-   use usharp_filesys, only: remove_file, join_path, file_exists, file_hash, hash_hex, hash_text
+   use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
@@ -284,7 +284,7 @@ contains
       type(error_type), allocatable :: close_error
       integer(int64) :: now, rate
       character(len=:), allocatable :: fingerprint, old_fingerprint, changed, journal
-      logical :: overwrite, resuming, dropped
+      logical :: overwrite, resuming
       obj%prob = prob
       allocate (obj%replay(0), obj%replay_jac(0))
       overwrite = .false.
@@ -350,9 +350,6 @@ contains
       end if
       call obj%log%close(close_error)
       if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
-      ! The cache serves only the resumption of a stopped run, and it grows with every
-      ! evaluation (tens of MB for a multi-start least-squares fit): a finished run drops it
-      if (.not. allocated(error)) dropped = remove_file(join_path(dir, cache_name))
    end subroutine run_fit
 
    !> Whether a journal file holds at least one evaluation (a line besides the fingerprint)
