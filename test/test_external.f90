@@ -232,7 +232,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=:), allocatable :: path
-      path = write_text(name//'.nml', [character(len=400) :: &
+      path = write_text(name//'.nml', [character(len=4000) :: &
          "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
          "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
          "  n = 5.8, q = 91000.0 /", &
@@ -404,7 +404,7 @@ contains
       function fit_lines(name, extra) result(lines)
          character(len=*), intent(in) :: name, extra
          character(len=400), allocatable :: lines(:)
-         lines = [character(len=400) :: &
+         lines = [character(len=4000) :: &
             "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
             "&constants a1 = 1.0, a2 = 1.0e-5, b = 1.0e13, c2 = 0.1, h1 = 100.0, h2 = 100.0,", &
             "  n = 1.0, q = 91000.0 /", &

@@ -43,7 +43,7 @@ contains
    function deck(name, extra_fit, extra_test) result(path)
       character(len=*), intent(in) :: name, extra_fit, extra_test
       character(len=:), allocatable :: path
-      path = write_text(name, [character(len=400) :: &
+      path = write_text(name, [character(len=4000) :: &
          "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
          '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
          "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200 "//extra_fit//' /', &
@@ -211,7 +211,7 @@ contains
       dir = scratch_dir//'/fingerprint-out'
       data = scratch_dir//'/fingerprint-lcf.txt'
       stat = shell('cp data/thesis/lcf.sim.txt '//data)
-      input = write_text('fingerprint.nml', [character(len=400) :: &
+      input = write_text('fingerprint.nml', [character(len=4000) :: &
          "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
          '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
          "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200, max_evals=10 /", &
@@ -244,7 +244,7 @@ contains
       if (allocated(error)) return
       ! A history file: its contents reach the fit through the control history
       hist = write_text('fingerprint-hist.csv', [character(len=20) :: '0 0', '120 0.005', '240 0'])
-      input = write_text('fingerprint-hist.nml', [character(len=400) :: &
+      input = write_text('fingerprint-hist.nml', [character(len=4000) :: &
          "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
          '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
          "&fit fitted='H1','n', max_evals=5, identify=.false. /", &
@@ -277,7 +277,7 @@ contains
       ext = ", backend='external', constants_format='(ES24.16)', command='case {work} in "// &
             "*identify*) echo no report here >&2; exit 9;; esac; sh "//absolute_path('test/ansys_standin.sh')// &
             ' '//absolute_path(exe)//" {input_dir}/report-internal.nml {test}'"
-      input = write_text('report-internal.nml', [character(len=400) :: &
+      input = write_text('report-internal.nml', [character(len=4000) :: &
          "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
          '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
          "&fit fitted='H1','n' /", &
@@ -435,7 +435,7 @@ contains
          return
       end if
       count = absolute_path(scratch_dir)//'/extresume-count.txt'
-      input = write_text('extresume-internal.nml', [character(len=400) :: &
+      input = write_text('extresume-internal.nml', [character(len=4000) :: &
          "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
          '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
          "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', dt_out=4.0 /"])
