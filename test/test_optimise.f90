@@ -15,7 +15,7 @@ module test_optimise
    use usharp_input, only: read_config, override_constants
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_identify, only: identify_result, identify_at, robust_covariance, jacobian_log10, &
-                              chi2_quantile_95
+                              chi2_quantile_95, identify_report
    use usharp_miller, only: get_constant
    use usharp_lapack, only: dgesv
    use usharp_cmd_run, only: run_command
@@ -177,6 +177,15 @@ contains
       call check(error, all(res%determined .eqv. [.false., .false., .true., .false., .true., .true., .true.]), &
                  'determined: B, H1, H2, n')
       if (allocated(error)) return
+      block
+         character(len=200), allocatable :: lines(:)
+         lines = identify_report(res)
+         ! Undetermined A1 gets no interval; determined B gets one
+         call check(error, any(index(lines, '  A1 ') == 1 .and. index(lines, 'none') > 0) .and. &
+                    .not. any(index(lines, '  B  ') == 1 .and. index(lines, 'none') > 0), &
+                    'no interval printed for an undetermined constant')
+         if (allocated(error)) return
+      end block
       ! A tight-tolerance reference (CVODE rtol 1e-10, or RODAS4 rtol 1e-9) gives 3.95e-4 and
       ! 6.6e-6: combinations of A1, A2, C2, and A2/A1 alone. CVODE at its default tolerance
       ! blurred them to 1.3e-3 and 4.8e-4 (difference noise); RODAS4's default keeps them.

@@ -262,9 +262,16 @@ contains
          '  constant      value       95 % interval (sandwich)    simultaneous 95 % ('// &
          str(res%rank)//' directions)   status']
       do j = 1, n
-         line = '  '//res%names(j)//'  '//real_str(res%c(j), 'es13.5')//'  ['// &
-                real_str(res%lo95(j), 'es11.4')//', '//real_str(res%hi95(j), 'es11.4')//']  ['// &
-                real_str(res%lo_joint(j), 'es11.4')//', '//real_str(res%hi_joint(j), 'es11.4')//']  '
+         line = '  '//res%names(j)//'  '//real_str(res%c(j), 'es13.5')//'  '
+         if (res%determined(j) .or. res%at_bound(j)) then
+            line = line//'['//real_str(res%lo95(j), 'es11.4')//', '// &
+                   real_str(res%hi95(j), 'es11.4')//']  ['//real_str(res%lo_joint(j), 'es11.4')// &
+                   ', '//real_str(res%hi_joint(j), 'es11.4')//']  '
+         else
+            ! A linearised interval of an undetermined constant is an artefact of round-off in
+            ! a near-null direction: print none rather than a number a reader would trust
+            line = line//'[         none           ]  [         none           ]  '
+         end if
          if (res%at_bound(j)) then
             line = line//'at a bound'
          else if (res%determined(j)) then
