@@ -18,6 +18,7 @@ program tester
    use test_safety, only: collect_safety
    use test_cluster, only: collect_cluster
    use test_diagnose_data, only: collect_diagnose_data
+   use test_chaboche, only: collect_chaboche
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -41,7 +42,8 @@ program tester
       new_testsuite('cli', collect_cli), &
       new_testsuite('safety', collect_safety), &
       new_testsuite('cluster', collect_cluster), &
-      new_testsuite('diagnose-data', collect_diagnose_data)]
+      new_testsuite('diagnose-data', collect_diagnose_data), &
+      new_testsuite('chaboche', collect_chaboche)]
    ! An optional argument runs one suite only
    only = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)
