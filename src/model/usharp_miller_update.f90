@@ -17,7 +17,7 @@ module usharp_miller_update
    private
 
    public :: miller_update, update_status_ok, update_status_cut, n_state, elastic_moduli
-   public :: deviator_projector, solve_dense
+   public :: deviator_projector
 
    !> Number of state variables: inelastic strain (6), back stress (6), drag stress
    integer, parameter :: n_state = 13

@@ -20,7 +20,7 @@ module usharp_model_chaboche
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
-   use usharp_miller_update, only: deviator_projector, solve_dense
+   use usharp_model_j2, only: deviator_projector, solve_dense, m_vec
    implicit none
    private
 
@@ -60,7 +60,6 @@ module usharp_model_chaboche
    !> Backward Euler substeps per increment by default, Newton iterations, halvings
    integer, parameter, public :: chaboche_default_substeps = 8
    integer, parameter :: max_newton = 30, max_halvings = 12
-   real(dp), parameter :: m_vec(6) = [1.0_dp, 1.0_dp, 1.0_dp, 0.0_dp, 0.0_dp, 0.0_dp]
 
    !> The Chaboche constants (units for a model in MPa)
    type :: chaboche_constants
