@@ -23,7 +23,7 @@ program tester
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
    type(error_type), allocatable :: error
-   character(len=64) :: only
+   character(len=64) :: only, one
    integer :: is, it, npass, nfail, nskip
 
    suites = [ &
@@ -44,9 +44,11 @@ program tester
       new_testsuite('cluster', collect_cluster), &
       new_testsuite('diagnose-data', collect_diagnose_data), &
       new_testsuite('chaboche', collect_chaboche)]
-   ! An optional argument runs one suite only
+   ! An optional argument runs one suite only, a second one test of it
    only = ''
+   one = ''
    if (command_argument_count() > 0) call get_command_argument(1, only)
+   if (command_argument_count() > 1) call get_command_argument(2, one)
    npass = 0
    nfail = 0
    nskip = 0
@@ -55,6 +57,7 @@ program tester
       write (output_unit, '(a)') '# suite '//suites(is)%name
       call suites(is)%collect(tests)
       do it = 1, size(tests)
+         if (len_trim(one) > 0 .and. tests(it)%name /= trim(one)) cycle
          call tests(it)%test(error)
          if (.not. allocated(error)) then
             npass = npass + 1

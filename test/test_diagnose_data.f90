@@ -25,7 +25,8 @@ module test_diagnose_data
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report
-   use usharp_diagnose, only: diagnose_result, diagnose_run
+   use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context
+   use usharp_diagnose_verdict, only: conclude
    use test_util, only: write_text
    implicit none
    private
@@ -52,7 +53,8 @@ contains
          new_unittest('serration-signature-in-the-residual', test_serration), &
          new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
          new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift), &
-         new_unittest('independent-data-clean-and-modulus-drop', test_independent)]
+         new_unittest('independent-data-clean-and-modulus-drop', test_independent), &
+         new_unittest('serrated-flow-named-in-the-verdict', test_serrated_verdict)]
    end subroutine collect_diagnose_data
 
    !> A measured strain: the command sampled every dt s with Gaussian noise of sd (strain)
@@ -362,6 +364,83 @@ contains
                  'drift '//real_str(sr%effects(1)%p(1), 'es10.3')//' ['//real_str(sr%effects(1)%p_lo(1), &
                  'es10.3')//', '//real_str(sr%effects(1)%p_hi(1), 'es10.3')//'] misses 8e-6')
    end subroutine test_specimen_drift
+
+   !> An oscillation of 1.5 % of the peak stress and a period of 5 samples added to one cyclic
+   !> test's data (model plus 0.5 % noise) is named in the verdict as serrated flow in that
+   !> test, not as one of its cycles; without it the verdict names no serrated flow
+   subroutine test_serrated_verdict(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(test_effects) :: base
+      type(experiment_type), allocatable :: exps(:), clean(:)
+      type(rng_type) :: rng
+      real(dp), allocatable :: r(:), y(:)
+      real(dp), parameter :: pi = acos(-1.0_dp)
+      real(dp) :: peak
+      integer :: i, j, k0, n, pass
+      logical :: ok
+      call read_config(write_text('diag-serrated.nml', [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /", &
+         "&fit fitted = 'B', method = 'lm' /", &
+         "&diagnose holdout = 'c2' /", &
+         "&test name = 'c1', history = 'cyclic', dt_out = 0.05, strain_range = 0.01,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /", &
+         "&test name = 'c2', history = 'cyclic', dt_out = 0.05, strain_range = 0.008,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
+      if (allocated(error)) return
+      allocate (clean(2))
+      do i = 1, 2
+         clean(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         clean(i)%y = spread(1.0_dp, 1, size(clean(i)%t))
+      end do
+      call setup_problem(cfg, prob, e, clean)
+      call check(error, .not. allocated(e), 'setup failed')
+      if (allocated(error)) return
+      call new_effect_problem(prob, [1, 2], 1, base, 1.0_dp, ep, free_constants=.false., p0=[0.0_dp])
+      allocate (r(ep%nres()), y(ep%nres()))
+      call ep%residual_at(ep%start(), r, ok, y)
+      call check(error, ok, 'simulation failed')
+      if (allocated(error)) return
+      call rng%seed(31)
+      k0 = 0
+      do i = 1, 2
+         n = size(clean(i)%t)
+         peak = maxval(abs(y(k0 + 1:k0 + n)))
+         clean(i)%y = [(y(k0 + j) + 0.005_dp*peak*rng%normal(), j=1, n)]
+         k0 = k0 + n
+      end do
+      do pass = 1, 2
+         exps = clean
+         if (pass == 1) then
+            peak = maxval(abs(exps(1)%y))
+            exps(1)%y = exps(1)%y + 0.015_dp*peak*sin(2.0_dp*pi*[(j, j=1, size(exps(1)%y))]/5.0_dp)
+         end if
+         call diagnose_baseline(cfg, opts, ctx, res, e, exps)
+         call check(error, .not. allocated(e), 'baseline failed')
+         if (allocated(error)) return
+         allocate (res%effects(0))
+         call conclude(res)
+         write (*, '(4x,a)') trim(merge('with   ', 'without', pass == 1))//' an oscillation: '//res%verdict
+         if (pass == 1) then
+            call check(error, index(res%verdict, 'serrated flow in c1') > 0 .and. &
+                       index(res%verdict, 'c2 (held out): the residual') == 0, 'oscillation not named: '//res%verdict)
+         else
+            call check(error, index(res%verdict, 'serrated flow') == 0, 'serrated flow named in clean data: '// &
+                       res%verdict)
+         end if
+         if (allocated(error)) return
+      end do
+   end subroutine test_serrated_verdict
 
    !> Data made by a program that is not usharp (bench/independent: Python, scipy's Radau)
    !> for the thesis matrix with the ratcheting test held out, 0.5 % noise: clean data give

@@ -72,7 +72,9 @@ def cyclic(strain_range, rate, cycles):
     return 'strain', np.array(t), np.array(v)
 
 
-HISTORIES = dict(lcf=thesis_lcf, relax=relaxation, ratchet=ratchet, creep=creep)
+HISTORIES = dict(lcf=thesis_lcf, relax=relaxation, ratchet=ratchet, creep=creep,
+                 c6=lambda: cyclic(0.006, 1.0e-3, 3), c8=lambda: cyclic(0.008, 1.0e-3, 3),
+                 c10=lambda: cyclic(0.010, 1.0e-3, 3))
 
 
 def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):

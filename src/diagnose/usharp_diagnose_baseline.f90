@@ -9,7 +9,7 @@ module usharp_diagnose_baseline
    use usharp_experiment, only: fits_strain
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se, &
-                             inelastic_points, serration_of, serration_stat, serration_p
+                             inelastic_points, serration_in_runs, serration_stat, serration_p
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
@@ -150,7 +150,7 @@ contains
 
    !> Regions of every test: the whole test, each history class, each cycle, elastic and
    !> inelastic points, and 'serrated flow' where the inelastic points' residual oscillates
-   !> (serration_p)
+   !> (serration_p, on their concatenation or on one of their runs)
    function all_regions(prob, res, r, ysim, nv) result(regs)
       type(fit_problem), intent(in) :: prob
       type(diagnose_result), intent(in) :: res
@@ -175,7 +175,7 @@ contains
             end do
             if (.not. fits_strain(prob%cfg%tests(i))) then
                ! periods well below a branch (two per cycle)
-               ser = serration_of(e, .not. el, count(.not. el)/(12*maxval(cyc)))
+               ser = serration_in_runs(e, .not. el, count(.not. el)/(12*maxval(cyc)))
                if (ser%p < serration_p) then
                   ! Ahead of the inelastic region of the same points: the name says what it is
                   regs = [regs, region_of(tag, 'serrated flow', .not. el, rr, e, vv)]

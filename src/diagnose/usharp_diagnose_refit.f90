@@ -291,19 +291,18 @@ contains
       end associate
    end subroutine name_params
 
-   !> Every magnitude of e's refit (parameters p, all tests) against its physical limit:
-   !> global parameters by value; per-test ones by value, or, where the constants take up
-   !> their common part (relative), by their spread about the fit tests' mean and by that
-   !> mean; the second back stress by its saturation H3/gamma3 against the peak stress (a
-   !> back stress beyond the stress it is part of is no back stress). A delay (shift, lag)
-   !> below the sampling interval of the data is not resolved by them.
+   !> Every magnitude of e's refit (parameters p, all tests) against its physical limit: by
+   !> value (each test's value of a per-test parameter); the second back stress by its
+   !> saturation H3/gamma3 against the peak stress (a back stress beyond the stress it is
+   !> part of is no back stress). A delay (shift, lag) below the sampling interval of the data
+   !> is not resolved by them.
    subroutine judge_magnitude(ctx, res, ep, p, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_problem), intent(in) :: ep
       real(dp), intent(in) :: p(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp) :: pmean, v
+      real(dp) :: v
       integer :: j, g, nt
       nt = size(ctx%prob%targets)
       e%worst = 0.0_dp
@@ -311,18 +310,9 @@ contains
       associate (info => ctx%cat(e%k))
          if (info%sharing == param_per_test) then
             do g = 1, info%nparam
-               associate (pg => p((g - 1)*nt + 1:g*nt), fg => ep%pfree((g - 1)*nt + 1:g*nt))
-                  pmean = sum(pg, fg)/max(count(fg), 1)
-                  do j = 1, nt
-                     if (.not. fg(j)) cycle
-                     if (info%relative) then
-                        call worse_of(abs(pg(j) - pmean)/info%plausible(g), 'spread of '//info%pname(g))
-                     else
-                        call worse_of(abs(pg(j))/info%plausible(g), info%pname(g))
-                     end if
-                  end do
-                  if (info%relative) call worse_of(abs(pmean)/info%plausible(g), 'mean of '//info%pname(g))
-               end associate
+               do j = 1, nt
+                  if (ep%pfree((g - 1)*nt + j)) call worse_of(abs(p((g - 1)*nt + j))/info%plausible(g), info%pname(g))
+               end do
             end do
          else
             do j = 1, size(ep%p0)

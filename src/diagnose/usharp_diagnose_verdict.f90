@@ -55,7 +55,24 @@ contains
       res%alike = res%alike(order_of(real(keys, dp) + 1.0e-6_dp*atan(res%effects(res%alike)%dbic)))
       res%leading = res%alike(1)
       call effect_verdict(res)
+      res%verdict = res%verdict//serration_note(res)
    end subroutine conclude
+
+   !> The tests whose inelastic residual oscillates, named as serrated flow: no catalogue
+   !> effect carries an oscillation, and its share of the gap can rank below a cycle's
+   function serration_note(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      integer :: i
+      text = ''
+      do i = 1, size(res%regions)
+         if (res%regions(i)%label /= 'serrated flow') cycle
+         if (len(text) > 0) text = text//', '
+         text = text//trim(res%regions(i)%test)
+      end do
+      if (len(text) > 0) text = '; serrated flow in '//text//': the residual of the inelastic '// &
+         'points oscillates (as dynamic strain ageing makes it), which no catalogue effect carries'
+   end function serration_note
 
    !> Complexity of an effect's refit: twice its free parameters, one more when they are per test
    pure integer function complexity(e) result(key)
@@ -116,12 +133,13 @@ contains
       end if
       where = ''
       top = top_regions(res%regions, size(res%regions))
-      top = pack(top, res%regions(top)%structured)
+      top = pack(top, res%regions(top)%structured .and. res%regions(top)%label /= 'serrated flow')
       do j = 1, min(3, size(top))
          if (j > 1) where = where//'; '
          where = where//trim(res%regions(top(j))%test)//' '//trim(res%regions(top(j))%label)
       end do
-      res%verdict = 'no catalogue effect is confirmed; the structured residual lies in: '//where
+      res%verdict = 'no catalogue effect is confirmed'//serration_note(res)
+      if (len(where) > 0) res%verdict = res%verdict//'; the structured residual lies in: '//where
       do j = 1, size(res%effects)
          if (res%effects(j)%significant) res%verdict = res%verdict//'; '// &
             trim(res%effects(j)%name)//' lowers BIC, but '//why_not(res%effects(j), res)

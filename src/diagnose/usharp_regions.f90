@@ -13,7 +13,7 @@ module usharp_regions
 
    public :: point_classes, region_stat, region_of, noise_sd, runs_z, class_names, gap_se
    public :: noise_var_rse, inelastic_points, kinematics_of, control_kinematics
-   public :: serration_stat, serration_of
+   public :: serration_stat, serration_of, serration_in_runs
    public :: class_loading, class_unloading, class_reversal, class_hold
 
    integer, parameter :: class_loading = 1, class_unloading = 2, class_reversal = 3, class_hold = 4
@@ -396,6 +396,47 @@ contains
       ! A sinusoid of amplitude A gives an ordinate of about A**2 m/4
       st%amplitude = 2.0_dp*sqrt(pg(jmax)/m)
    end function serration_of
+
+   !> Oscillation in the residual e at the points in mask, tested on their concatenation and
+   !> on each contiguous run of 32 or more of them (a serration starts afresh on each branch
+   !> of flow: across the runs its phase jumps and the concatenation's line spreads over as
+   !> many ordinates as the runs are short); the smallest chance, times the number of tests
+   !> made (Bonferroni), is p
+   pure function serration_in_runs(e, mask, max_period) result(st)
+      real(dp), intent(in) :: e(:)
+      logical, intent(in) :: mask(:)
+      integer, intent(in), optional :: max_period
+      type(serration_stat) :: st
+      type(serration_stat) :: sr
+      integer :: a, b, ntest
+      integer, allocatable :: starts(:), ends(:)
+      st = serration_of(e, mask, max_period)
+      allocate (starts(0), ends(0))
+      a = 1
+      do while (a <= size(mask))
+         if (.not. mask(a)) then
+            a = a + 1
+            cycle
+         end if
+         b = a
+         do while (b < size(mask))
+            if (.not. mask(b + 1)) exit
+            b = b + 1
+         end do
+         if (b - a + 1 >= 32) then
+            starts = [starts, a]
+            ends = [ends, b]
+         end if
+         a = b + 1
+      end do
+      ntest = 1 + size(starts)
+      st%p = min(1.0_dp, ntest*st%p)
+      do a = 1, size(starts)
+         sr = serration_of(e(starts(a):ends(a)), mask(starts(a):ends(a)), max_period)
+         sr%p = min(1.0_dp, ntest*sr%p)
+         if (sr%p < st%p) st = sr
+      end do
+   end function serration_in_runs
 
    !> Median (selection by partial sorting of a copy)
    pure real(dp) function median(a) result(med)

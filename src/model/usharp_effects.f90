@@ -55,9 +55,6 @@ module usharp_effects
       !> Largest magnitude the effect can physically have; a fit beyond it stands for
       !> something else (huge: no limit)
       real(dp) :: plausible(2) = huge(1.0_dp)
-      !> Per-test parameters whose common part the constants take up (a dT shared by every
-      !> test is a factor on B theta): the magnitude is their spread about the fit tests' mean
-      logical :: relative = .false.
    end type effect_info
 
 contains
@@ -75,8 +72,7 @@ contains
          ['s           ', '            '], [1.0_dp, 1.0_dp], [.true., .false.], [.true., .true.], [2.0_dp, 0.0_dp])
       cat(3) = effect_info('temperature', 'temperature offset per test: theta(T+dT) and '// &
          'E(T+dT)', 1, param_per_test, ['dT          ', '            '], &
-         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [25.0_dp, 0.0_dp], &
-         .true.)
+         ['K           ', '            '], [10.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [25.0_dp, 0.0_dp])
       cat(4) = effect_info('scatter', 'specimen-to-specimen scatter: per-test factors on E '// &
          'and on the initial drag stress', 2, param_per_test, ['dE/E        ', 'dD0/D0      '], &
          ['-           ', '-           '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [0.2_dp, 0.4_dp])
@@ -165,16 +161,25 @@ contains
    end function effects_of
 
    !> The model a test with effects eff sees: temperature T + dT, modulus
-   !> E*(1 + dE/E)*(1 + dlnE_dT*dT), set up again (B*theta and D0 follow the temperature)
+   !> E*(1 + dE/E)*(1 + dlnE_dT*dT), set up again. B*theta follows the temperature, D0 stays
+   !> that of the nominal temperature: the virgin material's drag is a state of the specimen,
+   !> not of the thermocouple's reading (D0 from the yield stress at T + dT would keep a
+   !> hotter test exactly as strong at the reference rate, and make an offset shared by every
+   !> test a mere factor on B that the constants take up)
    pure subroutine effect_model(model, eff, out, error)
       type(miller_model), intent(in) :: model
       type(test_effects), intent(in) :: eff
       type(miller_model), intent(out) :: out
       type(error_type), allocatable, intent(out) :: error
+      real(dp) :: d0_nominal
       out = model
+      call model_setup(out, error)
+      if (allocated(error)) return
+      d0_nominal = out%d0
       out%temperature = model%temperature + eff%dtemp
       out%youngs = model%youngs*(1.0_dp + eff%modulus)*(1.0_dp + eff%dlnE_dT*eff%dtemp)
       call model_setup(out, error)
+      out%d0 = d0_nominal
    end subroutine effect_model
 
    !> Value of a piecewise-linear control (corners tc, vc) seen through a first-order lag of
