@@ -291,8 +291,15 @@ contains
       end do
       if (lead > 0) then
          associate (e => sr%effects(lead))
-            verdict = trim(e%name)//' explains how '//trim(sr%name)//' differs from its replicates: '// &
-               real_str(100.0_dp*e%removed, 'f0.0')//' % of its structured gap, BIC '//real_str(e%dbic, 'f0.1')
+            verdict = trim(e%name)//' explains how '//trim(sr%name)//' differs from its replicates: '
+            if (sr%gap > 0.0_dp) then
+               verdict = verdict//real_str(100.0_dp*e%removed, 'f0.0')//' % of its structured gap, BIC '// &
+                         real_str(e%dbic, 'f0.1')
+            else
+               ! Significant by its form although the objective as a whole is at the noise level
+               verdict = verdict//'BIC '//real_str(e%dbic, 'f0.1')//', a difference below the noise level of '// &
+                         'the objective as a whole'
+            end if
          end associate
          ! Effects within bic_margin of it explain the difference as well
          ln = ''
@@ -302,7 +309,7 @@ contains
          end do
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
       end if
-      if (sr%gap <= 0.0_dp) verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
+      if (sr%gap <= 0.0_dp .and. lead == 0) verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
       call add('**Verdict:** '//verdict)
    contains
       subroutine add(text)
