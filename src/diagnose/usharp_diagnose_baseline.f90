@@ -14,7 +14,8 @@ module usharp_diagnose_baseline
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell
-   use usharp_diagnose_numerics, only: constants_at, best_of_starts, global_points, at_bound
+   use usharp_diagnose_numerics, only: constants_at, best_of_starts, global_points, at_bound, jacobian, &
+                                       pseudo_inverse
    implicit none
    private
 
@@ -61,6 +62,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: base_all
       real(dp), allocatable :: r0(:), yb(:), eps(:), eps_in(:)
+      real(dp) :: pvar
       integer, allocatable :: npts(:)
       integer :: i, m, nt
       logical :: ok
@@ -86,8 +88,53 @@ contains
          npts = [(size(ctx%prob%targets(i)%exp%y), i=1, nt)]
          res%floor_fit = gap_z*gap_se(nv, res%test_of, npts, .not. res%held)
          res%floor_held = gap_z*gap_se(nv, res%test_of, npts, res%held)
+         if (any(res%held)) then
+            call prediction_spread(ctx, base_all, res, pvar)
+            res%noise_held = res%noise_held + res%pred_held
+            res%gap_held = max(sum(r0**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
+            res%floor_held = gap_z*sqrt((res%floor_held/gap_z)**2 + pvar)
+         end if
       end associate
    end subroutine baseline_regions
+
+   !> What the fitted constants' own uncertainty adds to the held-out objective: with J the
+   !> residuals' Jacobian in the constants (fit rows Jf, held-out rows Jh), the constants'
+   !> covariance C = (Jf'Jf)^+ Jf' N Jf (Jf'Jf)^+ from the fit tests' noise variances N (the
+   !> sandwich), the prediction error's covariance P = Jh C Jh': mean tr(P) (res%pred_held)
+   !> and variance 2 tr(P^2) (pvar) of the sum of its squares. Without it the clean data of a
+   !> held-out test the fit tests constrain weakly (a creep test predicted from cycling and
+   !> relaxation) show a structured gap that no effect explains.
+   subroutine prediction_spread(ctx, ep, res, pvar)
+      type(diagnose_context), intent(in) :: ctx
+      type(effect_problem), intent(inout) :: ep
+      type(diagnose_result), intent(inout) :: res
+      real(dp), intent(out) :: pvar
+      real(dp), allocatable :: r(:), jac(:, :), jf(:, :), jh(:, :), ai(:, :), cov(:, :), cm(:, :)
+      logical, allocatable :: fit_row(:)
+      logical :: ok
+      integer :: j
+      res%pred_held = 0.0_dp
+      pvar = 0.0_dp
+      call jacobian(ep, ep%start(), ctx%h, r, jac, ok)
+      res%nevals = res%nevals + size(jac, 2) + 1
+      if (.not. ok) return
+      fit_row = .not. res%held(res%test_of)
+      allocate (jf(count(fit_row), size(jac, 2)), jh(count(.not. fit_row), size(jac, 2)))
+      do j = 1, size(jac, 2)
+         jf(:, j) = pack(jac(:, j), fit_row)
+         jh(:, j) = pack(jac(:, j), .not. fit_row)
+      end do
+      ai = pseudo_inverse(matmul(transpose(jf), jf))
+      do j = 1, size(jf, 2)
+         jf(:, j) = jf(:, j)*sqrt(pack(ctx%nv, fit_row))
+      end do
+      cov = matmul(ai, matmul(matmul(transpose(jf), jf), ai))
+      cm = matmul(cov, matmul(transpose(jh), jh))
+      do j = 1, size(cm, 1)
+         res%pred_held = res%pred_held + cm(j, j)
+      end do
+      pvar = 2.0_dp*sum(cm*transpose(cm))
+   end subroutine prediction_spread
 
    !> Every point of every test in one list: time, data, test, history class and cycle from
    !> the control's kinematics, elastic or inelastic from the baseline's inelastic rate

@@ -106,6 +106,9 @@ module usharp_diagnose_types
       real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
       real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)
       real(dp) :: noise_fit = 0.0_dp, noise_held = 0.0_dp  !< objective the noise explains
+      !> Part of noise_held that the fitted constants' own uncertainty explains: a prediction
+      !> from constants fitted to noisy tests is off by their scatter
+      real(dp) :: pred_held = 0.0_dp
       real(dp) :: gap_fit = 0.0_dp, gap_held = 0.0_dp      !< structured gaps at the baseline
       !> Gaps up to these are noise: gap_z standard errors of the gap noise alone leaves
       real(dp) :: floor_fit = 0.0_dp, floor_held = 0.0_dp
