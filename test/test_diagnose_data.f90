@@ -54,7 +54,8 @@ contains
          new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
          new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift), &
          new_unittest('independent-data-clean-and-modulus-drop', test_independent), &
-         new_unittest('serrated-flow-named-in-the-verdict', test_serrated_verdict)]
+         new_unittest('serrated-flow-named-in-the-verdict', test_serrated_verdict), &
+         new_unittest('held-out-floor-holds-the-constants-uncertainty', test_prediction_spread)]
    end subroutine collect_diagnose_data
 
    !> A measured strain: the command sampled every dt s with Gaussian noise of sd (strain)
@@ -441,6 +442,75 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_serrated_verdict
+
+   !> Clean data, 1 % noise, 40 draws: B and n fitted to 0.6 % cycling, 1.2 % cycling held
+   !> out (an extrapolation that carries the constants' scatter). The held-out objective beyond
+   !> its noise part averages what the fitted constants' own uncertainty explains (pred_held,
+   !> within 3 Monte Carlo standard errors), which is well above zero
+   subroutine test_prediction_spread(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(test_effects) :: base
+      type(experiment_type), allocatable :: exps(:), clean(:)
+      type(rng_type) :: rng
+      real(dp), allocatable :: r(:), y(:)
+      integer, parameter :: ndraw = 40
+      real(dp) :: excess(ndraw), pred(ndraw), se
+      integer :: i, j, k0, n, k
+      logical :: ok
+      call read_config(write_text('diag-spread.nml', [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /", &
+         "&fit fitted = 'B', 'n', method = 'lm' /", &
+         "&diagnose holdout = 'c2' /", &
+         "&test name = 'c1', history = 'cyclic', dt_out = 0.1, strain_range = 0.006,", &
+         "  strain_rate = 1.0e-3, cycles = 2 /", &
+         "&test name = 'c2', history = 'cyclic', dt_out = 0.1, strain_range = 0.012,", &
+         "  strain_rate = 1.0e-4, cycles = 1 /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
+      if (allocated(error)) return
+      allocate (clean(2))
+      do i = 1, 2
+         clean(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         clean(i)%y = spread(1.0_dp, 1, size(clean(i)%t))
+      end do
+      call setup_problem(cfg, prob, e, clean)
+      call check(error, .not. allocated(e), 'setup failed')
+      if (allocated(error)) return
+      call new_effect_problem(prob, [1, 2], 1, base, 1.0_dp, ep, free_constants=.false., p0=[0.0_dp])
+      allocate (r(ep%nres()), y(ep%nres()))
+      call ep%residual_at(ep%start(), r, ok, y)
+      call check(error, ok, 'simulation failed')
+      if (allocated(error)) return
+      call rng%seed(41)
+      do k = 1, ndraw
+         exps = clean
+         k0 = 0
+         do i = 1, 2
+            n = size(clean(i)%t)
+            exps(i)%y = [(y(k0 + j) + 0.01_dp*maxval(abs(y(k0 + 1:k0 + n)))*rng%normal(), j=1, n)]
+            k0 = k0 + n
+         end do
+         call diagnose_baseline(cfg, opts, ctx, res, e, exps)
+         call check(error, .not. allocated(e), 'baseline failed')
+         if (allocated(error)) return
+         pred(k) = res%pred_held
+         excess(k) = res%per_test0(2) - (res%noise_held - res%pred_held)
+      end do
+      se = sqrt(sum((excess - sum(excess)/ndraw)**2)/(ndraw - 1)/ndraw)
+      write (*, '(4x,a)') 'held-out objective beyond noise '//real_str(sum(excess)/ndraw, 'es10.3')//' +- '// &
+         real_str(se, 'es9.2')//', constants'' uncertainty '//real_str(sum(pred)/ndraw, 'es10.3')
+      call check(error, sum(pred)/ndraw > 3.0_dp*se .and. abs(sum(excess - pred)/ndraw) < 3.0_dp*se, &
+                 'the held-out excess and the constants'' uncertainty disagree')
+   end subroutine test_prediction_spread
 
    !> Data made by a program that is not usharp (bench/independent: Python, scipy's Radau)
    !> for the thesis matrix with the ratcheting test held out, 0.5 % noise: clean data give
