@@ -6,7 +6,7 @@ with 0.5 % noise, write a deck, run the diagnosis and read its verdict. Prints o
 matrix and effect: repetitions, how often an accepted effect came first, the held-out
 structured gap removed (median).
 
-usage: selfcheck.py EXE [--reps N] [--matrices a,b] [--rows a,b] [--noise F] [--keep DIR]
+usage: selfcheck.py EXE [--reps N] [--matrices a,b] [--rows a,b] [--noise F] [--keep DIR] [--u U]
        selfcheck.py --make MATRIX ROW U SEED DIR   (one case's data and deck, no diagnosis)
 """
 import argparse
@@ -153,6 +153,8 @@ def main():
     ap.add_argument('--noise', type=float, default=0.005)
     ap.add_argument('--seed', type=int, default=1)
     ap.add_argument('--keep', default='')
+    ap.add_argument('--u', type=float, default=None,
+                    help='every repetition at this point of the range (0: the low end), not drawn')
     a = ap.parse_args()
     work = a.keep or tempfile.mkdtemp(prefix='usharp-indep-')
     os.makedirs(work, exist_ok=True)
@@ -164,6 +166,8 @@ def main():
             answers, removed = [], []
             for rep in range(a.reps):
                 u = 0.0 if rep == 0 else rng.uniform()
+                if a.u is not None:
+                    u = a.u
                 case = os.path.join(work, f'{mname}-{row}-{rep}')
                 label = make_case(mname, row, u, rng, case, a.noise)
                 p = subprocess.run([a.exe, 'diagnose', 'diagnose.nml', '-o', 'out'], cwd=case,
