@@ -3,11 +3,12 @@ program usharp_main
    use, intrinsic :: iso_c_binding, only: c_int
    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, stat_usage
+   use usharp_error, only: error_type, stat_usage, stat_input
    use usharp_strings, only: str, real_str
    use usharp_cli, only: cli_command, arg_string, parse_arguments, execute_command, &
                          main_help, command_help, version_text
    use usharp_cli_threads, only: ensure_wait_policy
+   use usharp_mpi, only: parallel_start, parallel_stop, is_root, this_rank
    implicit none
    type(arg_string), allocatable :: args(:)
    type(cli_command) :: cmd
@@ -24,6 +25,8 @@ program usharp_main
    end interface
 
    call ensure_wait_policy()
+   ! Under an MPI launcher every rank runs the command; rank 0 alone prints
+   call parallel_start()
    allocate (args(command_argument_count()))
    do i = 1, size(args)
       call get_command_argument(i, length=length)
@@ -31,47 +34,58 @@ program usharp_main
       if (length > 0) call get_command_argument(i, args(i)%s)
    end do
    call parse_arguments(args, cmd, error)
-   if (allocated(error)) then
+   if (allocated(error) .and. is_root()) then
       write (error_unit, '(a)') 'usharp: '//error%message
       if (len(cmd%name) > 0) then
          write (error_unit, '(a)') command_help(cmd%name)
       else
          write (error_unit, '(a)') main_help()
       end if
-      stop stat_usage, quiet=.true.
    end if
-   if (cmd%version) then
-      write (output_unit, '(a)') version_text()
-      stop
-   end if
-   if (cmd%help) then
+   if (allocated(error)) call finish(stat_usage)
+   if (cmd%version .and. is_root()) write (output_unit, '(a)') version_text()
+   if (cmd%help .and. is_root()) then
       if (len(cmd%name) > 0) then
          write (output_unit, '(a)') command_help(cmd%name)
       else
          write (output_unit, '(a)') main_help()
       end if
-      stop
    end if
+   if (cmd%version .or. cmd%help) call finish(0)
 
    ! The progress line goes to stderr only on a terminal and without --quiet
-   if (.not. cmd%quiet .and. c_isatty(2_c_int) == 1) then
+   if (.not. cmd%quiet .and. c_isatty(2_c_int) == 1 .and. is_root()) then
       call execute_command(cmd, lines, error, show_progress, show_stage)
       if (cmd%name == 'run' .or. cmd%name == 'diagnose') write (error_unit, '(a)') ''
    else
       call execute_command(cmd, lines, error)
    end if
    ! (lines come with an error only where the results stand: a fit whose report failed)
-   if (allocated(lines)) then
+   if (allocated(lines) .and. is_root()) then
       do i = 1, size(lines)
          write (output_unit, '(a)') trim(lines(i))
       end do
    end if
    if (allocated(error)) then
-      write (error_unit, '(a)') 'usharp: error: '//error%message
-      stop error%stat, quiet=.true.
+      if (is_root()) then
+         write (error_unit, '(a)') 'usharp: error: '//error%message
+      else if (error%stat /= stat_input .and. error%stat /= stat_usage .and. error%stat < 128) then
+         ! Errors of the input every rank finds alike; rank 0 has said them
+         write (error_unit, '(a)') 'usharp: rank '//str(this_rank())//': error: '//error%message
+      end if
+      call finish(error%stat)
    end if
+   call finish(0)
 
 contains
+
+   !> Stop MPI (when running under it) and exit with code
+   subroutine finish(code)
+      integer, intent(in) :: code
+      call parallel_stop()
+      if (code == 0) stop
+      stop code, quiet=.true.
+   end subroutine finish
 
    subroutine show_progress(nevals, best, seconds)
       integer, intent(in) :: nevals

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Install what usharp needs to build and test, without prompts; a no-op when all is present.
-# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, gnuplot. PyPI: fpm,
+# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, Open MPI, gnuplot. PyPI: fpm,
 # numpy and scipy (independent reference data for the diagnosis tests).
 set -euo pipefail
 
@@ -13,6 +13,9 @@ command -v gfortran >/dev/null 2>&1 || need_apt+=(gfortran)
   need_apt+=(libsundials-fortran-dev libsundials-dev)
 ls /usr/lib/x86_64-linux-gnu/liblapack.so* >/dev/null 2>&1 || ls /usr/lib/*/liblapack.so >/dev/null 2>&1 || need_apt+=(liblapack-dev)
 ls /usr/lib/*/libblas.so >/dev/null 2>&1 || need_apt+=(libblas-dev)
+# Open MPI: the compiler wrapper, mpirun and the mpi_f08 module (spreads work over ranks)
+{ command -v mpirun >/dev/null 2>&1 && command -v mpif90 >/dev/null 2>&1; } ||
+  need_apt+=(libopenmpi-dev openmpi-bin)
 # gnuplot draws the fit plots (scripts/plot-fit.sh); usharp itself runs without it
 command -v gnuplot >/dev/null 2>&1 || need_apt+=(gnuplot-nox)
 
@@ -23,6 +26,19 @@ if [ ${#need_apt[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   $sudo_cmd apt-get update -qq
   $sudo_cmd apt-get install -y -qq --no-install-recommends "${need_apt[@]}" >/dev/null
+fi
+
+# include/openmpi points fpm at the folder of mpi_f08.mod (Debian's on x86_64); elsewhere the
+# link is pointed at the folder the MPI wrapper names
+here="$(cd "$(dirname "$0")/.." && pwd)"
+if [ ! -e "$here/include/openmpi/mpi_f08.mod" ] && command -v mpif90 >/dev/null 2>&1; then
+  for d in $(mpif90 --showme:incdirs 2>/dev/null); do
+    if [ -e "$d/mpi_f08.mod" ]; then
+      ln -sfn "$d" "$here/include/openmpi"
+      echo "setup: include/openmpi -> $d" >&2
+      break
+    fi
+  done
 fi
 
 if ! command -v fpm >/dev/null 2>&1; then

@@ -1,10 +1,12 @@
 !> Tests of the cluster job scripts (scripts/cluster): their syntax, and a job stopped by TERM
-!> and started again ends where an uninterrupted run ends
+!> and started again ends where an uninterrupted run ends; and of MPI: the same work on 1 and
+!> 2 ranks writes the same results and logs, bit for bit, and a 2-rank run stopped by TERM
+!> goes on on 1 rank to the same end
 module test_cluster
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
-   use test_util, only: require_exe, read_text, scratch_dir
+   use test_util, only: require_exe, read_text, scratch_dir, write_text
    implicit none
    private
    public :: collect_cluster
@@ -19,7 +21,9 @@ contains
       type(unittest_type), allocatable, intent(out) :: testsuite(:)
       testsuite = [ &
          new_unittest('job-scripts-parse', test_syntax), &
-         new_unittest('job-stopped-by-term-resumes-to-same-result', test_restart)]
+         new_unittest('job-stopped-by-term-resumes-to-same-result', test_restart), &
+         new_unittest('mpi-multistart-same-on-1-and-2-ranks', test_mpi_multistart), &
+         new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -73,4 +77,130 @@ contains
       if (allocated(error)) return
       call check(error, read_text(a//'/GUESS.TXT') == read_text(b//'/GUESS.TXT'), 'guesses differ')
    end subroutine test_restart
+
+   !> mpirun for 2 ranks of one thread each, or a skip when there is none
+   subroutine require_mpirun(mpirun, error)
+      character(len=:), allocatable, intent(out) :: mpirun
+      type(error_type), allocatable, intent(out) :: error
+      integer :: stat
+      mpirun = 'OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -np 2 '
+      call execute_command_line('command -v mpirun > /dev/null 2>&1', exitstat=stat)
+      if (stat /= 0) call skip_test(error, 'mpirun not found (Open MPI: openmpi-bin)')
+   end subroutine require_mpirun
+
+   !> Thesis run 2's tests fitted by Levenberg-Marquardt from 8 starts of at most 60
+   !> evaluations each (about 480 evaluations)
+   function multistart_deck() result(path)
+      character(len=:), allocatable :: path
+      character(len=4096) :: cwd
+      call get_environment_variable('PWD', cwd)
+      path = write_text('mpi-multistart.nml', [character(len=4200) :: &
+         "&model name = 'miller', units = 'ksi', temperature = 866.15, tm = 1800.0, youngs = 22.5e3 /", &
+         '&constants a1 = 1.0, a2 = 1.0e-5, b = 1.0e13, c2 = 0.1, h1 = 100.0, h2 = 100.0, n = 1.0, '// &
+         'q = 91000.0 /', &
+         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = 8, "// &
+         "objective = 'eq7', max_evals = 60, max_failures = 200 /", &
+         "&test name = 'lcf', history = 'thesis_lcf', dt_out = 1.0, data_file = '"//trim(cwd)// &
+         "/data/thesis/lcf.sim.txt', time_column = 'time', stress_column = 'stress', "// &
+         "weighting = 'threshold', sig = 14.0 /", &
+         "&test name = 'relax', history = 'relaxation', dt_out = 1.0, levels = 0.00075, 0.001, "// &
+         "ramp_time = 1.0, holds = 600.0, 600.0, data_file = '"//trim(cwd)// &
+         "/data/thesis/relax.sim.txt', time_column = 'time', stress_column = 'stress', "// &
+         "weighting = 'relaxation' /"])
+   end function multistart_deck
+
+   !> Whether two files are the same byte for byte
+   logical function same_file(a, b)
+      character(len=*), intent(in) :: a, b
+      integer :: stat
+      call execute_command_line('cmp -s '//a//' '//b, exitstat=stat)
+      same_file = stat == 0
+   end function same_file
+
+   !> The fit's logs and results in folders a and b are the same (best.nml from its third line:
+   !> the second names the folder)
+   subroutine check_same_fit(error, a, b)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in) :: a, b
+      character(len=*), parameter :: files(*) = [character(len=13) :: 'fit.journal', 'fit.cache', &
+         'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'lcf.fit.txt', 'relax.fit.txt']
+      integer :: k, stat
+      do k = 1, size(files)
+         call check(error, same_file(a//'/'//trim(files(k)), b//'/'//trim(files(k))), &
+                    trim(files(k))//' differs between '//a//' and '//b)
+         if (allocated(error)) return
+      end do
+      call execute_command_line('bash -c "cmp -s <(tail -n +3 '//a//'/best.nml) <(tail -n +3 '//b// &
+                                '/best.nml)"', exitstat=stat)
+      call check(error, stat == 0, 'best.nml differs between '//a//' and '//b)
+   end subroutine check_same_fit
+
+   !> A multi-start fit on 1 rank and on 2 ranks: the same journal, cache, logs and result
+   subroutine test_mpi_multistart(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, mpirun, deck, a, b
+      integer :: stat
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call require_mpirun(mpirun, error)
+      if (allocated(error)) return
+      call make_dir(scratch_dir, e)
+      deck = multistart_deck()
+      a = scratch_dir//'/mpi-ms-1'
+      b = scratch_dir//'/mpi-ms-2'
+      call execute_command_line('rm -rf '//a//' '//b)
+      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' run -q -o '//a//' '//deck//' > /dev/null', &
+                                exitstat=stat)
+      call check(error, stat == 0, '1 rank')
+      if (allocated(error)) return
+      call execute_command_line(mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null', exitstat=stat)
+      call check(error, stat == 0, '2 ranks')
+      if (allocated(error)) return
+      call check(error, index(read_text(a//'/fit.log'), 'multi-start 8 of 8') > 0, 'not 8 starts')
+      if (allocated(error)) return
+      call check_same_fit(error, a, b)
+      if (allocated(error)) return
+      call check(error, same_file(a//'/fit.log', b//'/fit.log'), 'fit.log differs')
+   end subroutine test_mpi_multistart
+
+   !> A 2-rank multi-start fit stopped by TERM once its first starts are logged, resumed on 1
+   !> rank: the logs and result of an uninterrupted run
+   subroutine test_mpi_resume(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, mpirun, deck, a, b, stop_script
+      integer :: stat
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call require_mpirun(mpirun, error)
+      if (allocated(error)) return
+      call make_dir(scratch_dir, e)
+      deck = multistart_deck()
+      a = scratch_dir//'/mpi-rs-whole'
+      b = scratch_dir//'/mpi-rs-stopped'
+      call execute_command_line('rm -rf '//a//' '//b//' '//b//'.log')
+      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' run -q -o '//a//' '//deck//' > /dev/null', &
+                                exitstat=stat)
+      call check(error, stat == 0, 'uninterrupted run')
+      if (allocated(error)) return
+      ! Wait until the first round of starts is in the journal (at most 120 s), then TERM
+      stop_script = mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null 2> '//b//'.log & p=$!; n=0; '// &
+         'while [ "$(cat '//b//'/fit.journal 2>/dev/null | grep -vc ^#)" -lt 1 ] && [ $n -lt 2400 ]; '// &
+         'do sleep 0.05; n=$((n+1)); done; kill -TERM $p; wait $p'
+      call execute_command_line('bash -c '''//stop_script//'''', exitstat=stat)
+      call check(error, index(read_text(b//'.log'), 'stopped by signal 15') > 0, &
+                 'the 2-rank run was not stopped by TERM: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      call check(error, index(read_text(b//'/fit.log'), 'finished') == 0, &
+                 'the stopped run must not have finished')
+      if (allocated(error)) return
+      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' run -q --resume -o '//b//' '//deck// &
+                                ' > /dev/null 2>> '//b//'.log', exitstat=stat)
+      call check(error, stat == 0, 'resume on 1 rank: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      call check(error, index(read_text(b//'/fit.log'), 'resumed') > 0, 'did not resume')
+      if (allocated(error)) return
+      call check_same_fit(error, a, b)
+   end subroutine test_mpi_resume
 end module test_cluster

@@ -5,6 +5,7 @@ module usharp_cli_help
    use omp_lib, only: openmp_version, omp_get_max_threads
    use usharp_version, only: usharp_version_string
    use usharp_strings, only: str
+   use usharp_mpi, only: parallel_description
    implicit none
    private
 
@@ -176,6 +177,6 @@ contains
          'SUNDIALS: '//trim(sundials)//nl// &
          'OpenMP: '//str(openmp_version)//', '//str(omp_get_max_threads())// &
          ' threads (OMP_NUM_THREADS), wait policy '//trim(policy)//' (OMP_WAIT_POLICY)'//nl// &
-         'MPI: none'
+         'MPI: '//parallel_description()
    end function version_text
 end module usharp_cli_help

@@ -15,6 +15,7 @@ module usharp_cmd_run
    use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
+   use usharp_mpi, only: is_root
    implicit none
    private
 
@@ -73,6 +74,12 @@ contains
          end if
          call setup_problem(cfg, prob, error)
          if (allocated(error)) return
+         ! Under MPI the other ranks search starts for rank 0, which writes everything
+         if (.not. is_root()) then
+            call run_fit(prob, dir, resume, out, error, force=overwrite, constants_file=constants_file, &
+                         auto_resume=auto_resume)
+            return
+         end if
          call make_dir(dir, error)
          if (allocated(error)) return
          call lock_file(join_path(dir, '.usharp.lock'), lock, error)

@@ -21,10 +21,22 @@ module usharp_fit
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
+   use usharp_mpi, only: n_ranks, this_rank, is_root, owner_of, share, parallel_sync
    implicit none
    private
 
    public :: fit_objective, run_fit, fit_outcome, progress_interface, fit_fingerprint
+
+   !> Internal: a replay_only objective ran out of records
+   integer, parameter :: stat_exhausted = -1
+
+   !> The evaluations of one start of a multi-start fit as a rank made them, and how it ended
+   type :: start_log
+      type(journal_record), allocatable :: recs(:)
+      type(cached_jacobian), allocatable :: jacs(:)
+      integer :: stat = 0        !< the stat of the error that ended it (0: none)
+      integer :: nsimulated = 0
+   end type start_log
 
 
    abstract interface
@@ -54,6 +66,18 @@ module usharp_fit
       real(dp), allocatable :: best_x(:)
       procedure(progress_interface), pointer, nopass :: progress => null()
       integer(int64) :: clock0 = 0
+      integer :: nresumed = 0           !< leading records of replay that come from a journal
+      !> Keep the evaluations in kept (another rank logs them) instead of logging them
+      logical :: capture = .false.
+      !> Stop with stat_exhausted where a simulation would be needed (replay what is there)
+      logical :: replay_only = .false.
+      character(len=:), allocatable :: tag  !< before the evaluation's number in external work folders
+      type(journal_record), allocatable :: kept(:)
+      type(cached_jacobian), allocatable :: kept_jac(:)
+      integer :: nkept = 0
+      integer, allocatable :: start_eval(:), start_sens(:)  !< first evaluation, Jacobian of each start
+      integer :: start_now = 0  !< the start being searched
+      character(len=:), allocatable :: fingerprint  !< of the inputs, for the logs' first line
    contains
       procedure :: eval => fit_eval
       procedure :: residuals => fit_residuals
@@ -100,8 +124,6 @@ contains
       real(dp) :: per_test(size(self%prob%targets))
       integer :: status, k
       character(len=:), allocatable :: message
-      call check_stop(self, error)
-      if (allocated(error)) return
       k = self%nevals + 1
       if (k <= size(self%replay)) then
          call check_replay(self, k, x, error)
@@ -109,9 +131,11 @@ contains
          f = self%replay(k)%f
          per_test = self%replay(k)%per_test
          status = self%replay(k)%status
-         message = 'replayed'
+         message = replay_message(self, k)
       else
-         call self%prob%evaluate(x, f, per_test, status, message, str(k))
+         call may_simulate(self, error)
+         if (allocated(error)) return
+         call self%prob%evaluate(x, f, per_test, status, message, tag_of(self)//str(k))
          self%nsimulated = self%nsimulated + 1
          ! An evaluation a stop signal may have cut short is not logged
          call check_stop(self, error)
@@ -131,8 +155,6 @@ contains
       integer :: i
       done = .false.
       if (self%prob%cfg%fit%jacobian /= 'sensitivity') return
-      call check_stop(self, error)
-      if (allocated(error)) return
       i = self%nsens + 1
       if (i <= size(self%replay_jac)) then
          if (all(self%replay_jac(i)%x == x)) then
@@ -141,12 +163,18 @@ contains
          end if
       end if
       if (.not. done) then
+         call may_simulate(self, error)
+         if (allocated(error)) return
          call self%prob%jacobian(x, jac, done)
          self%nsimulated = self%nsimulated + 1
       end if
       if (.not. done) return
       self%nsens = i
-      call self%log%record_jacobian(i, x, jac, error)
+      if (self%capture) then
+         self%kept_jac = [self%kept_jac, cached_jacobian(x, jac)]
+      else
+         call self%log%record_jacobian(i, x, jac, error)
+      end if
    end subroutine fit_jacobian
 
    !> Residuals at several points, simulated in parallel (OpenMP) and then logged in order,
@@ -161,8 +189,6 @@ contains
       real(dp) :: per_test(size(self%prob%targets), size(xs, 2))
       integer :: status(size(xs, 2)), j, k0, nr
       character(len=message_len) :: messages(size(xs, 2))
-      call check_stop(self, error)
-      if (allocated(error)) return
       k0 = self%nevals
       ! The journal's leading points whose residuals fit.cache kept are replayed; the rest
       ! (a resumed run's first new points onwards) are simulated as one batch
@@ -177,11 +203,13 @@ contains
          fs(j) = self%replay(k0 + j)%f
          per_test(:, j) = self%replay(k0 + j)%per_test
          status(j) = self%replay(k0 + j)%status
-         messages(j) = 'replayed'
+         messages(j) = replay_message(self, k0 + j)
       end do
       if (nr < size(xs, 2)) then
+         call may_simulate(self, error)
+         if (allocated(error)) return
          call self%prob%batch(xs(:, nr + 1:), k0 + nr, rs(:, nr + 1:), fs(nr + 1:), &
-                              per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:))
+                              per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:), tag_of(self))
          self%nsimulated = self%nsimulated + size(xs, 2) - nr
          call check_stop(self, error)
          if (allocated(error)) return
@@ -205,6 +233,39 @@ contains
             journal_name//' was made at other constants (did the input change?)', stat_input)
       end if
    end subroutine check_replay
+
+   !> Before a simulation: a stop signal ends the fit here (replayed evaluations go on being
+   !> logged, so that what was computed is kept); a replay_only objective ends with
+   !> stat_exhausted
+   subroutine may_simulate(self, error)
+      class(fit_objective), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      if (self%replay_only) then
+         call fatal_error(error, 'replay exhausted', stat_exhausted)
+         return
+      end if
+      call check_stop(self, error)
+   end subroutine may_simulate
+
+   !> What a replayed evaluation's log says: why it failed when another rank made it
+   function replay_message(self, k) result(message)
+      class(fit_objective), intent(in) :: self
+      integer, intent(in) :: k
+      character(len=:), allocatable :: message
+      if (allocated(self%replay(k)%message)) then
+         message = self%replay(k)%message
+      else
+         message = 'replayed'
+      end if
+   end function replay_message
+
+   !> The prefix of the evaluations' names ('' but for a start made on its own)
+   function tag_of(self) result(tag)
+      class(fit_objective), intent(in) :: self
+      character(len=:), allocatable :: tag
+      tag = ''
+      if (allocated(self%tag)) tag = self%tag
+   end function tag_of
 
    !> A stop signal (SIGTERM from a batch scheduler, Ctrl-C) ends the fit between
    !> evaluations with a note in fit.log; the exit code is 128 + the signal's number
@@ -231,14 +292,18 @@ contains
       integer :: k
       self%nevals = self%nevals + 1
       k = self%nevals
-      call self%log%record(k, status, f, per_test, x, self%constants_of(x), error, r)
-      if (allocated(error)) return
+      if (self%capture) then
+         call keep(self, x, f, per_test, status, message, r)
+      else
+         call self%log%record(k, status, f, per_test, x, self%constants_of(x), error, r)
+         if (allocated(error)) return
+      end if
       if (k == 1) self%first = f
       if (status /= eval_ok) then
          self%nfail_row = self%nfail_row + 1
          self%nfail_total = self%nfail_total + 1
          if (status == eval_invalid) self%ninvalid_total = self%ninvalid_total + 1
-         if (k > size(self%replay)) call self%log%event('evaluation '//str(k)//': penalty '// &
+         if (k > self%nresumed) call self%log%event('evaluation '//str(k)//': penalty '// &
             real_str(f, 'es10.3')//': '//message)
          if (self%nfail_row >= self%prob%cfg%fit%max_failures) then
             call fatal_error(error, 'fit aborted: '//str(self%nfail_row)// &
@@ -256,6 +321,31 @@ contains
       end if
       if (associated(self%progress)) call report(self)
    end subroutine fit_record
+
+   !> Keep an evaluation in memory (grown by doubling)
+   subroutine keep(self, x, f, per_test, status, message, r)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: x(:), f, per_test(:)
+      integer, intent(in) :: status
+      character(len=*), intent(in) :: message
+      real(dp), intent(in), optional :: r(:)
+      type(journal_record), allocatable :: grown(:)
+      if (.not. allocated(self%kept)) allocate (self%kept(16))
+      if (self%nkept == size(self%kept)) then
+         allocate (grown(2*self%nkept))
+         grown(:self%nkept) = self%kept(:self%nkept)
+         call move_alloc(grown, self%kept)
+      end if
+      self%nkept = self%nkept + 1
+      associate (rec => self%kept(self%nkept))
+         rec%status = status
+         rec%f = f
+         rec%per_test = per_test
+         rec%x = x
+         if (present(r)) rec%r = r
+         rec%message = message
+      end associate
+   end subroutine keep
 
    subroutine report(self)
       class(fit_objective), intent(in) :: self
@@ -284,7 +374,7 @@ contains
       type(error_type), allocatable :: close_error
       integer(int64) :: now, rate
       character(len=:), allocatable :: fingerprint, old_fingerprint, changed, journal
-      logical :: overwrite, resuming
+      logical :: overwrite, resuming, parallel
       obj%prob = prob
       allocate (obj%replay(0), obj%replay_jac(0))
       overwrite = .false.
@@ -321,17 +411,32 @@ contains
             'with --resume, or start again and overwrite it with --force', stat_usage)
          return
       end if
-      call obj%log%open(dir, fingerprint, prob%nres(), size(prob%idx), error)
+      obj%nresumed = size(obj%replay)
+      obj%fingerprint = fingerprint
+      parallel = n_ranks() > 1 .and. prob%cfg%fit%multistart > 0
+      ! Under MPI, rank 0 alone writes the logs, once every rank has read the journal; a fit
+      ! of one start is made by rank 0 alone
+      call parallel_sync()
+      if (.not. is_root()) then
+         obj%capture = .true.
+         if (.not. parallel) return
+      end if
+      if (is_root()) call obj%log%open(dir, fingerprint, prob%nres(), size(prob%idx), error)
       if (allocated(error)) then
          call obj%log%close()
          return
       end if
       call catch_stop_signals()
-      if (size(obj%replay) > 0) call obj%log%event('resumed: replaying '// &
+      if (size(obj%replay) > 0 .and. .not. parallel) call obj%log%event('resumed: replaying '// &
          str(size(obj%replay))//' evaluations from '//journal_name)
       if (present(progress)) obj%progress => progress
       call system_clock(obj%clock0, rate)
-      call search(obj, outcome%opt, outcome%nstarts, error)
+      if (parallel) then
+         call parallel_search(obj, outcome%opt, outcome%nstarts, error)
+         if (.not. is_root()) return
+      else
+         call search(obj, outcome%opt, outcome%nstarts, error)
+      end if
       ! Past the search a signal ends the process at once (the results are written whole)
       call release_stop_signals()
       call system_clock(now)
@@ -339,7 +444,7 @@ contains
       outcome%f_start = obj%first
       outcome%nfail = obj%nfail_total
       outcome%ninvalid = obj%ninvalid_total
-      outcome%nreplayed = min(size(obj%replay), obj%nevals)
+      outcome%nreplayed = min(obj%nresumed, obj%nevals)
       outcome%nsimulated = obj%nsimulated
       if (.not. allocated(error)) then
          outcome%opt%nevals = obj%nevals
@@ -413,15 +518,17 @@ contains
    end function fit_fingerprint
    !> The configured method from the input's start, or from each multi-start point (a Latin
    !> hypercube over the box, in log10 of the constants); the best result wins
-   subroutine search(obj, opt, nstarts, error)
+   !> (first to last: only those starts, each from where the previous one left the objective)
+   subroutine search(obj, opt, nstarts, error, first, last)
       type(fit_objective), intent(inout) :: obj
       type(optimum_type), intent(out) :: opt
       integer, intent(out) :: nstarts
       type(error_type), allocatable, intent(out) :: error
+      integer, intent(in), optional :: first, last
       type(optimum_type) :: one
       type(rng_type) :: rng
       real(dp), allocatable :: u(:, :), lo(:), hi(:), blo(:), bhi(:), x0(:)
-      integer :: s, n
+      integer :: s, n, s1, s2
       associate (fc => obj%prob%cfg%fit, idx => obj%prob%idx)
          n = size(idx)
          lo = log10(fc%lower(idx))
@@ -433,7 +540,19 @@ contains
             call rng%seed(fc%seed)
             call latin_hypercube(rng, n, fc%multistart, u)
          end if
-         do s = 1, nstarts
+         s1 = 1
+         s2 = nstarts
+         if (present(first)) s1 = first
+         if (present(last)) s2 = last
+         if (.not. allocated(obj%start_eval)) then
+            allocate (obj%start_eval(nstarts), obj%start_sens(nstarts))
+            obj%start_eval = 0
+            obj%start_sens = 0
+         end if
+         do s = s1, s2
+            obj%start_now = s
+            obj%start_eval(s) = obj%nevals + 1
+            obj%start_sens(s) = obj%nsens + 1
             if (fc%multistart > 0) then
                x0 = blo + u(:, s)*(bhi - blo)
                if (.not. fc%log_search) x0 = 10.0_dp**x0
@@ -455,9 +574,203 @@ contains
                call hooke_jeeves(obj, x0, fc%rho, fc%eps, fc%itermax, fc%max_evals, one, error)
             end select
             if (allocated(error)) return
-            if (s == 1 .or. one%f < opt%f) opt = one
+            if (s == s1 .or. one%f < opt%f) opt = one
          end do
          if (fc%multistart > 0) opt%reason = 'best of '//str(nstarts)//' starts: '//opt%reason
       end associate
    end subroutine search
+
+   !> The starts of a multi-start fit spread over the MPI ranks: one start per rank at a time
+   !> (OpenMP threads inside it), each searched on its own with its evaluations kept; every
+   !> rank receives every start's evaluations, and rank 0 then runs the search again over all
+   !> starts in their order, replaying them, so that the logs, the journal and the result are
+   !> those of one process. Starts a journal holds (resume) are taken from it, whatever
+   !> number of ranks wrote it; a start it holds in part goes on from there.
+   subroutine parallel_search(obj, opt, nstarts, error)
+      type(fit_objective), intent(inout) :: obj
+      type(optimum_type), intent(out) :: opt
+      integer, intent(out) :: nstarts
+      type(error_type), allocatable, intent(out) :: error
+      type(start_log), allocatable :: logs(:)
+      type(fit_objective) :: dry, w
+      type(optimum_type) :: one
+      type(error_type), allocatable :: e
+      integer :: np, s, s0, t, n, first_open, last, nsim
+      np = n_ranks()
+      nstarts = max(1, obj%prob%cfg%fit%multistart)
+      allocate (logs(nstarts))
+      do s = 1, nstarts
+         allocate (logs(s)%recs(0), logs(s)%jacs(0))
+      end do
+      first_open = 1
+      if (size(obj%replay) > 0) then
+         ! Replay the journal alone to find where each start's evaluations lie in it
+         dry = worker(obj)
+         dry%replay = obj%replay
+         dry%replay_jac = obj%replay_jac
+         dry%replay_only = .true.
+         call search(dry, one, n, e)
+         first_open = nstarts + 1
+         if (allocated(e)) first_open = dry%start_now
+         do s = 1, min(dry%start_now, nstarts)
+            last = dry%nkept
+            if (s < dry%start_now) last = dry%start_eval(s + 1) - 1
+            logs(s)%recs = dry%kept(dry%start_eval(s):last)
+            last = size(dry%kept_jac)
+            if (s < dry%start_now) last = dry%start_sens(s + 1) - 1
+            logs(s)%jacs = dry%kept_jac(dry%start_sens(s):last)
+         end do
+         obj%nresumed = dry%nkept
+      end if
+      do s0 = first_open, nstarts, np
+         s = s0 + this_rank()
+         if (s <= nstarts) then
+            w = worker(obj)
+            w%replay = logs(s)%recs
+            w%replay_jac = logs(s)%jacs
+            w%tag = 'start'//str(s)//'-'
+            if (is_root() .and. associated(obj%progress)) w%progress => obj%progress
+            call search(w, one, n, e, s, s)
+            logs(s)%recs = w%kept(:w%nkept)
+            logs(s)%jacs = w%kept_jac
+            logs(s)%nsimulated = w%nsimulated
+            logs(s)%stat = 0
+            if (allocated(e)) logs(s)%stat = e%stat
+         end if
+         do t = s0, min(s0 + np - 1, nstarts)
+            call share_start(logs(t), owner_of(t, s0, np), size(obj%prob%targets), size(obj%prob%idx), &
+                             obj%prob%nres())
+         end do
+         ! A start stopped (a signal, too many failures): the rest is left to the replay
+         if (any(logs(s0:min(s0 + np - 1, nstarts))%stat /= 0)) exit
+         ! The logs of the starts so far, so that a job killed outright keeps them
+         if (is_root() .and. s0 + np <= nstarts) then
+            call obj%log%close()
+            dry = worker(obj)
+            call in_order(logs, dry%replay, dry%replay_jac)
+            dry%replay_only = .true.
+            dry%capture = .false.
+            call dry%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), e)
+            if (.not. allocated(e)) call search(dry, one, n, e)
+            call dry%log%close()
+         end if
+      end do
+      if (.not. is_root()) return
+      nsim = sum(logs%nsimulated)
+      call obj%log%close()
+      call obj%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), error)
+      if (allocated(error)) return
+      if (obj%nresumed > 0) call obj%log%event('resumed: replaying '//str(obj%nresumed)// &
+                                               ' evaluations from '//journal_name)
+      call in_order(logs, obj%replay, obj%replay_jac)
+      call search(obj, opt, nstarts, error)
+      obj%nsimulated = obj%nsimulated + nsim
+   end subroutine parallel_search
+
+   !> The starts' evaluations in the order of the starts, up to the first start that stopped
+   subroutine in_order(logs, recs, jacs)
+      type(start_log), intent(in) :: logs(:)
+      type(journal_record), allocatable, intent(inout) :: recs(:)
+      type(cached_jacobian), allocatable, intent(inout) :: jacs(:)
+      integer :: s
+      if (allocated(recs)) deallocate (recs)
+      if (allocated(jacs)) deallocate (jacs)
+      allocate (recs(0), jacs(0))
+      do s = 1, size(logs)
+         recs = [recs, logs(s)%recs]
+         jacs = [jacs, logs(s)%jacs]
+         if (logs(s)%stat /= 0) exit
+      end do
+   end subroutine in_order
+
+   !> An objective for one start on its own: the fit's problem, nothing replayed, nothing logged
+   function worker(obj) result(w)
+      type(fit_objective), intent(in) :: obj
+      type(fit_objective) :: w
+      w%prob = obj%prob
+      w%capture = .true.
+      allocate (w%replay(0), w%replay_jac(0), w%kept_jac(0))
+      w%clock0 = obj%clock0
+   end function worker
+
+   !> One start's evaluations from the rank that made them to every rank (ntest tests, nx
+   !> fitted constants, m residuals)
+   subroutine share_start(sl, from, ntest, nx, m)
+      type(start_log), intent(inout) :: sl
+      integer, intent(in) :: from, ntest, nx, m
+      integer, allocatable :: ints(:)
+      real(dp), allocatable :: reals(:)
+      character(len=:), allocatable :: text
+      integer :: k, nrec, njac, pos, at, nmsg, n
+      if (n_ranks() == 1) return
+      if (this_rank() == from) then
+         nrec = size(sl%recs)
+         njac = size(sl%jacs)
+         ! Sizes first: a start may hold thousands of residual vectors
+         n = njac*(nx + m*nx)
+         nmsg = 0
+         do k = 1, nrec
+            n = n + 1 + ntest + nx
+            if (allocated(sl%recs(k)%r)) n = n + m
+            nmsg = nmsg + len(sl%recs(k)%message)
+         end do
+         allocate (ints(4 + 3*nrec), reals(n))
+         allocate (character(len=nmsg) :: text)
+         ints(1:4) = [nrec, njac, sl%stat, sl%nsimulated]
+         pos = 0
+         at = 0
+         do k = 1, nrec
+            associate (rec => sl%recs(k))
+               ints(4 + 3*(k - 1) + 1:4 + 3*k) = [rec%status, merge(1, 0, allocated(rec%r)), &
+                                                  len(rec%message)]
+               reals(pos + 1:pos + 1 + ntest + nx) = [rec%f, rec%per_test, rec%x]
+               pos = pos + 1 + ntest + nx
+               if (allocated(rec%r)) then
+                  reals(pos + 1:pos + m) = rec%r
+                  pos = pos + m
+               end if
+               text(at + 1:at + len(rec%message)) = rec%message
+               at = at + len(rec%message)
+            end associate
+         end do
+         do k = 1, njac
+            reals(pos + 1:pos + nx + m*nx) = [sl%jacs(k)%x, reshape(sl%jacs(k)%jac, [m*nx])]
+            pos = pos + nx + m*nx
+         end do
+      end if
+      call share(ints, from)
+      call share(reals, from)
+      call share(text, from)
+      if (this_rank() == from) return
+      nrec = ints(1)
+      njac = ints(2)
+      sl%stat = ints(3)
+      sl%nsimulated = ints(4)
+      if (allocated(sl%recs)) deallocate (sl%recs)
+      if (allocated(sl%jacs)) deallocate (sl%jacs)
+      allocate (sl%recs(nrec), sl%jacs(njac))
+      pos = 0
+      at = 0
+      do k = 1, nrec
+         associate (rec => sl%recs(k), meta => ints(4 + 3*(k - 1) + 1:4 + 3*k))
+            rec%status = meta(1)
+            rec%f = reals(pos + 1)
+            rec%per_test = reals(pos + 2:pos + 1 + ntest)
+            rec%x = reals(pos + 2 + ntest:pos + 1 + ntest + nx)
+            pos = pos + 1 + ntest + nx
+            if (meta(2) == 1) then
+               rec%r = reals(pos + 1:pos + m)
+               pos = pos + m
+            end if
+            nmsg = meta(3)
+            rec%message = text(at + 1:at + nmsg)
+            at = at + nmsg
+         end associate
+      end do
+      do k = 1, njac
+         sl%jacs(k)%x = reals(pos + 1:pos + nx)
+         sl%jacs(k)%jac = reshape(reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
+         pos = pos + nx + m*nx
+      end do
+   end subroutine share_start
 end module usharp_fit

@@ -24,12 +24,14 @@ module usharp_fit_log
    !> Kinds of record in fit.cache
    integer(int32), parameter :: cache_residuals = 1, cache_jacobian = 2
 
-   !> One evaluation as the journal keeps it (r: its residuals, when fit.cache has them)
+   !> One evaluation as the journal keeps it (r: its residuals, when fit.cache has them;
+   !> message: why it failed, for an evaluation made on another rank and logged here)
    type :: journal_record
       integer :: status = 0
       real(dp) :: f = 0.0_dp
       real(dp), allocatable :: per_test(:), x(:)
       real(dp), allocatable :: r(:)
+      character(len=:), allocatable :: message
    end type journal_record
 
    !> A sensitivity Jacobian as fit.cache keeps it

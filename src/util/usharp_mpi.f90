@@ -1,0 +1,168 @@
+!> The one place that speaks MPI (the mpi_f08 module): start and stop, this process's rank and
+!> the number of ranks, and the broadcasts with which independent results computed on the
+!> ranks are shared so that every rank (and rank 0, which writes the files) holds them in one
+!> fixed order. A program started without an MPI launcher (mpirun, srun) does not start MPI
+!> at all: it is a single rank and every procedure here is a no-op.
+module usharp_mpi
+   use mpi_f08, only: MPI_Init_thread, MPI_Initialized, MPI_Finalized, MPI_Finalize, MPI_Comm_rank, &
+                      MPI_Comm_size, MPI_Bcast, MPI_Allreduce, MPI_Abort, MPI_Barrier, &
+                      MPI_Get_library_version, MPI_MAX_LIBRARY_VERSION_STRING, MPI_COMM_WORLD, MPI_INTEGER, &
+                      MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, &
+                      MPI_THREAD_FUNNELED
+   use usharp_kinds, only: dp
+   use usharp_strings, only: str
+   implicit none
+   private
+
+   public :: parallel_start, parallel_stop, parallel_abort, this_rank, n_ranks, is_root, owner_of
+   public :: share, any_rank, parallel_sync, parallel_description
+
+   !> Broadcast from one rank to all: the receivers' arrays take the sender's size
+   interface share
+      module procedure share_ints, share_reals, share_text
+   end interface share
+
+contains
+
+   !> Start MPI when the process was launched by an MPI launcher (its environment says so);
+   !> OpenMP threads inside a rank do not call MPI (funneled)
+   subroutine parallel_start()
+      logical :: started
+      integer :: provided
+      if (.not. launched()) return
+      call MPI_Initialized(started)
+      if (.not. started) call MPI_Init_thread(MPI_THREAD_FUNNELED, provided)
+   end subroutine parallel_start
+
+   !> Stop MPI (before the process exits, on every rank)
+   subroutine parallel_stop()
+      if (.not. running()) return
+      call MPI_Finalize()
+   end subroutine parallel_stop
+
+   !> End every rank at once with an exit code (a rank that cannot go on)
+   subroutine parallel_abort(code)
+      integer, intent(in) :: code
+      if (.not. running()) return
+      call MPI_Abort(MPI_COMM_WORLD, code)
+   end subroutine parallel_abort
+
+   !> Whether the environment names an MPI launcher (Open MPI's mpirun, Hydra, PMI, PMIx: SLURM's srun)
+   logical function launched()
+      character(len=*), parameter :: names(5) = [character(len=20) :: 'OMPI_COMM_WORLD_SIZE', &
+         'PMI_SIZE', 'PMIX_RANK', 'PMI_RANK', 'MPI_LOCALNRANKS']
+      integer :: i, length, status
+      launched = .false.
+      do i = 1, size(names)
+         call get_environment_variable(trim(names(i)), length=length, status=status)
+         if (status == 0) launched = .true.
+      end do
+   end function launched
+
+   logical function running()
+      logical :: started, finished
+      call MPI_Initialized(started)
+      running = started
+      if (.not. started) return
+      call MPI_Finalized(finished)
+      running = .not. finished
+   end function running
+
+   !> This process's rank, 0 to n_ranks() - 1
+   integer function this_rank() result(r)
+      r = 0
+      if (running()) call MPI_Comm_rank(MPI_COMM_WORLD, r)
+   end function this_rank
+
+   !> The number of ranks (1 without MPI)
+   integer function n_ranks() result(n)
+      n = 1
+      if (running()) call MPI_Comm_size(MPI_COMM_WORLD, n)
+   end function n_ranks
+
+   !> Whether this is rank 0, the one that writes files and prints
+   logical function is_root()
+      is_root = this_rank() == 0
+   end function is_root
+
+   !> The rank that does task k of a list, the i-th task of the list counted from first:
+   !> round robin, so consecutive tasks run at the same time
+   pure integer function owner_of(k, first, nranks) result(r)
+      integer, intent(in) :: k, first, nranks
+      r = modulo(k - first, nranks)
+   end function owner_of
+
+   !> The MPI library and this process's place: 'Open MPI v4.1.4, rank 0 of 2', or the library
+   !> and 'not started' for a program started without a launcher
+   function parallel_description() result(text)
+      character(len=:), allocatable :: text
+      character(len=MPI_MAX_LIBRARY_VERSION_STRING) :: version
+      integer :: length, cut
+      call MPI_Get_library_version(version, length)
+      cut = scan(version(:length), ','//new_line('a'))
+      if (cut > 1) length = cut - 1
+      text = version(:length)
+      if (running()) then
+         text = text//', rank '//str(this_rank())//' of '//str(n_ranks())
+      else
+         text = text//', not started (one process: start ranks with mpirun or srun)'
+      end if
+   end function parallel_description
+
+   !> Wait until every rank is here
+   subroutine parallel_sync()
+      if (running()) call MPI_Barrier(MPI_COMM_WORLD)
+   end subroutine parallel_sync
+
+   !> Whether flag is true on any rank (every rank must call it)
+   logical function any_rank(flag) result(any_true)
+      logical, intent(in) :: flag
+      any_true = flag
+      if (running()) call MPI_Allreduce(flag, any_true, 1, MPI_LOGICAL, MPI_LOR, MPI_COMM_WORLD)
+   end function any_rank
+
+   subroutine share_ints(a, from)
+      integer, allocatable, intent(inout) :: a(:)
+      integer, intent(in) :: from
+      integer :: n
+      if (.not. running()) return
+      n = 0
+      if (this_rank() == from) n = size(a)
+      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
+      if (this_rank() /= from) then
+         if (allocated(a)) deallocate (a)
+         allocate (a(n))
+      end if
+      if (n > 0) call MPI_Bcast(a, n, MPI_INTEGER, from, MPI_COMM_WORLD)
+   end subroutine share_ints
+
+   subroutine share_reals(a, from)
+      real(dp), allocatable, intent(inout) :: a(:)
+      integer, intent(in) :: from
+      integer :: n
+      if (.not. running()) return
+      n = 0
+      if (this_rank() == from) n = size(a)
+      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
+      if (this_rank() /= from) then
+         if (allocated(a)) deallocate (a)
+         allocate (a(n))
+      end if
+      if (n > 0) call MPI_Bcast(a, n, MPI_DOUBLE_PRECISION, from, MPI_COMM_WORLD)
+   end subroutine share_reals
+
+   subroutine share_text(s, from)
+      character(len=:), allocatable, intent(inout) :: s
+      integer, intent(in) :: from
+      integer :: n
+      if (.not. running()) return
+      n = 0
+      if (this_rank() == from) n = len(s)
+      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
+      if (this_rank() /= from) then
+         if (allocated(s)) deallocate (s)
+         allocate (character(len=n) :: s)
+      end if
+      if (n > 0) call MPI_Bcast(s, n, MPI_CHARACTER, from, MPI_COMM_WORLD)
+   end subroutine share_text
+end module usharp_mpi
