@@ -13,7 +13,8 @@ module test_cluster
 
    character(len=*), parameter :: scripts(*) = [character(len=40) :: &
       'scripts/cluster/usharp-job.sh', 'scripts/cluster/slurm-run.sbatch', &
-      'scripts/cluster/slurm-array.sbatch', 'scripts/cluster/pbs-run.pbs']
+      'scripts/cluster/slurm-array.sbatch', 'scripts/cluster/pbs-run.pbs', &
+      'scripts/cluster/slurm-mpi.sbatch']
 
 contains
 
@@ -23,7 +24,9 @@ contains
          new_unittest('job-scripts-parse', test_syntax), &
          new_unittest('job-stopped-by-term-resumes-to-same-result', test_restart), &
          new_unittest('mpi-multistart-same-on-1-and-2-ranks', test_mpi_multistart), &
-         new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume)]
+         new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume), &
+         new_unittest('mpi-selfcheck-same-on-1-and-2-ranks', test_mpi_selfcheck), &
+         new_unittest('mpi-design-same-on-1-and-2-ranks', test_mpi_design)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -88,8 +91,9 @@ contains
       if (stat /= 0) call skip_test(error, 'mpirun not found (Open MPI: openmpi-bin)')
    end subroutine require_mpirun
 
-   !> Thesis run 2's tests fitted by Levenberg-Marquardt from 8 starts of at most 60
-   !> evaluations each (about 480 evaluations)
+   !> Thesis run 2's tests fitted by Levenberg-Marquardt from 20 starts of at most 30
+   !> evaluations each (about 600 evaluations; on 2 ranks two chunks of starts, see
+   !> tasks_per_share, so that a run can be stopped after the first is journaled)
    function multistart_deck() result(path)
       character(len=:), allocatable :: path
       character(len=4096) :: cwd
@@ -98,8 +102,8 @@ contains
          "&model name = 'miller', units = 'ksi', temperature = 866.15, tm = 1800.0, youngs = 22.5e3 /", &
          '&constants a1 = 1.0, a2 = 1.0e-5, b = 1.0e13, c2 = 0.1, h1 = 100.0, h2 = 100.0, n = 1.0, '// &
          'q = 91000.0 /', &
-         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = 8, "// &
-         "objective = 'eq7', max_evals = 60, max_failures = 200 /", &
+         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = 20, "// &
+         "objective = 'eq7', max_evals = 30, max_failures = 200 /", &
          "&test name = 'lcf', history = 'thesis_lcf', dt_out = 1.0, data_file = '"//trim(cwd)// &
          "/data/thesis/lcf.sim.txt', time_column = 'time', stress_column = 'stress', "// &
          "weighting = 'threshold', sig = 14.0 /", &
@@ -157,15 +161,16 @@ contains
       call execute_command_line(mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null', exitstat=stat)
       call check(error, stat == 0, '2 ranks')
       if (allocated(error)) return
-      call check(error, index(read_text(a//'/fit.log'), 'multi-start 8 of 8') > 0, 'not 8 starts')
+      call check(error, index(read_text(a//'/fit.log'), 'multi-start 20 of 20') > 0, 'not 20 starts')
       if (allocated(error)) return
       call check_same_fit(error, a, b)
       if (allocated(error)) return
       call check(error, same_file(a//'/fit.log', b//'/fit.log'), 'fit.log differs')
    end subroutine test_mpi_multistart
 
-   !> A 2-rank multi-start fit stopped by TERM once its first starts are logged, resumed on 1
-   !> rank: the logs and result of an uninterrupted run
+   !> A 2-rank multi-start fit started by the job script (usharp-job.sh through mpirun), stopped
+   !> by TERM once its first starts are logged, resumed on 1 rank: the logs and result of an
+   !> uninterrupted run
    subroutine test_mpi_resume(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -184,8 +189,10 @@ contains
                                 exitstat=stat)
       call check(error, stat == 0, 'uninterrupted run')
       if (allocated(error)) return
-      ! Wait until the first round of starts is in the journal (at most 120 s), then TERM
-      stop_script = mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null 2> '//b//'.log & p=$!; n=0; '// &
+      ! The job script with 2 ranks: wait until the first chunk of starts is in the journal
+      ! (at most 120 s), then TERM the script, which passes it on through mpirun
+      stop_script = 'USHARP='//exe//' USHARP_THREADS=1 USHARP_LAUNCHER="'//mpirun(19:)//'" '// &
+         'bash scripts/cluster/usharp-job.sh '//deck//' '//b//' > /dev/null 2> '//b//'.log & p=$!; n=0; '// &
          'while [ "$(cat '//b//'/fit.journal 2>/dev/null | grep -vc ^#)" -lt 1 ] && [ $n -lt 2400 ]; '// &
          'do sleep 0.05; n=$((n+1)); done; kill -TERM $p; wait $p'
       call execute_command_line('bash -c '''//stop_script//'''', exitstat=stat)
@@ -203,4 +210,81 @@ contains
       if (allocated(error)) return
       call check_same_fit(error, a, b)
    end subroutine test_mpi_resume
+
+   !> The Miller model at the thesis's Table 4 constants (Type 304 at 593 C, ksi)
+   function table4_groups() result(lines)
+      character(len=100) :: lines(3)
+      lines = [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /"]
+   end function table4_groups
+
+   !> A command on 1 rank and on 2 ranks into two folders; the files named must be the same
+   !> (the self-check's report after its time is taken out)
+   subroutine check_same_on_ranks(error, name, command, files)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in) :: name, command, files(:)
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, mpirun, a, b
+      integer :: stat, k
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call require_mpirun(mpirun, error)
+      if (allocated(error)) return
+      call make_dir(scratch_dir, e)
+      a = scratch_dir//'/'//name//'-1'
+      b = scratch_dir//'/'//name//'-2'
+      call execute_command_line('rm -rf '//a//' '//b)
+      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' '//command//' -q -o '//a//' > /dev/null', &
+                                exitstat=stat)
+      call check(error, stat == 0, name//' on 1 rank')
+      if (allocated(error)) return
+      call execute_command_line(mpirun//exe//' '//command//' -q -o '//b//' > /dev/null', exitstat=stat)
+      call check(error, stat == 0, name//' on 2 ranks')
+      if (allocated(error)) return
+      do k = 1, size(files)
+         call execute_command_line('bash -c "cmp -s <(sed ''s/ in [0-9.]* s$//'' '//a//'/'// &
+            trim(files(k))//') <(sed ''s/ in [0-9.]* s$//'' '//b//'/'//trim(files(k))//')"', exitstat=stat)
+         call check(error, stat == 0, trim(files(k))//' differs between 1 and 2 ranks ('//a//', '//b//')')
+         if (allocated(error)) return
+      end do
+   end subroutine check_same_on_ranks
+
+   !> A self-check subset (clean data and three effects, one repetition each, a small matrix)
+   !> on 1 and 2 ranks: the same journal and report
+   subroutine test_mpi_selfcheck(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: deck
+      deck = write_text('mpi-selfcheck.nml', [character(len=100) :: table4_groups(), &
+         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm' /", &
+         "&test name = 'cyc1', history = 'cyclic', dt_out = 0.5, strain_range = 0.01,", &
+         "  strain_rate = 1.0e-3, cycles = 6 /", &
+         "&test name = 'cyc2-hold', history = 'cyclic', dt_out = 0.5, strain_range = 0.02,", &
+         "  strain_rate = 1.0e-3, cycles = 2, hold_max = 200.0 /", &
+         "&test name = 'held', history = 'cyclic', dt_out = 1.0, strain_range = 0.015,", &
+         "  strain_rate = 1.0e-4, cycles = 1 /", &
+         "&diagnose holdout = 'held', effects = 'compliance', 'lag', 'shift', n_refit = 2,", &
+         "  reps = 1, seed = 3, noise = 0.01 /"])
+      call check_same_on_ranks(error, 'mpi-selfcheck', 'diagnose --selfcheck '//deck, &
+                               [character(len=20) :: 'selfcheck.journal', 'selfcheck.md'])
+   end subroutine test_mpi_selfcheck
+
+   !> A design of one current test and three candidates on 1 and 2 ranks: the same journal
+   !> and ranking
+   subroutine test_mpi_design(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: deck
+      deck = write_text('mpi-design.nml', [character(len=100) :: table4_groups(), &
+         "&fit fitted = 'B', 'C2', 'H1', 'n' /", &
+         "&test name = 'cyc', history = 'cyclic', strain_range = 0.01, strain_rate = 1e-3,", &
+         "  cycles = 2, dt_out = 0.5 /", &
+         "&test name = 'relax', history = 'relaxation', candidate = .true., holds = 100.0, 100.0 /", &
+         "&test name = 'cyc2', history = 'cyclic', strain_range = 0.02, strain_rate = 1e-3,", &
+         "  cycles = 2, dt_out = 0.5, candidate = .true. /", &
+         "&test name = 'hold', history = 'cyclic', strain_range = 0.01, strain_rate = 1e-3,", &
+         "  cycles = 1, dt_out = 0.5, hold_max = 100.0, candidate = .true. /"])
+      call check_same_on_ranks(error, 'mpi-design', 'design '//deck, &
+                               [character(len=20) :: 'design.journal', 'design.txt'])
+   end subroutine test_mpi_design
 end module test_cluster

@@ -8,8 +8,10 @@
 # usage: usharp-job.sh INPUT.nml [OUT_DIR]
 # environment:
 #   USHARP          the usharp executable (default: usharp on PATH)
-#   USHARP_COMMAND  the command: run (default)
-#   USHARP_THREADS  OpenMP threads (default: the allocation's CPUs, else all cores)
+#   USHARP_COMMAND  the command: run (default), design, or 'diagnose --selfcheck'
+#   USHARP_THREADS  OpenMP threads per rank (default: the allocation's CPUs per task, else all cores)
+#   USHARP_LAUNCHER the MPI launcher and its options for a run over ranks (e.g. 'srun' or
+#                   'mpirun -np 16'; default: none, one process)
 #   USHARP_REQUEUE  a command that puts this job back in the queue after a stop by TERM
 #                   (the SLURM and PBS scripts set it; empty: none)
 set -uo pipefail
@@ -25,12 +27,15 @@ export OMP_NUM_THREADS=$threads
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 export OMP_PROC_BIND=${OMP_PROC_BIND:-false}
 
-args=("$command" --auto-resume -q)
+read -r -a args <<< "$command"
+args+=(--auto-resume -q)
 [ -n "$out" ] && args+=(-o "$out")
 args+=("$input")
 
-echo "usharp-job: $(date -u +%FT%TZ) start: $usharp ${args[*]} ($threads threads)" >&2
-"$usharp" "${args[@]}" &
+read -r -a launcher <<< "${USHARP_LAUNCHER:-}"
+echo "usharp-job: $(date -u +%FT%TZ) start: ${launcher[*]} $usharp ${args[*]} ($threads threads)" >&2
+# The launcher (srun, mpirun) passes a TERM on to every rank
+"${launcher[@]}" "$usharp" "${args[@]}" &
 pid=$!
 stopped=0
 trap 'stopped=1; kill -TERM "$pid" 2>/dev/null' TERM INT

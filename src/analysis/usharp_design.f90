@@ -21,6 +21,8 @@ module usharp_design
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_identify, only: jacobian_log10
    use usharp_lapack, only: logdet_spd, solve_dense
+   use usharp_fit, only: fit_fingerprint
+   use usharp_task_farm, only: task_list, task_text, run_tasks
    implicit none
    private
 
@@ -49,19 +51,26 @@ module usharp_design
       integer :: max_tests = 0
    end type design_result
 
+   !> The tests as tasks: task i is test i's information at the known constants
+   type, extends(task_list) :: design_tasks
+      type(run_config) :: cfg
+   contains
+      procedure :: run => design_task
+   end type design_tasks
+
 contains
 
-   !> Simulate every test with the configuration's constants and rank the candidates
-   subroutine design_run(cfg, res, error)
+   !> Simulate every test with the configuration's constants and rank the candidates. The
+   !> tests' information matrices are tasks spread over the MPI ranks and kept in journal
+   !> ('' or absent: none; mode: see run_tasks; constants_file: the -c file, fingerprinted)
+   subroutine design_run(cfg, res, error, journal, mode, constants_file)
       type(run_config), intent(in) :: cfg
       type(design_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
-      type(fit_problem) :: prob
-      type(run_config) :: one
-      type(experiment_type) :: exps(1)
-      type(sim_result) :: sim
-      real(dp), allocatable :: info1(:, :, :)
-      integer :: i, j, ncur, nevals
+      character(len=*), intent(in), optional :: journal, mode, constants_file
+      type(design_tasks) :: tasks
+      type(task_text), allocatable :: results(:)
+      integer :: i, j, ncur, p, nevals
       integer, allocatable :: cur(:), cand(:)
       if (count(cfg%tests%candidate) == 0) then
          call fatal_error(error, cfg%path//': &test: design needs at least one test with '// &
@@ -78,25 +87,21 @@ contains
       end do
       ncur = count(.not. cfg%tests%candidate)
       ! One test at a time: the Jacobian of a long test is large, and information adds
+      tasks%cfg = cfg
+      if (present(journal) .and. present(mode) .and. present(constants_file)) then
+         call run_tasks(tasks, size(cfg%tests), journal, fit_fingerprint(cfg, constants_file), mode, &
+                        results, error)
+      else
+         call run_tasks(tasks, size(cfg%tests), '', '', 'force', results, error)
+      end if
+      if (allocated(error)) return
       do i = 1, size(cfg%tests)
-         one = cfg
-         one%tests = cfg%tests(i:i)
-         call simulate_test(cfg%model, cfg%solver, cfg%tests(i), sim, error)
-         if (allocated(error)) then
-            call prefix_error(error, cfg%path//': with the known &constants: ')
-            return
-         end if
-         exps(1)%t = sim%t
-         exps(1)%y = simulated(cfg%tests(i), sim)
-         call setup_problem(one, prob, error, exps)
-         if (allocated(error)) return
-         call test_information(prob, cfg%design%noise, cfg%fit%fd_step, info1, nevals, error)
-         if (allocated(error)) return
-         if (i == 1) allocate (res%info(size(info1, 1), size(info1, 2), size(cfg%tests)))
-         res%info(:, :, i) = info1(:, :, 1)
+         read (results(i)%s, *) nevals, p
+         if (i == 1) allocate (res%info(p, p, size(cfg%tests)))
+         read (results(i)%s, *) nevals, p, res%info(:, :, i)
          res%nevals = res%nevals + nevals
       end do
-      res%names = constant_names(prob%idx)
+      res%names = constant_names(pack([(j, j=1, size(cfg%fit%fitted))], cfg%fit%fitted))
       allocate (res%test_names(size(cfg%tests)))
       do i = 1, size(cfg%tests)
          res%test_names(i) = cfg%tests(i)%name
@@ -117,6 +122,44 @@ contains
       call best_combinations(res, cur, cand, max(cfg%design%max_tests - ncur, 1), &
                              cfg%design%top)
    end subroutine design_run
+
+   !> Test k simulated with the known constants (its data) and its information; the text:
+   !> 'nevals p', then the p x p matrix by columns at full precision, one number a line
+   subroutine design_task(self, k, text, error)
+      class(design_tasks), intent(inout) :: self
+      integer, intent(in) :: k
+      character(len=:), allocatable, intent(out) :: text
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_problem) :: prob
+      type(run_config) :: one
+      type(experiment_type) :: exps(1)
+      type(sim_result) :: sim
+      real(dp), allocatable :: info1(:, :, :)
+      character(len=32) :: buf
+      integer :: nevals, i, j
+      associate (cfg => self%cfg)
+         one = cfg
+         one%tests = cfg%tests(k:k)
+         call simulate_test(cfg%model, cfg%solver, cfg%tests(k), sim, error)
+         if (allocated(error)) then
+            call prefix_error(error, cfg%path//': with the known &constants: ')
+            return
+         end if
+         exps(1)%t = sim%t
+         exps(1)%y = simulated(cfg%tests(k), sim)
+         call setup_problem(one, prob, error, exps)
+         if (allocated(error)) return
+         call test_information(prob, cfg%design%noise, cfg%fit%fd_step, info1, nevals, error)
+         if (allocated(error)) return
+      end associate
+      text = str(nevals)//' '//str(size(info1, 1))//new_line('a')
+      do j = 1, size(info1, 2)
+         do i = 1, size(info1, 1)
+            write (buf, '(es25.17e3)') info1(i, j, 1)
+            text = text//trim(adjustl(buf))//new_line('a')
+         end do
+      end do
+   end subroutine design_task
 
    !> Fisher information of each test of prob (data = the problem's targets) in log10 of the
    !> fitted constants: J_i' J_i / s_i**2 with s_i**2 the variance of one weighted residual

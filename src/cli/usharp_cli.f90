@@ -14,6 +14,7 @@ module usharp_cli
    use usharp_cmd_identify, only: identify_command
    use usharp_cmd_design, only: design_command
    use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
+   use usharp_mpi, only: is_root
    implicit none
    private
 
@@ -40,6 +41,12 @@ contains
       character(len=200), allocatable :: summary(:)
       integer :: k
 
+      ! Under MPI, commands that spread no work over ranks run on rank 0 alone
+      if (.not. is_root() .and. .not. (cmd%name == 'run' .or. cmd%name == 'design' .or. &
+                                       (cmd%name == 'diagnose' .and. cmd%selfcheck))) then
+         allocate (lines(0))
+         return
+      end if
       select case (cmd%name)
       case ('simulate', 'deck')
          if (cmd%name == 'simulate') then
@@ -57,10 +64,10 @@ contains
       case ('identify')
          call identify_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
       case ('design')
-         call design_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+         call design_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, journal_mode(cmd))
       case ('diagnose')
          if (cmd%selfcheck) then
-            call selfcheck_command(cmd%input, cmd%out_dir, summary, error)
+            call selfcheck_command(cmd%input, cmd%out_dir, summary, error, journal_mode(cmd))
          else
             call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, stage)
          end if
@@ -75,4 +82,14 @@ contains
       if (allocated(error)) return
       lines = [character(len=4200) :: summary]
    end subroutine execute_command
+
+   !> How a command with a journal treats one it finds: 'resume', 'auto', 'force' or 'start'
+   pure function journal_mode(cmd) result(mode)
+      type(cli_command), intent(in) :: cmd
+      character(len=:), allocatable :: mode
+      mode = 'start'
+      if (cmd%force) mode = 'force'
+      if (cmd%auto_resume) mode = 'auto'
+      if (cmd%resume) mode = 'resume'
+   end function journal_mode
 end module usharp_cli

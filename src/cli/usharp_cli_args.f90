@@ -30,12 +30,12 @@ module usharp_cli_args
       character(len=:), allocatable :: constants
       !> -t, --test: `simulate` only this test
       character(len=:), allocatable :: only_test
-      !> --resume: `run` continues a stopped run from its journal
+      !> --resume: `run`, `design`, `diagnose --selfcheck` continue a stopped run from its journal
       logical :: resume = .false.
-      !> --force: `run` starts again over an earlier run's journal
+      !> --force: start again over an earlier run's journal
       logical :: force = .false.
-      !> --auto-resume: `run` continues from the journal when the output folder holds one,
-      !> else starts (one command for a job script that may be stopped and started again)
+      !> --auto-resume: continue from the journal when the output folder holds one, else
+      !> start (one command for a job script that may be stopped and started again)
       logical :: auto_resume = .false.
       !> -q, --quiet: no progress line, no list of files written
       logical :: quiet = .false.
@@ -67,7 +67,7 @@ contains
       case ('--test')
          ok = command == 'simulate'
       case ('--resume', '--force', '--auto-resume')
-         ok = command == 'run'
+         ok = command == 'run' .or. command == 'design' .or. command == 'diagnose'
       case ('--selfcheck')
          ok = command == 'diagnose'
       case default
@@ -172,6 +172,12 @@ contains
          i = i + 1
       end do
 
+      if ((cmd%resume .or. cmd%force .or. cmd%auto_resume) .and. cmd%name == 'diagnose' .and. &
+          .not. cmd%selfcheck) then
+         call fatal_error(error, '--resume, --force and --auto-resume go with diagnose --selfcheck', &
+                          stat_usage)
+         return
+      end if
       if (cmd%resume .and. cmd%force) then
          call fatal_error(error, '--resume continues the journal, --force overwrites it: give one', &
                           stat_usage)

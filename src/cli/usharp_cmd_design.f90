@@ -7,6 +7,7 @@ module usharp_cmd_design
    use usharp_design, only: design_result, design_run, design_report
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
+   use usharp_mpi, only: is_root
    implicit none
    private
 
@@ -14,19 +15,22 @@ module usharp_cmd_design
 
 contains
 
-   subroutine design_command(path, out_dir, constants_file, lines, error)
-      character(len=*), intent(in) :: path, out_dir, constants_file
+   !> The design of path's tests; every test's information is kept in
+   !> <out_dir>/design.journal (mode: see run_tasks)
+   subroutine design_command(path, out_dir, constants_file, lines, error, mode)
+      character(len=*), intent(in) :: path, out_dir, constants_file, mode
       character(len=200), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(design_result) :: res
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
-      call design_run(cfg, res, error)
-      if (allocated(error)) return
-      lines = design_report(res)
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return
+      call design_run(cfg, res, error, join_path(cfg%out_dir, 'design.journal'), mode, constants_file)
+      if (allocated(error)) return
+      if (.not. is_root()) return
+      lines = design_report(res)
       call write_lines(join_path(cfg%out_dir, 'design.txt'), lines, error)
    end subroutine design_command
 

@@ -11,6 +11,7 @@ module usharp_cmd_diagnose
    use usharp_error, only: fatal_error, stat_input
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
+   use usharp_mpi, only: is_root, parallel_sync
    implicit none
    private
 
@@ -77,9 +78,10 @@ contains
       end do
    end subroutine specimen_command
 
-   !> Self-check of the diagnosis on synthetic data with each effect injected
-   subroutine selfcheck_command(path, out_dir, lines, error)
-      character(len=*), intent(in) :: path, out_dir
+   !> Self-check of the diagnosis on synthetic data with each effect injected; its
+   !> repetitions are kept in <out_dir>/selfcheck.journal (mode: see run_tasks)
+   subroutine selfcheck_command(path, out_dir, lines, error, mode)
+      character(len=*), intent(in) :: path, out_dir, mode
       character(len=200), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
@@ -89,20 +91,25 @@ contains
       dir = out_dir
       if (len(dir) == 0) dir = 'selfcheck'
       deck = path
+      call make_dir(dir, error)
+      if (allocated(error)) return
       if (len(deck) == 0) then
-         ! The built-in matrix, written out so that it can be edited and run again
-         call make_dir(dir, error)
-         if (allocated(error)) return
+         ! The built-in matrix, written out so that it can be edited and run again (by rank 0;
+         ! the other ranks read it)
          deck = join_path(dir, 'selfcheck.nml')
-         call write_lines(deck, selfcheck_deck(), error)
+         if (is_root()) call write_lines(deck, selfcheck_deck(), error)
+         call parallel_sync()
          if (allocated(error)) return
       end if
       call read_config_as(deck, '', dir, cfg, error)
       if (allocated(error)) return
       call diagnose_options_of(cfg, opts, error)
       if (allocated(error)) return
-      call selfcheck_run(cfg, opts, sc, error)
+      call make_dir(cfg%out_dir, error)
       if (allocated(error)) return
+      call selfcheck_run(cfg, opts, sc, error, join_path(cfg%out_dir, 'selfcheck.journal'), mode)
+      if (allocated(error)) return
+      if (.not. is_root()) return
       lines = selfcheck_report(sc)
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return

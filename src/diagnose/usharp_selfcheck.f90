@@ -3,6 +3,7 @@
 !> fitted without it and diagnosed; the confusion table counts which effect came out first.
 !> Clean data (noise only) must come out as "no significant effect".
 module usharp_selfcheck
+   use, intrinsic :: iso_fortran_env, only: int64
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
@@ -18,6 +19,9 @@ module usharp_selfcheck
                               held_quiet
    use usharp_rng, only: rng_type
    use usharp_sort, only: order_of
+   use usharp_task_farm, only: task_list, task_text, run_tasks
+   use usharp_filesys, only: file_hash, hash_hex
+   use usharp_version, only: usharp_version_string
    implicit none
    private
 
@@ -39,6 +43,17 @@ module usharp_selfcheck
       integer :: failed = 0                          !< diagnoses that stopped with an error
       character(len=200), allocatable :: misses(:)  !< the reports of the wrong answers
    end type selfcheck_result
+
+   !> The repetitions as tasks: task k is row (k - 1)/reps + 1, repetition modulo(k - 1, reps) + 1
+   type, extends(task_list) :: selfcheck_tasks
+      type(run_config) :: cfg
+      type(diagnose_options) :: o
+      real(dp) :: peak = 0.0_dp
+      integer, allocatable :: rows(:)
+      integer :: reps = 0
+   contains
+      procedure :: run => selfcheck_task
+   end type selfcheck_tasks
 
 contains
 
@@ -136,21 +151,23 @@ contains
       end do
    end subroutine synthetic_data
 
-   !> Run reps repetitions for the clean data and for every considered effect
-   subroutine selfcheck_run(cfg, opts, sc, error)
+   !> Run reps repetitions for the clean data and for every considered effect; the
+   !> repetitions are tasks spread over the MPI ranks and kept in journal ('' for none; mode:
+   !> see run_tasks, default 'force'), so that a stopped self-check continues
+   subroutine selfcheck_run(cfg, opts, sc, error, journal, mode)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(selfcheck_result), intent(out) :: sc
       type(error_type), allocatable, intent(out) :: error
-      type(diagnose_options) :: o
-      type(diagnose_result) :: res
+      character(len=*), intent(in), optional :: journal, mode
+      type(selfcheck_tasks) :: tasks
+      type(task_text), allocatable :: results(:)
       type(experiment_type), allocatable :: exps(:)
       type(rng_type) :: rng
-      real(dp), allocatable :: p(:)
-      real(dp) :: peak
-      integer :: row, rep, k, first, j, c0, c1, rate
+      character(len=200), allocatable :: lines(:)
+      integer :: row, rep, j, c0, c1, rate, t, failed, nevals, first, named_flag
+      real(dp) :: shrink
       call system_clock(c0, rate)
-      o = opts
       sc%reps = cfg%diagnose%reps
       sc%injected = opts%rows
       sc%columns = [0, opts%effects]
@@ -164,51 +181,130 @@ contains
       call rng%seed(cfg%diagnose%seed)
       call synthetic_data(cfg, 0, [real(dp) ::], 0.0_dp, rng, exps, error)
       if (allocated(error)) return
-      peak = 0.0_dp
+      tasks%peak = 0.0_dp
       do j = 1, size(exps)
-         peak = max(peak, maxval(abs(exps(j)%y)))
+         tasks%peak = max(tasks%peak, maxval(abs(exps(j)%y)))
       end do
-      do row = 1, size(sc%injected)
-         k = sc%injected(row)
-         do rep = 1, sc%reps
-            call rng%seed(cfg%diagnose%seed + 1000*k + rep)
-            call rng%skip(64)
-            p = inject(k, size(cfg%tests), peak, rng)
-            call synthetic_data(cfg, k, p, cfg%diagnose%noise, rng, exps, error)
-            if (allocated(error)) return
-            call diagnose_run(cfg, o, res, error, exps)
-            if (allocated(error)) then
-               ! A diagnosis that fails counts as a wrong answer, with its message
-               sc%failed = sc%failed + 1
-               sc%misses = [character(len=200) :: sc%misses, '', '# failed: injected '//str(k)// &
-                  ', repetition '//str(rep)//': '//error%message(1:min(len(error%message), 150))]
-               deallocate (error)
-               cycle
-            end if
-            sc%nevals = sc%nevals + res%nevals
-            first = 0
-            if (res%leading > 0) first = res%effects(res%leading)%k
-            sc%confusion(row, first) = sc%confusion(row, first) + 1
-            sc%first(row, rep) = named(res, k)
-            if (.not. sc%first(row, rep)) sc%misses = [character(len=200) :: sc%misses, '', '---', '', &
-               '# miss: injected '//str(k)//', repetition '//str(rep)//', parameters '// &
-               real_list(p), diagnose_report(res, o)]
-            ! Held-out tests at the noise level have no gap to remove: not counted
-            if (held_quiet(res)) sc%shrink(row, rep) = ieee_value(1.0_dp, ieee_quiet_nan)
-            do j = 1, size(res%effects)
-               if (res%effects(j)%k == k .and. res%effects(j)%refitted .and. .not. held_quiet(res)) &
-                  sc%shrink(row, rep) = res%effects(j)%shrink_held
-            end do
-            ! A right answer that removes less than target_shrink of the held-out gap is shown too
-            if (sc%first(row, rep) .and. k > 0 .and. sc%shrink(row, rep) < target_shrink) sc%misses = &
-               [character(len=200) :: sc%misses, '', '---', '', '# short: injected '//str(k)// &
-               ', repetition '//str(rep)//', parameters '//real_list(p)//': held-out gap removed '// &
-               real_str(100.0_dp*sc%shrink(row, rep), 'f0.1')//' %', diagnose_report(res, o)]
-         end do
+      tasks%cfg = cfg
+      tasks%o = opts
+      tasks%rows = sc%injected
+      tasks%reps = sc%reps
+      if (present(journal) .and. present(mode)) then
+         call run_tasks(tasks, size(sc%injected)*sc%reps, journal, selfcheck_fingerprint(cfg), mode, &
+                        results, error)
+      else
+         call run_tasks(tasks, size(sc%injected)*sc%reps, '', '', 'force', results, error)
+      end if
+      if (allocated(error)) return
+      ! Every repetition's outcome read back from its text, in order
+      do t = 1, size(results)
+         row = (t - 1)/sc%reps + 1
+         rep = modulo(t - 1, sc%reps) + 1
+         call split_lines(results(t)%s, lines)
+         read (lines(1), *) failed, nevals, first, named_flag, shrink
+         sc%misses = [character(len=200) :: sc%misses, lines(2:)]
+         if (failed == 1) then
+            sc%failed = sc%failed + 1
+            cycle
+         end if
+         sc%nevals = sc%nevals + nevals
+         sc%confusion(row, first) = sc%confusion(row, first) + 1
+         sc%first(row, rep) = named_flag == 1
+         sc%shrink(row, rep) = shrink
       end do
       call system_clock(c1)
       sc%seconds = real(c1 - c0, dp)/real(rate, dp)
    end subroutine selfcheck_run
+
+   !> One repetition (task t): the injected effect's data made, diagnosed and judged. Its text:
+   !> a line 'failed nevals first named shrink', then the lines the report shows for it
+   subroutine selfcheck_task(self, k, text, error)
+      class(selfcheck_tasks), intent(inout) :: self
+      integer, intent(in) :: k
+      character(len=:), allocatable, intent(out) :: text
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      type(experiment_type), allocatable :: exps(:)
+      type(error_type), allocatable :: e
+      type(rng_type) :: rng
+      real(dp), allocatable :: p(:)
+      character(len=200), allocatable :: lines(:)
+      character(len=80) :: head
+      real(dp) :: shrink
+      integer :: row, rep, ki, first, j
+      logical :: named_k
+      row = (k - 1)/self%reps + 1
+      rep = modulo(k - 1, self%reps) + 1
+      ki = self%rows(row)
+      associate (cfg => self%cfg)
+         call rng%seed(cfg%diagnose%seed + 1000*ki + rep)
+         call rng%skip(64)
+         p = inject(ki, size(cfg%tests), self%peak, rng)
+         call synthetic_data(cfg, ki, p, cfg%diagnose%noise, rng, exps, error)
+         if (allocated(error)) return
+         call diagnose_run(cfg, self%o, res, e, exps)
+      end associate
+      allocate (lines(0))
+      if (allocated(e)) then
+         ! A diagnosis that fails counts as a wrong answer, with its message
+         lines = [character(len=200) :: '', '# failed: injected '//str(ki)// &
+            ', repetition '//str(rep)//': '//e%message(1:min(len(e%message), 150))]
+         write (head, '(a)') '1 0 0 0 0.0'
+      else
+         first = 0
+         if (res%leading > 0) first = res%effects(res%leading)%k
+         named_k = named(res, ki)
+         if (.not. named_k) lines = [character(len=200) :: lines, '', '---', '', &
+            '# miss: injected '//str(ki)//', repetition '//str(rep)//', parameters '// &
+            real_list(p), diagnose_report(res, self%o)]
+         ! Held-out tests at the noise level have no gap to remove: not counted
+         shrink = 0.0_dp
+         if (held_quiet(res)) shrink = ieee_value(1.0_dp, ieee_quiet_nan)
+         do j = 1, size(res%effects)
+            if (res%effects(j)%k == ki .and. res%effects(j)%refitted .and. .not. held_quiet(res)) &
+               shrink = res%effects(j)%shrink_held
+         end do
+         ! A right answer that removes less than target_shrink of the held-out gap is shown too
+         if (named_k .and. ki > 0 .and. shrink < target_shrink) lines = &
+            [character(len=200) :: lines, '', '---', '', '# short: injected '//str(ki)// &
+            ', repetition '//str(rep)//', parameters '//real_list(p)//': held-out gap removed '// &
+            real_str(100.0_dp*shrink, 'f0.1')//' %', diagnose_report(res, self%o)]
+         write (head, '(a,1x,i0,1x,i0,1x,i1,1x,es25.17e3)') '0', res%nevals, first, merge(1, 0, named_k), &
+            shrink
+      end if
+      text = trim(head)//new_line('a')
+      do j = 1, size(lines)
+         text = text//trim(lines(j))//new_line('a')
+      end do
+   end subroutine selfcheck_task
+
+   !> What decides a self-check's results: the program version and the deck's contents
+   function selfcheck_fingerprint(cfg) result(fp)
+      type(run_config), intent(in) :: cfg
+      character(len=:), allocatable :: fp
+      integer(int64) :: h
+      logical :: ok
+      call file_hash(cfg%path, h, ok)
+      fp = 'version='//usharp_version_string//' input='//hash_hex(h)
+   end function selfcheck_fingerprint
+
+   !> The lines of a text whose lines end with new_line('a')
+   subroutine split_lines(text, lines)
+      character(len=*), intent(in) :: text
+      character(len=200), allocatable, intent(out) :: lines(:)
+      integer :: at, nl, n
+      n = 0
+      do at = 1, len(text)
+         if (text(at:at) == new_line('a')) n = n + 1
+      end do
+      allocate (lines(n))
+      at = 1
+      do n = 1, size(lines)
+         nl = index(text(at:), new_line('a'))
+         lines(n) = text(at:at + nl - 2)
+         at = at + nl
+      end do
+   end subroutine split_lines
 
    !> The confusion table (rows: injected, columns: ranked first) in Markdown
    function selfcheck_report(sc) result(lines)

@@ -21,14 +21,14 @@ module usharp_fit
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
-   use usharp_mpi, only: n_ranks, this_rank, is_root, owner_of, share, parallel_sync
+   use usharp_mpi, only: n_ranks, this_rank, is_root, owner_of, share, parallel_sync, tasks_per_share
    implicit none
    private
 
    public :: fit_objective, run_fit, fit_outcome, progress_interface, fit_fingerprint
 
-   !> Internal: a replay_only objective ran out of records
-   integer, parameter :: stat_exhausted = -1
+   !> Internal: a replay_only objective ran out of records; a start not run (after a stop)
+   integer, parameter :: stat_exhausted = -1, stat_not_run = -2
 
    !> The evaluations of one start of a multi-start fit as a rank made them, and how it ended
    type :: start_log
@@ -580,12 +580,13 @@ contains
       end associate
    end subroutine search
 
-   !> The starts of a multi-start fit spread over the MPI ranks: one start per rank at a time
-   !> (OpenMP threads inside it), each searched on its own with its evaluations kept; every
-   !> rank receives every start's evaluations, and rank 0 then runs the search again over all
-   !> starts in their order, replaying them, so that the logs, the journal and the result are
-   !> those of one process. Starts a journal holds (resume) are taken from it, whatever
-   !> number of ranks wrote it; a start it holds in part goes on from there.
+   !> The starts of a multi-start fit spread over the MPI ranks, round robin in chunks (see
+   !> tasks_per_share; OpenMP threads inside each start), each searched on its own with its
+   !> evaluations kept; after a chunk every rank receives every start's evaluations, and rank
+   !> 0 runs the search again over all starts in their order, replaying them, so that the
+   !> logs, the journal and the result are those of one process. Starts a journal holds
+   !> (resume) are taken from it, whatever number of ranks wrote it; a start it holds in part
+   !> goes on from there.
    subroutine parallel_search(obj, opt, nstarts, error)
       type(fit_objective), intent(inout) :: obj
       type(optimum_type), intent(out) :: opt
@@ -595,7 +596,7 @@ contains
       type(fit_objective) :: dry, w
       type(optimum_type) :: one
       type(error_type), allocatable :: e
-      integer :: np, s, s0, t, n, first_open, last, nsim
+      integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk
       np = n_ranks()
       nstarts = max(1, obj%prob%cfg%fit%multistart)
       allocate (logs(nstarts))
@@ -622,9 +623,16 @@ contains
          end do
          obj%nresumed = dry%nkept
       end if
-      do s0 = first_open, nstarts, np
-         s = s0 + this_rank()
-         if (s <= nstarts) then
+      chunk = np*tasks_per_share(nstarts - first_open + 1, np)
+      do s0 = first_open, nstarts, chunk
+         s1 = min(s0 + chunk - 1, nstarts)
+         ! This rank's starts of the chunk (round robin), one after the other; after a stop
+         ! the rest are not run
+         do s = s0 + this_rank(), s1, np
+            logs(s)%stat = stat_not_run
+            if (s > s0 + this_rank()) then
+               if (logs(s - np)%stat /= 0) cycle
+            end if
             w = worker(obj)
             w%replay = logs(s)%recs
             w%replay_jac = logs(s)%jacs
@@ -636,15 +644,15 @@ contains
             logs(s)%nsimulated = w%nsimulated
             logs(s)%stat = 0
             if (allocated(e)) logs(s)%stat = e%stat
-         end if
-         do t = s0, min(s0 + np - 1, nstarts)
+         end do
+         do t = s0, s1
             call share_start(logs(t), owner_of(t, s0, np), size(obj%prob%targets), size(obj%prob%idx), &
                              obj%prob%nres())
          end do
          ! A start stopped (a signal, too many failures): the rest is left to the replay
-         if (any(logs(s0:min(s0 + np - 1, nstarts))%stat /= 0)) exit
+         if (any(logs(s0:s1)%stat /= 0)) exit
          ! The logs of the starts so far, so that a job killed outright keeps them
-         if (is_root() .and. s0 + np <= nstarts) then
+         if (is_root() .and. s1 < nstarts) then
             call obj%log%close()
             dry = worker(obj)
             call in_order(logs, dry%replay, dry%replay_jac)

@@ -15,7 +15,7 @@ module usharp_mpi
    private
 
    public :: parallel_start, parallel_stop, parallel_abort, this_rank, n_ranks, is_root, owner_of
-   public :: share, any_rank, parallel_sync, parallel_description
+   public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share
 
    !> Broadcast from one rank to all: the receivers' arrays take the sender's size
    interface share
@@ -113,6 +113,14 @@ contains
    subroutine parallel_sync()
       if (running()) call MPI_Barrier(MPI_COMM_WORLD)
    end subroutine parallel_sync
+
+   !> How many of ntasks independent tasks each of nranks ranks runs before the results are
+   !> shared (and journaled): all of them, so that a rank never waits for another's slower
+   !> task, but at most 8, so that a run killed outright loses little
+   pure integer function tasks_per_share(ntasks, nranks) result(c)
+      integer, intent(in) :: ntasks, nranks
+      c = max(1, min((ntasks + nranks - 1)/nranks, 8))
+   end function tasks_per_share
 
    !> Whether flag is true on any rank (every rank must call it)
    logical function any_rank(flag) result(any_true)

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# MPI ranks: wall time of the same work on 1 and on 2 ranks of one thread each, and whether the
+# results are the same bit for bit: the multi-start fit of the Alloy 617 tests
+# (decks/a617-950C-fit.nml, 8 starts; needs ../shared/realdata) and a self-check subset (clean
+# data and three effects, 2 repetitions each, on a small matrix). Prints the machine's load
+# with the figures: on a shared machine the ratio is only as good as the cores are free.
+# usage: bash bench/mpi.sh   (release build; Open MPI's mpirun)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.local/bin:$PATH"
+fpm build --profile release --flag "-I/usr/include/sundials/fortran" > /dev/null
+exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran" --runner echo 2>/dev/null | tail -n 1)
+mpirun="mpirun --oversubscribe -np 2"
+[ "$(id -u)" -eq 0 ] && mpirun="mpirun --allow-run-as-root --oversubscribe -np 2"
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+export OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive
+
+wall() { # folder command...: wall seconds of the command
+  local s e
+  s=$(date +%s.%N)
+  "${@:2}" > /dev/null
+  e=$(date +%s.%N)
+  echo "$e - $s" | bc
+}
+compare() { # name file1 file2
+  if cmp -s <(sed 's/ in [0-9.]* s$//' "$2") <(sed 's/ in [0-9.]* s$//' "$3"); then echo same; else echo DIFFERENT; fi
+}
+row() { # label t1 t2 same
+  printf '%-34s %8.1f %8.1f %8.2f   %s\n' "$1" "$2" "$3" "$(echo "scale=3; $2 / $3" | bc)" "$4"
+}
+
+cat > "$out/selfcheck.nml" <<'NML'
+&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /
+&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0, n = 5.8, q = 91000.0 /
+&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm' /
+&test name = 'cyc1', history = 'cyclic', dt_out = 0.5, strain_range = 0.01, strain_rate = 1.0e-3, cycles = 6 /
+&test name = 'cyc2-hold', history = 'cyclic', dt_out = 0.5, strain_range = 0.02, strain_rate = 1.0e-3,
+  cycles = 2, hold_max = 200.0 /
+&test name = 'held', history = 'cyclic', dt_out = 1.0, strain_range = 0.015, strain_rate = 1.0e-4, cycles = 1 /
+&diagnose holdout = 'held', effects = 'compliance', 'lag', 'shift', n_refit = 2, reps = 2, seed = 3,
+  noise = 0.01 /
+NML
+
+echo "machine: $(nproc) cores; load before: $(uptime | sed 's/.*load average: //')"
+printf '%-34s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "2 ranks" "ratio" "results"
+if [ -d ../shared/realdata/a617-950C ]; then
+  t1=$(wall x "$exe" run -q -o "$out/fit1" decks/a617-950C-fit.nml)
+  t2=$(wall x $mpirun "$exe" run -q -o "$out/fit2" decks/a617-950C-fit.nml)
+  row "Alloy 617 fit, 8 starts" "$t1" "$t2" "$(compare x "$out/fit1/fit.journal" "$out/fit2/fit.journal")"
+else
+  echo "Alloy 617 fit: skipped (no ../shared/realdata/a617-950C)"
+fi
+t1=$(wall x "$exe" diagnose --selfcheck -q -o "$out/sc1" "$out/selfcheck.nml")
+t2=$(wall x $mpirun "$exe" diagnose --selfcheck -q -o "$out/sc2" "$out/selfcheck.nml")
+row "self-check subset, 8 repetitions" "$t1" "$t2" "$(compare x "$out/sc1/selfcheck.md" "$out/sc2/selfcheck.md")"
+echo "load after: $(uptime | sed 's/.*load average: //')"
