@@ -7,6 +7,7 @@ module test_cluster
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
    use test_util, only: require_exe, read_text, scratch_dir, write_text
+   use test_diagnose, only: model_groups, small_matrix
    implicit none
    private
    public :: collect_cluster
@@ -139,11 +140,13 @@ contains
       call check(error, stat == 0, 'best.nml differs between '//a//' and '//b)
    end subroutine check_same_fit
 
-   !> A multi-start fit on 1 rank and on 2 ranks: the same journal, cache, logs and result
-   subroutine test_mpi_multistart(error)
+   !> The usharp executable, mpirun, the multi-start deck, and its fit on 1 rank into folder a
+   !> (b removed for the run to compare), or a skip or failure
+   subroutine reference_fit(exe, mpirun, deck, a, b, error)
+      character(len=:), allocatable, intent(out) :: exe, mpirun, deck
+      character(len=*), intent(in) :: a, b
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=:), allocatable :: exe, mpirun, deck, a, b
       integer :: stat
       call require_exe(exe, error)
       if (allocated(error)) return
@@ -151,12 +154,20 @@ contains
       if (allocated(error)) return
       call make_dir(scratch_dir, e)
       deck = multistart_deck()
-      a = scratch_dir//'/mpi-ms-1'
-      b = scratch_dir//'/mpi-ms-2'
-      call execute_command_line('rm -rf '//a//' '//b)
+      call execute_command_line('rm -rf '//a//' '//b//' '//b//'.log')
       call execute_command_line('OMP_NUM_THREADS=1 '//exe//' run -q -o '//a//' '//deck//' > /dev/null', &
                                 exitstat=stat)
-      call check(error, stat == 0, '1 rank')
+      call check(error, stat == 0, 'the fit on 1 rank')
+   end subroutine reference_fit
+
+   !> A multi-start fit on 1 rank and on 2 ranks: the same journal, cache, logs and result
+   subroutine test_mpi_multistart(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, mpirun, deck, a, b
+      integer :: stat
+      a = scratch_dir//'/mpi-ms-1'
+      b = scratch_dir//'/mpi-ms-2'
+      call reference_fit(exe, mpirun, deck, a, b, error)
       if (allocated(error)) return
       call execute_command_line(mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null', exitstat=stat)
       call check(error, stat == 0, '2 ranks')
@@ -173,21 +184,11 @@ contains
    !> uninterrupted run
    subroutine test_mpi_resume(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
       character(len=:), allocatable :: exe, mpirun, deck, a, b, stop_script
       integer :: stat
-      call require_exe(exe, error)
-      if (allocated(error)) return
-      call require_mpirun(mpirun, error)
-      if (allocated(error)) return
-      call make_dir(scratch_dir, e)
-      deck = multistart_deck()
       a = scratch_dir//'/mpi-rs-whole'
       b = scratch_dir//'/mpi-rs-stopped'
-      call execute_command_line('rm -rf '//a//' '//b//' '//b//'.log')
-      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' run -q -o '//a//' '//deck//' > /dev/null', &
-                                exitstat=stat)
-      call check(error, stat == 0, 'uninterrupted run')
+      call reference_fit(exe, mpirun, deck, a, b, error)
       if (allocated(error)) return
       ! The job script with 2 ranks: wait until the first chunk of starts is in the journal
       ! (at most 120 s), then TERM the script, which passes it on through mpirun
@@ -211,14 +212,6 @@ contains
       call check_same_fit(error, a, b)
    end subroutine test_mpi_resume
 
-   !> The Miller model at the thesis's Table 4 constants (Type 304 at 593 C, ksi)
-   function table4_groups() result(lines)
-      character(len=100) :: lines(3)
-      lines = [character(len=100) :: &
-         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
-         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
-         "  n = 5.8, q = 91000.0 /"]
-   end function table4_groups
 
    !> A command on 1 rank and on 2 ranks into two folders; the files named must be the same
    !> (the self-check's report after its time is taken out)
@@ -251,21 +244,12 @@ contains
       end do
    end subroutine check_same_on_ranks
 
-   !> A self-check subset (clean data and three effects, one repetition each, a small matrix)
-   !> on 1 and 2 ranks: the same journal and report
+   !> A self-check subset (clean data and three effects, one repetition each, the small matrix
+   !> of the diagnosis tests) on 1 and 2 ranks: the same journal and report
    subroutine test_mpi_selfcheck(error)
       type(error_type), allocatable, intent(out) :: error
       character(len=:), allocatable :: deck
-      deck = write_text('mpi-selfcheck.nml', [character(len=100) :: table4_groups(), &
-         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm' /", &
-         "&test name = 'cyc1', history = 'cyclic', dt_out = 0.5, strain_range = 0.01,", &
-         "  strain_rate = 1.0e-3, cycles = 6 /", &
-         "&test name = 'cyc2-hold', history = 'cyclic', dt_out = 0.5, strain_range = 0.02,", &
-         "  strain_rate = 1.0e-3, cycles = 2, hold_max = 200.0 /", &
-         "&test name = 'held', history = 'cyclic', dt_out = 1.0, strain_range = 0.015,", &
-         "  strain_rate = 1.0e-4, cycles = 1 /", &
-         "&diagnose holdout = 'held', effects = 'compliance', 'lag', 'shift', n_refit = 2,", &
-         "  reps = 1, seed = 3, noise = 0.01 /"])
+      deck = write_text('mpi-selfcheck.nml', [character(len=100) :: model_groups, small_matrix])
       call check_same_on_ranks(error, 'mpi-selfcheck', 'diagnose --selfcheck '//deck, &
                                [character(len=20) :: 'selfcheck.journal', 'selfcheck.md'])
    end subroutine test_mpi_selfcheck
@@ -275,7 +259,7 @@ contains
    subroutine test_mpi_design(error)
       type(error_type), allocatable, intent(out) :: error
       character(len=:), allocatable :: deck
-      deck = write_text('mpi-design.nml', [character(len=100) :: table4_groups(), &
+      deck = write_text('mpi-design.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B', 'C2', 'H1', 'n' /", &
          "&test name = 'cyc', history = 'cyclic', strain_range = 0.01, strain_rate = 1e-3,", &
          "  cycles = 2, dt_out = 0.5 /", &

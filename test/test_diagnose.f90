@@ -26,7 +26,7 @@ module test_diagnose
    use test_util, only: write_text, check_message
    implicit none
    private
-   public :: collect_diagnose
+   public :: collect_diagnose, model_groups, small_matrix
 
    character(len=*), parameter :: model_groups(3) = [character(len=100) :: &
       "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &

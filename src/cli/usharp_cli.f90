@@ -80,6 +80,8 @@ contains
          end if
       end select
       if (allocated(error)) return
+      ! (the other ranks of an MPI run have nothing to show)
+      if (.not. allocated(summary)) allocate (summary(0))
       lines = [character(len=4200) :: summary]
    end subroutine execute_command
 

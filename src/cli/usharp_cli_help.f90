@@ -32,6 +32,13 @@ module usharp_cli_help
       '  -h, --help            show this help'//nl// &
       '  -V, --version         show the version and the build'
 
+   !> Options of the commands that keep a journal of their tasks
+   character(len=*), parameter :: journal_options = &
+      '      --resume          continue a stopped run from its journal (on any number of'//nl// &
+      '                        ranks; refused when the input changed)'//nl// &
+      '      --force           start again, overwriting the journal of an earlier run'//nl// &
+      '      --auto-resume     --resume when the output folder holds a journal, else start'//nl
+
    interface
       function sundials_get_version(version, length) bind(C, name='SUNDIALSGetVersion') &
          result(flag)
@@ -104,9 +111,11 @@ contains
             'candidate = .true.); simulates them with the known &constants (or those of'//nl// &
             '--constants FILE) and predicts, for a stress noise of &design noise, how well'//nl// &
             'each combination of up to max_tests tests determines the &fit constants.'//nl// &
-            'Writes <out_dir>/design.txt.'//nl//nl// &
+            'Writes <out_dir>/design.txt and design.journal (every test''s information).'//nl// &
+            'Under mpirun or srun the tests are spread over the ranks.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE as the known constants'//nl// &
+            journal_options// &
             common_options
       case ('diagnose')
          text = 'usage: usharp diagnose [options] <fit.nml>'//nl// &
@@ -117,11 +126,13 @@ contains
             'leading ones (AIC/BIC, 95 % intervals) and predicts the held-out tests with them.'//nl// &
             'Writes <out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv and'//nl// &
             'plots. With --selfcheck: injects each effect into synthetic data (the built-in'//nl// &
-            'matrix, or the given file), diagnoses it and writes <out_dir>/selfcheck.md.'//nl// &
+            'matrix, or the given file), diagnoses it and writes <out_dir>/selfcheck.md and'//nl// &
+            'selfcheck.journal (every repetition; under mpirun or srun spread over the ranks).'//nl// &
             'Guide: docs/guide/diagnosis.md.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
             '      --selfcheck       the self-check on synthetic data'//nl// &
+            '  (with --selfcheck)'//nl//journal_options// &
             common_options
       case ('deck')
          text = 'usage: usharp deck [options] [<test>] <input.nml>'//nl//nl// &

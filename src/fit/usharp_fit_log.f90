@@ -9,7 +9,7 @@ module usharp_fit_log
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_input
    use usharp_strings, only: str
-   use usharp_filesys, only: join_path, file_exists, raw_file
+   use usharp_filesys, only: join_path, file_exists, raw_file, read_line
    implicit none
    private
 
@@ -213,21 +213,6 @@ contains
       records = records(:nrec)
    end subroutine read_journal
 
-   !> One line of any length
-   subroutine read_line(unit, line, ios)
-      integer, intent(in) :: unit
-      character(len=:), allocatable, intent(out) :: line
-      integer, intent(out) :: ios
-      character(len=4096) :: buf
-      integer :: nread
-      line = ''
-      do
-         read (unit, '(a)', advance='no', iostat=ios, size=nread) buf
-         line = line//buf(:nread)
-         if (ios /= 0) exit
-      end do
-      if (is_iostat_eor(ios)) ios = 0
-   end subroutine read_line
 
    !> Attach the residuals kept in fit.cache to the journal's records (where the cache has
    !> them at the record's point) and return its sensitivity Jacobians. A missing, foreign or

@@ -10,7 +10,7 @@ module usharp_filesys
 
    public :: make_dir, join_path, file_exists, absolute_path, remove_file, remove_dir
    public :: rename_file, lock_file, unlock_file, file_hash, hash_text, hash_hex
-   public :: raw_file
+   public :: raw_file, read_line
 
    !> A file written through the C library, every write and the close checked. (gfortran's
    !> formatted and stream writes do not report a full disk: the bytes are lost and iostat
@@ -351,4 +351,20 @@ contains
       character(len=*), intent(in) :: path
       inquire (file=path, exist=file_exists)
    end function file_exists
+   !> One line of any length from a formatted unit (without its end); ios 0, or the end of file
+   subroutine read_line(unit, line, ios)
+      integer, intent(in) :: unit
+      character(len=:), allocatable, intent(out) :: line
+      integer, intent(out) :: ios
+      character(len=4096) :: buf
+      integer :: nread
+      line = ''
+      do
+         read (unit, '(a)', advance='no', iostat=ios, size=nread) buf
+         line = line//buf(:nread)
+         if (ios /= 0) exit
+      end do
+      if (is_iostat_eor(ios)) ios = 0
+   end subroutine read_line
+
 end module usharp_filesys

@@ -134,10 +134,8 @@ contains
       integer, intent(in) :: from
       integer :: n
       if (.not. running()) return
-      n = 0
       if (this_rank() == from) n = size(a)
-      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
-      if (this_rank() /= from) then
+      if (receive_size(n, from)) then
          if (allocated(a)) deallocate (a)
          allocate (a(n))
       end if
@@ -149,10 +147,8 @@ contains
       integer, intent(in) :: from
       integer :: n
       if (.not. running()) return
-      n = 0
       if (this_rank() == from) n = size(a)
-      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
-      if (this_rank() /= from) then
+      if (receive_size(n, from)) then
          if (allocated(a)) deallocate (a)
          allocate (a(n))
       end if
@@ -164,13 +160,20 @@ contains
       integer, intent(in) :: from
       integer :: n
       if (.not. running()) return
-      n = 0
       if (this_rank() == from) n = len(s)
-      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
-      if (this_rank() /= from) then
+      if (receive_size(n, from)) then
          if (allocated(s)) deallocate (s)
          allocate (character(len=n) :: s)
       end if
       if (n > 0) call MPI_Bcast(s, n, MPI_CHARACTER, from, MPI_COMM_WORLD)
    end subroutine share_text
+
+   !> Broadcast a size n from rank from; whether this rank is a receiver (which then makes
+   !> room for the data that follow)
+   logical function receive_size(n, from) result(receiving)
+      integer, intent(inout) :: n
+      integer, intent(in) :: from
+      call MPI_Bcast(n, 1, MPI_INTEGER, from, MPI_COMM_WORLD)
+      receiving = this_rank() /= from
+   end function receive_size
 end module usharp_mpi

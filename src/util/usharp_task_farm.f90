@@ -10,7 +10,7 @@
 module usharp_task_farm
    use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
    use usharp_strings, only: str
-   use usharp_filesys, only: raw_file, file_exists
+   use usharp_filesys, only: raw_file, file_exists, read_line
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_mpi, only: n_ranks, this_rank, is_root, owner_of, share, any_rank, parallel_sync, &
                          tasks_per_share
@@ -251,19 +251,4 @@ contains
       close (unit)
    end subroutine read_task_journal
 
-   !> One line of any length (without its end)
-   subroutine read_line(unit, line, ios)
-      integer, intent(in) :: unit
-      character(len=:), allocatable, intent(out) :: line
-      integer, intent(out) :: ios
-      character(len=4096) :: buf
-      integer :: nread
-      line = ''
-      do
-         read (unit, '(a)', advance='no', iostat=ios, size=nread) buf
-         line = line//buf(:nread)
-         if (ios /= 0) exit
-      end do
-      if (is_iostat_eor(ios)) ios = 0
-   end subroutine read_line
 end module usharp_task_farm
