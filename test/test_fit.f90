@@ -5,7 +5,11 @@ module test_fit
    use usharp_error, only: uerror => error_type, stat_failure
    use usharp_experiment, only: interpolate
    use usharp_weighting, only: threshold_weights, relaxation_weights
-   use usharp_objective, only: test_objective, fit_problem, setup_problem
+   use usharp_objective, only: test_objective, fit_problem, setup_problem, eval_ok
+   use usharp_simulation, only: sim_result
+   use usharp_simulate, only: simulate_test
+   use usharp_history, only: cyclic_history, history_type
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_optimiser, only: objective_type, optimum_type
    use usharp_hooke_jeeves, only: hooke_jeeves
    use usharp_config, only: run_config
@@ -44,7 +48,10 @@ contains
          new_unittest('data-not-covering-span-rejected', test_coverage), &
          new_unittest('data-unit-converted', test_units), &
          new_unittest('fit-aborts-after-failures-in-a-row', test_abort), &
-         new_unittest('kill-9-then-resume-same-result', test_resume)]
+         new_unittest('kill-9-then-resume-same-result', test_resume), &
+         new_unittest('peaks-target-read-and-compared', test_peaks), &
+         new_unittest('peaks-and-data-share-the-objective', test_peak_share), &
+         new_unittest('creep-and-lcf-in-one-deck', test_mixed)]
    end subroutine collect_fit
 
    subroutine rosen_eval(self, x, f, error)
@@ -266,4 +273,141 @@ contains
          rest = text(max(k, 1):)
       end function body
    end subroutine test_resume
+
+   !> A peak file for 3 cycles of 1 % at 1e-3/s (maxima at 5, 25, 45 s, minima at 15, 35, 55 s):
+   !> four rows (the fourth cycle lies beyond the history) and a row with a missing value
+   function peak_file() result(path)
+      character(len=:), allocatable :: path
+      path = write_text('peaks.csv', [character(len=60) :: 'cycle,time_max,max,time_min,min', &
+         '1,4.5,31.5,15.0,-30.5', '2,25.0,32.0,35.0,-31.0', '3,45.0,32.5,55.0,-31.5', &
+         '4,65.0,33.0,75.0,-32.0', '5,85.0,.,.,.'])
+   end function peak_file
+
+   !> target = 'peaks': the points are the history's turning points within the file's
+   !> cycles, the data the file's peak stresses, the simulation's stress there compared
+   subroutine test_peaks(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      type(sim_result) :: res, direct
+      character(len=:), allocatable :: pf
+      pf = peak_file()
+      call read_config(fit_deck('peaks.nml', '', [character(len=200) :: &
+         "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
+         "target='peaks', peak_file='peaks.csv' /"]), cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      associate (tg => prob%targets(1), test => cfg%tests(1))
+         call check(error, all(abs(tg%t - [5.0_dp, 15.0_dp, 25.0_dp, 35.0_dp, 45.0_dp, 55.0_dp]) < 1e-12_dp), &
+                    'points at the strain peaks of cycles 1 to 3')
+         if (allocated(error)) return
+         call check(error, all(tg%y_ex == [31.5_dp, -30.5_dp, 32.0_dp, -31.0_dp, 32.5_dp, -31.5_dp]), &
+                    'measured peaks in time order')
+         if (allocated(error)) return
+         call check(error, all(test%peak_cycle == [1, 1, 2, 2, 3, 3]) .and. &
+                    all(test%point_kind == [1, -1, 1, -1, 1, -1]), 'cycles and kinds')
+         if (allocated(error)) return
+         call check(error, all(tg%w == 1.0_dp) .and. tg%y_ex_max == 32.5_dp, 'weights 1, peak 32.5')
+         if (allocated(error)) return
+         call simulate_test(cfg%model, cfg%solver, test, res, uerr)
+         if (.not. allocated(uerr)) call simulate_rosenbrock(cfg%model, test%hist, tg%t, cfg%solver, direct, uerr)
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         call check(error, all(res%stress == direct%stress), 'the stress at the peaks is compared')
+      end associate
+   end subroutine test_peaks
+
+   !> target = 'both': data points and peaks, the peaks a share of the test's objective
+   subroutine test_peak_share(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: pf, df
+      integer :: n, np
+      real(dp) :: share
+      pf = peak_file()
+      df = write_text('loops.csv', [character(len=40) :: 'time,stress', '0,0', '30,10', '60,0'])
+      call read_config(fit_deck('both.nml', '', [character(len=200) :: &
+         "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
+         "dt_out=2.0, target='both', peak_file='peaks.csv', data_file='loops.csv', peak_share=0.3 /"]), &
+         cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      associate (tg => prob%targets(1), kind => cfg%tests(1)%point_kind)
+         n = size(tg%t)
+         np = count(kind /= 0)
+         ! A grid of 2 s (31 points), the 6 corners off it (the peaks, at odd seconds), and the
+         ! 6 peak points at the same times
+         call check(error, np == 6 .and. n == 31 + 6 + 6, 'points: 37 data and 6 peaks')
+         if (allocated(error)) return
+         share = sum(tg%w, mask=kind /= 0)/real(n, dp)
+         call check(error, share, 0.3_dp, 'peaks weigh 0.3 of the objective', thr=1e-12_dp)
+         if (allocated(error)) return
+         call check(error, sum(tg%w, mask=kind == 0)/real(n, dp), 0.7_dp, 'data 0.7', thr=1e-12_dp)
+         if (allocated(error)) return
+         call check(error, all(pack(tg%t(2:) >= tg%t(:n - 1), .true.)), 'points in time order')
+      end associate
+   end subroutine test_peak_share
+
+   !> A creep test (fitted on strain) and a cyclic test (on stress) in one deck, their data
+   !> made by the model: both objectives vanish at the constants that made them, and away
+   !> from them each test's Eq. 7 is a percentage of its own peak, of one order
+   subroutine test_mixed(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      type(sim_result) :: res
+      character(len=200) :: tests(2)
+      character(len=60), allocatable :: rows(:)
+      character(len=:), allocatable :: msg, path
+      real(dp) :: total, pt(2), x(2)
+      integer :: i, k, status
+      tests(1) = "&test name='creep', history='creep', stress=12.0, ramp_time=1.0, duration=3600.0, dt_out=60.0"
+      tests(2) = "&test name='cyc', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=2, dt_out=1.0"
+      call read_config(fit_deck('mixed0.nml', '', [character(len=200) :: (trim(tests(i))//' /', i=1, 2)]), &
+                       cfg, uerr)
+      do i = 1, 2
+         if (allocated(uerr)) exit
+         call simulate_test(cfg%model, cfg%solver, cfg%tests(i), res, uerr)
+         if (allocated(uerr)) exit
+         rows = [character(len=60) :: 'time,strain,stress']
+         do k = 1, size(res%t)
+            rows = [character(len=60) :: rows, real_row(res%t(k), res%strain(k), res%stress(k))]
+         end do
+         path = write_text('mixed-'//cfg%tests(i)%name//'.csv', rows)
+      end do
+      if (.not. allocated(uerr)) call read_config(fit_deck('mixed.nml', '', [character(len=200) :: &
+         trim(tests(1))//", data_file='mixed-creep.csv' /", trim(tests(2))//", data_file='mixed-cyc.csv' /"]), &
+         cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      x = prob%start_point()
+      call prob%evaluate(x, total, pt, status, msg)
+      call check(error, status == eval_ok .and. maxval(pt) < 1.0e-8_dp, 'both vanish at the true constants')
+      if (allocated(error)) return
+      ! H1 and n 10 % off
+      call prob%evaluate(1.1_dp*x, total, pt, status, msg)
+      call check(error, status == eval_ok .and. minval(pt) > 1.0e-2_dp .and. maxval(pt)/minval(pt) < 1.0e3_dp, &
+                 'creep and cycling weigh alike: '//real_row(pt(1), pt(2), 0.0_dp))
+   contains
+      function real_row(a, b, c) result(text)
+         real(dp), intent(in) :: a, b, c
+         character(len=60) :: text
+         write (text, '(es18.10e3,",",es18.10e3,",",es18.10e3)') a, b, c
+      end function real_row
+   end subroutine test_mixed
 end module test_fit

@@ -5,6 +5,10 @@ module test_history
    use usharp_error, only: uerror => error_type
    use usharp_history
    use usharp_forcing, only: measured_history, turning_points, monotone, signal_resolution
+   use usharp_cycles, only: gap_filled_history, record_starts, match_peaks
+   use usharp_miller, only: miller_model, model_setup
+   use usharp_simulation, only: solver_options, sim_result
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
    implicit none
    private
    public :: collect_history
@@ -25,7 +29,9 @@ contains
          new_unittest('turning-points-with-hysteresis', test_turning), &
          new_unittest('monotone-pools-violators', test_monotone), &
          new_unittest('measured-forcing-noisy-triangle', test_measured), &
-         new_unittest('measured-forcing-noise-zero-is-linear', test_measured_raw)]
+         new_unittest('measured-forcing-noise-zero-is-linear', test_measured_raw), &
+         new_unittest('gap-filled-cycle-10-as-continuous', test_gap_fill), &
+         new_unittest('gap-fill-smooth-pieces-and-peaks', test_gap_fill_smooth)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -216,4 +222,110 @@ contains
       if (allocated(error)) return
       call same(error, h%v, [0.0_dp, 1.0_dp, 0.5_dp, 2.0_dp], 'samples kept')
    end subroutine test_measured_raw
+
+   !> Cycles 1, 2 and 10 of a triangular strain cycling (range 1 %, 1e-3/s, 20 s a cycle,
+   !> sampled every 0.05 s; the recorded pieces end one sample short of the next cycle, as a
+   !> test machine's files do), the gap filled with cycles: the history equals the continuous
+   !> 10-cycle one everywhere (so 7 cycles were cycled through), and the simulated stress of
+   !> cycle 10 equals that of the continuous simulation
+   subroutine test_gap_fill(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      type(history_type) :: cont, filled
+      type(miller_model) :: model
+      type(solver_options) :: opts
+      type(sim_result) :: r1, r2
+      real(dp), allocatable :: t(:), v(:), spans(:, :), probe(:), t10(:)
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
+      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 4000)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = cont%value_at(t(k))
+      end do
+      call check(error, size(record_starts(t)), 2, 'one gap found')
+      if (allocated(error)) return
+      call gap_filled_history(t, v, 1, 0.0_dp, 0.0_dp, 0.0_dp, filled, spans, uerr, noise=0.0_dp)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, .not. filled%smooth(), 'noise 0: piecewise linear')
+      if (allocated(error)) return
+      call same(error, reshape(spans, [4]), [0.0_dp, 39.95_dp, 180.0_dp, 200.0_dp], 'recorded spans')
+      if (allocated(error)) return
+      ! The continuous history's corners and points in between, compared with the filled one
+      probe = [cont%t, 0.5_dp*(cont%t(2:) + cont%t(:size(cont%t) - 1)), 41.234_dp, 177.7_dp]
+      do k = 1, size(probe)
+         call check(error, filled%value_at(probe(k)), cont%value_at(probe(k)), &
+                    'filled history at t = '//real_str(probe(k)), thr=1.0e-12_dp)
+         if (allocated(error)) return
+      end do
+      call model_setup(model, uerr)
+      ! Tight tolerances: the two differ in their steps (every sample of the recorded pieces
+      ! is a corner), not in their load
+      opts%rtol = 1.0e-9_dp
+      opts%atol_strain = 1.0e-12_dp
+      t10 = [(180.0_dp + 0.25_dp*k, k=0, 80)]
+      call simulate_rosenbrock(model, cont, t10, opts, r1, uerr)
+      if (.not. allocated(uerr)) call simulate_rosenbrock(model, filled, t10, opts, r2, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, maxval(abs(r1%stress - r2%stress)) < 1.0e-6_dp*maxval(abs(r1%stress)), &
+                 'cycle 10 stress as in the continuous simulation: largest difference '// &
+                 real_str(maxval(abs(r1%stress - r2%stress))))
+      if (allocated(error)) return
+      ! A cycle less would leave the drag stress elsewhere: the check can fail
+      call check(error, abs(r1%drag(1) - r2%drag(1)) < 1.0e-4_dp*r1%drag(1), 'drag stress at cycle 10')
+   contains
+      function real_str(x) result(text)
+         real(dp), intent(in) :: x
+         character(len=24) :: text
+         write (text, '(g0.6)') x
+      end function real_str
+   end subroutine test_gap_fill
+
+   !> The same cycling recorded noisily (quantised to 1e-5) as smooth pieces: the fill's
+   !> corners are the peaks of the 7 unrecorded cycles at their times within a sample, and the
+   !> peaks of cycles 1 to 10 (maxima and minima) are matched to the simulated cycles 1 to 10
+   subroutine test_gap_fill_smooth(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      type(history_type) :: cont, filled
+      real(dp), allocatable :: t(:), v(:), spans(:, :), tp(:)
+      integer, allocatable :: kp(:), corner(:), cyc(:)
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
+      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 4000)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = 1.0e-5_dp*nint(1.0e5_dp*cont%value_at(t(k)))
+      end do
+      call gap_filled_history(t, v, 1, 0.0_dp, 0.0_dp, 0.0_dp, filled, spans, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, filled%smooth(), 'smooth pieces')
+      if (allocated(error)) return
+      ! Peaks of cycles 3 to 9: +0.005 at 45, 65, ..., 165 s, -0.005 at 55, ..., 175 s
+      do k = 3, 9
+         call check(error, filled%value_at(20.0_dp*k - 15.0_dp), 0.005_dp, 'fill maximum', thr=1.0e-9_dp)
+         if (allocated(error)) return
+         call check(error, filled%value_at(20.0_dp*k - 5.0_dp), -0.005_dp, 'fill minimum', thr=1.0e-9_dp)
+         if (allocated(error)) return
+      end do
+      ! Measured peaks of cycles 1 to 11 (11 lies beyond the history), the maxima 0.3 s early
+      tp = [(20.0_dp*k - 15.3_dp, k=1, 11), (20.0_dp*k - 5.0_dp, k=1, 11)]
+      kp = [spread(1, 1, 11), spread(-1, 1, 11)]
+      call match_peaks(filled, tp, kp, corner, cyc)
+      call check(error, all(cyc == [(k, k=1, 10), 0, (k, k=1, 10), 0]), 'cycles 1 to 10 matched')
+      if (allocated(error)) return
+      do k = 1, 10
+         call check(error, filled%t(corner(k)), 20.0_dp*k - 15.0_dp, 'maximum of cycle k', thr=0.051_dp)
+         if (allocated(error)) return
+      end do
+   end subroutine test_gap_fill_smooth
 end module test_history

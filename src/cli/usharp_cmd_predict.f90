@@ -32,7 +32,9 @@ contains
       real(dp) :: rms, rel, worst
       character(len=200) :: row
       character(len=32) :: name
-      integer :: i
+      real(dp), allocatable :: y(:)
+      integer, allocatable :: kind(:)
+      integer :: i, part
       allocate (summary(0))
       if (len_trim(constants_file) == 0) then
          call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_input)
@@ -52,14 +54,25 @@ contains
       summary = [character(len=200) :: 'usharp predict '//path//' with the constants of '// &
          constants_file, '  test                              RMS error    RMS/peak   max error']
       do i = 1, size(cfg%tests)
-         call prediction_errors(prob%targets(i)%y_ex, simulated(cfg%tests(i), res(i)), rms, rel, worst)
-         name = cfg%tests(i)%name
-         write (row, '(2x,a32,es12.4,f10.2,a,es12.4)') name, rms, 100.0_dp*rel, ' %', worst
-         summary = [character(len=200) :: summary, row]
+         y = simulated(cfg%tests(i), res(i))
+         kind = spread(0, 1, size(y))
+         if (cfg%tests(i)%has_peaks()) kind = cfg%tests(i)%point_kind
+         ! A test with peaks: one row for its data points, one for its cycles' peaks
+         do part = 0, 1
+            if (count((kind /= 0) .eqv. (part == 1)) == 0) cycle
+            call prediction_errors(pack(prob%targets(i)%y_ex, (kind /= 0) .eqv. (part == 1)), &
+                                   pack(y, (kind /= 0) .eqv. (part == 1)), rms, rel, worst)
+            name = cfg%tests(i)%name
+            if (part == 1) name = cfg%tests(i)%name//' peaks'
+            write (row, '(2x,a32,es12.4,f10.2,a,es12.4)') name, rms, 100.0_dp*rel, ' %', worst
+            summary = [character(len=200) :: summary, row]
+         end do
       end do
       summary = [character(len=200) :: summary, '  (errors in '//cfg%units// &
          ', strain for stress-controlled tests; peak: the largest |value| of the data)', &
          '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
+      if (any([(cfg%tests(i)%has_peaks(), i=1, size(cfg%tests))])) summary(size(summary)) = &
+         trim(summary(size(summary)))//' (and <test>.peaks.txt)'
       call write_curves(prob, cfg%model, cfg%out_dir, error)
       if (allocated(error)) return
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)

@@ -211,7 +211,40 @@ contains
          end do
          call out%commit(error)
          if (allocated(error)) return
+         if (prob%cfg%tests(i)%has_peaks()) then
+            call write_peaks(join_path(dir, prob%cfg%tests(i)%name//'.peaks.txt'), prob, i, &
+                             res(i), error)
+            if (allocated(error)) return
+         end if
       end do
    end subroutine write_curves
+
+   !> <test>.peaks.txt: each compared peak stress of test i beside the simulated stress at its
+   !> turning point, with the simulated cycle's number (the cyclic hardening or softening curve)
+   subroutine write_peaks(file, prob, i, res, error)
+      character(len=*), intent(in) :: file
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: i
+      type(sim_result), intent(in) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(result_file) :: out
+      character(len=160) :: row
+      integer :: k
+      associate (test => prob%cfg%tests(i), tg => prob%targets(i))
+         call out%open(file, error)
+         if (allocated(error)) return
+         call out%line("# peak stresses of test '"//test%name//"' against "//test%peak_file)
+         call out%line('# columns: cycle, +1 maximum or -1 minimum, time (s), strain (-), '// &
+                       'measured and simulated stress ('//prob%cfg%units//')')
+         call out%line('# cycle kind time strain stress_exp stress_sim')
+         do k = 1, size(tg%t)
+            if (test%point_kind(k) == 0) cycle
+            write (row, '(i8,i4,4es20.11e3)') test%peak_cycle(k), test%point_kind(k), tg%t(k), &
+               res%strain(k), tg%y_ex(k), res%stress(k)
+            call out%line(row)
+         end do
+         call out%commit(error)
+      end associate
+   end subroutine write_peaks
 
 end module usharp_cmd_run

@@ -8,6 +8,7 @@
 module usharp_regions
    use usharp_kinds, only: dp
    use usharp_history, only: history_type
+   use usharp_sort, only: median
    implicit none
    private
 
@@ -437,41 +438,4 @@ contains
          if (sr%p < st%p) st = sr
       end do
    end function serration_in_runs
-
-   !> Median (selection by partial sorting of a copy)
-   pure real(dp) function median(a) result(med)
-      real(dp), intent(in) :: a(:)
-      real(dp) :: b(size(a)), pivot, tmp
-      integer :: lo, hi, i, j, k
-      b = a
-      k = (size(b) + 1)/2
-      lo = 1
-      hi = size(b)
-      do while (lo < hi)
-         pivot = b((lo + hi)/2)
-         i = lo
-         j = hi
-         do while (i <= j)
-            do while (b(i) < pivot)
-               i = i + 1
-            end do
-            do while (b(j) > pivot)
-               j = j - 1
-            end do
-            if (i <= j) then
-               tmp = b(i); b(i) = b(j); b(j) = tmp
-               i = i + 1
-               j = j - 1
-            end if
-         end do
-         if (k <= j) then
-            hi = j
-         else if (k >= i) then
-            lo = i
-         else
-            exit
-         end if
-      end do
-      med = b(k)
-   end function median
 end module usharp_regions

@@ -9,7 +9,6 @@ module usharp_selfcheck
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
-   use usharp_history, only: output_times
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
@@ -123,7 +122,7 @@ contains
       logical :: ok
       allocate (exps(size(cfg%tests)))
       do i = 1, size(cfg%tests)
-         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         exps(i)%t = cfg%tests(i)%times()
          exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
       end do
       call setup_problem(cfg, prob, error, exps)

@@ -5,7 +5,8 @@ module usharp_objective
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error
    use usharp_miller, only: miller_model, model_setup, n_constants, get_constant, set_constant
-   use usharp_history, only: output_times, control_stress
+   use usharp_history, only: control_stress
+   use usharp_units, only: stress_factor
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test
    use usharp_cvode_driver, only: simulate_cvode
@@ -65,7 +66,6 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
       integer :: i, k
-      logical, allocatable :: in_hold(:)
       prob%cfg = cfg
       prob%idx = pack([(k, k=1, n_constants)], cfg%fit%fitted)
       if (size(prob%idx) == 0) then
@@ -86,31 +86,67 @@ contains
             call load_experiment(cfg%tests(i), cfg%units, prob%targets(i)%exp, error)
             if (allocated(error)) exit
          end if
-         prob%targets(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
-         allocate (prob%targets(i)%y_ex(size(prob%targets(i)%t)))
-         call interpolate(prob%targets(i)%exp%t, prob%targets(i)%exp%y, prob%targets(i)%t, prob%targets(i)%y_ex, error)
-         if (allocated(error)) then
-            call prefix_error(error, cfg%tests(i)%data%file//': ')
-            exit
-         end if
-         prob%targets(i)%y_ex_max = maxval(abs(prob%targets(i)%exp%y))
-         select case (cfg%tests(i)%weighting)
-         case ('threshold')
-            prob%targets(i)%w = threshold_weights(prob%targets(i)%y_ex, cfg%tests(i)%sig)
-         case ('relaxation')
-            in_hold = hold_points(cfg%tests(i)%hist%t, cfg%tests(i)%hist%v, prob%targets(i)%t)
-            prob%targets(i)%w = relaxation_weights(prob%targets(i)%t, prob%targets(i)%y_ex, in_hold)
-         case ('column')
-            allocate (prob%targets(i)%w(size(prob%targets(i)%t)))
-            call interpolate(prob%targets(i)%exp%t, prob%targets(i)%exp%weight, prob%targets(i)%t, prob%targets(i)%w, error)
-            if (allocated(error)) exit
-         case default
-            allocate (prob%targets(i)%w(size(prob%targets(i)%t)))
-            prob%targets(i)%w = 1.0_dp
-         end select
+         call set_target(cfg%tests(i), cfg%units, prob%targets(i), error)
+         if (allocated(error)) exit
       end do
       if (allocated(error)) call prefix_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': ")
    end subroutine setup_problem
+
+   !> A test's target at its compared times (test%times()): its data interpolated there and
+   !> the measured peak stresses at the turning points of a peaks target, with the weights of
+   !> its weighting (on its data points). With both, the weights make the peaks' share of the
+   !> test's objective peak_share: w = N share / n_peaks on the peaks and N (1 - share) /
+   !> n_data times the weighting on the data points (N points in all)
+   subroutine set_target(test, units, tg, error)
+      type(test_config), intent(in) :: test
+      character(len=*), intent(in) :: units
+      type(test_target), intent(inout) :: tg
+      type(error_type), allocatable, intent(out) :: error
+      logical, allocatable :: on_data(:)
+      real(dp), allocatable :: td(:), yd(:), wd(:)
+      integer :: n, nd
+      tg%t = test%times()
+      n = size(tg%t)
+      if (test%has_peaks()) then
+         on_data = test%point_kind == 0
+      else
+         on_data = spread(.true., 1, n)
+      end if
+      nd = count(on_data)
+      td = pack(tg%t, on_data)
+      allocate (tg%y_ex(n), tg%w(n), yd(nd), wd(nd))
+      tg%y_ex = 0.0_dp
+      if (nd > 0) then
+         call interpolate(tg%exp%t, tg%exp%y, td, yd, error)
+         if (allocated(error)) then
+            call prefix_error(error, test%data%file//': ')
+            return
+         end if
+      end if
+      tg%y_ex = unpack(yd, on_data, tg%y_ex)
+      tg%y_ex_max = maxval(abs(tg%exp%y))
+      if (test%has_peaks()) then
+         where (.not. on_data) tg%y_ex = test%peak_y*stress_factor(test%data%unit, units)
+         tg%y_ex_max = max(tg%y_ex_max, maxval(abs(tg%y_ex), mask=.not. on_data))
+      end if
+      select case (test%weighting)
+      case ('threshold')
+         wd = threshold_weights(yd, test%sig)
+      case ('relaxation')
+         wd = relaxation_weights(td, yd, hold_points(test%hist%t, test%hist%v, td))
+      case ('column')
+         if (nd > 0) call interpolate(tg%exp%t, tg%exp%weight, td, wd, error)
+         if (allocated(error)) return
+      case default
+         wd = 1.0_dp
+      end select
+      tg%w = 1.0_dp
+      tg%w = unpack(wd, on_data, tg%w)
+      if (nd > 0 .and. nd < n) then
+         tg%w = merge(tg%w*real(n, dp)*(1.0_dp - test%peak_share)/real(nd, dp), &
+                      real(n, dp)*test%peak_share/real(n - nd, dp), on_data)
+      end if
+   end subroutine set_target
 
    !> Points that lie inside a hold (a segment of constant control value)
    pure function hold_points(tc, vc, t) result(hold)

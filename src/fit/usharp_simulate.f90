@@ -3,7 +3,6 @@ module usharp_simulate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, prefix_error
    use usharp_miller, only: miller_model
-   use usharp_history, only: output_times
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
@@ -25,12 +24,11 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       if (solver%integrator == 'umat') then
-         call simulate_umat(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+         call simulate_umat(model, test%hist, test%times(), solver, res, error)
       else if (solver%integrator == 'rodas4') then
-         call simulate_rosenbrock(model, test%hist, output_times(test%hist, test%dt_out), solver, res, &
-                                  error)
+         call simulate_rosenbrock(model, test%hist, test%times(), solver, res, error)
       else
-         call simulate_cvode(model, test%hist, output_times(test%hist, test%dt_out), solver, res, error)
+         call simulate_cvode(model, test%hist, test%times(), solver, res, error)
       end if
       if (allocated(error)) call prefix_error(error, "test '"//test%name//"': ")
    end subroutine simulate_test

@@ -25,7 +25,8 @@ module usharp_experiment
 
 contains
 
-   !> Read a test's data file (columns, unit, filter as the &test group says)
+   !> Read a test's data file (columns, unit, filter as the &test group says); a test that
+   !> compares only its cycles' peak stresses has those as its data
    subroutine load_experiment(test, model_units, exp, error)
       type(test_config), intent(in) :: test
       character(len=*), intent(in) :: model_units
@@ -35,6 +36,12 @@ contains
       character(len=128) :: cols(3)
       if (.not. test%has_data) then
          call fatal_error(error, "test '"//test%name//"' has no data_file to fit")
+         return
+      end if
+      if (test%target == 'peaks') then
+         ! Only the cycles' peak stresses are compared: they are the data
+         exp%t = pack(test%tout, test%point_kind /= 0)
+         exp%y = pack(test%peak_y, test%point_kind /= 0)*stress_factor(test%data%unit, model_units)
          return
       end if
       cols(1) = test%data%time_col

@@ -6,8 +6,11 @@ module usharp_input_test
    use usharp_strings, only: lower_text => lower, str
    use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
                              thesis_lcf_history, relaxation_history, ratchet_history, &
-                             cyclic_history, tensile_history, creep_history, rate_jump_history
+                             cyclic_history, tensile_history, creep_history, rate_jump_history, &
+                             output_times
    use usharp_forcing, only: measured_history
+   use usharp_cycles, only: gap_filled_history, match_peaks
+   use usharp_sort, only: order_of
    use usharp_table, only: read_columns, merge_repeated_times
    use usharp_namelist, only: nml_file, group_text, check_length, value_len, max_list, unset, &
                               resolve_path
@@ -63,6 +66,22 @@ module usharp_input_test
       type(external_spec) :: ext            !< external backend (when ext%enabled)
       logical :: candidate = .false.        !< a candidate test of `usharp design`
       integer :: line = 0                   !< line of its group in the input file
+      character(len=:), allocatable :: target    !< data, peaks or both
+      character(len=:), allocatable :: gap_fill  !< cycles or linear (history 'data')
+      character(len=:), allocatable :: peak_file !< every cycle's peak stresses (target peaks)
+      real(dp) :: peak_share = 0.5_dp       !< share of the peaks in the test's objective (both)
+      !> The compared (and written) times, s, when they are not output_times(hist, dt_out):
+      !> the recorded pieces of a gap-filled history, the turning points of a peaks target
+      real(dp), allocatable :: tout(:)
+      !> Per point of tout: 0 a point of data_file, +1 a cycle's maximum, -1 its minimum
+      integer, allocatable :: point_kind(:)
+      !> Per point of tout: the measured peak stress (data_unit; 0 at data points) and the
+      !> number of the simulated cycle (0 at data points)
+      real(dp), allocatable :: peak_y(:)
+      integer, allocatable :: peak_cycle(:)
+   contains
+      procedure :: times => test_times
+      procedure :: has_peaks => test_has_peaks
    end type test_config
 
    !> The variables of one &test group as given
@@ -71,12 +90,13 @@ module usharp_input_test
                                   stress_column, strain_column, weight_column, data_unit, &
                                   filter_column, data_format, weighting, backend, output_file, &
                                   output_format, output_time, output_stress, output_unit, &
-                                  constants_file, constants_format, command
-      character(len=filter_len + 1) :: filter(max_list)
+                                  constants_file, constants_format, command, target, &
+                                  gap_fill, peak_file
+      character(len=filter_len + 1) :: filter(max_list), peak_columns(4)
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list)
+                  time_limit, rates(max_list), peak_share
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
    end type test_values
@@ -220,7 +240,39 @@ contains
          call fatal_error(error, "weighting = 'column' needs weight_column")
          return
       end if
-      t%has_data = len_trim(v%data_file) > 0
+      t%target = lower_text(trim(v%target))
+      select case (t%target)
+      case ('data', 'peaks', 'both')
+      case default
+         call fatal_error(error, "target = '"//trim(v%target)//"' is not known (data, peaks, both)")
+         return
+      end select
+      t%gap_fill = lower_text(trim(v%gap_fill))
+      if (t%gap_fill /= 'cycles' .and. t%gap_fill /= 'linear') then
+         call fatal_error(error, "gap_fill = '"//trim(v%gap_fill)//"' is not known (cycles or linear)")
+         return
+      end if
+      t%peak_file = ''
+      if (len_trim(v%peak_file) > 0) t%peak_file = resolve_path(base_dir, trim(v%peak_file))
+      if (t%target /= 'data' .and. len_trim(v%peak_file) == 0) then
+         call fatal_error(error, "target = '"//t%target//"' needs peak_file")
+         return
+      end if
+      if (t%target == 'data' .and. len_trim(v%peak_file) > 0) then
+         call fatal_error(error, "peak_file is set but target = 'data' does not compare it "// &
+                          "(target = 'peaks' or 'both')")
+         return
+      end if
+      if (t%target == 'both' .and. len_trim(v%data_file) == 0) then
+         call fatal_error(error, "target = 'both' needs data_file")
+         return
+      end if
+      if (.not. (v%peak_share > 0.0_dp .and. v%peak_share < 1.0_dp)) then
+         call fatal_error(error, 'peak_share must lie between 0 and 1 (exclusive)')
+         return
+      end if
+      t%peak_share = v%peak_share
+      t%has_data = len_trim(v%data_file) > 0 .or. t%target /= 'data'
       t%data%file = resolve_path(base_dir, trim(v%data_file))
       t%data%time_col = trim(v%time_column)
       t%data%stress_col = trim(v%stress_column)
@@ -290,11 +342,12 @@ contains
          call file_history(resolve_path(base_dir, trim(v%file)), lower_text(trim(v%control)), &
                            t%hist, error)
       case ('data')
-         if (.not. t%has_data) then
+         if (len_trim(v%data_file) == 0) then
             call fatal_error(error, "history 'data' needs data_file")
             return
          end if
-         call data_history(t%data, t%hist, error)
+         call data_history(t%data, t%gap_fill, merge(v%strain_range, 0.0_dp, v%strain_range /= unset), &
+                           v%mean_strain, v%strain_rate, v%duration, t%hist, t%dt_out, t%tout, error)
       case ('')
          call fatal_error(error, 'history is not set (thesis_lcf, relaxation, ratchet, '// &
             'cyclic, tensile, rate_jump, creep, file, data)')
@@ -302,7 +355,76 @@ contains
          call fatal_error(error, "history = '"//trim(v%history)//"' is not known (thesis_lcf, "// &
             'relaxation, ratchet, cyclic, tensile, rate_jump, creep, file, data)')
       end select
+      if (allocated(error) .or. t%target == 'data') return
+      if (t%hist%control /= control_strain .or. t%ext%enabled) then
+         call fatal_error(error, "target = '"//t%target//"' needs a strain-controlled history "// &
+                          'simulated by the internal integrator (the peaks are stresses)')
+         return
+      end if
+      call add_peak_points(t, v%peak_columns, error)
    end subroutine build_test
+
+   !> The measured peak stresses of test t's peak_file (columns: time of the maximum, the
+   !> maximum, time of the minimum, the minimum) as compared points at the turning points of
+   !> its history (match_peaks), merged with its data points (target 'both') in time order
+   subroutine add_peak_points(t, columns, error)
+      type(test_config), intent(inout) :: t
+      character(len=*), intent(in) :: columns(:)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: vals(:, :), tp(:), yp(:), td(:)
+      integer, allocatable :: kp(:), corner(:), cyc(:), order(:)
+      integer :: n, m
+      call read_columns(t%peak_file, columns, vals, error, skip_missing=.true.)
+      if (allocated(error)) return
+      n = size(vals, 1)
+      tp = [vals(:, 1), vals(:, 3)]
+      yp = [vals(:, 2), vals(:, 4)]
+      kp = [spread(1, 1, n), spread(-1, 1, n)]
+      call match_peaks(t%hist, tp, kp, corner, cyc)
+      if (count(corner > 0) == 0) then
+         call fatal_error(error, t%peak_file//': no peak lies at a turning point of the '// &
+                          "history (target = '"//t%target//"')")
+         return
+      end if
+      tp = t%hist%t(pack(corner, corner > 0))
+      yp = pack(yp, corner > 0)
+      kp = pack(kp, corner > 0)
+      cyc = pack(cyc, corner > 0)
+      order = order_of(tp)
+      if (t%target == 'both') then
+         td = t%times()
+      else
+         allocate (td(0))
+      end if
+      m = size(td)
+      t%tout = [td, tp(order)]
+      t%point_kind = [spread(0, 1, m), kp(order)]
+      t%peak_y = [spread(0.0_dp, 1, m), yp(order)]
+      t%peak_cycle = [spread(0, 1, m), cyc(order)]
+      order = order_of(t%tout)
+      t%tout = t%tout(order)
+      t%point_kind = t%point_kind(order)
+      t%peak_y = t%peak_y(order)
+      t%peak_cycle = t%peak_cycle(order)
+   end subroutine add_peak_points
+
+   !> The times (s) at which test self is simulated, compared and written
+   pure function test_times(self) result(times)
+      class(test_config), intent(in) :: self
+      real(dp), allocatable :: times(:)
+      if (allocated(self%tout)) then
+         times = self%tout
+      else
+         times = output_times(self%hist, self%dt_out)
+      end if
+   end function test_times
+
+   !> Whether some compared points of test self are peak stresses of its cycles
+   pure logical function test_has_peaks(self)
+      class(test_config), intent(in) :: self
+      test_has_peaks = .false.
+      if (allocated(self%point_kind)) test_has_peaks = any(self%point_kind /= 0)
+   end function test_has_peaks
 
    !> No character value may have been cut at its buffer's length
    subroutine check_lengths(v, error)
@@ -331,8 +453,14 @@ contains
       call check_length(error, '', 'output_unit', v%output_unit)
       call check_length(error, '', 'constants_file', v%constants_file)
       call check_length(error, '', 'constants_format', v%constants_format)
+      call check_length(error, '', 'target', v%target)
+      call check_length(error, '', 'gap_fill', v%gap_fill)
+      call check_length(error, '', 'peak_file', v%peak_file)
       do i = 1, max_list
          call check_length(error, '', 'filter', v%filter(i))
+      end do
+      do i = 1, size(v%peak_columns)
+         call check_length(error, '', 'peak_columns', v%peak_columns(i))
       end do
    end subroutine check_lengths
 
@@ -412,12 +540,13 @@ contains
                                   stress_column, strain_column, weight_column, data_unit, &
                                   filter_column, data_format, weighting, backend, output_file, &
                                   output_format, output_time, output_stress, output_unit, &
-                                  constants_file, constants_format, command
-      character(len=filter_len + 1) :: filter(max_list)
+                                  constants_file, constants_format, command, target, &
+                                  gap_fill, peak_file
+      character(len=filter_len + 1) :: filter(max_list), peak_columns(4)
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list)
+                  time_limit, rates(max_list), peak_share
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
       namelist /test/ name, history, dt_out, amp_first, amp_last, npeaks, quarter_time, levels, &
@@ -426,7 +555,8 @@ contains
          data_file, time_column, stress_column, strain_column, weight_column, data_unit, &
          filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
          output_file, output_format, output_time, output_stress, output_unit, constants_file, &
-         constants_format, time_limit, candidate, rates
+         constants_format, time_limit, candidate, rates, target, gap_fill, peak_file, &
+         peak_columns, peak_share
       name = ''
       history = ''
       file = ''
@@ -453,6 +583,8 @@ contains
       output_time = 'TIME'; output_stress = 'STRESS'; output_unit = ''
       constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = d%ext%time_limit
       candidate = d%candidate; rates = unset
+      target = 'data'; gap_fill = 'cycles'; peak_file = ''; peak_share = d%peak_share
+      peak_columns = [character(len=filter_len + 1) :: 'time_max', 'max', 'time_min', 'min']
       ios = 0
       msg = ''
       if (present(text)) read (text, nml=test, iostat=ios, iomsg=msg)
@@ -473,7 +605,8 @@ contains
       v%final_strain = final_strain; v%stress = stress; v%duration = duration
       v%noise = noise; v%sig = sig; v%time_limit = time_limit; v%rates = rates
       v%candidate = candidate; v%npeaks = npeaks; v%repeats = repeats; v%cycles = cycles
-      v%seed = seed
+      v%seed = seed; v%target = target; v%gap_fill = gap_fill; v%peak_file = peak_file
+      v%peak_columns = peak_columns; v%peak_share = peak_share
    end subroutine test_namelist
 
    !> History from a file of (time, value) points; control is 'strain' or 'stress'
@@ -496,13 +629,24 @@ contains
       if (allocated(error)) call prefix_error(error, path//': ')
    end subroutine file_history
 
-   !> Strain-controlled history from a measured file's time and strain columns
-   subroutine data_history(spec, hist, error)
+   !> Strain-controlled history from a measured file's time and strain columns. With
+   !> gap_fill = 'cycles' its gaps (unrecorded cycles between recorded ones) are cycled
+   !> through (gap_filled_history; range, mean, rate: the cycles' strain range, mean strain
+   !> and rate per s if stated, else 0) and, when there are gaps, tout holds the output times
+   !> (step dt_out, s) inside the recorded pieces only: the filled cycles are not compared.
+   subroutine data_history(spec, gap_fill, range, mean, rate, duration, hist, dt_out, tout, error)
       type(data_spec), intent(in) :: spec
+      character(len=*), intent(in) :: gap_fill
+      !> the history ends at the last sample at or before duration (s; unset: at the last)
+      real(dp), intent(in) :: duration
+      real(dp), intent(in) :: range, mean, rate, dt_out
       type(history_type), intent(out) :: hist
+      real(dp), allocatable, intent(inout) :: tout(:)
       type(error_type), allocatable, intent(out) :: error
-      real(dp), allocatable :: vals(:, :)
-      integer :: nmerged
+      real(dp), allocatable :: vals(:, :), spans(:, :), times(:)
+      real(dp) :: tol
+      logical, allocatable :: inside(:)
+      integer :: nmerged, j
       character(len=:), allocatable :: cols(:)
       allocate (character(len=max(len(spec%time_col), len(spec%strain_col))) :: cols(2))
       cols(1) = spec%time_col
@@ -511,8 +655,32 @@ contains
       if (allocated(error)) return
       call merge_repeated_times(vals, spec%file, nmerged, error)
       if (allocated(error)) return
-      call measured_history(vals(:, 1), vals(:, 2), control_strain, hist, error)
-      if (allocated(error)) call prefix_error(error, spec%file//': ')
+      if (duration /= unset) then
+         if (count(vals(:, 1) <= duration) < 2) then
+            call fatal_error(error, 'duration: fewer than 2 samples of '//spec%file//' lie within it')
+            return
+         end if
+         vals = vals(:count(vals(:, 1) <= duration), :)
+      end if
+      if (gap_fill == 'linear') then
+         call measured_history(vals(:, 1), vals(:, 2), control_strain, hist, error)
+      else
+         call gap_filled_history(vals(:, 1), vals(:, 2), control_strain, range, mean, rate, &
+                                 hist, spans, error)
+      end if
+      if (allocated(error)) then
+         call prefix_error(error, spec%file//': ')
+         return
+      end if
+      if (gap_fill == 'linear' .or. size(spans, 2) == 1) return
+      times = output_times(hist, dt_out)
+      tol = 1.0e-9_dp*max(1.0_dp, abs(times(size(times))))
+      allocate (inside(size(times)))
+      inside = .false.
+      do j = 1, size(spans, 2)
+         inside = inside .or. (times >= spans(1, j) - tol .and. times <= spans(2, j) + tol)
+      end do
+      tout = pack(times, inside)
    end subroutine data_history
 
    !> Read columns of a data_spec's file with its filter and format

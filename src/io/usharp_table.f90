@@ -20,7 +20,8 @@ contains
    !> its 1-based position. With filter_column, only rows whose text in that column equals one
    !> of filter_values are kept. With fmt (a Fortran format such as '(2E12.5)'), each data line
    !> is read with that format and columns must be positions.
-   subroutine read_columns(file, columns, values, error, filter_column, filter_values, fmt)
+   subroutine read_columns(file, columns, values, error, filter_column, filter_values, fmt, &
+                           skip_missing)
       character(len=*), intent(in) :: file
       character(len=*), intent(in) :: columns(:)
       real(dp), allocatable, intent(out) :: values(:, :)
@@ -28,6 +29,8 @@ contains
       character(len=*), intent(in), optional :: filter_column
       character(len=*), intent(in), optional :: filter_values(:)
       character(len=*), intent(in), optional :: fmt
+      !> drop the rows where a requested field is empty or '.' (a missing value)
+      logical, intent(in), optional :: skip_missing
 
       character(len=line_len) :: line
       character(len=field_len) :: fields(max_fields), header(max_fields)
@@ -107,6 +110,9 @@ contains
             if (ifilter > nfield) cycle
             if (.not. any(trim(fields(ifilter)) == filter_values)) cycle
          end if
+         if (present(skip_missing)) then
+            if (skip_missing .and. any([(missing(fields(min(icol(j), nfield))), j=1, size(columns))])) cycle
+         end if
          do j = 1, size(columns)
             if (icol(j) > nfield) then
                call fatal_error(error, file//':'//str(lineno)//': row has '//str(nfield)// &
@@ -137,6 +143,11 @@ contains
       values = transpose(buf(:, :npt))
 
    contains
+
+      pure logical function missing(field)
+         character(len=*), intent(in) :: field
+         missing = len_trim(field) == 0 .or. trim(adjustl(field)) == '.'
+      end function missing
 
       subroutine append(vals)
          real(dp), intent(in) :: vals(:)

@@ -1,0 +1,329 @@
+!> The cyclic structure of a measured history: selected cycles of a fatigue test (recorded
+!> pieces with unrecorded cycles between them) joined by the cycling that took place in the
+!> gaps, and the turning points (strain peaks) of a history, where each cycle's peak stress
+!> is compared.
+module usharp_cycles
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type
+   use usharp_history, only: history_type, history_from_points
+   use usharp_forcing, only: measured_history, turning_points
+   use usharp_sort, only: median
+   implicit none
+   private
+
+   public :: record_starts, gap_filled_history, fill_gap, peak_corners, match_peaks
+
+   !> A time step longer than this many times the median step of the samples is a gap
+   !> (unrecorded cycles); within a recorded cycle the steps vary by a factor of 10 at most
+   real(dp), parameter, public :: gap_factor = 50.0_dp
+   !> Turning points of a recorded piece: confirmed after a return of this fraction of its range
+   real(dp), parameter :: turn_fraction = 0.1_dp
+
+   !> The cycling of a recorded piece at one of its ends: the upper and lower turning values,
+   !> the value and direction (+1 rising, -1 falling) at the end, and the mean rate (per s)
+   type, public :: cycle_shape
+      real(dp) :: upper = 0.0_dp, lower = 0.0_dp, value = 0.0_dp, rate = 0.0_dp
+      integer :: dir = 0
+   end type cycle_shape
+
+contains
+
+   !> First index of each recorded piece of times t: 1, and every k with t(k) - t(k-1)
+   !> longer than gap_factor times the median step
+   pure function record_starts(t) result(starts)
+      real(dp), intent(in) :: t(:)
+      integer, allocatable :: starts(:)
+      real(dp) :: limit
+      integer :: k
+      starts = [1]
+      if (size(t) < 3) return
+      limit = gap_factor*median(t(2:) - t(:size(t) - 1))
+      do k = 2, size(t)
+         if (t(k) - t(k - 1) > limit) starts = [starts, k]
+      end do
+   end function record_starts
+
+   !> A history from measured samples (t in s, v strain) whose recorded pieces (see
+   !> record_starts) are each the smooth forcing of measured_history and whose gaps are filled
+   !> with triangular cycles (fill_gap): upper and lower turning values interpolated from the
+   !> piece before the gap to the piece after it, at the rate of the piece before. range > 0
+   !> (strain) states the cycles' range instead, about mean (strain); rate > 0 (per s) their
+   !> rate. A piece that does not reverse (monotonic loading) is joined to the next by a
+   !> straight line. spans(:, j): first and last time of recorded piece j (s). noise: as for
+   !> measured_history (0: no smoothing).
+   pure subroutine gap_filled_history(t, v, control, range, mean, rate, hist, spans, error, noise)
+      real(dp), intent(in) :: t(:), v(:)
+      integer, intent(in) :: control
+      real(dp), intent(in) :: range, mean, rate
+      type(history_type), intent(out) :: hist
+      real(dp), allocatable, intent(out) :: spans(:, :)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), intent(in), optional :: noise
+      integer, allocatable :: starts(:), stops(:), cs(:)
+      type(history_type) :: piece
+      type(cycle_shape) :: a, b
+      real(dp), allocatable :: tt(:), vv(:), d2(:), tc(:), vc(:)
+      integer :: i, j, p0, p1, np
+      starts = [record_starts(t), size(t) + 1]
+      np = size(starts) - 1
+      allocate (spans(2, np))
+      if (np == 1) then
+         call measured_history(t, v, control, hist, error, noise)
+         spans(:, 1) = [t(1), t(size(t))]
+         return
+      end if
+      allocate (tt(0), vv(0), d2(0), stops(0))
+      do j = 1, np
+         p0 = starts(j)
+         p1 = starts(j + 1) - 1
+         spans(:, j) = [t(p0), t(p1)]
+         call measured_history(t(p0:p1), v(p0:p1), control, piece, error, noise)
+         if (allocated(error)) return
+         if (j > 1) then
+            b = piece_end(piece, .false.)
+            call fill_gap(tt(size(tt)), a, piece%t(1), b, range, mean, rate, tc, vc)
+            stops = [stops, size(tt) + [(i, i=1, size(tc))]]
+            tt = [tt, tc]
+            vv = [vv, vc]
+            d2 = [d2, spread(0.0_dp, 1, size(tc))]
+         end if
+         cs = piece%corners()
+         stops = [stops, size(tt) + cs]
+         tt = [tt, piece%t]
+         vv = [vv, piece%v]
+         if (piece%smooth()) then
+            d2 = [d2, piece%d2]
+         else
+            d2 = [d2, spread(0.0_dp, 1, size(piece%t))]
+         end if
+         a = piece_end(piece, .true.)
+      end do
+      call history_from_points(tt, vv, control, hist, error)
+      if (allocated(error)) return
+      ! Without a smoothed piece it is piecewise linear through every point
+      if (size(stops) == size(tt) .and. all(d2 == 0.0_dp)) return
+      hist%d2 = d2
+      hist%stops = stops
+   end subroutine gap_filled_history
+
+   !> The cycling of a recorded piece at its end (last = true) or its start: the turning
+   !> values of its last (first) full cycle, or its extremes when it has none; a piece with no
+   !> turning point has dir = 0 at its start and its one direction at its end, and rate 0 when
+   !> it does not reverse
+   pure function piece_end(piece, last) result(s)
+      type(history_type), intent(in) :: piece
+      logical, intent(in) :: last
+      type(cycle_shape) :: s
+      integer, allocatable :: tp(:)
+      real(dp) :: vr(size(piece%v))
+      integer :: n, m, j
+      vr = piece%v
+      n = size(vr)
+      s%upper = maxval(vr)
+      s%lower = minval(vr)
+      tp = turning_points(vr, turn_fraction*(s%upper - s%lower))
+      m = size(tp)
+      if (m >= 3) s%rate = sum(abs(vr(tp(2:)) - vr(tp(:m - 1))))/(piece%t(n) - piece%t(1))
+      if (last) then
+         s%value = vr(n)
+         s%dir = nint(sign(1.0_dp, vr(n) - vr(tp(m - 1))))
+         if (vr(n) == vr(tp(m - 1))) s%dir = 0
+         ! The last inner maximum and minimum
+         if (m >= 4) then
+            j = m - 1
+            s%upper = max(vr(tp(j)), vr(tp(j - 1)))
+            s%lower = min(vr(tp(j)), vr(tp(j - 1)))
+         end if
+      else
+         s%value = vr(1)
+         s%dir = nint(sign(1.0_dp, vr(tp(2)) - vr(1)))
+         if (vr(tp(2)) == vr(1)) s%dir = 0
+         if (m >= 4) then
+            s%upper = max(vr(tp(2)), vr(tp(3)))
+            s%lower = min(vr(tp(2)), vr(tp(3)))
+         end if
+      end if
+   end function piece_end
+
+   !> The corners (tc, vc) strictly inside a gap from time ta (the end a of a recorded piece)
+   !> to tb (the start b of the next): k reversals at constant rate, k of the parity that
+   !> leaves a in its direction and arrives at b in its, the number that makes the rate closest
+   !> to the rate before the gap (a%rate, or rate > 0); the turning values interpolated from a's
+   !> to b's (range > 0: mean +- range/2). A gap after a piece that does not reverse, or into
+   !> one that does not move, is a straight line (no corners).
+   pure subroutine fill_gap(ta, a, tb, b, range, mean, rate, tc, vc)
+      real(dp), intent(in) :: ta, tb, range, mean, rate
+      type(cycle_shape), intent(in) :: a, b
+      real(dp), allocatable, intent(out) :: tc(:), vc(:)
+      real(dp) :: r0, target, step, ua, la, ub, lb
+      real(dp), allocatable :: p(:)
+      integer :: k, kmin, kbest, kk, da, db
+      r0 = a%rate
+      if (rate > 0.0_dp) r0 = rate
+      da = a%dir
+      db = b%dir
+      allocate (tc(0), vc(0))
+      if (r0 <= 0.0_dp .or. da == 0 .or. db == 0) return
+      ua = a%upper; la = a%lower; ub = b%upper; lb = b%lower
+      if (range > 0.0_dp) then
+         ua = mean + 0.5_dp*range; ub = ua
+         la = mean - 0.5_dp*range; lb = la
+      end if
+      if (ua <= la .or. ub <= lb) return
+      if (da == db) then
+         kmin = 2
+         if (da*(b%value - a%value) > 0.0_dp) kmin = 0
+      else
+         kmin = 1
+      end if
+      target = r0*(tb - ta)
+      step = (ua - la) + (ub - lb)
+      ! Each further pair of reversals adds about two ranges: estimate, then look around it
+      kk = kmin + 2*max(0, nint((target - path(kmin))/step))
+      kbest = kmin
+      do k = max(kmin, kk - 4), kk + 4, 2
+         if (abs(path(k) - target) < abs(path(kbest) - target)) kbest = k
+      end do
+      if (kbest == 0) return
+      p = peaks(kbest)
+      tc = ta + (tb - ta)*cumulative(kbest)/path(kbest)
+      ! A reversal at the very value the fill leaves from or arrives at is no corner
+      vc = pack(p, tc > ta .and. tc < tb)
+      tc = pack(tc, tc > ta .and. tc < tb)
+   contains
+      !> The turning values of a fill with k reversals
+      pure function peaks(k) result(pk)
+         integer, intent(in) :: k
+         real(dp) :: pk(k)
+         real(dp) :: f
+         integer :: j, d
+         d = da
+         do j = 1, k
+            f = real(j, dp)/real(k + 1, dp)
+            if (d > 0) then
+               pk(j) = (1.0_dp - f)*ua + f*ub
+            else
+               pk(j) = (1.0_dp - f)*la + f*lb
+            end if
+            d = -d
+         end do
+         ! Never turn short of the values the fill leaves from and arrives at
+         if (k > 0) then
+            pk(1) = merge(max(pk(1), a%value), min(pk(1), a%value), da > 0)
+            pk(k) = merge(max(pk(k), b%value), min(pk(k), b%value), db < 0)
+         end if
+      end function peaks
+      !> Strain travelled by a fill with k reversals
+      pure real(dp) function path(k)
+         integer, intent(in) :: k
+         real(dp) :: c(k)
+         if (k == 0) then
+            path = abs(b%value - a%value)
+         else
+            c = cumulative(k)
+            path = c(k) + abs(b%value - peaks_last(k))
+         end if
+      end function path
+      pure real(dp) function peaks_last(k)
+         integer, intent(in) :: k
+         real(dp) :: pk(k)
+         pk = peaks(k)
+         peaks_last = pk(k)
+      end function peaks_last
+      !> Strain travelled up to each reversal
+      pure function cumulative(k) result(c)
+         integer, intent(in) :: k
+         real(dp) :: c(k), pk(k)
+         integer :: j
+         pk = peaks(k)
+         c(1) = abs(pk(1) - a%value)
+         do j = 2, k
+            c(j) = c(j - 1) + abs(pk(j) - pk(j - 1))
+         end do
+      end function cumulative
+   end subroutine fill_gap
+
+   !> Indices of the corners of hist that are its turning points: kind +1 a maximum, -1 a
+   !> minimum (its first and last points are neither); a hold at a peak counts at its start
+   pure subroutine peak_corners(hist, idx, kind)
+      type(history_type), intent(in) :: hist
+      integer, allocatable, intent(out) :: idx(:), kind(:)
+      integer, allocatable :: c(:)
+      integer :: i, j
+      real(dp) :: prev, here, next
+      c = hist%corners()
+      allocate (idx(size(c)), kind(size(c)))
+      j = 0
+      do i = 2, size(c) - 1
+         prev = hist%v(c(i - 1))
+         here = hist%v(c(i))
+         next = hist%v(c(i + 1))
+         if (here > prev .and. here >= next) then
+            j = j + 1
+            idx(j) = c(i)
+            kind(j) = 1
+         else if (here < prev .and. here <= next) then
+            j = j + 1
+            idx(j) = c(i)
+            kind(j) = -1
+         end if
+      end do
+      idx = idx(:j)
+      kind = kind(:j)
+   end subroutine peak_corners
+
+   !> The turning point of hist at which each measured peak (time tp, s; kind kp: +1 a
+   !> maximum, -1 a minimum) is compared: the nearest turning point of its kind, if it lies
+   !> within a quarter of the local spacing of those turning points (a measured peak may come
+   !> before the strain's, as a first-cycle overshoot does) and no earlier peak took it;
+   !> corner(i) its index in hist (0: none, e.g. a peak after the history's end) and cyc(i)
+   !> the number of the simulated cycle (1 for the first turning point of its kind)
+   pure subroutine match_peaks(hist, tp, kp, corner, cyc)
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: tp(:)
+      integer, intent(in) :: kp(:)
+      integer, allocatable, intent(out) :: corner(:), cyc(:)
+      integer, allocatable :: idx(:), kind(:), sel(:)
+      logical, allocatable :: taken(:)
+      real(dp), allocatable :: tk(:)
+      real(dp) :: spacing
+      integer :: i, s, lo, hi, mid, j
+      call peak_corners(hist, idx, kind)
+      allocate (corner(size(tp)), cyc(size(tp)))
+      corner = 0
+      cyc = 0
+      do s = -1, 1, 2
+         sel = pack(idx, kind == s)
+         if (size(sel) == 0) cycle
+         tk = hist%t(sel)
+         allocate (taken(size(sel)))
+         taken = .false.
+         do i = 1, size(tp)
+            if (kp(i) /= s) cycle
+            ! Nearest by bisection
+            lo = 1
+            hi = size(tk)
+            do while (hi - lo > 1)
+               mid = (lo + hi)/2
+               if (tk(mid) <= tp(i)) then
+                  lo = mid
+               else
+                  hi = mid
+               end if
+            end do
+            j = merge(lo, hi, abs(tk(lo) - tp(i)) <= abs(tk(hi) - tp(i)))
+            if (size(tk) > 1) then
+               spacing = tk(min(j + 1, size(tk))) - tk(max(j - 1, 1))
+               if (j > 1 .and. j < size(tk)) spacing = 0.5_dp*spacing
+            else
+               spacing = hist%end_time() - hist%t(1)
+            end if
+            if (abs(tk(j) - tp(i)) > 0.25_dp*spacing .or. taken(j)) cycle
+            taken(j) = .true.
+            corner(i) = sel(j)
+            cyc(i) = j
+         end do
+         deallocate (taken)
+      end do
+   end subroutine match_peaks
+end module usharp_cycles
