@@ -10,6 +10,8 @@ module test_fit
    use usharp_simulate, only: simulate_test
    use usharp_history, only: cyclic_history, history_type
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
+   use usharp_table, only: read_columns
+   use usharp_filesys, only: absolute_path
    use usharp_optimiser, only: objective_type, optimum_type
    use usharp_hooke_jeeves, only: hooke_jeeves
    use usharp_config, only: run_config
@@ -51,7 +53,8 @@ contains
          new_unittest('kill-9-then-resume-same-result', test_resume), &
          new_unittest('peaks-target-read-and-compared', test_peaks), &
          new_unittest('peaks-and-data-share-the-objective', test_peak_share), &
-         new_unittest('creep-and-lcf-in-one-deck', test_mixed)]
+         new_unittest('creep-and-lcf-in-one-deck', test_mixed), &
+         new_unittest('real-a617-cycles-counted-through-gaps', test_real_life)]
    end subroutine collect_fit
 
    subroutine rosen_eval(self, x, f, error)
@@ -368,15 +371,17 @@ contains
       type(fit_problem) :: prob
       type(uerror), allocatable :: uerr
       type(sim_result) :: res
-      character(len=200) :: tests(2)
+      character(len=200) :: tests(2), lines(2)
       character(len=60), allocatable :: rows(:)
       character(len=:), allocatable :: msg, path
       real(dp) :: total, pt(2), x(2)
       integer :: i, k, status
       tests(1) = "&test name='creep', history='creep', stress=12.0, ramp_time=1.0, duration=3600.0, dt_out=60.0"
       tests(2) = "&test name='cyc', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=2, dt_out=1.0"
-      call read_config(fit_deck('mixed0.nml', '', [character(len=200) :: (trim(tests(i))//' /', i=1, 2)]), &
-                       cfg, uerr)
+      ! Whole lines of a fixed length (a typed constructor of trimmed texts is miscompiled)
+      lines(1) = trim(tests(1))//' /'
+      lines(2) = trim(tests(2))//' /'
+      call read_config(fit_deck('mixed0.nml', '', lines), cfg, uerr)
       do i = 1, 2
          if (allocated(uerr)) exit
          call simulate_test(cfg%model, cfg%solver, cfg%tests(i), res, uerr)
@@ -387,9 +392,9 @@ contains
          end do
          path = write_text('mixed-'//cfg%tests(i)%name//'.csv', rows)
       end do
-      if (.not. allocated(uerr)) call read_config(fit_deck('mixed.nml', '', [character(len=200) :: &
-         trim(tests(1))//", data_file='mixed-creep.csv' /", trim(tests(2))//", data_file='mixed-cyc.csv' /"]), &
-         cfg, uerr)
+      lines(1) = trim(tests(1))//", data_file='mixed-creep.csv' /"
+      lines(2) = trim(tests(2))//", data_file='mixed-cyc.csv' /"
+      if (.not. allocated(uerr)) call read_config(fit_deck('mixed.nml', '', lines), cfg, uerr)
       if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
       if (allocated(uerr)) then
          call test_failed(error, uerr%message)
@@ -410,4 +415,53 @@ contains
          write (text, '(es18.10e3,",",es18.10e3,",",es18.10e3)') a, b, c
       end function real_row
    end subroutine test_mixed
+
+   !> The measured E-12 test (1 %, 1e-3/s) from its recorded cycles 1, 2, 5, 10, 20, 50 and
+   !> 99-100, the 95 cycles between them cycled through: each matched peak of its PeakStress
+   !> file lies in the simulated cycle of the file's own cycle number (the fill has as many
+   !> cycles as the test had), and all of cycles 1 to 100 are matched
+   subroutine test_real_life(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: lcf = '../shared/realdata/a617-950C/lcf/'
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: rows(:, :)
+      integer, allocatable :: expected(:)
+      logical :: exists
+      integer :: k
+      inquire (file=lcf//'HTM_A19_Cycles_E12.csv', exist=exists)
+      if (.not. exists) then
+         call skip_test(error, 'measured data not found at '//lcf//' (shared/ not beside the checkout)')
+         return
+      end if
+      call read_config(write_text('real-life.nml', [character(len=300) :: &
+         "&model name='miller', units='MPa', temperature=1223.15, tm=1630.0, youngs=144000.0 /", &
+         '&constants a1=0.116, a2=2.26e-7, b=1e15, c2=0.69, h1=1930, h2=100, n=5.8, q=91000 /', &
+         "&test name='E12', history='data', dt_out=0.0, data_unit='MPa', target='peaks',", &
+         "  data_file='"//absolute_path(lcf//'HTM_A19_Cycles_E12.csv')//"',", &
+         "  time_column='Elapsed Time Sec', stress_column='Stress Mpa', strain_column='Strain',", &
+         "  filter_column='Cycle Label', filter='Cycle 1', 'Cycle 2', 'Cycle 5', 'Cycle 10',", &
+         "  'Cycle 20', 'Cycle 50', 'Cycle 99-100',", &
+         "  peak_file='"//absolute_path(lcf//'HTM_A19_PeakStress_E12.csv')//"',", &
+         "  peak_columns='Time Max Stress Sec', 'Max Stress Mpa', 'Time Min Stress Sec', 'Min Stress Mpa' /"]), &
+         cfg, uerr)
+      if (.not. allocated(uerr)) call read_columns(lcf//'HTM_A19_PeakStress_E12.csv', &
+         [character(len=24) :: 'Time Max Stress Sec', 'Cycle'], rows, uerr, skip_missing=.true.)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      associate (test => cfg%tests(1))
+         ! The cycle of the file's row whose maximum lies nearest each matched maximum
+         allocate (expected(size(test%tout)))
+         do k = 1, size(test%tout)
+            expected(k) = nint(rows(minloc(abs(rows(:, 1) - test%tout(k)), 1), 2))
+         end do
+         call check(error, all(pack(test%peak_cycle == expected, test%point_kind == 1)), &
+                    'simulated cycle numbers are the file''s')
+         if (allocated(error)) return
+         call check(error, count(test%point_kind == 1) >= 99 .and. count(test%point_kind == -1) >= 99, &
+                    'maxima and minima of cycles 1 to 99 matched')
+      end associate
+   end subroutine test_real_life
 end module test_fit
