@@ -20,9 +20,10 @@ module usharp_cycles
    real(dp), parameter :: turn_fraction = 0.1_dp
 
    !> The cycling of a recorded piece at one of its ends: the upper and lower turning values,
-   !> the value and direction (+1 rising, -1 falling) at the end, and the mean rate (per s)
+   !> the value and direction (+1 rising, -1 falling) at the end, and the time of a half
+   !> cycle (s, 0 when the piece does not reverse)
    type, public :: cycle_shape
-      real(dp) :: upper = 0.0_dp, lower = 0.0_dp, value = 0.0_dp, rate = 0.0_dp
+      real(dp) :: upper = 0.0_dp, lower = 0.0_dp, value = 0.0_dp, half = 0.0_dp
       integer :: dir = 0
    end type cycle_shape
 
@@ -45,8 +46,8 @@ contains
 
    !> A history from measured samples (t in s, v strain) whose recorded pieces (see
    !> record_starts) are each the smooth forcing of measured_history and whose gaps are filled
-   !> with triangular cycles (fill_gap): upper and lower turning values interpolated from the
-   !> piece before the gap to the piece after it, at the rate of the piece before. range > 0
+   !> with triangular cycles (fill_gap): upper and lower turning values and the time of a half
+   !> cycle interpolated from the piece before the gap to the piece after it. range > 0
    !> (strain) states the cycles' range instead, about mean (strain); rate > 0 (per s) their
    !> rate. A piece that does not reverse (monotonic loading) is joined to the next by a
    !> straight line. spans(:, j): first and last time of recorded piece j (s). noise: as for
@@ -107,9 +108,8 @@ contains
    end subroutine gap_filled_history
 
    !> The cycling of a recorded piece at its end (last = true) or its start: the turning
-   !> values of its last (first) full cycle, or its extremes when it has none; a piece with no
-   !> turning point has dir = 0 at its start and its one direction at its end, and rate 0 when
-   !> it does not reverse
+   !> values of its last (first) full cycle, or its extremes when it has none; the time of a
+   !> half cycle; dir 0 at the start of a piece without a turning point
    pure function piece_end(piece, last) result(s)
       type(history_type), intent(in) :: piece
       logical, intent(in) :: last
@@ -123,7 +123,11 @@ contains
       s%lower = minval(vr)
       tp = turning_points(vr, turn_fraction*(s%upper - s%lower))
       m = size(tp)
-      if (m >= 3) s%rate = sum(abs(vr(tp(2:)) - vr(tp(:m - 1))))/(piece%t(n) - piece%t(1))
+      ! The machine's timing, robust to a glitch of the extensometer that would bias a rate
+      ! or a spacing of turning points: a piece holds whole cycles (its travel between its
+      ! turning points in ranges, rounded), each a sample interval longer than its samples span
+      if (m >= 3) s%half = (piece%t(n) - piece%t(1) + median(piece%t(2:) - piece%t(:n - 1)))/ &
+         real(2*max(1, nint(sum(abs(vr(tp(2:)) - vr(tp(:m - 1))))/(2.0_dp*(s%upper - s%lower)))), dp)
       if (last) then
          s%value = vr(n)
          s%dir = nint(sign(1.0_dp, vr(n) - vr(tp(m - 1))))
@@ -146,47 +150,52 @@ contains
    end function piece_end
 
    !> The corners (tc, vc) strictly inside a gap from time ta (the end a of a recorded piece)
-   !> to tb (the start b of the next): k reversals at constant rate, k of the parity that
-   !> leaves a in its direction and arrives at b in its, the number that makes the rate closest
-   !> to the rate before the gap (a%rate, or rate > 0); the turning values interpolated from a's
-   !> to b's (range > 0: mean +- range/2). A gap after a piece that does not reverse, or into
-   !> one that does not move, is a straight line (no corners).
+   !> to tb (the start b of the next): k reversals, k of the parity that leaves a in its
+   !> direction and arrives at b in its. Turning values and the time of a half cycle go
+   !> linearly from a's to b's (range > 0: mean +- range/2; rate > 0: a half cycle of
+   !> range/rate); each leg takes its share of a half cycle, and k is the number whose legs'
+   !> time is nearest the gap's (the cycles the test ran through), their times then scaled to
+   !> fill it. A gap after a piece that does not reverse, or into one that does not move, is a
+   !> straight line (no corners).
    pure subroutine fill_gap(ta, a, tb, b, range, mean, rate, tc, vc)
       real(dp), intent(in) :: ta, tb, range, mean, rate
       type(cycle_shape), intent(in) :: a, b
       real(dp), allocatable, intent(out) :: tc(:), vc(:)
-      real(dp) :: r0, target, step, ua, la, ub, lb
-      real(dp), allocatable :: p(:)
+      real(dp) :: ua, la, ub, lb, ha, hb, h
+      real(dp), allocatable :: p(:), c(:)
       integer :: k, kmin, kbest, kk, da, db
-      r0 = a%rate
-      if (rate > 0.0_dp) r0 = rate
       da = a%dir
       db = b%dir
       allocate (tc(0), vc(0))
-      if (r0 <= 0.0_dp .or. da == 0 .or. db == 0) return
       ua = a%upper; la = a%lower; ub = b%upper; lb = b%lower
+      ha = a%half; hb = b%half
+      if (hb <= 0.0_dp) hb = ha
       if (range > 0.0_dp) then
          ua = mean + 0.5_dp*range; ub = ua
          la = mean - 0.5_dp*range; lb = la
       end if
-      if (ua <= la .or. ub <= lb) return
+      if (rate > 0.0_dp) then
+         ha = (ua - la)/rate
+         hb = (ub - lb)/rate
+      end if
+      if (ha <= 0.0_dp .or. da == 0 .or. db == 0 .or. ua <= la .or. ub <= lb) return
       if (da == db) then
          kmin = 2
          if (da*(b%value - a%value) > 0.0_dp) kmin = 0
       else
          kmin = 1
       end if
-      target = r0*(tb - ta)
-      step = (ua - la) + (ub - lb)
-      ! Each further pair of reversals adds about two ranges: estimate, then look around it
-      kk = kmin + 2*max(0, nint((target - path(kmin))/step))
+      ! Each further pair of reversals takes about a cycle: estimate, then look around it
+      h = 0.5_dp*(ha + hb)
+      kk = kmin + 2*max(0, nint((tb - ta - duration(kmin))/(2.0_dp*h)))
       kbest = kmin
       do k = max(kmin, kk - 4), kk + 4, 2
-         if (abs(path(k) - target) < abs(path(kbest) - target)) kbest = k
+         if (abs(duration(k) - (tb - ta)) < abs(duration(kbest) - (tb - ta))) kbest = k
       end do
       if (kbest == 0) return
       p = peaks(kbest)
-      tc = ta + (tb - ta)*cumulative(kbest)/path(kbest)
+      c = leg_times(kbest)
+      tc = ta + (tb - ta)*c(:kbest)/c(kbest + 1)
       ! A reversal at the very value the fill leaves from or arrives at is no corner
       vc = pack(p, tc > ta .and. tc < tb)
       tc = pack(tc, tc > ta .and. tc < tb)
@@ -213,34 +222,28 @@ contains
             pk(k) = merge(max(pk(k), b%value), min(pk(k), b%value), db < 0)
          end if
       end function peaks
-      !> Strain travelled by a fill with k reversals
-      pure real(dp) function path(k)
+      !> Times at the end of each of the k + 1 legs of a fill with k reversals, from the start
+      !> of the gap: a leg takes the half cycle's time times its share of the range there
+      pure function leg_times(k) result(c)
          integer, intent(in) :: k
-         real(dp) :: c(k)
-         if (k == 0) then
-            path = abs(b%value - a%value)
-         else
-            c = cumulative(k)
-            path = c(k) + abs(b%value - peaks_last(k))
-         end if
-      end function path
-      pure real(dp) function peaks_last(k)
-         integer, intent(in) :: k
-         real(dp) :: pk(k)
-         pk = peaks(k)
-         peaks_last = pk(k)
-      end function peaks_last
-      !> Strain travelled up to each reversal
-      pure function cumulative(k) result(c)
-         integer, intent(in) :: k
-         real(dp) :: c(k), pk(k)
+         real(dp) :: c(k + 1)
+         real(dp) :: v(0:k + 1), f
          integer :: j
-         pk = peaks(k)
-         c(1) = abs(pk(1) - a%value)
-         do j = 2, k
-            c(j) = c(j - 1) + abs(pk(j) - pk(j - 1))
+         v(0) = a%value
+         v(1:k) = peaks(k)
+         v(k + 1) = b%value
+         do j = 1, k + 1
+            f = (real(j, dp) - 0.5_dp)/real(k + 1, dp)
+            c(j) = ((1.0_dp - f)*ha + f*hb)*abs(v(j) - v(j - 1))/((1.0_dp - f)*(ua - la) + f*(ub - lb))
+            if (j > 1) c(j) = c(j) + c(j - 1)
          end do
-      end function cumulative
+      end function leg_times
+      pure real(dp) function duration(k)
+         integer, intent(in) :: k
+         real(dp) :: c(k + 1)
+         c = leg_times(k)
+         duration = c(k + 1)
+      end function duration
    end subroutine fill_gap
 
    !> Indices of the corners of hist that are its turning points: kind +1 a maximum, -1 a
