@@ -31,9 +31,11 @@ module usharp_rosenbrock_driver
       type(segment_type) :: seg
       integer :: k = 1
       !> A smooth forcing (plain model): the spline's second derivatives at the samples
-      !> (tc, vc) and the last sample kend of the branch that begins at sample k
+      !> (tc, vc) and the last sample kend of the branch that begins at sample k; the spline
+      !> is searched between samples lo and hi when hi > 0 (the span of the current step),
+      !> else over the branch
       logical :: smooth = .false.
-      integer :: kend = 1
+      integer :: kend = 1, lo = 0, hi = 0
       real(dp), allocatable :: mc(:)
       logical :: extended = .false.
       type(test_effects) :: eff
@@ -157,7 +159,11 @@ contains
       if (sys%extended) then
          call lagged_value(sys%tc, sys%vc, sys%yk, sys%k, sys%eff%lag, t, load, rate)
       else if (sys%smooth) then
-         call spline_eval(sys%tc, sys%vc, sys%mc, sys%k, sys%kend, t, load, rate)
+         if (sys%hi > 0) then
+            call spline_eval(sys%tc, sys%vc, sys%mc, sys%lo, sys%hi, t, load, rate)
+         else
+            call spline_eval(sys%tc, sys%vc, sys%mc, sys%k, sys%kend, t, load, rate)
+         end if
       else
          load = sys%seg%value(t)
          rate = sys%seg%slope
