@@ -201,11 +201,13 @@ contains
 
    !> Jacobian in the state and the rates' time derivative (through the load), both from
    !> the analytic derivative in the stress: the rates' Jacobian with d sigma/d eps_in = 1
-   !> gives d f/d sigma as its first column
-   pure subroutine rates_jacobian(sys, t, y, jac, dfdt)
+   !> gives d f/d sigma as its first column. fy: the rates themselves (of the plain model
+   !> the same bit for bit as those of rates)
+   pure subroutine rates_jacobian(sys, t, y, jac, dfdt, fy)
       type(rate_system), intent(in) :: sys
       real(dp), intent(in) :: t, y(:)
       real(dp), intent(out) :: jac(:, :), dfdt(:)
+      real(dp), intent(out), optional :: fy(:)
       real(dp) :: sigma, dsig, dsig_dt, f(size(y))
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
       if (sys%extended) then
@@ -213,6 +215,7 @@ contains
       else
          call uniaxial_rates(sys%model, sigma, 1.0_dp, y, f, jac)
       end if
+      if (present(fy)) fy = f
       dfdt = jac(:, 1)*dsig_dt
       jac(:, 1) = jac(:, 1)*dsig
    end subroutine rates_jacobian
