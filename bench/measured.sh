@@ -3,8 +3,9 @@
 # (decks/a617-950C-fit.nml, cycles 1-2, at the constants of decks/a617-950C-best.nml) with the
 # measured strain as smooth forcing and through every sample, against one of the thesis's
 # three tests (decks/thesis-run3.nml), in the same run; each test's stress against a
-# tight-tolerance reference under the same forcing; and, with gnuplot, the loops of both
-# into docs/figures/a617-950C-forcing.png. Needs ../shared/realdata beside the project.
+# tight-tolerance reference under the same forcing, at those constants and at the deck's own
+# (start) constants; and, with gnuplot, the loops of both into
+# docs/figures/a617-950C-forcing.png. Needs ../shared/realdata beside the project.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FLAGS="-I/usr/include/sundials/fortran"
