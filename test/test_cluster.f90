@@ -7,6 +7,7 @@ module test_cluster
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
    use test_util, only: require_exe, read_text, scratch_dir, write_text
+   use usharp_strings, only: str
    use test_diagnose, only: model_groups, small_matrix
    implicit none
    private
@@ -95,15 +96,17 @@ contains
    !> Thesis run 2's tests fitted by Levenberg-Marquardt from 20 starts of at most 30
    !> evaluations each (about 600 evaluations; on 2 ranks two chunks of starts, see
    !> tasks_per_share, so that a run can be stopped after the first is journaled)
-   function multistart_deck() result(path)
+   function multistart_deck(nstarts) result(path)
+      !> number of starts
+      integer, intent(in) :: nstarts
       character(len=:), allocatable :: path
       character(len=4096) :: cwd
       call get_environment_variable('PWD', cwd)
-      path = write_text('mpi-multistart.nml', [character(len=4200) :: &
+      path = write_text('mpi-multistart-'//str(nstarts)//'.nml', [character(len=4200) :: &
          "&model name = 'miller', units = 'ksi', temperature = 866.15, tm = 1800.0, youngs = 22.5e3 /", &
          '&constants a1 = 1.0, a2 = 1.0e-5, b = 1.0e13, c2 = 0.1, h1 = 100.0, h2 = 100.0, n = 1.0, '// &
          'q = 91000.0 /', &
-         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = 20, "// &
+         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = "//str(nstarts)//", "// &
          "objective = 'eq7', max_evals = 30, max_failures = 200 /", &
          "&test name = 'lcf', history = 'thesis_lcf', dt_out = 1.0, data_file = '"//trim(cwd)// &
          "/data/thesis/lcf.sim.txt', time_column = 'time', stress_column = 'stress', "// &
@@ -140,10 +143,11 @@ contains
       call check(error, stat == 0, 'best.nml differs between '//a//' and '//b)
    end subroutine check_same_fit
 
-   !> The usharp executable, mpirun, the multi-start deck, and its fit on 1 rank into folder a
-   !> (b removed for the run to compare), or a skip or failure
-   subroutine reference_fit(exe, mpirun, deck, a, b, error)
+   !> The usharp executable, mpirun, the multi-start deck with nstarts starts, and its fit on
+   !> 1 rank into folder a (b removed for the run to compare), or a skip or failure
+   subroutine reference_fit(exe, mpirun, deck, nstarts, a, b, error)
       character(len=:), allocatable, intent(out) :: exe, mpirun, deck
+      integer, intent(in) :: nstarts
       character(len=*), intent(in) :: a, b
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -153,7 +157,7 @@ contains
       call require_mpirun(mpirun, error)
       if (allocated(error)) return
       call make_dir(scratch_dir, e)
-      deck = multistart_deck()
+      deck = multistart_deck(nstarts)
       call execute_command_line('rm -rf '//a//' '//b//' '//b//'.log')
       call execute_command_line('OMP_NUM_THREADS=1 '//exe//' run -q -o '//a//' '//deck//' > /dev/null', &
                                 exitstat=stat)
@@ -167,7 +171,7 @@ contains
       integer :: stat
       a = scratch_dir//'/mpi-ms-1'
       b = scratch_dir//'/mpi-ms-2'
-      call reference_fit(exe, mpirun, deck, a, b, error)
+      call reference_fit(exe, mpirun, deck, 20, a, b, error)
       if (allocated(error)) return
       call execute_command_line(mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null', exitstat=stat)
       call check(error, stat == 0, '2 ranks')
@@ -188,7 +192,9 @@ contains
       integer :: stat
       a = scratch_dir//'/mpi-rs-whole'
       b = scratch_dir//'/mpi-rs-stopped'
-      call reference_fit(exe, mpirun, deck, a, b, error)
+      ! 64 starts: 2 ranks journal them in chunks of 16, so the TERM after the first chunk
+      ! comes with three chunks still to run
+      call reference_fit(exe, mpirun, deck, 64, a, b, error)
       if (allocated(error)) return
       ! The job script with 2 ranks: wait until the first chunk of starts is in the journal
       ! (at most 120 s), then TERM the script, which passes it on through mpirun
