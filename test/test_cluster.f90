@@ -28,7 +28,8 @@ contains
          new_unittest('mpi-multistart-same-on-1-and-2-ranks', test_mpi_multistart), &
          new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume), &
          new_unittest('mpi-selfcheck-same-on-1-and-2-ranks', test_mpi_selfcheck), &
-         new_unittest('mpi-design-same-on-1-and-2-ranks', test_mpi_design)]
+         new_unittest('mpi-design-same-on-1-and-2-ranks', test_mpi_design), &
+         new_unittest('mpi-diagnose-same-on-1-and-2-ranks', test_mpi_diagnose)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -277,4 +278,27 @@ contains
       call check_same_on_ranks(error, 'mpi-design', 'design '//deck, &
                                [character(len=20) :: 'design.journal', 'design.txt'])
    end subroutine test_mpi_design
+
+   !> The thesis diagnosis (decks/thesis-diagnose.nml) with a baseline from 2 Latin-hypercube
+   !> starts besides the deck's constants, on 1 and 2 ranks: the same report and tables
+   subroutine test_mpi_diagnose(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: deck
+      character(len=4096) :: cwd
+      call get_environment_variable('PWD', cwd)
+      deck = write_text('mpi-diagnose.nml', [character(len=4200) :: model_groups, &
+         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = 2 /", &
+         "&diagnose holdout = 'ratchet' /", &
+         "&test name = 'lcf', history = 'thesis_lcf', dt_out = 0.5, amp_first = 0.0005, "// &
+         "amp_last = 0.005, npeaks = 12, quarter_time = 10.0, weighting = 'threshold', sig = 14.0, "// &
+         "data_file = '"//trim(cwd)//"/data/thesis-noise1/lcf.sim.txt' /", &
+         "&test name = 'relax', history = 'relaxation', dt_out = 1.0, weighting = 'relaxation', "// &
+         "levels = 0.00075, 0.001, ramp_time = 1.0, holds = 600.0, 600.0, "// &
+         "data_file = '"//trim(cwd)//"/data/thesis-noise1/relax.sim.txt' /", &
+         "&test name = 'ratchet', history = 'ratchet', dt_out = 1.0, up = 0.0005, down = 0.00025, "// &
+         "repeats = 15, seg_time = 40.0, data_file = '"//trim(cwd)//"/data/thesis-noise1/ratchet.sim.txt' /"])
+      call check_same_on_ranks(error, 'mpi-diagnose', 'diagnose '//deck, &
+         [character(len=30) :: 'diagnose/report.md', 'diagnose/effects.csv', 'diagnose/regions.csv', &
+         'diagnose/residuals.csv'])
+   end subroutine test_mpi_diagnose
 end module test_cluster

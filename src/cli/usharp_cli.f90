@@ -43,7 +43,7 @@ contains
 
       ! Under MPI, commands that spread no work over ranks run on rank 0 alone
       if (.not. is_root() .and. .not. (cmd%name == 'run' .or. cmd%name == 'design' .or. &
-                                       (cmd%name == 'diagnose' .and. cmd%selfcheck))) then
+                                       cmd%name == 'diagnose')) then
          allocate (lines(0))
          return
       end if

@@ -11,7 +11,7 @@ module usharp_cmd_diagnose
    use usharp_error, only: fatal_error, stat_input
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
-   use usharp_mpi, only: is_root, parallel_sync
+   use usharp_mpi, only: is_root, parallel_sync, n_ranks
    implicit none
    private
 
@@ -35,11 +35,15 @@ contains
       call diagnose_options_of(cfg, opts, error)
       if (allocated(error)) return
       if (len_trim(cfg%diagnose%specimen) > 0) then
-         call specimen_command(cfg, opts, lines, error)
+         ! (on rank 0 alone under MPI)
+         if (is_root()) call specimen_command(cfg, opts, lines, error)
          return
       end if
+      ! Under MPI every rank runs the diagnosis, the starts of its global stages spread over
+      ! them; rank 0 writes the report
+      opts%over_ranks = n_ranks() > 1
       call diagnose_run(cfg, opts, res, error, progress=progress)
-      if (allocated(error)) return
+      if (allocated(error) .or. .not. is_root()) return
       call write_report(join_path(cfg%out_dir, 'diagnose'), res, opts, lines, error)
    end subroutine diagnose_command
 

@@ -43,7 +43,8 @@ contains
       if (ctx%prob%cfg%fit%multistart > 0) then
          call tell(ctx, 'baseline fit from '//str(res%baseline_starts)//' starts', res%nevals)
          call best_of_starts(base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
-                             lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals)
+                             lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
+                             over_ranks=ctx%opts%over_ranks)
       end if
       ! Global starts come later, only when the local refits leave a structured gap
       allocate (res%x_global(size(ctx%prob%idx), 0))

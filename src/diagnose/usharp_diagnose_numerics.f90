@@ -16,6 +16,7 @@ module usharp_diagnose_numerics
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
    use usharp_diagnose_types, only: diagnose_context
+   use usharp_mpi, only: n_ranks, this_rank, owner_of, share, sum_over_ranks
    implicit none
    private
 
@@ -178,7 +179,7 @@ contains
    !> Levenberg-Marquardt (100 steps) from every column of xs; opt becomes the lowest end
    !> point when it is lower than opt already is. A start where the model fails is passed
    !> over (its fs: huge).
-   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals, fs)
+   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals, fs, over_ranks)
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: xs(:, :), lo(:), hi(:), h
       integer, intent(in) :: max_evals
@@ -186,22 +187,76 @@ contains
       integer, intent(inout) :: nevals
       !> Objective at the end of each start
       real(dp), intent(out), optional :: fs(:)
-      type(optimum_type) :: alt
+      !> Spread the starts over the MPI ranks (every rank calls this with the same starts);
+      !> the outcome is that of one process
+      logical, intent(in), optional :: over_ranks
+      type(optimum_type), allocatable :: alts(:)
       type(error_type), allocatable :: error
-      integer :: j
+      logical, allocatable :: ok(:)
+      logical :: spread
+      integer :: j, n0
+      spread = .false.
+      if (present(over_ranks)) spread = over_ranks .and. n_ranks() > 1
       if (present(fs)) fs = huge(1.0_dp)
+      allocate (alts(size(xs, 2)), ok(size(xs, 2)))
+      ok = .false.
+      n0 = ep%nevals
       do j = 1, size(xs, 2)
+         if (spread) then
+            if (owner_of(j, 1, n_ranks()) /= this_rank()) cycle
+         end if
          call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
-                                  max_evals, alt, error)
+                                  max_evals, alts(j), error)
          if (allocated(error)) then
             deallocate (error)
             cycle
          end if
-         nevals = nevals + alt%nevals
-         if (present(fs)) fs(j) = alt%f
-         if (alt%f < opt%f) opt = alt
+         ok(j) = .true.
+      end do
+      if (spread) then
+         do j = 1, size(xs, 2)
+            call share_optimum(alts(j), ok(j), owner_of(j, 1, n_ranks()))
+         end do
+         ep%nevals = n0 + sum_over_ranks(ep%nevals - n0)
+      end if
+      ! In the order of the starts, as one process takes them
+      do j = 1, size(xs, 2)
+         if (.not. ok(j)) cycle
+         nevals = nevals + alts(j)%nevals
+         if (present(fs)) fs(j) = alts(j)%f
+         if (alts(j)%f < opt%f) opt = alts(j)
       end do
    end subroutine best_of_starts
+
+   !> A start's outcome from the rank that ran it to every rank
+   subroutine share_optimum(o, ok, from)
+      type(optimum_type), intent(inout) :: o
+      logical, intent(inout) :: ok
+      integer, intent(in) :: from
+      integer, allocatable :: ints(:)
+      real(dp), allocatable :: reals(:)
+      character(len=:), allocatable :: reason
+      if (this_rank() == from) then
+         ints = [merge(1, 0, ok), o%nevals, o%iterations]
+         reals = [real(dp) ::]
+         reason = ''
+         if (ok) then
+            reals = [o%f, o%x]
+            if (allocated(o%reason)) reason = o%reason
+         end if
+      end if
+      call share(ints, from)
+      call share(reals, from)
+      call share(reason, from)
+      if (this_rank() == from) return
+      ok = ints(1) == 1
+      if (.not. ok) return
+      o%nevals = ints(2)
+      o%iterations = ints(3)
+      o%f = reals(1)
+      o%x = reals(2:)
+      o%reason = reason
+   end subroutine share_optimum
 
    !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
    !> the largest singular value dropped), after scaling to a unit diagonal

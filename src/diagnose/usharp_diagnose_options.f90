@@ -34,6 +34,9 @@ module usharp_diagnose_options
       integer :: global_starts
       !> A refit that ends above another runs again from that one's constants
       logical :: cross_starts
+      !> Spread the starts of each global stage over the MPI ranks (every rank runs the
+      !> diagnosis); not inside a self-check repetition, which runs on one rank
+      logical :: over_ranks = .false.
    end type diagnose_options
 
 contains

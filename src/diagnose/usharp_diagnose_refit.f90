@@ -81,7 +81,8 @@ contains
       call base%bounds(lo, hi)
       opt%f = res%f0
       opt%x = log10(res%c)
-      call best_of_starts(base, res%x_global, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals)
+      call best_of_starts(base, res%x_global, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
+                          over_ranks=ctx%opts%over_ranks)
       res%f0_global = opt%f
       counted = sum(res%effects%nevals)
       do j = 1, size(res%effects)
@@ -199,7 +200,7 @@ contains
          e%nevals = e%nevals + opt%nevals
          allocate (fs(size(starts, 2)))
          call best_of_starts(ep, with_params(e, starts), lo, hi, ctx%h, ctx%opts%max_evals, opt, &
-                             e%nevals, fs)
+                             e%nevals, fs, ctx%opts%over_ranks)
          e%nstarts = e%nstarts + size(fs)
          e%f_lo = min(e%f_lo, opt%f)
          e%f_hi = max(e%f_hi, maxval(fs, fs < huge(1.0_dp)), opt%f)
@@ -214,9 +215,10 @@ contains
          ! Also from the next screening end points and the global starts; the lowest
          ! objective is kept
          if (allocated(e%x_alt)) call best_of_starts(ep, e%x_alt(:, :min(ctx%opts%refit_starts - 1, &
-            size(e%x_alt, 2))), lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals)
+            size(e%x_alt, 2))), lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals, &
+            over_ranks=ctx%opts%over_ranks)
          call best_of_starts(ep, with_params(e, res%x_global), lo, hi, ctx%h, ctx%opts%max_evals, &
-                             opt, e%nevals)
+                             opt, e%nevals, over_ranks=ctx%opts%over_ranks)
       end if
    end subroutine fit_constants
 

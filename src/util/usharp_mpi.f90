@@ -7,7 +7,7 @@ module usharp_mpi
    use mpi_f08, only: MPI_Init_thread, MPI_Initialized, MPI_Finalized, MPI_Finalize, MPI_Comm_rank, &
                       MPI_Comm_size, MPI_Bcast, MPI_Allreduce, MPI_Abort, MPI_Barrier, &
                       MPI_Get_library_version, MPI_MAX_LIBRARY_VERSION_STRING, MPI_COMM_WORLD, MPI_INTEGER, &
-                      MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, &
+                      MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, MPI_SUM, &
                       MPI_THREAD_FUNNELED
    use usharp_kinds, only: dp
    use usharp_strings, only: str
@@ -15,7 +15,7 @@ module usharp_mpi
    private
 
    public :: parallel_start, parallel_stop, parallel_abort, this_rank, n_ranks, is_root, owner_of
-   public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share
+   public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share, sum_over_ranks
 
    !> Broadcast from one rank to all: the receivers' arrays take the sender's size
    interface share
@@ -121,6 +121,13 @@ contains
       integer, intent(in) :: ntasks, nranks
       c = max(1, min((ntasks + nranks - 1)/nranks, 8))
    end function tasks_per_share
+
+   !> The sum of n over the ranks (every rank must call it)
+   integer function sum_over_ranks(n) result(total)
+      integer, intent(in) :: n
+      total = n
+      if (running()) call MPI_Allreduce(n, total, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
+   end function sum_over_ranks
 
    !> Whether flag is true on any rank (every rank must call it)
    logical function any_rank(flag) result(any_true)
