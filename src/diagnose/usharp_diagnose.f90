@@ -34,7 +34,7 @@ module usharp_diagnose
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
-                                    fit_structured, diagnose_progress, tell
+                                    fit_structured, diagnose_progress, tell, step_done
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
@@ -69,8 +69,10 @@ contains
       if (allocated(error)) return
       call screen(ctx, res, error)
       if (allocated(error)) return
+      call step_done(res, 'screening')
       call refit_candidates(ctx, res, 1, min(opts%n_refit, size(res%effects)), error)
       if (allocated(error)) return
+      call step_done(res, 'refits of the leading candidates')
       call conclude(res)
       ! Before the report says that nothing in the catalogue explains a structured gap,
       ! the candidates the screening ranked lower are refitted too: the score test can miss
@@ -78,6 +80,7 @@ contains
       if (res%leading == 0 .and. fit_structured(res)) then
          call refit_candidates(ctx, res, opts%n_refit + 1, size(res%effects), error)
          if (allocated(error)) return
+         call step_done(res, 'refits of the lower-ranked candidates')
          call conclude(res)
       end if
       ! When no significant refit brings the fit tests' structured gap down to the noise
@@ -91,8 +94,10 @@ contains
          call tell(ctx, 'global starts', res%nevals)
          call refit_global(ctx, res, error)
          if (allocated(error)) return
+         call step_done(res, 'global starts')
          call refit_candidates(ctx, res, 1, 0, error)
          if (allocated(error)) return
+         call step_done(res, 'cross starts after the global starts')
          call conclude(res)
       end if
       ! The refits that decide the verdict, from further starts
@@ -100,14 +105,17 @@ contains
          call tell(ctx, 'refits that decide the verdict, from further starts', res%nevals)
          call refit_deciding(ctx, res, deciding_lhs, error)
          if (allocated(error)) return
+         call step_done(res, 'deciding refits from further starts')
          call conclude(res)
       end if
       ! The leading effect's intervals where the curvature says little: profile likelihood
       call tell(ctx, 'profile', res%nevals)
       call profile_leading(ctx, res, error)
       if (allocated(error)) return
+      call step_done(res, 'profile intervals')
       ! Last: when effects explain the gap equally well, the test that would separate them
       call separate(ctx, res)
+      call step_done(res, 'separating test')
       call tell(ctx, 'done', res%nevals)
    end subroutine diagnose_run
 
@@ -124,8 +132,10 @@ contains
       procedure(diagnose_progress), optional :: progress
       integer(int64) :: clock0
       call system_clock(clock0)
+      call step_done(res, '')
       call prepare(cfg, opts, ctx, res, error, experiments)
       if (allocated(error)) return
+      call step_done(res, 'setup (data, problem)')
       ! after prepare, which makes ctx anew
       ctx%clock0 = clock0
       if (present(progress)) ctx%progress => progress
@@ -133,6 +143,8 @@ contains
       call fit_baseline(ctx, res, error)
       if (allocated(error)) return
       call baseline_regions(ctx, res, error)
+      if (allocated(error)) return
+      call step_done(res, 'baseline regions')
    end subroutine diagnose_baseline
 
    !> The context of a diagnosis: the fit problem of every test, the fit and held-out sets,

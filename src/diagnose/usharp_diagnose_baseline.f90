@@ -13,7 +13,7 @@ module usharp_diagnose_baseline
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
-   use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
    use usharp_diagnose_numerics, only: constants_at, best_of_starts, global_points, at_bound, jacobian, &
                                        pseudo_inverse
    implicit none
@@ -41,6 +41,7 @@ contains
       res%nevals = res%nevals + opt%nevals
       res%baseline_starts = 1 + max(ctx%prob%cfg%fit%multistart, 0)
       if (ctx%prob%cfg%fit%multistart > 0) then
+         call step_done(res, 'baseline from the given constants')
          call tell(ctx, 'baseline fit from '//str(res%baseline_starts)//' starts', res%nevals)
          call best_of_starts(base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
                              lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
@@ -53,6 +54,11 @@ contains
       res%f0 = opt%f
       res%m = base%nres()
       res%c_bound = at_bound(opt%x, lo, hi)
+      if (ctx%prob%cfg%fit%multistart > 0) then
+         call step_done(res, 'baseline multi-start')
+      else
+         call step_done(res, 'baseline from the given constants')
+      end if
    end subroutine fit_baseline
 
    !> Baseline residuals of every test (held-out ones: the prediction), their regions, the

@@ -35,7 +35,41 @@ contains
       call separate_section(lines, res)
       call add(lines, '')
       call add(lines, str(res%nevals)//' simulations of the test set.')
+      call steps_list(lines, res)
    end function diagnose_report
+
+   !> The simulations of each step that ran any, one line each
+   subroutine steps_list(lines, res)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      integer :: j
+      if (.not. allocated(res%steps)) return
+      if (.not. any(res%steps%nevals > 0)) return
+      call add(lines, '')
+      call add(lines, 'Simulations by step:')
+      call add(lines, '')
+      do j = 1, size(res%steps)
+         if (res%steps(j)%nevals > 0) call add(lines, '- '//trim(res%steps(j)%name)//': '//str(res%steps(j)%nevals))
+      end do
+   end subroutine steps_list
+
+   !> The log of a diagnosis: each step's simulations, elapsed and processor time (s)
+   function diagnose_log(res) result(lines)
+      type(diagnose_result), intent(in) :: res
+      character(len=200), allocatable :: lines(:)
+      integer :: j
+      allocate (lines(0))
+      call add(lines, 'step,simulations,wall_s,cpu_s')
+      if (.not. allocated(res%steps)) return
+      do j = 1, size(res%steps)
+         associate (st => res%steps(j))
+            call add(lines, trim(st%name)//','//str(st%nevals)//','//real_str(st%wall, 'f0.2')//','// &
+                     real_str(st%cpu, 'f0.2'))
+         end associate
+      end do
+      call add(lines, 'total,'//str(sum(res%steps%nevals))//','//real_str(sum(res%steps%wall), 'f0.2')//','// &
+               real_str(sum(res%steps%cpu), 'f0.2'))
+   end function diagnose_log
 
    !> Section 1: the baseline per test, the floors, the regions ranked by structured gap
    subroutine where_section(lines, res)
@@ -337,8 +371,11 @@ contains
       end if
       call write_lines(join_path(dir, 'report.md'), lines, error)
       if (allocated(error)) return
+      ! Times vary from run to run: in the log, not in the report
+      call write_lines(join_path(dir, 'steps.csv'), diagnose_log(res), error)
+      if (allocated(error)) return
       lines = [character(len=200) :: lines, '', 'wrote '//join_path(dir, 'report.md')//', '// &
-               'regions.csv, effects.csv, residuals.csv'//trim(merge(', *.png', '       ', plotted))]
+               'regions.csv, effects.csv, residuals.csv, steps.csv'//trim(merge(', *.png', '       ', plotted))]
    end subroutine write_report
 
    !> regions.csv, effects.csv, residuals.csv

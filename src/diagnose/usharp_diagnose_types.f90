@@ -12,6 +12,7 @@ module usharp_diagnose_types
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
+   public :: step_cost, step_done
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -38,6 +39,15 @@ module usharp_diagnose_types
          real(dp), intent(in) :: seconds
       end subroutine diagnose_progress
    end interface
+
+   !> What one step of a diagnosis cost: simulations of the test set (deterministic) and
+   !> time (for the log only)
+   type :: step_cost
+      character(len=48) :: name = ''
+      integer :: nevals = 0
+      real(dp) :: wall = 0.0_dp             !< s, elapsed
+      real(dp) :: cpu = 0.0_dp              !< s, processor time of every thread
+   end type step_cost
 
    !> The problem every step of a diagnosis works on
    type :: diagnose_context
@@ -130,6 +140,11 @@ module usharp_diagnose_types
       real(dp), allocatable :: x_global(:, :)
       logical :: global = .false.                 !< the refits ran from the global starts
       real(dp) :: f0_global = 0.0_dp              !< the baseline's objective from them too
+      !> Each step's cost, in the order they ran; the marks: where the step under way began
+      type(step_cost), allocatable :: steps(:)
+      integer :: mark_nevals = 0
+      integer(int64) :: mark_clock = 0
+      real(dp) :: mark_cpu = 0.0_dp
    end type diagnose_result
 
 contains
@@ -144,6 +159,26 @@ contains
       call system_clock(now, rate)
       call ctx%progress(stage, nevals, real(now - ctx%clock0, dp)/real(max(rate, 1_int64), dp))
    end subroutine tell
+
+   !> Close the step under way as `name` (its simulations, elapsed and processor time since
+   !> the last mark) and mark the start of the next (the first call only marks)
+   subroutine step_done(res, name)
+      type(diagnose_result), intent(inout) :: res
+      character(len=*), intent(in) :: name
+      integer(int64) :: now, rate
+      real(dp) :: cpu
+      call system_clock(now, rate)
+      call cpu_time(cpu)
+      if (.not. allocated(res%steps)) then
+         allocate (res%steps(0))
+      else
+         res%steps = [res%steps, step_cost(name, res%nevals - res%mark_nevals, &
+                      real(now - res%mark_clock, dp)/real(max(rate, 1_int64), dp), cpu - res%mark_cpu)]
+      end if
+      res%mark_nevals = res%nevals
+      res%mark_clock = now
+      res%mark_cpu = cpu
+   end subroutine step_done
 
    !> True when the fit tests had a structured gap at the baseline (above their floor)
    pure logical function fit_structured(res)
