@@ -31,6 +31,10 @@ module usharp_effect_problem
       logical, allocatable :: pnonneg(:)
       type(test_effects) :: base               !< dlnE_dT, gamma3 held fixed
       integer :: nevals = 0
+      !> The last point evaluated on its own and its residuals: a point that differs from it
+      !> only in one test's own parameters (a difference step of a per-test parameter)
+      !> simulates that test alone and copies the others' rows
+      real(dp), allocatable :: x_last(:), r_last(:)
    contains
       procedure :: residuals => ep_residuals
       procedure :: nres => ep_nres
@@ -148,14 +152,17 @@ contains
    end subroutine ep_unpack
 
    !> Residuals of the problem's tests at x (test after test); ok false on a failure
-   subroutine ep_residual_at(self, x, r, ok, fitted, strain, eps_in)
+   subroutine ep_residual_at(self, x, r, ok, fitted, strain, eps_in, only)
       class(effect_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
-      real(dp), intent(out) :: r(:)
+      !> With `only`: in, the residuals of the other tests (kept); out, those of that test too
+      real(dp), intent(inout) :: r(:)
       logical, intent(out) :: ok
       real(dp), intent(out), optional :: fitted(:)  !< the simulated responses
       real(dp), intent(out), optional :: strain(:)  !< the specimen's total strain, -
       real(dp), intent(out), optional :: eps_in(:)  !< its inelastic strain, -
+      !> Simulate only this test (an index into the problem's tests)
+      integer, intent(in), optional :: only
       type(miller_model) :: model, mt
       type(test_effects), allocatable :: eff(:)
       type(error_type), allocatable :: error
@@ -164,7 +171,7 @@ contains
       real(dp), allocatable :: p(:), tout(:), ysim(:)
       integer :: i, it, k0, n, nt
       ok = .false.
-      r = 0.0_dp
+      if (.not. present(only)) r = 0.0_dp
       call self%unpack(x, model, p)
       call model_setup(model, error)
       if (allocated(error)) return
@@ -178,6 +185,12 @@ contains
       k0 = 0
       do it = 1, size(self%tests)
          i = self%tests(it)
+         if (present(only)) then
+            if (it /= only) then
+               k0 = k0 + size(self%prob%targets(i)%t)
+               cycle
+            end if
+         end if
          associate (tg => self%prob%targets(i), test => self%prob%cfg%tests(i))
             call effect_model(model, eff(i), mt, error)
             if (allocated(error)) return
@@ -209,7 +222,10 @@ contains
       ok = all(abs(r) < huge(1.0_dp))
    end subroutine ep_residual_at
 
-   !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty
+   !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty. A
+   !> point that differs from the last point evaluated alone, or from an earlier point of the
+   !> batch, only in one test's own parameters simulates that test alone (the others' rows are
+   !> the same numbers); nevals counts points
    subroutine ep_residuals(self, xs, rs, fs, ok, error)
       class(effect_problem), intent(inout) :: self
       real(dp), intent(in) :: xs(:, :)
@@ -217,17 +233,97 @@ contains
       real(dp), intent(out) :: fs(:)
       logical, intent(out) :: ok(:)
       type(error_type), allocatable, intent(out) :: error
-      integer :: j
+      integer, allocatable :: owner(:), ref(:), only(:)
+      integer :: j, b, n
+      logical :: last_ok
+      n = size(xs, 2)
+      owner = test_of_x(self)
+      ! ref(j): 0 the last point, b > 0 column b of the batch, -1 none (every test simulated)
+      allocate (ref(n), only(n))
+      ref = -1
+      only = 0
+      last_ok = .false.
+      if (allocated(self%x_last)) last_ok = size(self%x_last) == size(xs, 1)
+      do j = 1, n
+         if (last_ok) then
+            only(j) = single_test(xs(:, j), self%x_last, owner)
+            if (only(j) > 0) ref(j) = 0
+         end if
+         do b = 1, j - 1
+            if (ref(j) >= 0) exit
+            if (ref(b) /= -1) cycle
+            only(j) = single_test(xs(:, j), xs(:, b), owner)
+            if (only(j) > 0) ref(j) = b
+         end do
+      end do
       !$omp parallel do schedule(dynamic)
-      do j = 1, size(xs, 2)
-         call self%residual_at(xs(:, j), rs(:, j), ok(j))
+      do j = 1, n
+         if (ref(j) == -1) call self%residual_at(xs(:, j), rs(:, j), ok(j))
       end do
       !$omp end parallel do
-      do j = 1, size(xs, 2)
+      !$omp parallel do schedule(dynamic)
+      do j = 1, n
+         if (ref(j) == -1) cycle
+         if (ref(j) == 0) then
+            rs(:, j) = self%r_last
+         else
+            rs(:, j) = rs(:, ref(j))
+         end if
+         call self%residual_at(xs(:, j), rs(:, j), ok(j), only=only(j))
+         ok(j) = ok(j) .and. all(abs(rs(:, j)) < huge(1.0_dp))
+      end do
+      !$omp end parallel do
+      do j = 1, n
          fs(j) = merge(sum(rs(:, j)**2), 2.0e10_dp, ok(j))
       end do
-      self%nevals = self%nevals + size(xs, 2)
+      self%nevals = self%nevals + n
+      if (n == 1 .and. ok(1)) then
+         self%x_last = xs(:, 1)
+         self%r_last = rs(:, 1)
+      end if
    end subroutine ep_residuals
+
+   !> For each component of x: the index (into the problem's tests) of the one test whose
+   !> residuals alone it changes (a per-test parameter of that test), 0 when it changes all
+   pure function test_of_x(self) result(owner)
+      class(effect_problem), intent(in) :: self
+      integer, allocatable :: owner(:)
+      type(effect_info) :: cat(n_effects)
+      integer :: nc, j, jx, nt, it
+      nc = 0
+      if (self%free_constants) nc = size(self%prob%idx)
+      allocate (owner(nc + count(self%pfree)))
+      owner = 0
+      if (self%k == 0) return
+      cat = effect_catalogue(1.0_dp)
+      if (cat(self%k)%sharing /= param_per_test) return
+      nt = size(self%prob%targets)
+      jx = nc
+      do j = 1, size(self%p0)
+         if (.not. self%pfree(j)) cycle
+         jx = jx + 1
+         do it = 1, size(self%tests)
+            if (self%tests(it) == mod(j - 1, nt) + 1) owner(jx) = it
+         end do
+      end do
+   end function test_of_x
+
+   !> The one test (owner's index) in whose own parameters alone xa differs from xb; 0 when
+   !> they are equal, or differ elsewhere or in several tests' parameters
+   pure integer function single_test(xa, xb, owner) result(it)
+      real(dp), intent(in) :: xa(:), xb(:)
+      integer, intent(in) :: owner(:)
+      integer :: j
+      it = 0
+      do j = 1, size(xa)
+         if (xa(j) == xb(j)) cycle
+         if (owner(j) == 0 .or. (it > 0 .and. owner(j) /= it)) then
+            it = 0
+            return
+         end if
+         it = owner(j)
+      end do
+   end function single_test
 
    subroutine ep_eval(self, x, f, error)
       class(effect_problem), intent(inout) :: self
