@@ -60,6 +60,7 @@ module usharp_diagnose_specimen
       character(len=32) :: unit = ''
       type(specimen_effect), allocatable :: effects(:)   !< ranked by BIC
       integer :: nevals = 0
+      integer :: nevals_rep = 0              !< of them, simulations of the replicates' set
    end type specimen_result
 
 contains
@@ -123,6 +124,7 @@ contains
                                   opts%max_evals, opt, error)
          if (allocated(error)) return
          sr%nevals = sr%nevals + opt%nevals
+         sr%nevals_rep = opt%nevals
          prob%cfg%model%c = constants_at(prob, opt%x)
          sr%f_rep = opt%f
       else
@@ -311,6 +313,9 @@ contains
       end if
       if (sr%gap <= 0.0_dp .and. lead == 0) verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
       call add('**Verdict:** '//verdict)
+      call add('')
+      call add(str(sr%nevals_rep)//' simulations of the test set (the replicates'' fit), '// &
+               str(sr%nevals - sr%nevals_rep)//' of the specimen alone (its effects and their intervals).')
    contains
       subroutine add(text)
          character(len=*), intent(in) :: text
