@@ -40,52 +40,86 @@ contains
    !> Forward-difference Jacobian of ep's residuals at x (step h, backwards at an upper bound)
    !> and the residuals r0 there, as one parallel batch; ok false if a point failed. With
    !> hold_failed, a column whose every step fails is left at zero (that parameter held).
-   subroutine jacobian(ep, x, h, r0, jac, ok, hold_failed)
+   !> With known_r and known_jac (the residuals at x and the first columns, from a problem
+   !> that gives the same numbers there: the baseline for an effect at zero), x is simulated
+   !> once to check that it does, and only the other columns are differenced. complete: every
+   !> column from its first step (none failed or went another way).
+   subroutine jacobian(ep, x, h, r0, jac, ok, hold_failed, known_r, known_jac, complete)
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: x(:), h
       real(dp), allocatable, intent(out) :: r0(:), jac(:, :)
       logical, intent(out) :: ok
       logical, intent(in), optional :: hold_failed
-      real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), lo(:), hi(:), step(:)
+      real(dp), intent(in), optional :: known_r(:), known_jac(:, :)
+      logical, intent(out), optional :: complete
+      real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), lo(:), hi(:), step(:), r1(:, :)
+      real(dp) :: f1(1)
       logical, allocatable :: oks(:)
+      logical :: ok1(1)
       type(error_type), allocatable :: error
-      integer :: n, j, attempt
+      integer :: n, j, attempt, nk, nb
       n = size(x)
       call ep%bounds(lo, hi)
-      allocate (xs(n, n + 1), rs(ep%nres(), n + 1), fs(n + 1), oks(n + 1), step(n))
-      do j = 1, n + 1
+      nk = 0
+      if (present(known_r) .and. present(known_jac)) then
+         allocate (r1(ep%nres(), 1))
+         call ep%residuals(reshape(x, [n, 1]), r1, f1, ok1, error)
+         if (ok1(1) .and. .not. allocated(error) .and. size(known_jac, 2) <= n) then
+            if (all(r1(:, 1) == known_r)) nk = size(known_jac, 2)
+         end if
+         if (allocated(error)) deallocate (error)
+      end if
+      ! Column 1: x itself, unless it is known; then the columns nk+1..n
+      nb = merge(0, 1, nk > 0)
+      allocate (xs(n, nb + n - nk), rs(ep%nres(), nb + n - nk), fs(nb + n - nk), oks(nb + n - nk), step(n))
+      do j = 1, size(xs, 2)
          xs(:, j) = x
       end do
-      do j = 1, n
+      step = 0.0_dp
+      do j = nk + 1, n
          step(j) = merge(-h, h, x(j) + h > hi(j))
-         xs(j, j + 1) = x(j) + step(j)
+         xs(j, nb + j - nk) = x(j) + step(j)
       end do
       call ep%residuals(xs, rs, fs, oks, error)
-      ok = oks(1) .and. .not. allocated(error)
+      if (nk > 0) then
+         ok = .not. allocated(error)
+      else
+         ok = oks(1) .and. .not. allocated(error)
+      end if
+      if (present(complete)) complete = all(oks)
       ! A step that failed (the model's admissible region ends there) goes the other way,
       ! then shorter, down to h/100
       attempt = 0
       do while (ok .and. .not. all(oks) .and. attempt < 5)
          attempt = attempt + 1
-         do j = 1, n
-            if (oks(j + 1)) cycle
+         do j = nk + 1, n
+            if (oks(nb + j - nk)) cycle
             step(j) = -step(j)
             if (mod(attempt, 2) == 0) step(j) = 0.1_dp*step(j)
-            xs(j, j + 1) = x(j) + step(j)
+            xs(j, nb + j - nk) = x(j) + step(j)
          end do
          call ep%residuals(xs, rs, fs, oks, error)
-         ok = oks(1) .and. .not. allocated(error)
+         if (nk > 0) then
+            ok = .not. allocated(error)
+         else
+            ok = oks(1) .and. .not. allocated(error)
+         end if
       end do
-      r0 = rs(:, 1)
+      if (nk > 0) then
+         r0 = known_r
+      else
+         r0 = rs(:, 1)
+      end if
       allocate (jac(size(r0), n))
       jac = 0.0_dp
-      do j = 1, n
-         if (oks(j + 1)) jac(:, j) = (rs(:, j + 1) - r0)/step(j)
+      if (nk > 0) jac(:, 1:nk) = known_jac
+      do j = nk + 1, n
+         if (oks(nb + j - nk)) jac(:, j) = (rs(:, nb + j - nk) - r0)/step(j)
       end do
       if (present(hold_failed)) then
          if (hold_failed) return
       end if
-      ok = ok .and. all(oks)
+      ok = ok .and. all(oks(nb + 1:))
    end subroutine jacobian
 
    !> Gauss-Newton decrease g'(J'J)^+ g (g = J'r) of sum(r**2) in the span of the columns of

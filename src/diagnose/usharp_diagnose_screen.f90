@@ -29,11 +29,11 @@ contains
       real(dp), allocatable :: r0(:), jc(:, :), keys(:)
       real(dp) :: d0
       integer :: i
-      logical :: ok
+      logical :: ok, complete
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
       ! The baseline may lie at the edge of the model's admissible region for a constant (every
       ! step of it fails): screen with that constant held rather than give up the diagnosis
-      call jacobian(base, base%start(), ctx%h, r0, jc, ok, hold_failed=.true.)
+      call jacobian(base, base%start(), ctx%h, r0, jc, ok, hold_failed=.true., complete=complete)
       if (.not. ok) then
          call fatal_error(error, 'screening: the model fails near the baseline fit', stat_failure)
          return
@@ -43,7 +43,7 @@ contains
       allocate (res%effects(size(ctx%opts%effects)))
       do i = 1, size(ctx%opts%effects)
          call tell(ctx, 'screening '//trim(ctx%cat(ctx%opts%effects(i))%name), res%nevals)
-         call screen_one(ctx, ctx%opts%effects(i), r0, jc, d0, res%effects(i), res%nevals, error)
+         call screen_one(ctx, ctx%opts%effects(i), r0, jc, complete, d0, res%effects(i), res%nevals, error)
          if (allocated(error)) return
       end do
       ! By predicted BIC change, best first (the keys copied: a component of an array of
@@ -53,12 +53,14 @@ contains
    end subroutine screen
 
    !> Screening of effect k: the linear score test and short nonlinear runs
-   subroutine screen_one(ctx, k, r0, jc, d0, e, nevals, error)
+   subroutine screen_one(ctx, k, r0, jc, jc_complete, d0, e, nevals, error)
       type(diagnose_context), intent(in) :: ctx
       !> Catalogue effect
       integer, intent(in) :: k
       !> Baseline residuals of the fit tests, their Jacobian in the constants
       real(dp), intent(in) :: r0(:), jc(:, :)
+      !> Every column of jc from its first difference step (none held or turned)
+      logical, intent(in) :: jc_complete
       !> Gauss-Newton decrease the constants alone give
       real(dp), intent(in) :: d0
       type(effect_outcome), intent(inout) :: e
@@ -71,14 +73,20 @@ contains
       integer, allocatable :: idx(:)
       real(dp) :: d1, s
       integer :: j, nc, q
-      logical :: ok
+      logical :: ok, complete
       s = sum(r0**2)
       nc = size(ctx%prob%idx)
       call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
       if (k == 8) ep%p0(2) = ctx%opts%gamma3
       ep%pfree = free_params(ep, ctx%ifit, .true.)
       x = ep%start()
-      call jacobian(ep, x, ctx%h, rr, je, ok)
+      ! With the effect at zero the constants' columns are the baseline's (the same numbers:
+      ! the extended model at zero is the plain model); only the effect's are differenced
+      if (jc_complete) then
+         call jacobian(ep, x, ctx%h, rr, je, ok, known_r=r0, known_jac=jc, complete=complete)
+      else
+         call jacobian(ep, x, ctx%h, rr, je, ok, complete=complete)
+      end if
       nevals = nevals + ep%nevals
       e%k = k
       e%name = ctx%cat(k)%name
@@ -102,8 +110,19 @@ contains
          ! From a start away from zero the constants first have to come back: 5 steps
          ! (measured: holding the effect at the start while the constants alone move
          ! first, 6 + 3 steps, gave the same self-check table at twice the cost)
-         call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
-                                  merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+         ! The zero start is where the screening's Jacobian was taken: its first step uses it
+         if (j == 1 .and. complete .and. size(xs, 1) == size(x) .and. size(je, 2) == size(x)) then
+            if (all(min(max(xs(:, 1), lo), hi) == x)) then
+               call levenberg_marquardt(ep, x, lo, hi, ctx%h, 1.0e-9_dp, 3, ctx%opts%max_evals, opt, &
+                                        error, jac0=je)
+            else
+               call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
+                                        merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+            end if
+         else
+            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
+                                     merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+         end if
          if (allocated(error)) then
             ! A start where the model fails is passed over; the zero start must work
             if (j == 1) return

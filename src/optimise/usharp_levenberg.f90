@@ -43,12 +43,15 @@ contains
    !> Minimise sum(r**2) from x0 within [lo, hi]. h: difference step; ftol: stop when an
    !> accepted step lowers the objective by less than ftol relative and moves x by < 1e-4;
    !> also after itermax Jacobians or max_evals evaluations.
-   subroutine levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error)
+   subroutine levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error, jac0)
       class(least_squares_type), intent(inout) :: obj
       real(dp), intent(in) :: x0(:), lo(:), hi(:), h, ftol
       integer, intent(in) :: itermax, max_evals
       type(optimum_type), intent(out) :: opt
       type(error_type), allocatable, intent(out) :: error
+      !> The difference Jacobian at x0 (inside the bounds) as this would compute it, when the
+      !> caller has it already: the first iteration uses it
+      real(dp), intent(in), optional :: jac0(:, :)
       integer :: n, m, iter, nevals, info
       real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
       real(dp) :: x(size(x0)), xn(size(x0)), dx(size(x0)), g(size(x0)), a(size(x0), size(x0))
@@ -82,9 +85,16 @@ contains
             opt%reason = 'max_evals reached'
             exit
          end if
-         call obj%jacobian(x, jac, by_sens, error)
+         if (iter == 1 .and. present(jac0)) then
+            jac = jac0
+            by_sens = .false.
+         else
+            call obj%jacobian(x, jac, by_sens, error)
+         end if
          if (allocated(error)) return
-         if (by_sens) then
+         if (iter == 1 .and. present(jac0)) then
+            continue
+         else if (by_sens) then
             nevals = nevals + 1
          else
             call fd_jacobian(obj, x, r, hi, h, jac, error)
