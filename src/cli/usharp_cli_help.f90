@@ -124,10 +124,11 @@ contains
             'holdout without any effect, splits the residual by test and region against the'//nl// &
             'noise level of the data, screens the catalogue of unmodelled effects, refits the'//nl// &
             'leading ones (AIC/BIC, 95 % intervals) and predicts the held-out tests with them.'//nl// &
-            'Writes <out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv and'//nl// &
-            'plots. With --selfcheck: injects each effect into synthetic data (the built-in'//nl// &
-            'matrix, or the given file), diagnoses it and writes <out_dir>/selfcheck.md and'//nl// &
-            'selfcheck.journal (every repetition; under mpirun or srun spread over the ranks).'//nl// &
+            'Writes <out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv,'//nl// &
+            'steps.csv (simulations and time of each step) and plots. With --selfcheck:'//nl// &
+            'injects each effect into synthetic data (the built-in matrix, or the given'//nl// &
+            'file), diagnoses it and writes <out_dir>/selfcheck.md and selfcheck.journal'//nl// &
+            '(every repetition; under mpirun or srun spread over the ranks).'//nl// &
             'Guide: docs/guide/diagnosis.md.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
