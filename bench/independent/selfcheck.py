@@ -101,8 +101,9 @@ def verdict_of(text):
     """(first effect named by the verdict or 'none' or '?', held-out gap removed % or nan,
     the verdict, the effects named as explaining the gap equally well when a separating test
     is named too)"""
-    m = re.search(r'\*\*Verdict:\*\*\s*(.*)', text)
-    v = m.group(1) if m else ''
+    # the verdict's line and its continuation lines (indented)
+    m = re.search(r'\*\*Verdict:\*\*\s*(.*(?:\n  .*)*)', text)
+    v = ' '.join(x.strip() for x in m.group(1).split('\n')) if m else ''
     if re.match(r'\s*no significant effect', v) or re.match(r'\s*no effect explains', v) or \
             'predicted to its noise level by its replicates' in v:
         lead = 'none'
