@@ -128,7 +128,8 @@ contains
          ! Runs in a region while both sets' gaps lie below their floors: the floors decide
          if (any(res%regions%structured)) res%verdict = 'no significant effect: the structured gap '// &
             'of both sets lies below its floor (the noise and, for the held-out tests, the fitted '// &
-            'constants'' own uncertainty)'//serration_note(res)
+            'constants'' own uncertainty): whatever effect there is lies below what these tests '// &
+            'detect'//serration_note(res)
          do j = 1, size(res%effects)
             if (res%effects(j)%significant) res%verdict = res%verdict//'; '// &
                trim(res%effects(j)%name)//' lowers BIC, but '//why_not(res%effects(j), res)
