@@ -1,0 +1,52 @@
+#!/usr/bin/env python3
+"""Summary of the cases selfcheck.py kept (--keep DIR): per matrix and injected effect, how
+often the answer was right (an accepted effect first, or named as explaining the gap equally
+well with a separating test proposed; clean data: no significant effect), the held-out
+structured gap the right answers removed (least and median), and the answers at the low end
+of each effect's range (each row's first repetition, or every one of a folder whose name ends
+in 'low', made with --u 0).
+
+usage: summarise.py DIR [DIR ...]
+"""
+import os, sys, re, glob, collections
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import selfcheck as sc
+rows = collections.OrderedDict()
+low = collections.defaultdict(list)
+for d in sys.argv[1:]:
+    lowall = d.rstrip('/').endswith('low')
+    for case in sorted(glob.glob(os.path.join(d, '*'))):
+        t = os.path.join(case, 'truth.txt')
+        if not os.path.exists(t):
+            continue
+        txt = open(t).read()
+        m = re.match(r'(\w+): (.*)\nverdict: (.*)', txt, re.S)
+        row, label = m.group(1), m.group(2)
+        name = os.path.basename(case)
+        mname = name[:name.index('-' + row + '-')]
+        rep = int(name.rsplit('-', 1)[1])
+        rpt = os.path.join(case, 'report.md')
+        spec = glob.glob(os.path.join(case, 'out', 'diagnose', 'specimen-*.md'))
+        rtxt = open(spec[0]).read() if spec else open(rpt).read()
+        lead, rem, v, alike = sc.verdict_of(rtxt)
+        ok = lead in sc.ACCEPT[row] or any(x in sc.ACCEPT[row] for x in alike)
+        key = (mname, row)
+        r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[]))
+        r['n'] += 1
+        r['ok'] += ok
+        if ok and rem == rem:
+            r['rem'].append(rem)
+        r['ans'].append(lead + ('' if lead in sc.ACCEPT[row] or not ok else '~' + next(x for x in alike if x in sc.ACCEPT[row])))
+        if rep == 0 or lowall:
+            low[row].append((mname, label, ok, lead))
+print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s}  answers')
+tot = ok = 0
+for (mname, row), r in rows.items():
+    rem = sorted(r['rem'])
+    rs = f'{rem[0]:.0f} / {rem[len(rem)//2]:.0f}' if rem else '-'
+    print(f'{mname:20s} {row:12s} {r["ok"]:>4d} / {r["n"]:<3d} {rs:>34s}  {" ".join(r["ans"])}')
+    tot += r['n']; ok += r['ok']
+print(f'right {ok} of {tot}')
+print('\nlow end (first repetition of each row, or --u 0):')
+for row, L in low.items():
+    print(f'{row:12s} {sum(x[2] for x in L)} of {len(L)}: ' + '; '.join(f'{m} {l} -> {a}' for m, l, o, a in L))
