@@ -176,8 +176,7 @@ contains
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
          real(dp), allocatable :: starts(:, :)
          real(dp) :: scale, g3
-         real(dp), parameter :: sats(2) = [0.03_dp, 0.1_dp], rates(3) = [0.5_dp, 2.0_dp, 10.0_dp], &
-                                signs(2) = [1.0_dp, -1.0_dp]
+         real(dp), parameter :: sats(2) = [0.03_dp, 0.1_dp], rates(3) = [0.5_dp, 2.0_dp, 10.0_dp]
          integer :: jj, g, np
          logical :: okj
          se_out%k = k
@@ -191,23 +190,14 @@ contains
          if (k == 8) ek%p0 = [0.01_dp*peak, opts%gamma3]
          se_out%q = count(ek%pfree)
          call ek%bounds(lo, hi)
-         ! From zero, from a tenth of the physical limit with either sign and, for the second
-         ! back stress, from saturations of 3 and 10 % of the peak at three recovery rates (from
-         ! one start its refit ended at 48 % of a gap that the injected one removes whole); the
-         ! lowest end point is kept
+         ! The second back stress also from saturations of 3 and 10 % of the peak at three
+         ! recovery rates (from one start its refit ended at 48 % of a gap that the injected
+         ! one removes whole); the lowest end point is kept
          starts = reshape(ek%p0, [np, 1])
          if (k == 8) then
             do jj = 1, 6
                g3 = opts%gamma3*rates(mod(jj - 1, 3) + 1)
                starts = reshape([starts, [sats((jj - 1)/3 + 1)*peak*g3, g3]], [np, size(starts, 2) + 1])
-            end do
-         else if (count(cat(k)%plausible(1:cat(k)%nparam) < huge(1.0_dp)) == cat(k)%nparam) then
-            do jj = 1, 2
-               p = [(0.1_dp*signs(jj)*cat(k)%plausible(merge((g - 1)/nt + 1, g, &
-                     cat(k)%sharing == param_per_test)), g=1, np)]
-               where (.not. ek%pfree) p = ek%p0
-               if (any(ek%pnonneg .and. p < 0.0_dp)) cycle
-               starts = reshape([starts, p], [np, size(starts, 2) + 1])
             end do
          end if
          se_out%nevals = 0
