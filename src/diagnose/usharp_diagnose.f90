@@ -32,7 +32,7 @@ module usharp_diagnose
    use usharp_effects, only: effect_catalogue
    use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
-   use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
+   use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     fit_structured, diagnose_progress, tell, step_done
    use usharp_diagnose_numerics, only: gn_decrease
@@ -70,7 +70,7 @@ contains
       call screen(ctx, res, error)
       if (allocated(error)) return
       call step_done(res, 'screening')
-      call refit_candidates(ctx, res, 1, min(opts%n_refit, size(res%effects)), error)
+      call refit_candidates(ctx, res, 1, n_leading(res, opts%n_refit), error)
       if (allocated(error)) return
       call step_done(res, 'refits of the leading candidates')
       call conclude(res)
@@ -78,7 +78,7 @@ contains
       ! the candidates the screening ranked lower are refitted too: the score test can miss
       ! an effect whose fit first has to leave the baseline's basin of the constants
       if (res%leading == 0 .and. fit_structured(res)) then
-         call refit_candidates(ctx, res, opts%n_refit + 1, size(res%effects), error)
+         call refit_candidates(ctx, res, n_leading(res, opts%n_refit) + 1, size(res%effects), error)
          if (allocated(error)) return
          call step_done(res, 'refits of the lower-ranked candidates')
          call conclude(res)
@@ -118,6 +118,23 @@ contains
       call step_done(res, 'separating test')
       call tell(ctx, 'done', res%nevals)
    end subroutine diagnose_run
+
+   !> How many of the screened effects to refit: the leading n_refit and those the screening
+   !> cannot tell from the last of them (predicted BIC within 10 % of it, or within bic_margin,
+   !> and significant): a temperature offset that screened 4th at -984 against scatter's -1007
+   !> was never refitted, and scatter, which carries it with two parameters more, led
+   pure integer function n_leading(res, n_refit) result(n)
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: n_refit
+      n = min(n_refit, size(res%effects))
+      if (n < 1) return
+      do while (n < size(res%effects))
+         associate (last => res%effects(n)%pred_dbic, next => res%effects(n + 1)%pred_dbic)
+            if (.not. (next < -bic_margin .and. next < last + max(bic_margin, 0.1_dp*abs(last)))) exit
+         end associate
+         n = n + 1
+      end do
+   end function n_leading
 
    !> The first step of a diagnosis: the baseline fitted to the fit tests alone (the held-out
    !> tests' data are not read before it is fitted: only their prediction follows), its
