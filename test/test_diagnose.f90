@@ -17,7 +17,8 @@ module test_diagnose
                              class_loading, class_unloading, class_reversal, class_hold
    use usharp_strings, only: real_str
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
-                              diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context
+                              diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
+                             n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_diagnose_types, only: effect_outcome
    use usharp_diagnose_verdict, only: conclude
@@ -63,6 +64,7 @@ contains
          new_unittest('baseline-ignores-held-out-data', test_held_out_unused), &
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
+         new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
          new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
@@ -506,6 +508,22 @@ contains
          e%worse = [.false., .false., .false.]
       end function outcome
    end subroutine test_parsimony
+
+   !> The leading n_refit effects are refitted and those the screening cannot tell from the
+   !> last of them (predicted BIC within 10 % or bic_margin), not one more
+   subroutine test_near_ties(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      allocate (res%effects(5))
+      res%effects%pred_dbic = [-1081.0_dp, -1066.0_dp, -1007.0_dp, -984.0_dp, -152.0_dp]
+      call check(error, n_leading(res, 3) == 4, 'a near tie at -984 against -1007 not refitted')
+      if (allocated(error)) return
+      res%effects(4)%pred_dbic = -500.0_dp
+      call check(error, n_leading(res, 3) == 3, 'an effect far behind refitted')
+      if (allocated(error)) return
+      res%effects%pred_dbic = [-8.0_dp, -7.0_dp, -6.0_dp, -5.0_dp, -4.0_dp]
+      call check(error, n_leading(res, 3) == 3, 'insignificant predictions refitted beyond n_refit')
+   end subroutine test_near_ties
 
    !> The separating step: two refits that predict alike give D = 0 on every candidate; a
    !> compliance of 0.2 against none is told apart (D far above 10) by the best candidate,

@@ -48,7 +48,7 @@ module usharp_diagnose
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
    public :: write_report, gn_decrease, diagnose_options_of, held_quiet
-   public :: diagnose_baseline, diagnose_context, diagnose_progress
+   public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict
    integer, parameter :: deciding_lhs = 2
