@@ -4,44 +4,61 @@ often the answer was right (an accepted effect first, or named as explaining the
 well with a separating test proposed; clean data: no significant effect), the held-out
 structured gap the right answers removed (least and median), and the answers at the low end
 of each effect's range (each row's first repetition, or every one of a folder whose name ends
-in 'low', made with --u 0).
+in 'low', made with --u 0). A case kept in several folders (the same data: the same seed,
+matrix, row and repetition) counts once, as diagnosed in the last folder given.
 
 usage: summarise.py DIR [DIR ...]
 """
-import os, sys, re, glob, collections
+import os, sys, re, glob, collections, hashlib
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import selfcheck as sc
-rows = collections.OrderedDict()
-low = collections.defaultdict(list)
+
+def data_key(case):
+    """The identity of a case's data: a digest of its data files"""
+    h = hashlib.sha1()
+    for f in sorted(glob.glob(os.path.join(case, '*.csv'))):
+        h.update(os.path.basename(f).encode())
+        h.update(open(f, 'rb').read())
+    return h.hexdigest()
+
+
+# The cases, each once: a later folder's diagnosis of the same data replaces an earlier one's
+cases = collections.OrderedDict()
 for d in sys.argv[1:]:
     lowall = d.rstrip('/').endswith('low')
     for case in sorted(glob.glob(os.path.join(d, '*'))):
-        t = os.path.join(case, 'truth.txt')
-        if not os.path.exists(t):
-            continue
-        txt = open(t).read()
-        m = re.match(r'(\w+): (.*)\nverdict: (.*)', txt, re.S)
-        row, label = m.group(1), m.group(2)
-        name = os.path.basename(case)
-        mname = name[:name.index('-' + row + '-')]
-        rep = int(name.rsplit('-', 1)[1])
-        rpt = os.path.join(case, 'report.md')
-        spec = glob.glob(os.path.join(case, 'out', 'diagnose', 'specimen-*.md'))
-        rtxt = open(spec[0]).read() if spec else open(rpt).read()
-        lead, rem, v, alike = sc.verdict_of(rtxt)
-        ok = lead in sc.ACCEPT[row] or any(x in sc.ACCEPT[row] for x in alike)
-        key = (mname, row)
-        r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[]))
-        r['n'] += 1
-        r['ok'] += ok
-        if ok and rem == rem:
-            r['rem'].append(rem)
-        r['ans'].append(lead + ('' if lead in sc.ACCEPT[row] or not ok else '~' + next(x for x in alike if x in sc.ACCEPT[row])))
-        if rep == 0 or lowall:
-            low[row].append((mname, label, ok, lead))
+        if os.path.exists(os.path.join(case, 'truth.txt')):
+            key = data_key(case)
+            cases.pop(key, None)
+            cases[key] = (case, lowall)
+rows = collections.OrderedDict()
+low = collections.defaultdict(list)
+for case, lowall in cases.values():
+    t = os.path.join(case, 'truth.txt')
+    txt = open(t).read()
+    m = re.match(r'(\w+): (.*)\nverdict: (.*)', txt, re.S)
+    row, label = m.group(1), m.group(2)
+    name = os.path.basename(case)
+    mname = name[:name.index('-' + row + '-')]
+    rep = int(name.rsplit('-', 1)[1])
+    rpt = os.path.join(case, 'report.md')
+    spec = glob.glob(os.path.join(case, 'out', 'diagnose', 'specimen-*.md'))
+    rtxt = open(spec[0]).read() if spec else open(rpt).read()
+    lead, rem, v, alike = sc.verdict_of(rtxt)
+    ok = lead in sc.ACCEPT[row] or any(x in sc.ACCEPT[row] for x in alike)
+    key = (mname, row)
+    r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[]))
+    r['n'] += 1
+    r['ok'] += ok
+    if ok and rem == rem:
+        r['rem'].append(rem)
+    r['ans'].append(lead + ('' if lead in sc.ACCEPT[row] or not ok else '~' + next(x for x in alike if x in sc.ACCEPT[row])))
+    if rep == 0 or lowall:
+        low[row].append((mname, label, ok, lead))
 print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s}  answers')
 tot = ok = 0
-for (mname, row), r in rows.items():
+order = lambda k: (list(sc.MATRICES).index(k[0]), sc.ROWS.index(k[1]))
+for (mname, row), r in sorted(rows.items(), key=lambda kr: order(kr[0])):
     rem = sorted(r['rem'])
     rs = f'{rem[0]:.0f} / {rem[len(rem)//2]:.0f}' if rem else '-'
     print(f'{mname:20s} {row:12s} {r["ok"]:>4d} / {r["n"]:<3d} {rs:>34s}  {" ".join(r["ans"])}')
