@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Wall time of the thesis fits (runs 1-3) and objective evaluations per second, release build,
-# one core. Each run writes to a temporary folder.
+# one core; then the Alloy 617 fit (if its data are present). Each run writes to a temporary
+# folder.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FLAGS="-I/usr/include/sundials/fortran"
@@ -17,4 +18,20 @@ for r in 1 2 3; do
   awk -v r="$r" -v b="$best" -v n="$evals" -v s="$start" -v e="$end" \
     'BEGIN { printf "%-6s %12s %10d %12.2f %10.0f\n", "run" r, b, n, e - s, n / (e - s) }'
 done
+# The Alloy 617 fit (decks/a617-950C-fit.nml: 7 measured-strain tests, LM from 8 starts, the
+# default threads), when the measured data lie beside the project: wall and CPU time, with
+# the load average (the machine may be shared)
+if [ -d ../shared/realdata/a617-950C ]; then
+  start=$(date +%s.%N)
+  TIMEFORMAT='%U %S'
+  { time "$exe" run decks/a617-950C-fit.nml -q -o "$tmp/a617" > "$tmp/a617.txt" ; } \
+    2> "$tmp/a617.time"
+  end=$(date +%s.%N)
+  evals=$(sed -n 's/.*evaluations \([0-9]*\) .*/\1/p' "$tmp/a617.txt" | tail -n 1)
+  best=$(sed -n 's/.*best \([0-9.E+-]*\).*/\1/p' "$tmp/a617.txt" | tail -n 1)
+  awk -v b="$best" -v n="$evals" -v s="$start" -v e="$end" -v c="$(cat "$tmp/a617.time")" \
+    -v l="$(cut -d' ' -f1 /proc/loadavg)" 'BEGIN { split(c, t, " ");
+    printf "%-6s %12s %10d %12.2f %10.0f   CPU %.1f s, load average %s\n", "a617", b, n, e - s,
+    n / (e - s), t[1] + t[2], l }'
+fi
 rm -rf "$tmp"
