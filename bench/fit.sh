@@ -22,16 +22,18 @@ done
 # default threads), when the measured data lie beside the project: wall and CPU time, with
 # the load average (the machine may be shared)
 if [ -d ../shared/realdata/a617-950C ]; then
+  load0=$(cut -d' ' -f1 /proc/loadavg)
   start=$(date +%s.%N)
   TIMEFORMAT='%U %S'
-  { time "$exe" run decks/a617-950C-fit.nml -q -o "$tmp/a617" > "$tmp/a617.txt" ; } \
+  # (the program's own messages apart from the times)
+  { time "$exe" run decks/a617-950C-fit.nml -q -o "$tmp/a617" > "$tmp/a617.txt" 2> "$tmp/a617.err" ; } \
     2> "$tmp/a617.time"
   end=$(date +%s.%N)
   evals=$(sed -n 's/.*evaluations \([0-9]*\) .*/\1/p' "$tmp/a617.txt" | tail -n 1)
   best=$(sed -n 's/.*best \([0-9.E+-]*\).*/\1/p' "$tmp/a617.txt" | tail -n 1)
-  awk -v b="$best" -v n="$evals" -v s="$start" -v e="$end" -v c="$(cat "$tmp/a617.time")" \
-    -v l="$(cut -d' ' -f1 /proc/loadavg)" 'BEGIN { split(c, t, " ");
-    printf "%-6s %12s %10d %12.2f %10.0f   CPU %.1f s, load average %s\n", "a617", b, n, e - s,
-    n / (e - s), t[1] + t[2], l }'
+  awk -v b="$best" -v n="$evals" -v s="$start" -v e="$end" -v c="$(tail -n 1 "$tmp/a617.time")" \
+    -v l0="$load0" -v l1="$(cut -d' ' -f1 /proc/loadavg)" 'BEGIN { split(c, t, " ");
+    printf "%-6s %12s %10d %12.2f %10.0f   CPU %.1f s, load average %s to %s\n", "a617", b, n, e - s,
+    n / (e - s), t[1] + t[2], l0, l1 }'
 fi
 rm -rf "$tmp"
