@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Install what usharp needs to build and test, without prompts; a no-op when all is present.
-# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, Open MPI, gnuplot. PyPI: fpm,
+# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, Open MPI, gnuplot, GNU time. PyPI: fpm,
 # numpy and scipy (independent reference data for the diagnosis tests).
 set -euo pipefail
 
@@ -18,6 +18,8 @@ ls /usr/lib/*/libblas.so >/dev/null 2>&1 || need_apt+=(libblas-dev)
   need_apt+=(libopenmpi-dev openmpi-bin)
 # gnuplot draws the fit plots (scripts/plot-fit.sh); usharp itself runs without it
 command -v gnuplot >/dev/null 2>&1 || need_apt+=(gnuplot-nox)
+# GNU time: bench/diagnose.sh measures processor time and memory with it
+[ -x /usr/bin/time ] || need_apt+=(time)
 
 if [ ${#need_apt[@]} -gt 0 ]; then
   echo "setup: installing Debian packages: ${need_apt[*]}" >&2
