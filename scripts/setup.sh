@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Install what usharp needs to build and test, without prompts; a no-op when all is present.
-# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, Open MPI, gnuplot, GNU time. PyPI: fpm,
-# numpy and scipy (independent reference data for the diagnosis tests).
+# Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, Open MPI, gnuplot,
+# GNU time. PyPI: fpm, numpy and scipy (independent reference data for the diagnosis tests).
 set -euo pipefail
 
 command -v python3 >/dev/null 2>&1 || need_py=1
