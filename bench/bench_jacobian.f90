@@ -10,7 +10,6 @@ program bench_jacobian
    use usharp_input, only: read_config, override_constants
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_identify, only: jacobian_log10
-   use usharp_miller, only: get_constant
    implicit none
    type(run_config) :: cfg, tight
    type(fit_problem) :: prob, ptight
@@ -38,7 +37,7 @@ program bench_jacobian
       tight%solver%rtol = 1.0e-10_dp
       tight%solver%atol_strain = 1.0e-14_dp
       call setup_problem(tight, ptight, e)
-      x = log10([(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))])
+      x = log10([(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))])
       n = size(x)
       m = prob%nres()
       call jacobian_log10(ptight, x, 1.0e-3_dp, r0, jref, f0, nev, e)

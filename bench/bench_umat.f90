@@ -4,8 +4,8 @@ program bench_umat
    use, intrinsic :: iso_fortran_env, only: int64, output_unit
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_miller, only: miller_model, model_setup
-   use usharp_miller_update, only: miller_update, n_state
+   use usharp_model_miller, only: miller_model, model_setup
+   use usharp_model_miller, only: miller_update, n_state
    use usharp_history, only: history_type, output_times, thesis_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_umat_driver, only: simulate_umat

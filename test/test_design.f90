@@ -14,7 +14,6 @@ module test_design
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_identify, only: identify_result, identify_at
    use usharp_design, only: design_result, design_run, design_report, test_information
-   use usharp_miller, only: get_constant
    use test_util, only: write_text, check_message
    implicit none
    private
@@ -116,7 +115,7 @@ contains
          call test_failed(error, e%message)
          return
       end if
-      c = [(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+      c = [(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
       call identify_at(prob, c, 1.0e-3_dp, idr, e)
       if (allocated(e)) then
          call test_failed(error, e%message)

@@ -8,7 +8,7 @@ module test_diagnose
    use usharp_config, only: run_config
    use usharp_input, only: read_config
    use usharp_history, only: history_type, cyclic_history, output_times
-   use usharp_miller, only: miller_model, model_setup
+   use usharp_model_miller, only: miller_model, model_setup
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock

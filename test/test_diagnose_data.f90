@@ -6,7 +6,7 @@ module test_diagnose_data
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_history, only: history_type, cyclic_history, output_times, control_strain, ratchet_history
-   use usharp_miller, only: miller_model, model_setup
+   use usharp_model_miller, only: miller_model, model_setup
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_regions, only: point_classes, inelastic_points, serration_of, serration_stat, &

@@ -5,7 +5,7 @@ module test_driver
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
-   use usharp_miller, only: miller_model, model_setup, get_constant, set_constant
+   use usharp_model_miller, only: miller_model, model_setup, get_constant, set_constant
    use usharp_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode

@@ -6,7 +6,7 @@ module test_history
    use usharp_history
    use usharp_forcing, only: measured_history, turning_points, monotone, signal_resolution
    use usharp_cycles, only: gap_filled_history, record_starts, match_peaks
-   use usharp_miller, only: miller_model, model_setup
+   use usharp_model_miller, only: miller_model, model_setup
    use usharp_simulation, only: solver_options, sim_result
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
    implicit none

@@ -4,7 +4,7 @@ module test_model
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use test_util, only: check_message
-   use usharp_miller, only: miller_model, theta_miller, model_setup, uniaxial_rates, &
+   use usharp_model_miller, only: miller_model, theta_miller, model_setup, &
                             gas_constant, set_constant, constant_index
    implicit none
    private
@@ -71,14 +71,14 @@ contains
       real(dp) :: jac(3, 3), fd(3, 3), f0(3), fp(3), fm(3), yp(3), ym(3), h, scale
       integer :: j
       character(len=120) :: buf
-      call uniaxial_rates(m, sigma_of(y(1)), dsig, y, f0, jac)
+      call m%uniaxial_rates(sigma_of(y(1)), dsig, y, f0, jac)
       do j = 1, 3
          h = 1.0e-6_dp*max(abs(y(j)), merge(1.0e-3_dp, 1.0_dp, j == 1))
          yp = y; ym = y
          yp(j) = y(j) + h
          ym(j) = y(j) - h
-         call uniaxial_rates(m, sigma_of(yp(1)), dsig, yp, fp)
-         call uniaxial_rates(m, sigma_of(ym(1)), dsig, ym, fm)
+         call m%uniaxial_rates(sigma_of(yp(1)), dsig, yp, fp)
+         call m%uniaxial_rates(sigma_of(ym(1)), dsig, ym, fm)
          fd(:, j) = (fp - fm)/(2*h)
       end do
       do j = 1, 3
@@ -133,8 +133,8 @@ contains
       type(uerror), allocatable :: uerr
       real(dp) :: fp(3), fm(3)
       call model_setup(m, uerr)
-      call uniaxial_rates(m, 20.0_dp, -m%youngs, [0.001_dp, 5.0_dp, 11.0_dp], fp)
-      call uniaxial_rates(m, -20.0_dp, -m%youngs, [-0.001_dp, -5.0_dp, 11.0_dp], fm)
+      call m%uniaxial_rates(20.0_dp, -m%youngs, [0.001_dp, 5.0_dp, 11.0_dp], fp)
+      call m%uniaxial_rates(-20.0_dp, -m%youngs, [-0.001_dp, -5.0_dp, 11.0_dp], fm)
       call check(error, fp(1), -fm(1), 'inelastic rate odd', thr=1e-14_dp, rel=.true.)
       if (allocated(error)) return
       call check(error, fp(2), -fm(2), 'back-stress rate odd', thr=1e-14_dp, rel=.true.)

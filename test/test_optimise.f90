@@ -16,7 +16,6 @@ module test_optimise
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_identify, only: identify_result, identify_at, robust_covariance, jacobian_log10, &
                               chi2_quantile_95, identify_report
-   use usharp_miller, only: get_constant
    use usharp_lapack, only: dgesv
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, read_text, scratch_dir
@@ -166,7 +165,7 @@ contains
          call test_failed(error, e%message)
          return
       end if
-      c = [(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+      c = [(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
       call identify_at(prob, c, 1.0e-3_dp, res, e)
       if (allocated(e)) then
          call test_failed(error, e%message)
@@ -360,7 +359,7 @@ contains
          tight%fit%log_search = .true.
          call setup_problem(tight, ptight, e)
          prob%cfg%fit%log_search = .true.
-         x = log10([(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))])
+         x = log10([(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))])
          allocate (jac(prob%nres(), size(x)))
          call prob%jacobian(x, jac, ok)
          call check(error, ok, 'no sensitivity Jacobian')

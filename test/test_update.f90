@@ -3,8 +3,9 @@ module test_update
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
-   use usharp_miller, only: miller_model, model_setup
-   use usharp_miller_update, only: miller_update, n_state, update_status_ok
+   use usharp_model_miller, only: miller_model, model_setup
+   use usharp_model_miller, only: miller_update, n_state
+   use usharp_model, only: update_status_ok
    use usharp_history, only: history_type, output_times
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode

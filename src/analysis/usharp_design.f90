@@ -13,7 +13,7 @@ module usharp_design
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error, stat_failure
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: constant_names, get_constant
+   use usharp_model, only: constant_names
    use usharp_config, only: run_config
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test
@@ -39,7 +39,7 @@ module usharp_design
    end type design_combination
 
    type :: design_result
-      character(len=2), allocatable :: names(:)
+      character(len=:), allocatable :: names(:)
       character(len=64), allocatable :: test_names(:)
       logical, allocatable :: candidate(:)
       real(dp), allocatable :: info(:, :, :)     !< per-test information (p, p, ntests)
@@ -101,7 +101,7 @@ contains
          read (results(i)%s, *) nevals, p, res%info(:, :, i)
          res%nevals = res%nevals + nevals
       end do
-      res%names = constant_names(pack([(j, j=1, size(cfg%fit%fitted))], cfg%fit%fitted))
+      res%names = constant_names(cfg%model, pack([(j, j=1, size(cfg%fit%fitted))], cfg%fit%fitted))
       allocate (res%test_names(size(cfg%tests)))
       do i = 1, size(cfg%tests)
          res%test_names(i) = cfg%tests(i)%name
@@ -177,7 +177,7 @@ contains
       logprob = prob
       logprob%cfg%fit%log_search = .true.
       p = size(prob%idx)
-      x = [(log10(get_constant(prob%cfg%model%c, prob%idx(j))), j=1, p)]
+      x = [(log10(prob%cfg%model%get_constant(prob%idx(j))), j=1, p)]
       call jacobian_log10(logprob, x, h, r0, jac, f0, nevals, error)
       if (allocated(error)) return
       allocate (info(p, p, size(prob%targets)))

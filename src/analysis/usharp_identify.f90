@@ -6,7 +6,7 @@ module usharp_identify
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: constant_names
+   use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, eval_ok, message_len
    use usharp_lapack, only: svd
    implicit none
@@ -20,7 +20,7 @@ module usharp_identify
    real(dp), parameter :: weak_ratio = 1.0e-3_dp
 
    type :: identify_result
-      character(len=2), allocatable :: names(:)
+      character(len=:), allocatable :: names(:)
       real(dp), allocatable :: c(:)          !< constants, physical units
       real(dp), allocatable :: sv(:)         !< singular values of J (log10 columns)
       real(dp), allocatable :: v(:, :)       !< right singular vectors (columns)
@@ -116,7 +116,7 @@ contains
       logprob%cfg%fit%log_search = .true.
       call jacobian_log10(logprob, log10(c), h, r0, jac, f0, res%nevals, error)
       if (allocated(error)) return
-      res%names = constant_names(prob%idx)
+      res%names = constant_names(prob%cfg%model, prob%idx)
       res%c = c
       res%m = size(r0)
       res%ssr = f0

@@ -3,7 +3,6 @@
 module usharp_cmd_identify
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_miller, only: get_constant
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
    use usharp_objective, only: fit_problem, setup_problem
@@ -30,7 +29,7 @@ contains
       if (allocated(error)) return
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return
-      c = [(get_constant(cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+      c = [(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
       call identify_at(prob, c, cfg%fit%fd_step, res, error)
       if (allocated(error)) return
       lines = identify_report(res)

@@ -4,7 +4,7 @@ module usharp_cmd_run
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: n_constants, constant_names, get_constant, miller_model
+   use usharp_model, only: model_type, constant_names
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
    use usharp_objective, only: fit_problem, setup_problem, simulated
@@ -54,12 +54,13 @@ contains
          type(run_config) :: cfg
          type(fit_problem) :: prob
          type(fit_outcome) :: out
-         type(miller_model) :: best
+         class(model_type), allocatable :: best
          type(identify_result) :: ident
          type(error_type), allocatable :: report_error
          character(len=200), allocatable :: report(:)
          character(len=:), allocatable :: dir
-         real(dp) :: start(n_constants)
+         real(dp), allocatable :: start(:), dvals(:)
+         character(len=:), allocatable :: names(:), dnames(:)
          integer :: i, j
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
@@ -92,10 +93,8 @@ contains
          call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume)
          if (allocated(error)) return
 
-         best = cfg%model
-         do j = 1, n_constants
-            start(j) = get_constant(cfg%model%c, j)
-         end do
+         names = constant_names(cfg%model, [(j, j=1, cfg%model%n_constants())])
+         start = [(cfg%model%get_constant(j), j=1, cfg%model%n_constants())]
          call prob%model_of(out%opt%x, best, error)
          if (allocated(error)) return
          call write_best(join_path(dir, 'best.nml'), path, best, out, error)
@@ -116,13 +115,18 @@ contains
                real_str(out%per_test(i), 'es12.5')]
          end do
          summary = [character(len=200) :: summary, '  constant        start          fitted']
-         do j = 1, n_constants
-            summary = [character(len=200) :: summary, '  '//constant_names(j)//'  '// &
-               real_str(start(j), 'es14.6')//'  '//real_str(get_constant(best%c, j), 'es14.6')// &
+         do j = 1, size(start)
+            summary = [character(len=200) :: summary, '  '//names(j)//'  '// &
+               real_str(start(j), 'es14.6')//'  '//real_str(best%get_constant(j), 'es14.6')// &
                merge('         ', '  (fixed)', cfg%fit%fitted(j))]
          end do
-         summary = [character(len=200) :: summary, '  D0 = '//real_str(best%d0, 'g0.6')//' '//cfg%units, &
-            '  wrote '//join_path(dir, 'best.nml')//', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
+         call best%derived_values(dnames, dvals)
+         do j = 1, size(dvals)
+            summary = [character(len=200) :: summary, '  '//trim(dnames(j))//' = '// &
+               real_str(dvals(j), 'g0.6')//' '//cfg%units]
+         end do
+         summary = [character(len=200) :: summary, '  wrote '//join_path(dir, 'best.nml')// &
+            ', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
             '<test>.fit.txt']
          if (cfg%fit%identify) then
             call identify_at(prob, out%constants, cfg%fit%fd_step, ident, report_error)
@@ -146,7 +150,7 @@ contains
 
    subroutine write_best(file, path, best, out, error)
       character(len=*), intent(in) :: file, path
-      type(miller_model), intent(in) :: best
+      class(model_type), intent(in) :: best
       type(fit_outcome), intent(in) :: out
       type(error_type), allocatable, intent(out) :: error
       character(len=200), allocatable :: lines(:)
@@ -155,9 +159,9 @@ contains
          '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
          real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
          '! simulate with it: usharp simulate '//path//' --constants '//file, '&constants']
-      do j = 1, n_constants
-         lines = [character(len=200) :: lines, '  '//trim(lower_name(constant_names(j)))//' = '// &
-            real_str(get_constant(best%c, j), 'es23.15e3')]
+      do j = 1, best%n_constants()
+         lines = [character(len=200) :: lines, '  '//lower_name(best%constant_name(j))//' = '// &
+            real_str(best%get_constant(j), 'es23.15e3')]
       end do
       lines = [character(len=200) :: lines, '/']
       call write_lines(file, lines, error)
@@ -177,7 +181,7 @@ contains
    !> simulation at the simulation's times, with residual and weight)
    subroutine write_curves(prob, best, dir, error)
       type(fit_problem), intent(in) :: prob
-      type(miller_model), intent(in) :: best
+      class(model_type), intent(in) :: best
       character(len=*), intent(in) :: dir
       type(error_type), allocatable, intent(out) :: error
       type(sim_result), allocatable :: res(:)

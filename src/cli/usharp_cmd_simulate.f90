@@ -3,7 +3,6 @@ module usharp_cmd_simulate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: n_constants, constant_names, get_constant
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants
    use usharp_simulation, only: sim_result
@@ -32,6 +31,8 @@ contains
       type(sim_result) :: res
       character(len=:), allocatable :: dir, command, file, line
       character(len=512), allocatable :: header(:)
+      character(len=:), allocatable :: dnames(:)
+      real(dp), allocatable :: dvals(:)
       integer :: i, k
       allocate (written(0))
       call read_config(path, cfg, error)
@@ -73,13 +74,18 @@ contains
             "' (history "//cfg%tests(i)%history_kind//', '// &
             merge('strain', 'stress', cfg%tests(i)%hist%control == control_strain)//' control)', &
             'regenerate: '//command, &
-            'model miller, T = '//real_str(cfg%model%temperature, 'g0.8')//' K, Tm = '// &
-            real_str(cfg%model%tm, 'g0.8')//' K, E = '//real_str(cfg%model%youngs, 'g0.8')//' '// &
-            cfg%units//', D0 = '//real_str(cfg%model%d0, 'g0.8')//' '//cfg%units]
+            'model '//cfg%model%name()//', T = '//real_str(cfg%model%temperature, 'g0.8')// &
+            ' K, Tm = '//real_str(cfg%model%tm, 'g0.8')//' K, E = '// &
+            real_str(cfg%model%youngs, 'g0.8')//' '//cfg%units]
+         call cfg%model%derived_values(dnames, dvals)
+         do k = 1, size(dvals)
+            header(3) = trim(header(3))//', '//trim(dnames(k))//' = '//real_str(dvals(k), 'g0.8')// &
+                        ' '//cfg%units
+         end do
          line = 'constants:'
-         do k = 1, n_constants
-            line = line//' '//trim(constant_names(k))//' = '// &
-                   real_str(get_constant(cfg%model%c, k), 'es12.5')
+         do k = 1, cfg%model%n_constants()
+            line = line//' '//cfg%model%constant_name(k)//' = '// &
+                   real_str(cfg%model%get_constant(k), 'es12.5')
          end do
          header = [character(len=512) :: header, line]
          if (cfg%tests(i)%noise > 0.0_dp) header = [character(len=512) :: header, &

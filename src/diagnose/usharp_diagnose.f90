@@ -24,7 +24,7 @@ module usharp_diagnose
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_miller, only: constant_names, get_constant
+   use usharp_model, only: constant_names
    use usharp_config, only: run_config
    use usharp_input_diagnose, only: check_holdout
    use usharp_objective, only: setup_problem
@@ -209,8 +209,8 @@ contains
       ctx%eff_base%gamma3 = opts%gamma3
       ctx%cat = effect_catalogue(ctx%peak)
       res%dt_sample = sampling_interval(ctx)
-      res%cnames = constant_names(ctx%prob%idx)
-      res%c0 = [(get_constant(cfg%model%c, ctx%prob%idx(j)), j=1, size(ctx%prob%idx))]
+      res%cnames = constant_names(cfg%model, ctx%prob%idx)
+      res%c0 = [(cfg%model%get_constant(ctx%prob%idx(j)), j=1, size(ctx%prob%idx))]
    end subroutine prepare
 
    !> Sampling interval (s) of the fit tests: the finest of their median intervals between

@@ -14,8 +14,8 @@ module usharp_diagnose_baseline
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
-   use usharp_diagnose_numerics, only: constants_at, best_of_starts, global_points, at_bound, jacobian, &
-                                       pseudo_inverse
+   use usharp_diagnose_numerics, only: set_constants_at, best_of_starts, global_points, at_bound, &
+                                       jacobian, pseudo_inverse
    implicit none
    private
 
@@ -50,7 +50,7 @@ contains
       ! Global starts come later, only when the local refits leave a structured gap
       allocate (res%x_global(size(ctx%prob%idx), 0))
       res%c = 10.0_dp**opt%x
-      ctx%prob%cfg%model%c = constants_at(ctx%prob, opt%x)
+      call set_constants_at(ctx%prob, opt%x)
       res%f0 = opt%f
       res%m = base%nres()
       res%c_bound = at_bound(opt%x, lo, hi)

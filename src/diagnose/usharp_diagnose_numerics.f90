@@ -4,8 +4,8 @@
 !> parameters are free
 module usharp_diagnose_numerics
    use usharp_kinds, only: dp
+   use usharp_model, only: model_type
    use usharp_error, only: error_type
-   use usharp_miller, only: set_constant, miller_constants
    use usharp_config, only: run_config
    use usharp_objective, only: fit_problem
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -20,22 +20,31 @@ module usharp_diagnose_numerics
    implicit none
    private
 
-   public :: constants_at, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
+   public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
    public :: free_params, effect_fit, at_bound
 
 contains
 
-   !> Constants of the model at x (log10 of the fitted constants)
-   pure function constants_at(prob, x) result(c)
-      type(fit_problem), intent(in) :: prob
+   !> The fitted constants of prob's model set to x (log10 of them); the model is to be set
+   !> up before it is simulated
+   pure subroutine set_constants_at(prob, x)
+      type(fit_problem), intent(inout) :: prob
       real(dp), intent(in) :: x(:)
-      type(miller_constants) :: c
       integer :: j
-      c = prob%cfg%model%c
       do j = 1, size(prob%idx)
-         call set_constant(c, prob%idx(j), 10.0_dp**x(j))
+         call prob%cfg%model%set_constant(prob%idx(j), 10.0_dp**x(j))
       end do
-   end function constants_at
+   end subroutine set_constants_at
+
+   !> Every constant of prob's model from model (of the same kind); to be set up before use
+   pure subroutine copy_constants(model, prob)
+      class(model_type), intent(in) :: model
+      type(fit_problem), intent(inout) :: prob
+      integer :: j
+      do j = 1, model%n_constants()
+         call prob%cfg%model%set_constant(j, model%get_constant(j))
+      end do
+   end subroutine copy_constants
 
    !> Forward-difference Jacobian of ep's residuals at x (step h, backwards at an upper bound)
    !> and the residuals r0 there, as one parallel batch; ok false if a point failed. With

@@ -6,7 +6,7 @@
 module usharp_diagnose_refit
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_miller, only: get_constant, miller_model
+   use usharp_model, only: model_type
    use usharp_objective, only: fit_problem
    use usharp_effects, only: param_per_test
    use usharp_effect_problem, only: effect_problem, new_effect_problem
@@ -17,7 +17,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, best_of_starts, global_points, &
-                                       free_params, effect_fit, at_bound
+                                       free_params, effect_fit, at_bound, copy_constants
    use usharp_diagnose_baseline, only: per_test, all_regions
    implicit none
    private
@@ -153,7 +153,7 @@ contains
       real(dp), intent(in), optional :: starts(:, :)
       type(effect_problem) :: ep
       type(optimum_type) :: opt
-      type(miller_model) :: mdl
+      class(model_type), allocatable :: mdl
       real(dp), allocatable :: p(:)
       logical :: moved
       call effect_fit(ctx, e%k, ep)
@@ -242,7 +242,7 @@ contains
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: x(:)
       type(effect_outcome), intent(inout) :: e
-      type(miller_model), intent(out) :: mdl
+      class(model_type), allocatable, intent(out) :: mdl
       real(dp), allocatable, intent(out) :: p(:)
       real(dp), allocatable :: r(:), jac(:, :), cov(:, :), se(:), pscale(:), lo(:), hi(:)
       integer :: nc, nt, n, j
@@ -261,7 +261,7 @@ contains
       call ep%bounds(lo, hi)
       e%c_bound = at_bound(x(1:nc), lo(1:nc), hi(1:nc))
       call ep%unpack(x, mdl, p)
-      e%c = [(get_constant(mdl%c, ctx%prob%idx(j)), j=1, nc)]
+      e%c = [(mdl%get_constant(ctx%prob%idx(j)), j=1, nc)]
       pscale = pack(ep%pscale, ep%pfree)
       e%p = pack(p, ep%pfree)
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
@@ -345,17 +345,17 @@ contains
    !> a held-out test fitted to it with the constants fixed (p updated)
    subroutine predict_held(ctx, mdl, e, p, error)
       type(diagnose_context), intent(in) :: ctx
-      type(miller_model), intent(in) :: mdl
+      class(model_type), intent(in) :: mdl
       type(effect_outcome), intent(inout) :: e
       real(dp), allocatable, intent(inout) :: p(:)
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: eh
       type(optimum_type) :: opt
       type(fit_problem) :: pk
-      type(miller_model) :: m2
+      class(model_type), allocatable :: m2
       real(dp), allocatable :: x0(:), lo(:), hi(:)
       pk = ctx%prob
-      pk%cfg%model%c = mdl%c
+      call copy_constants(mdl, pk)
       call new_effect_problem(pk, ctx%ihold, e%k, ctx%eff_base, ctx%peak, eh, free_constants=.false., p0=p)
       eh%pfree = .false.
       if (ctx%cat(e%k)%sharing == param_per_test) eh%pfree = free_params(eh, ctx%ihold, .false.)
@@ -375,7 +375,7 @@ contains
    subroutine with_effect(ctx, res, mdl, p, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
-      type(miller_model), intent(in) :: mdl
+      class(model_type), intent(in) :: mdl
       real(dp), intent(in) :: p(:)
       type(effect_outcome), intent(inout) :: e
       type(effect_problem) :: ea
@@ -384,7 +384,7 @@ contains
       integer :: i
       logical :: ok
       pk = ctx%prob
-      pk%cfg%model%c = mdl%c
+      call copy_constants(mdl, pk)
       call new_effect_problem(pk, [(i, i=1, size(ctx%prob%targets))], e%k, ctx%eff_base, ctx%peak, ea, &
                               free_constants=.false., p0=p)
       ea%pfree = .false.

@@ -11,7 +11,7 @@ module usharp_diagnose_separate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_strings, only: real_str
-   use usharp_miller, only: miller_model, set_constant
+   use usharp_model, only: model_type
    use usharp_history, only: history_type, control_strain, tensile_history, relaxation_history, &
                              cyclic_history, output_times
    use usharp_simulation, only: sim_result
@@ -139,7 +139,7 @@ contains
       type(effect_outcome), intent(in) :: e
       real(dp), allocatable, intent(out) :: y(:)
       logical, intent(out) :: ok
-      type(miller_model) :: model, mt
+      class(model_type), allocatable :: model, mt
       type(test_effects) :: eff(1)
       type(error_type), allocatable :: error
       type(sim_result) :: sim
@@ -151,7 +151,7 @@ contains
       if (.not. allocated(e%p_all) .or. .not. allocated(e%c)) return
       model = ctx%prob%cfg%model
       do j = 1, size(ctx%prob%idx)
-         call set_constant(model%c, ctx%prob%idx(j), e%c(j))
+         call model%set_constant(ctx%prob%idx(j), e%c(j))
       end do
       ! A per-test parameter of a new test: the fit tests' mean
       nt = size(ctx%prob%targets)

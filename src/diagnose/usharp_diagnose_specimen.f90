@@ -10,7 +10,7 @@ module usharp_diagnose_specimen
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
-   use usharp_miller, only: constant_names, get_constant
+   use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, setup_problem, test_residuals
    use usharp_experiment, only: experiment_type, fits_strain
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
@@ -22,7 +22,7 @@ module usharp_diagnose_specimen
    use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
-   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, constants_at
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at
    use usharp_diagnose_profile, only: profile_interval, profile_result
    implicit none
    private
@@ -49,7 +49,7 @@ module usharp_diagnose_specimen
    type :: specimen_result
       character(len=40) :: name = ''
       character(len=40), allocatable :: replicates(:)
-      character(len=2), allocatable :: cnames(:)
+      character(len=:), allocatable :: cnames(:)
       real(dp), allocatable :: c(:)          !< constants fitted to the replicates
       real(dp) :: f_rep = 0.0_dp             !< their objective on the replicates
       integer :: m = 0                       !< the specimen's points
@@ -125,14 +125,14 @@ contains
          if (allocated(error)) return
          sr%nevals = sr%nevals + opt%nevals
          sr%nevals_rep = opt%nevals
-         prob%cfg%model%c = constants_at(prob, opt%x)
+         call set_constants_at(prob, opt%x)
          sr%f_rep = opt%f
       else
          call ep%eval(ep%start(), sr%f_rep, error)
          if (allocated(error)) return
       end if
-      sr%cnames = constant_names(prob%idx)
-      sr%c = [(get_constant(prob%cfg%model%c, prob%idx(j)), j=1, size(prob%idx))]
+      sr%cnames = constant_names(prob%cfg%model, prob%idx)
+      sr%c = [(prob%cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
       ! The specimen predicted, and its noise part
       call new_effect_problem(prob, [ispec], 0, base, peak, ep, free_constants=.false.)
       sr%m = ep%nres()

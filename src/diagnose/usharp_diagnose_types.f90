@@ -112,7 +112,7 @@ module usharp_diagnose_types
       real(dp), allocatable :: c0(:), c(:)        !< constants given and of the baseline fit
       logical, allocatable :: c_bound(:)          !< baseline constants at a search bound
       integer :: baseline_starts = 1              !< starts of the baseline fit
-      character(len=2), allocatable :: cnames(:)
+      character(len=:), allocatable :: cnames(:)
       real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
       real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)
       real(dp) :: noise_fit = 0.0_dp, noise_held = 0.0_dp  !< objective the noise explains

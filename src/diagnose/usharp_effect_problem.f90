@@ -5,7 +5,7 @@
 module usharp_effect_problem
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_miller, only: miller_model, model_setup, set_constant, get_constant
+   use usharp_model, only: model_type
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, effects_of, &
                              effect_model, effect_nparams, n_effects, param_per_test
    use usharp_objective, only: fit_problem, test_residuals, simulated
@@ -110,7 +110,7 @@ contains
       allocate (x(0))
       if (self%free_constants) then
          do j = 1, size(self%prob%idx)
-            x = [x, log10(get_constant(self%prob%cfg%model%c, self%prob%idx(j)))]
+            x = [x, log10(self%prob%cfg%model%get_constant(self%prob%idx(j)))]
          end do
       end if
       x = [x, pack(self%p0/self%pscale, self%pfree)]
@@ -133,17 +133,17 @@ contains
    end subroutine ep_bounds
 
    !> Model constants and effect parameters (physical units) of x
-   pure subroutine ep_unpack(self, x, model, p)
+   subroutine ep_unpack(self, x, model, p)
       class(effect_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
-      type(miller_model), intent(out) :: model
+      class(model_type), allocatable, intent(out) :: model
       real(dp), allocatable, intent(out) :: p(:)
       integer :: j, k0
-      model = self%prob%cfg%model
+      allocate (model, source=self%prob%cfg%model)
       k0 = 0
       if (self%free_constants) then
          do j = 1, size(self%prob%idx)
-            call set_constant(model%c, self%prob%idx(j), 10.0_dp**x(j))
+            call model%set_constant(self%prob%idx(j), 10.0_dp**x(j))
          end do
          k0 = size(self%prob%idx)
       end if
@@ -163,7 +163,7 @@ contains
       real(dp), intent(out), optional :: eps_in(:)  !< its inelastic strain, -
       !> Simulate only this test (an index into the problem's tests)
       integer, intent(in), optional :: only
-      type(miller_model) :: model, mt
+      class(model_type), allocatable :: model, mt
       type(test_effects), allocatable :: eff(:)
       type(error_type), allocatable :: error
       type(sim_result) :: res
@@ -173,7 +173,7 @@ contains
       ok = .false.
       if (.not. present(only)) r = 0.0_dp
       call self%unpack(x, model, p)
-      call model_setup(model, error)
+      call model%setup(error)
       if (allocated(error)) return
       nt = size(self%prob%targets)
       if (self%k > 0) then

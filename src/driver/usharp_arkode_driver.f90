@@ -20,7 +20,7 @@ module usharp_arkode_driver
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: miller_model
+   use usharp_model, only: model_type
    use usharp_history, only: history_type
    use usharp_simulation, only: solver_options, sim_result, check_output_times
    use usharp_rosenbrock_driver, only: rate_system, rates, rates_jacobian, plain_system
@@ -29,8 +29,6 @@ module usharp_arkode_driver
 
    public :: simulate_arkode
 
-   !> States of the plain model: eps_in, R, D
-   integer(c_int), parameter :: neq = 3
    !> The ESDIRK table
    character(len=*), parameter :: dirk_table = 'ARKODE_ARK436L2SA_DIRK_6_3_4'
 
@@ -40,7 +38,7 @@ contains
    !> output times tout (s, non-decreasing, within the history's span). Tolerances: those of
    !> opts, RODAS4's defaults when not given.
    subroutine simulate_arkode(model, hist, tout, opts, res, error)
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tout(:)
       type(solver_options), intent(in) :: opts
@@ -56,7 +54,8 @@ contains
       integer(c_int) :: ierr
       integer(c_long) :: counter(1)
       integer, allocatable :: corner(:)
-      integer :: j, iout, nout
+      integer :: j, iout, nout, i
+      integer(c_int) :: neq
 
       nout = size(tout)
       call res%allocate(nout)
@@ -68,8 +67,12 @@ contains
       sys%seg = hist%segment(1)
       sys%k = 1
       sys%kend = corner(2)
-      y = [0.0_dp, 0.0_dp, model%d0]
-      atol = [atol_strain, atol_strain*model%youngs, atol_strain*model%youngs]
+      neq = int(model%n_uniaxial(), c_int)
+      allocate (y(neq), atol(neq))
+      call model%uniaxial_initial(y)
+      do i = 1, neq
+         atol(i) = merge(atol_strain*model%youngs, atol_strain, model%uniaxial_is_stress(i))
+      end do
 
       ierr = FSUNContext_Create(c_null_ptr, sunctx)
       yvec => FN_VMake_Serial(int(neq, c_long), y, sunctx)
@@ -136,8 +139,10 @@ contains
       !> Output i from the state y (ARKODE interpolates it at the output time)
       subroutine store(i)
          integer, intent(in) :: i
+         real(dp) :: back, drag
+         call model%uniaxial_outputs(y, back, drag)
          call res%store(i, tout(i), hist%control, hist%value_at(tout(i)), sys%stiffness, &
-                        y(1), y(2), y(3))
+                        y(1), back, drag)
       end subroutine store
 
       subroutine release()
@@ -173,12 +178,13 @@ contains
       type(c_ptr), value :: udata
       type(rate_system), pointer :: sys
       real(c_double), pointer :: y(:), jdata(:), jac(:, :)
-      real(dp) :: dfdt(neq)
+      real(dp), allocatable :: dfdt(:)
       call c_f_pointer(udata, sys)
       y => FN_VGetArrayPointer(yv)
-      ! The binding's data pointer has length 1; view the column-major storage as 3x3
+      allocate (dfdt(size(y)))
+      ! The binding's data pointer has length 1; view the column-major storage as n x n
       jdata => FSUNDenseMatrix_Data(jmat)
-      call c_f_pointer(c_loc(jdata(1)), jac, [neq, neq])
+      call c_f_pointer(c_loc(jdata(1)), jac, [size(y), size(y)])
       call rates_jacobian(sys, t, y, jac, dfdt)
       ierr = merge(0, 1, all(ieee_is_finite(jac)))
    end function jac_fn

@@ -1,4 +1,4 @@
-!> Uniaxial simulation of the Miller model with CVODE (BDF, Newton, dense linear solver,
+!> Uniaxial simulation of a model (usharp_model) with CVODE (BDF, Newton, dense linear solver,
 !> analytic Jacobian). The integration restarts at every corner of the load history, so no
 !> step straddles a kink, and stops exactly at each corner. Optionally CVODES integrates the
 !> forward sensitivities of the state to chosen constants alongside (staggered corrector,
@@ -18,8 +18,9 @@ module usharp_cvode_driver
    use usharp_kinds, only: dp, i8
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: miller_model, uniaxial_rates, get_constant, set_constant, model_setup
-   use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value, lag_corners
+   use usharp_model, only: model_type
+   use usharp_effects, only: test_effects, extended_rates, lagged_value, lag_corners, &
+                             extended_size, extended_initial
    use usharp_history, only: history_type, control_strain, segment_type
    use usharp_simulation, only: solver_options, sim_result, check_output_times
    implicit none
@@ -27,25 +28,22 @@ module usharp_cvode_driver
 
    public :: simulate_cvode
 
-   !> States of the plain model: eps_in, R, D
-   integer(c_int), parameter :: neq = 3
-
    !> What the callbacks need: the model and the current linear segment of the load; with
    !> effects (extended) also the effects, the stiffness seen through the compliance, and
    !> the control's corners and lagged corner values
    type :: rhs_context
-      type(miller_model) :: model
+      class(model_type), allocatable :: model
       type(segment_type) :: line  !< the current segment of the load
       logical :: extended = .false.
       type(test_effects) :: eff
       real(dp) :: stiffness = 0.0_dp   !< E/(1 + kappa), model unit
       integer :: seg = 1
       real(dp), allocatable :: tc(:), vc(:), yk(:)
-      !> With sensitivities: the constants (physical units), their indices (usharp_miller
-      !> order) and theta(T), so that B*theta follows B
+      !> The model's own states (the extended model adds p and R2)
+      integer :: nm = 0
+      !> With sensitivities: the constants (physical units) and their indices (model order)
       real(dp), allocatable :: p(:)
       integer, allocatable :: pidx(:)
-      real(dp) :: theta = 0.0_dp
    end type rhs_context
 
 contains
@@ -59,7 +57,7 @@ contains
    !> With sens (indices of constants, plain model only), deps_in(i, j) = d eps_in(tout(i)) /
    !> d c_sens(j) in 1/(unit of that constant); the drag stress's start D0 follows the constants.
    subroutine simulate_cvode(model, hist, tout, opts, res, error, effects, sens, deps_in)
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tout(:)
       type(solver_options), intent(in) :: opts
@@ -78,7 +76,7 @@ contains
       real(c_double) :: tret(1), tnext, rtol, atol_strain
       integer(c_int) :: ierr, n
       integer(c_long) :: counter(1)
-      integer :: k, iout, nout, nseg, j
+      integer :: k, iout, nout, nseg, j, i
       integer(c_int) :: ns
       type(c_ptr) :: ys
       real(c_double), allocatable, target :: pbar(:)
@@ -92,25 +90,29 @@ contains
       if (allocated(error)) return
       call opts%tolerances('cvode', rtol, atol_strain)
 
-      ctx%model = model
+      allocate (ctx%model, source=model)
       ctx%extended = present(effects)
+      ctx%nm = model%n_uniaxial()
       if (ctx%extended) then
-         n = n_extended
+         n = int(extended_size(model), c_int)
+         allocate (y(n), atol(n))
          ctx%eff = effects
          ctx%stiffness = model%youngs/(1.0_dp + effects%compliance)
          ctx%tc = hist%t
          ctx%vc = hist%v
          ctx%yk = lag_corners(hist%t, hist%v, effects%lag)
-         y = [0.0_dp, effects%r0, model%d0*(1.0_dp + effects%strength) + effects%dd0, &
-              0.0_dp, 0.0_dp]
-         atol = [atol_strain, atol_strain*model%youngs, atol_strain*model%youngs, &
-                 atol_strain, atol_strain*model%youngs]
+         call extended_initial(model, effects, y)
+         ! p is a strain, R2 a stress
+         atol(n - 1:n) = [atol_strain, atol_strain*model%youngs]
       else
-         n = neq
+         n = int(ctx%nm, c_int)
+         allocate (y(n), atol(n))
          ctx%stiffness = model%youngs
-         y = [0.0_dp, 0.0_dp, model%d0]
-         atol = [atol_strain, atol_strain*model%youngs, atol_strain*model%youngs]
+         call model%uniaxial_initial(y)
       end if
+      do i = 1, ctx%nm
+         atol(i) = merge(atol_strain*model%youngs, atol_strain, model%uniaxial_is_stress(i))
+      end do
 
       ierr = FSUNContext_Create(c_null_ptr, sunctx)
       yvec => FN_VMake_Serial(int(n, c_long), y, sunctx)
@@ -134,8 +136,7 @@ contains
          ns = size(sens)
          allocate (deps_in(nout, ns))
          ctx%pidx = sens
-         ctx%p = [(get_constant(model%c, sens(j)), j=1, ns)]
-         ctx%theta = model%btheta/model%c%b
+         ctx%p = [(model%get_constant(sens(j)), j=1, ns)]
          pbar = abs(ctx%p)
          plist = [(int(j - 1, c_int), j=1, ns)]
          ys = FN_VCloneVectorArray(ns, yvec)
@@ -209,15 +210,16 @@ contains
       subroutine store(i, t)
          integer, intent(in) :: i
          real(dp), intent(in) :: t
-         real(dp) :: load, rate
+         real(dp) :: load, rate, back, drag
          if (ctx%extended) then
             call lagged_value(ctx%tc, ctx%vc, ctx%yk, ctx%seg, ctx%eff%lag, t, load, rate)
          else
             load = hist%value_at(t)
          end if
          ! The measured strain includes the machine's kappa*sigma/E (the stiffness seen)
-         call res%store(i, tout(i), hist%control, load, ctx%stiffness, y(1), &
-                        merge(y(2) + y(n), y(2), ctx%extended), y(3))
+         call ctx%model%uniaxial_outputs(y(1:ctx%nm), back, drag)
+         if (ctx%extended) back = back + y(n)
+         call res%store(i, tout(i), hist%control, load, ctx%stiffness, y(1), back, drag)
          if (with_sens) then
             do j = 1, ns
                deps_in(i, j) = sens_value(ys, j, 1)
@@ -236,34 +238,37 @@ contains
       end subroutine release
    end subroutine simulate_cvode
 
-   !> Start of the sensitivities: eps_in and R start at 0 whatever the constants; D starts at
-   !> D0, which the constants set unless it is fixed (central differences of the D0 formula)
+   !> Start of the sensitivities: the virgin state's derivative in each constant by central
+   !> differences of the models set up with it changed (the Miller model's D0 follows the
+   !> constants unless it is fixed; its other states start at 0 whatever the constants)
    subroutine initial_sensitivities(model, sens, ys)
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       integer, intent(in) :: sens(:)
       type(c_ptr), intent(in) :: ys
       type(N_Vector), pointer :: v
       real(c_double), pointer :: d(:)
-      type(miller_model) :: mp, mm
+      class(model_type), allocatable :: mp, mm
       type(error_type), allocatable :: err
-      real(dp) :: c, h
+      real(dp) :: c, h, y0p(model%n_uniaxial()), y0m(model%n_uniaxial())
       integer :: j
       do j = 1, size(sens)
          v => FN_VGetVecAtIndexVectorArray(ys, int(j - 1, c_int))
          d => FN_VGetArrayPointer(v)
          d = 0.0_dp
-         if (model%d0_fixed > 0.0_dp) cycle
-         c = get_constant(model%c, sens(j))
+         c = model%get_constant(sens(j))
          h = 1.0e-6_dp*abs(c)
-         mp = model
-         mm = model
-         call set_constant(mp%c, sens(j), c + h)
-         call set_constant(mm%c, sens(j), c - h)
-         call model_setup(mp, err)
-         if (allocated(err)) cycle
-         call model_setup(mm, err)
-         if (allocated(err)) cycle
-         d(3) = (mp%d0 - mm%d0)/(2.0_dp*h)
+         allocate (mp, source=model)
+         allocate (mm, source=model)
+         call mp%set_constant(sens(j), c + h)
+         call mm%set_constant(sens(j), c - h)
+         call mp%setup(err)
+         if (.not. allocated(err)) call mm%setup(err)
+         if (.not. allocated(err)) then
+            call mp%uniaxial_initial(y0p)
+            call mm%uniaxial_initial(y0m)
+            d = (y0p - y0m)/(2.0_dp*h)
+         end if
+         deallocate (mp, mm)
       end do
    end subroutine initial_sensitivities
 
@@ -308,8 +313,8 @@ contains
       call c_f_pointer(udata, ctx)
       y => FN_VGetArrayPointer(yv)
       f => FN_VGetArrayPointer(fv)
-      ! A non-positive drag stress is outside the model: let CVODE retry with a smaller step
-      if (y(3) <= 0.0_dp) then
+      ! A state outside the model: let CVODE retry with a smaller step
+      if (.not. ctx%model%admissible(y(1:ctx%nm))) then
          ierr = 1
          return
       end if
@@ -317,7 +322,7 @@ contains
       if (ctx%extended) then
          call extended_rates(ctx%model, ctx%eff, sigma, y, f)
       else
-         call uniaxial_rates(ctx%model, sigma, dsig, y, f)
+         call ctx%model%uniaxial_rates(sigma, dsig, y, f)
       end if
       ierr = merge(0, 1, all(ieee_is_finite(f)))
    end function rhs_fn
@@ -329,14 +334,14 @@ contains
       type(c_ptr), value :: udata
       type(rhs_context), pointer :: ctx
       real(c_double), pointer :: y(:), jdata(:), jac(:, :)
-      real(dp) :: sigma, dsig, ydot(neq)
+      real(dp) :: sigma, dsig
       call c_f_pointer(udata, ctx)
       y => FN_VGetArrayPointer(yv)
-      ! The binding's data pointer has length 1; view the column-major storage as 3x3
+      ! The binding's data pointer has length 1; view the column-major storage as n x n
       jdata => FSUNDenseMatrix_Data(jmat)
-      call c_f_pointer(c_loc(jdata(1)), jac, [neq, neq])
+      call c_f_pointer(c_loc(jdata(1)), jac, [ctx%nm, ctx%nm])
       call stress_of(ctx, t, y, sigma, dsig)
-      call uniaxial_rates(ctx%model, sigma, dsig, y, ydot, jac)
+      call plain_jacobian(ctx, sigma, dsig, y, jac)
       ierr = merge(0, 1, all(ieee_is_finite(jac)))
    end function jac_fn
 
@@ -351,29 +356,36 @@ contains
       type(c_ptr), value :: udata
       type(rhs_context), pointer :: ctx
       real(c_double), pointer :: y(:), sv(:), sd(:)
-      real(dp) :: sigma, dsig, f0(neq), fp(neq), fm(neq), jac(neq, neq), c, h
-      type(miller_model) :: mp, mm
-      integer :: j
+      real(dp) :: sigma, dsig
       call c_f_pointer(udata, ctx)
       y => FN_VGetArrayPointer(yv)
       sv => FN_VGetArrayPointer(ysv)
       sd => FN_VGetArrayPointer(ysdotv)
-      j = is + 1
       call stress_of(ctx, t, y, sigma, dsig)
-      call uniaxial_rates(ctx%model, sigma, dsig, y, f0, jac)
-      c = ctx%p(j)
-      h = 1.0e-6_dp*abs(c)
-      mp = ctx%model
-      mm = ctx%model
-      call set_constant(mp%c, ctx%pidx(j), c + h)
-      call set_constant(mm%c, ctx%pidx(j), c - h)
-      mp%btheta = mp%c%b*ctx%theta
-      mm%btheta = mm%c%b*ctx%theta
-      call uniaxial_rates(mp, sigma, dsig, y, fp)
-      call uniaxial_rates(mm, sigma, dsig, y, fm)
-      sd = matmul(jac, sv) + (fp - fm)/(2.0_dp*h)
+      call sens_rates(ctx, is + 1, sigma, dsig, y, sv, sd)
       ierr = merge(0, 1, all(ieee_is_finite(sd)))
    end function sens_rhs
+
+   !> The plain model's Jacobian (small arrays on the stack)
+   subroutine plain_jacobian(ctx, sigma, dsig, y, jac)
+      type(rhs_context), intent(in) :: ctx
+      real(dp), intent(in) :: sigma, dsig, y(:)
+      real(dp), intent(out) :: jac(:, :)
+      real(dp) :: ydot(size(y))
+      call ctx%model%uniaxial_rates(sigma, dsig, y, ydot, jac)
+   end subroutine plain_jacobian
+
+   !> d/dt of sensitivity j: J s + d ydot/d c_j
+   subroutine sens_rates(ctx, j, sigma, dsig, y, sv, sd)
+      type(rhs_context), intent(in) :: ctx
+      integer, intent(in) :: j
+      real(dp), intent(in) :: sigma, dsig, y(:), sv(:)
+      real(dp), intent(out) :: sd(:)
+      real(dp) :: f0(size(y)), dfdc(size(y)), jac(size(y), size(y))
+      call ctx%model%uniaxial_rates(sigma, dsig, y, f0, jac)
+      call ctx%model%rates_constant_derivative(ctx%pidx(j), sigma, dsig, y, dfdc)
+      sd = matmul(jac, sv) + dfdc
+   end subroutine sens_rates
 
    !> Keep CVODE quiet: failures come back as an error_type, printed once by the program
    subroutine silent_handler(error_code, module, function, msg, udata) bind(C)

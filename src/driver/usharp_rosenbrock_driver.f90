@@ -1,18 +1,19 @@
-!> Uniaxial simulation of the Miller model with a one-step linearly implicit method: the
+!> Uniaxial simulation of a model (usharp_model) with a one-step linearly implicit method: the
 !> Rosenbrock method RODAS4 of Hairer and Wanner (order 4 with an embedded order-3 error
-!> estimate, L-stable, stiffly accurate; analytic Jacobian, one 3x3 LU per step). A one-step
+!> estimate, L-stable, stiffly accurate; the model's analytic Jacobian, one LU per step). A one-step
 !> method starts at full order after every corner of the load history, where CVODE's BDF
 !> restarts at order 1; it stops exactly at each corner, so no step straddles a kink.
 !> Output between steps: cubic Hermite interpolation of the state and its rates.
-!> With effects it integrates the extended model of usharp_effects (five states, its
-!> analytic Jacobian), as CVODE does.
+!> With effects it integrates the extended model of usharp_effects (the model's states, p
+!> and R2; its analytic Jacobian), as CVODE does.
 module usharp_rosenbrock_driver
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: miller_model, uniaxial_rates
-   use usharp_effects, only: test_effects, extended_rates, n_extended, lagged_value, lag_corners
+   use usharp_model, only: model_type
+   use usharp_effects, only: test_effects, extended_rates, lagged_value, lag_corners, &
+                             extended_size, extended_initial
    use usharp_history, only: history_type, control_strain, segment_type, spline_eval
    use usharp_simulation, only: solver_options, sim_result, check_output_times, rodas4_smooth_rtol
    implicit none
@@ -20,14 +21,14 @@ module usharp_rosenbrock_driver
 
    public :: simulate_rosenbrock, rates, rates_jacobian, rate_system, plain_system
 
-   !> Stages of RODAS4; states of the plain model (eps_in, R, D)
-   integer, parameter :: ns = 6, n_plain = 3
+   !> Stages of RODAS4
+   integer, parameter :: ns = 6
 
    !> What the rates see: the model, the current segment of the load (k its index) and, for
    !> the extended model, the effects, the stiffness E/(1 + kappa) seen through the
    !> compliance and the control's corners with their lagged values
    type :: rate_system
-      type(miller_model) :: model
+      class(model_type), allocatable :: model
       type(segment_type) :: seg
       integer :: k = 1
       !> A smooth forcing (plain model): the spline's second derivatives at the samples
@@ -84,7 +85,7 @@ contains
    !> offsets and the compliance, and the control value passes through the lag. The
    !> stress-channel shift is the caller's (output times).
    subroutine simulate_rosenbrock(model, hist, tout, opts, res, error, effects)
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tout(:)
       type(solver_options), intent(in) :: opts
@@ -93,6 +94,8 @@ contains
       type(test_effects), intent(in), optional :: effects
       type(rate_system) :: sys
       real(dp) :: rtol, atol_strain, as, ar
+      real(dp), allocatable :: y0(:), atol(:)
+      integer :: n, i
 
       call res%allocate(size(tout))
       call check_output_times(hist, tout, error)
@@ -101,30 +104,46 @@ contains
       if (hist%smooth() .and. .not. opts%rtol > 0.0_dp) rtol = rodas4_smooth_rtol
       as = atol_strain
       ar = atol_strain*model%youngs
-      sys%model = model
       sys%extended = present(effects)
       if (sys%extended) then
+         allocate (sys%model, source=model)
          sys%eff = effects
          sys%stiffness = model%youngs/(1.0_dp + effects%compliance)
          sys%tc = hist%t
          sys%vc = hist%v
          sys%yk = lag_corners(hist%t, hist%v, effects%lag)
-         call integrate_extended(sys, hist, tout, opts, [0.0_dp, effects%r0, &
-            model%d0*(1.0_dp + effects%strength) + effects%dd0, 0.0_dp, 0.0_dp], &
-            [as, ar, ar, as, ar], rtol, res, error)
+         n = extended_size(model)
+         allocate (y0(n), atol(n))
+         call extended_initial(model, effects, y0)
+         ! p is a strain, R2 a stress
+         atol(n - 1:n) = [as, ar]
       else
          call plain_system(model, hist, sys)
-         call integrate_plain(sys, hist, tout, opts, [0.0_dp, 0.0_dp, model%d0], [as, ar, ar], &
-                              rtol, res, error)
+         n = model%n_uniaxial()
+         allocate (y0(n), atol(n))
+         call model%uniaxial_initial(y0)
       end if
+      do i = 1, n - merge(2, 0, sys%extended)
+         atol(i) = merge(ar, as, model%uniaxial_is_stress(i))
+      end do
+      ! Small arrays of a size known at compile time where the model has one of these sizes
+      select case (n)
+      case (3); call integrate_3(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      case (4); call integrate_4(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      case (5); call integrate_5(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      case (6); call integrate_6(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      case (7); call integrate_7(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      case default; call integrate_n(n, sys, hist, tout, opts, y0, atol, rtol, res, error)
+      end select
    end subroutine simulate_rosenbrock
 
    !> The rates of the plain model under the load of hist (its smooth forcing, if it is one)
-   pure subroutine plain_system(model, hist, sys)
-      type(miller_model), intent(in) :: model
+   subroutine plain_system(model, hist, sys)
+      class(model_type), intent(in) :: model
       type(history_type), intent(in) :: hist
       type(rate_system), intent(inout) :: sys
-      sys%model = model
+      if (allocated(sys%model)) deallocate (sys%model)
+      allocate (sys%model, source=model)
       sys%stiffness = model%youngs
       sys%smooth = hist%smooth()
       if (sys%smooth) then
@@ -134,20 +153,39 @@ contains
       end if
    end subroutine plain_system
 
-   !> The integration from y0 (absolute tolerances atol) of the plain model. Its body is
-   !> shared with the extended model and compiled for each number of states n, so that its
-   !> small arrays have a constant size: with n known only at run time a simulation took
-   !> 30 % longer.
-   subroutine integrate_plain(sys, hist, tout, opts, y0, atol, rtol, res, error)
-      integer, parameter :: n = n_plain
+   !> The integration from y0 (absolute tolerances atol) of a model with n states. Its body
+   !> is compiled for each of the common numbers of states, so that its small arrays have a
+   !> constant size: with n known only at run time a simulation took 30 % longer.
+   subroutine integrate_3(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      integer, parameter :: n = 3
       include 'usharp_rodas4.inc'
-   end subroutine integrate_plain
+   end subroutine integrate_3
 
-   !> The same integration for the extended model (n_extended states)
-   subroutine integrate_extended(sys, hist, tout, opts, y0, atol, rtol, res, error)
-      integer, parameter :: n = n_extended
+   subroutine integrate_4(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      integer, parameter :: n = 4
       include 'usharp_rodas4.inc'
-   end subroutine integrate_extended
+   end subroutine integrate_4
+
+   subroutine integrate_5(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      integer, parameter :: n = 5
+      include 'usharp_rodas4.inc'
+   end subroutine integrate_5
+
+   subroutine integrate_6(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      integer, parameter :: n = 6
+      include 'usharp_rodas4.inc'
+   end subroutine integrate_6
+
+   subroutine integrate_7(sys, hist, tout, opts, y0, atol, rtol, res, error)
+      integer, parameter :: n = 7
+      include 'usharp_rodas4.inc'
+   end subroutine integrate_7
+
+   !> Any other number of states
+   subroutine integrate_n(n, sys, hist, tout, opts, y0, atol, rtol, res, error)
+      integer, intent(in) :: n
+      include 'usharp_rodas4.inc'
+   end subroutine integrate_n
 
    !> Stress, its derivative in eps_in and in time at (t, y): the load of the current
    !> segment, or for the extended model the lagged control value
@@ -188,13 +226,13 @@ contains
       logical, intent(out) :: ok
       real(dp) :: sigma, dsig, dsig_dt
       f = 0.0_dp
-      ok = y(3) > 0.0_dp
+      ok = sys%model%admissible(y(1:size(y) - merge(2, 0, sys%extended)))
       if (.not. ok) return
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
       if (sys%extended) then
          call extended_rates(sys%model, sys%eff, sigma, y, f)
       else
-         call uniaxial_rates(sys%model, sigma, dsig, y, f)
+         call sys%model%uniaxial_rates(sigma, dsig, y, f)
       end if
       ok = all(ieee_is_finite(f))
    end subroutine rates
@@ -213,7 +251,7 @@ contains
       if (sys%extended) then
          call extended_rates(sys%model, sys%eff, sigma, y, f, 1.0_dp, jac)
       else
-         call uniaxial_rates(sys%model, sigma, 1.0_dp, y, f, jac)
+         call sys%model%uniaxial_rates(sigma, 1.0_dp, y, f, jac)
       end if
       if (present(fy)) fy = f
       dfdt = jac(:, 1)*dsig_dt

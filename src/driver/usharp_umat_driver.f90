@@ -7,8 +7,7 @@ module usharp_umat_driver
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: real_str
-   use usharp_miller, only: miller_model
-   use usharp_miller_update, only: miller_update, update_status_ok, n_state, default_substeps
+   use usharp_model, only: model_type, update_status_ok
    use usharp_history, only: history_type, control_strain
    use usharp_simulation, only: solver_options, sim_result
    use usharp_lapack, only: solve_dense
@@ -24,13 +23,14 @@ contains
    !> Simulate the history from the virgin state with the implicit stress update, writing the
    !> response at the output times tout (s). Increments end exactly at corners and outputs.
    subroutine simulate_umat(model, hist, tout, opts, res, error)
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tout(:)
       type(solver_options), intent(in) :: opts
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: t, dt, h, tstop, eps(6), y(n_state), eps_new(6), y_new(n_state), sig(6)
+      real(dp) :: t, dt, h, tstop, eps(6), y(model%n_state()), eps_new(6), y_new(model%n_state())
+      real(dp) :: sig(6)
       real(dp) :: tend, tol
       integer :: iout, kc, nit, nsub
       logical :: ok
@@ -40,8 +40,7 @@ contains
       tend = hist%end_time()
       tol = 1.0e-12_dp*max(1.0_dp, abs(tend))
       eps = 0.0_dp
-      y = 0.0_dp
-      y(13) = model%d0
+      call model%state_initial(y)
       sig = 0.0_dp
       if (hist%control == control_strain) eps(1) = hist%v(1)
       dt = opts%dt_init
@@ -77,7 +76,7 @@ contains
          eps = eps_new
          y = y_new
          ! Grow the increment after an easy one
-         if (nsub == default_substeps .and. nit <= 4) then
+         if (nsub == model%update_substeps() .and. nit <= 4) then
             dt = min(2.0_dp*h, opts%dt_max)
          else
             dt = min(h, opts%dt_max)
@@ -93,10 +92,7 @@ contains
             res%t(iout) = tout(iout)
             res%strain(iout) = eps(1)
             res%stress(iout) = sig(1)
-            res%eps_in(iout) = y(1)
-            ! Uniaxial back stress: R'_11 = 2/3 R
-            res%back(iout) = 1.5_dp*y(7)
-            res%drag(iout) = y(13)
+            call model%state_outputs(y, res%eps_in(iout), res%back(iout), res%drag(iout))
             iout = iout + 1
          end do
       end subroutine store_outputs
@@ -104,8 +100,8 @@ contains
       !> One increment from t to t + h: Newton on the free normal strains so that the lateral
       !> stresses vanish (and, under stress control, the axial stress meets the history)
       subroutine increment(t, h, eps0, y0, eps1, y1, sig1, ok, nit, nsub)
-         real(dp), intent(in) :: t, h, eps0(6), y0(n_state)
-         real(dp), intent(out) :: eps1(6), y1(n_state), sig1(6)
+         real(dp), intent(in) :: t, h, eps0(6), y0(:)
+         real(dp), intent(out) :: eps1(6), y1(:), sig1(6)
          logical, intent(out) :: ok
          integer, intent(out) :: nit, nsub
          real(dp) :: ddsde(6, 6), target(3), load, rhs(3, 1), a(3, 3), stol
@@ -127,7 +123,7 @@ contains
          nit = 0
          nsub = 1
          do it = 1, max_equilibrium
-            call miller_update(model, eps0, eps1 - eps0, h, y0, sig1, y1, ddsde, status, nsub)
+            call model%stress_update(eps0, eps1 - eps0, h, y0, sig1, y1, ddsde, status, nsub)
             nit = nit + 1
             if (status /= update_status_ok) return
             rhs(first:3, 1) = target(first:3) - sig1(first:3)

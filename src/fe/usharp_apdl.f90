@@ -10,7 +10,6 @@ module usharp_apdl
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config, test_config
    use usharp_history, only: control_strain
-   use usharp_upf, only: n_upf_props, n_upf_state
    use usharp_external, only: n_constants_file
    use usharp_version, only: usharp_version_string
    implicit none
@@ -44,8 +43,11 @@ contains
       character(len=*), intent(in) :: command
       character(len=line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
-      integer :: n, k
-      character(len=:), allocatable :: cname, cext, oname, oext, temp
+      integer :: n, k, np, j
+      character(len=:), allocatable :: cname, cext, oname, oext, temp, names_text, row
+      integer, allocatable :: spos(:)
+      real(dp), allocatable :: sval(:)
+      character(len=:), allocatable :: snames(:), snotes(:)
       real(dp) :: v
       logical :: strain
 
@@ -60,6 +62,15 @@ contains
          call split_name(ext%constants_file, cname, cext)
          call split_name(ext%output_file, oname, oext)
          temp = apdl_real(cfg%model%temperature)
+         np = cfg%model%n_props()
+         call cfg%model%fe_start_values(spos, sval, snames, snotes)
+         names_text = cfg%model%prop_name(1)
+         do j = 2, np
+            names_text = names_text//', '//cfg%model%prop_name(j)
+         end do
+         do j = 1, size(spos)
+            names_text = names_text//', '//trim(snames(j))
+         end do
          allocate (lines(80 + 7*size(h%t)))
          n = 0
          call add('! usharp '//usharp_version_string//" APDL deck for test '"//test%name//"' of "// &
@@ -71,13 +82,12 @@ contains
          call add('! units: stress '//cfg%units//' (E and the constants), time s, temperature K;')
          call add('! the cube has unit edges, so the top displacement is the axial strain.')
          call add('! needs an ANSYS linked with the usharp USERMAT (docs/guide/fe-users.md).')
-         call add('! reads '//ext%constants_file//' (E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, '// &
-                  'Q, Tm, D0), writes '//ext%output_file)
+         call add('! reads '//ext%constants_file//' ('//names_text//'), writes '//ext%output_file)
          call add('/BATCH')
          call add('/TITLE,usharp '//test%name)
          call add('/PREP7')
-         call add('*DIM,props,ARRAY,'//str(n_constants_file))
-         call add('*VREAD,props(1),'//cname//','//cext//',,IJK,'//str(n_constants_file))
+         call add('*DIM,props,ARRAY,'//str(n_constants_file(cfg%model)))
+         call add('*VREAD,props(1),'//cname//','//cext//',,IJK,'//str(n_constants_file(cfg%model)))
          call add(ext%constants_format)
          call add('ET,1,SOLID185')
          call add('N,1,0,0,0')
@@ -91,13 +101,21 @@ contains
          call add('TYPE,1')
          call add('MAT,1')
          call add('E,1,2,3,4,5,6,7,8')
-         call add('TB,USER,1,1,'//str(n_upf_props))
+         call add('TB,USER,1,1,'//str(np))
          call add('TBTEMP,'//temp)
-         call add('TBDATA,1,props(1),props(2),props(3),props(4),props(5),props(6)')
-         call add('TBDATA,7,props(7),props(8),props(9),props(10),props(11),props(12)')
-         call add('TBDATA,13,props(13)')
-         call add('TB,STATE,1,,'//str(n_upf_state))
-         call add('TBDATA,7,props(14)            ! initial drag stress D0')
+         ! Six values a TBDATA command
+         do j = 1, np, 6
+            row = 'TBDATA,'//str(j)
+            do k = j, min(j + 5, np)
+               row = row//',props('//str(k)//')'
+            end do
+            call add(row)
+         end do
+         call add('TB,STATE,1,,'//str(cfg%model%n_state()))
+         do j = 1, size(spos)
+            row = 'TBDATA,'//str(spos(j))//',props('//str(np + j)//')'
+            call add(row//repeat(' ', max(1, 30 - len(row)))//'! '//trim(snotes(j)))
+         end do
          call add('TUNIF,'//temp)
          call add('! symmetry planes x = 0, y = 0, z = 0')
          call add('D,1,UX,0')

@@ -14,8 +14,7 @@ module usharp_external
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error, stat_io, stat_failure
    use usharp_strings, only: str, real_str, shell_quote
-   use usharp_miller, only: miller_model
-   use usharp_upf, only: upf_props
+   use usharp_model, only: model_type
    use usharp_config, only: external_spec
    use usharp_history, only: history_type, control_strain
    use usharp_prvar, only: read_prvar
@@ -32,28 +31,41 @@ module usharp_external
    private
 
    public :: run_external, write_constants_file, expand_command, n_constants_file
-
-   !> Values in the constants file: the 13 TB,USER properties, then the initial drag stress D0
-   integer, parameter :: n_constants_file = 14
    character(len=*), parameter :: script_name = 'usharp-command.sh'
    character(len=*), parameter :: stdout_name = 'stdout.txt', stderr_name = 'stderr.txt'
 
 contains
 
-   !> Write the constants file: E, Poisson, A1, A2, B, C1, C2, k, H1, H2, n, Q, Tm, D0 (stress in
-   !> the model unit, Q in cal/mol, Tm in K), one value per line in format fmt
+   !> Number of values in the constants file: the user material's properties, then the
+   !> state variables that start other than zero
+   pure integer function n_constants_file(model) result(n)
+      class(model_type), intent(in) :: model
+      integer, allocatable :: pos(:)
+      real(dp), allocatable :: start(:)
+      character(len=:), allocatable :: names(:), notes(:)
+      call model%fe_start_values(pos, start, names, notes)
+      n = model%n_props() + size(pos)
+   end function n_constants_file
+
+   !> Write the constants file: the user material's properties (Miller: E, Poisson, A1, A2, B,
+   !> C1, C2, k, H1, H2, n, Q, Tm), then the state variables that start other than zero
+   !> (Miller: D0); stress in the model unit; one value per line in format fmt
    subroutine write_constants_file(path, model, fmt, error, sync)
       character(len=*), intent(in) :: path, fmt
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
       logical, intent(in), optional :: sync  !< see result_commit (default true)
-      real(dp) :: vals(n_constants_file)
-      character(len=64) :: lines(n_constants_file)
+      real(dp) :: vals(n_constants_file(model))
+      character(len=64) :: lines(n_constants_file(model))
       integer :: ios, k
       character(len=256) :: msg
-      vals(:n_constants_file - 1) = upf_props(model)
-      vals(n_constants_file) = model%d0
-      do k = 1, n_constants_file
+      integer, allocatable :: pos(:)
+      real(dp), allocatable :: start(:)
+      character(len=:), allocatable :: names(:), notes(:)
+      call model%to_props(vals(:model%n_props()))
+      call model%fe_start_values(pos, start, names, notes)
+      vals(model%n_props() + 1:) = start
+      do k = 1, size(vals)
          write (lines(k), fmt, iostat=ios, iomsg=msg) vals(k)
          if (ios /= 0) then
             call fatal_error(error, path//': constants_format '//fmt//' does not fit a number ('// &
@@ -102,7 +114,7 @@ contains
    subroutine run_external(ext, model, units, hist, test, input_dir, work_root, tag, t_out, &
                            stress, error)
       type(external_spec), intent(in) :: ext
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       character(len=*), intent(in) :: units, test, input_dir, work_root, tag
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: t_out(:)

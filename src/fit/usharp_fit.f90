@@ -6,7 +6,6 @@ module usharp_fit
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure, stat_input, stat_usage
    use usharp_strings, only: str, real_str
-   use usharp_miller, only: get_constant, constant_names
    use usharp_objective, only: fit_problem, eval_ok, eval_invalid, message_len
    use usharp_optimiser, only: least_squares_type, optimum_type
    use usharp_hooke_jeeves, only: hooke_jeeves

@@ -4,7 +4,7 @@ module usharp_objective
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error
-   use usharp_miller, only: miller_model, model_setup, n_constants, get_constant, set_constant
+   use usharp_model, only: model_type
    use usharp_history, only: control_stress
    use usharp_units, only: stress_factor
    use usharp_simulation, only: sim_result
@@ -67,7 +67,7 @@ contains
       type(experiment_type), intent(in), optional :: experiments(:)
       integer :: i, k
       prob%cfg = cfg
-      prob%idx = pack([(k, k=1, n_constants)], cfg%fit%fitted)
+      prob%idx = pack([(k, k=1, cfg%model%n_constants())], cfg%fit%fitted)
       if (size(prob%idx) == 0) then
          call fatal_error(error, cfg%path//': &fit: fitted names no constant to fit')
          return
@@ -175,34 +175,34 @@ contains
       real(dp) :: x(size(self%idx))
       integer :: j
       do j = 1, size(self%idx)
-         x(j) = get_constant(self%cfg%model%c, self%idx(j))
+         x(j) = self%cfg%model%get_constant(self%idx(j))
          if (self%cfg%fit%log_search) x(j) = log10(max(x(j), tiny(1.0_dp)))
       end do
    end function problem_start_point
 
    !> The model with the fitted constants set from x, checked and set up
-   pure subroutine problem_model_of(self, x, model, error)
+   subroutine problem_model_of(self, x, model, error)
       class(fit_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
-      type(miller_model), intent(out) :: model
+      class(model_type), allocatable, intent(out) :: model
       type(error_type), allocatable, intent(out) :: error
       integer :: j
-      model = self%cfg%model
+      allocate (model, source=self%cfg%model)
       do j = 1, size(self%idx)
          if (self%cfg%fit%log_search) then
-            call set_constant(model%c, self%idx(j), 10.0_dp**x(j))
+            call model%set_constant(self%idx(j), 10.0_dp**x(j))
          else
-            call set_constant(model%c, self%idx(j), x(j))
+            call model%set_constant(self%idx(j), x(j))
          end if
       end do
-      call model_setup(model, error)
+      call model%setup(error)
    end subroutine problem_model_of
 
    !> Simulate every test with the model of x; error on the first failure. tag names the
    !> work folders of external tests ('best' when absent).
    subroutine problem_simulate_all(self, model, res, error, tag)
       class(fit_problem), intent(in) :: self
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(sim_result), intent(out) :: res(:)
       type(error_type), allocatable, intent(out) :: error
       character(len=*), intent(in), optional :: tag
@@ -223,7 +223,7 @@ contains
    subroutine problem_response(self, i, model, tag, res, error)
       class(fit_problem), intent(in) :: self
       integer, intent(in) :: i
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       character(len=*), intent(in) :: tag
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
@@ -317,7 +317,7 @@ contains
       integer, intent(out) :: status
       character(len=:), allocatable, intent(out) :: message
       character(len=*), intent(in) :: tag
-      type(miller_model) :: model
+      class(model_type), allocatable :: model
       type(sim_result) :: res
       type(error_type), allocatable :: error
       integer :: i, k0, n
@@ -367,7 +367,7 @@ contains
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: jac(:, :)
       logical, intent(out) :: ok
-      type(miller_model) :: model
+      class(model_type), allocatable :: model
       type(error_type), allocatable :: error
       integer :: i, j, n
       integer, allocatable :: k0(:)
@@ -384,7 +384,7 @@ contains
       end if
       do j = 1, size(x)
          dcdx(j) = 1.0_dp
-         if (self%cfg%fit%log_search) dcdx(j) = get_constant(model%c, self%idx(j))*log(10.0_dp)
+         if (self%cfg%fit%log_search) dcdx(j) = model%get_constant(self%idx(j))*log(10.0_dp)
       end do
       allocate (k0(size(self%targets)))
       k0(1) = 0

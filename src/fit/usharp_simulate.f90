@@ -2,7 +2,7 @@
 module usharp_simulate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, prefix_error
-   use usharp_miller, only: miller_model
+   use usharp_model, only: model_type
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
@@ -18,7 +18,7 @@ contains
 
    !> Simulate a test at its output interval with the chosen integrator; errors name the test
    subroutine simulate_test(model, solver, test, res, error)
-      type(miller_model), intent(in) :: model
+      class(model_type), intent(in) :: model
       type(solver_options), intent(in) :: solver
       type(test_config), intent(in) :: test
       type(sim_result), intent(out) :: res

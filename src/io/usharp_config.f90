@@ -2,7 +2,7 @@
 !> settings of every group. Each group's type lives in its reader (usharp_input_<group>) and is
 !> re-exported here.
 module usharp_config
-   use usharp_miller, only: miller_model
+   use usharp_model, only: model_type
    use usharp_simulation, only: solver_options
    use usharp_input_fit, only: fit_config
    use usharp_input_design, only: design_config
@@ -19,7 +19,7 @@ module usharp_config
       character(len=:), allocatable :: base_dir  !< its folder, for relative paths
       character(len=:), allocatable :: out_dir   !< &output
       character(len=:), allocatable :: units     !< &model: model stress unit, ksi or MPa
-      type(miller_model) :: model                !< &model and &constants
+      class(model_type), allocatable :: model    !< &model and &constants
       type(solver_options) :: solver             !< &solver
       type(fit_config) :: fit                    !< &fit
       type(design_config) :: design              !< &design

@@ -4,7 +4,6 @@
 !> usharp_input_<group>). Every error names the file and the group and variable, or the line.
 module usharp_input
    use usharp_error, only: error_type, prefix_error
-   use usharp_miller, only: model_setup
    use usharp_config, only: run_config
    use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path
    use usharp_input_model, only: read_model_group, read_constants_group
@@ -41,12 +40,12 @@ contains
       if (.not. allocated(error)) call read_constants_group(file, cfg%model, error)
       if (.not. allocated(error)) call read_solver_group(file, cfg%solver, error)
       if (.not. allocated(error)) call read_output_group(file, cfg%out_dir, error)
-      if (.not. allocated(error)) call read_fit_group(file, cfg%units, cfg%fit, error)
+      if (.not. allocated(error)) call read_fit_group(file, cfg%units, cfg%model, cfg%fit, error)
       if (.not. allocated(error)) call read_design_group(file, cfg%design, error)
       if (.not. allocated(error)) call read_test_groups(file, cfg%units, cfg%tests, error)
       if (.not. allocated(error)) call read_diagnose_group(file, cfg%tests, cfg%diagnose, error)
       if (allocated(error)) return
-      call model_setup(cfg%model, error)
+      call cfg%model%setup(error)
       if (allocated(error)) call prefix_error(error, path//': &constants: ')
    end subroutine read_config
 
@@ -75,7 +74,7 @@ contains
       if (allocated(error)) return
       call read_constants_group(file, cfg%model, error)
       if (allocated(error)) return
-      call model_setup(cfg%model, error)
+      call cfg%model%setup(error)
       if (allocated(error)) call prefix_error(error, path//': &constants: ')
    end subroutine override_constants
 

@@ -3,7 +3,7 @@ module usharp_input_fit
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_strings, only: lower_text => lower
-   use usharp_miller, only: n_constants, constant_index, literature_low, literature_high, stress_power
+   use usharp_model, only: model_type, constant_index
    use usharp_units, only: stress_factor
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
                               value_len, max_list, unset
@@ -14,7 +14,7 @@ module usharp_input_fit
 
    !> Fit settings (&fit group)
    type :: fit_config
-      logical :: fitted(n_constants) = .false.     !< which constants are searched
+      logical, allocatable :: fitted(:)            !< which constants are searched (model order)
       character(len=16) :: method = 'hooke-jeeves' !< hooke-jeeves, lm, nelder-mead, anneal
       character(len=4) :: objective = 'eq7'        !< eq7 or eq13
       real(dp) :: rho = 0.5_dp
@@ -24,9 +24,9 @@ module usharp_input_fit
       integer :: max_failures = 100                !< failures in a row before the fit aborts
       logical :: log_search = .false.
       !> Search bounds (physical units); lm, nelder-mead, anneal and multistart keep to them
-      real(dp) :: lower(n_constants) = 0.0_dp, upper(n_constants) = 0.0_dp
+      real(dp), allocatable :: lower(:), upper(:)
       !> Box of the multi-start points (physical units)
-      real(dp) :: box_lower(n_constants) = 0.0_dp, box_upper(n_constants) = 0.0_dp
+      real(dp), allocatable :: box_lower(:), box_upper(:)
       integer :: multistart = 0                    !< number of Latin-hypercube starts (0: none)
       integer :: seed = 1                          !< seed of multi-start and annealing
       real(dp) :: fd_step = 1.0e-3_dp              !< forward-difference step in log10 of a constant
@@ -48,24 +48,29 @@ module usharp_input_fit
 contains
 
    !> Read &fit (optional) into fit; units: the model's stress unit (of the default bounds)
-   subroutine read_fit_group(file, units, fit, error)
+   subroutine read_fit_group(file, units, model, fit, error)
       type(nml_file), intent(in) :: file
       character(len=*), intent(in) :: units
+      class(model_type), intent(in) :: model
       type(fit_config), intent(out) :: fit
       type(error_type), allocatable, intent(out) :: error
       type(fit_lists) :: given
       integer :: ios, k, i, idx
-      real(dp) :: f
-      character(len=512) :: msg
+      real(dp) :: f, low, high
+      character(len=512) :: msg, names
       character(len=:), allocatable :: lines(:)
       character(len=:), allocatable :: where, method, objective, jacobian
       ! Defaults: the literature box, and two decades beyond it for the search bounds
-      do i = 1, n_constants
-         f = stress_factor('ksi', units)**stress_power(i)
-         fit%box_lower(i) = literature_low(i)*f
-         fit%box_upper(i) = literature_high(i)*f
-         fit%lower(i) = 0.01_dp*literature_low(i)*f
-         fit%upper(i) = 100.0_dp*literature_high(i)*f
+      allocate (fit%fitted(model%n_constants()), source=.false.)
+      allocate (fit%lower(model%n_constants()), fit%upper(model%n_constants()), &
+                fit%box_lower(model%n_constants()), fit%box_upper(model%n_constants()))
+      do i = 1, model%n_constants()
+         f = stress_factor(model%literature_units(), units)**model%stress_power(i)
+         call model%literature_range(i, low, high)
+         fit%box_lower(i) = low*f
+         fit%box_upper(i) = high*f
+         fit%lower(i) = 0.01_dp*low*f
+         fit%upper(i) = 100.0_dp*high*f
       end do
       k = find_group(file, 'fit')
       if (k > 0) then
@@ -88,9 +93,13 @@ contains
       if (allocated(error)) return
       do i = 1, max_list
          if (len_trim(given%fitted(i)) == 0) cycle
-         idx = constant_index(given%fitted(i))
+         idx = constant_index(model, given%fitted(i))
          if (idx == 0) then
-            call fail("fitted = '"//trim(given%fitted(i))//"' is not a constant (A1, A2, B, C2, H1, H2, n, Q)")
+            names = model%constant_name(1)
+            do k = 2, model%n_constants()
+               names = trim(names)//', '//model%constant_name(k)
+            end do
+            call fail("fitted = '"//trim(given%fitted(i))//"' is not a constant ("//trim(names)//")")
             return
          end if
          fit%fitted(idx) = .true.

@@ -1,10 +1,11 @@
-!> The &model group (material, temperature, elastic constants, stress unit) and the &constants
-!> group (the eight Miller constants). Defaults are those of miller_model.
+!> The &model group (the model's name, material, temperature, elastic constants, stress unit)
+!> and the &constants group (the model's constants, by their names).
 module usharp_input_model
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower, str, real_str
-   use usharp_miller, only: miller_model, miller_constants
+   use usharp_model, only: model_type
+   use usharp_model_registry, only: new_model, default_model
    use usharp_units, only: stress_factor
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
                               value_len, unset
@@ -19,8 +20,10 @@ module usharp_input_model
    !> Below a tenth of the melting temperature no metal is viscoplastic: the temperature was
    !> given in Celsius (room temperature 20 reads as 20 K)
    real(dp), parameter :: lowest_homologous = 0.1_dp
-   !> The model named by default
-   character(len=*), parameter :: default_name = 'miller', default_units = 'ksi'
+   !> The stress unit by default
+   character(len=*), parameter :: default_units = 'ksi'
+   !> Defaults of the settings of the D0 formula (the Miller model's own)
+   real(dp), parameter :: default_d0 = 0.0_dp, default_d0_rate = 5.0e-5_dp, default_poisson = 0.3_dp
 
    !> The &model variables as given
    type :: model_values
@@ -30,14 +33,14 @@ module usharp_input_model
 
 contains
 
-   !> Read &model into model (temperature, elastic and D0 settings) and model_units (ksi or MPa)
+   !> Read &model into a new model of the name it gives (temperature, elastic and the model's
+   !> own settings) and model_units (ksi or MPa)
    subroutine read_model_group(file, model, model_units, error)
       type(nml_file), intent(in) :: file
-      type(miller_model), intent(inout) :: model
+      class(model_type), allocatable, intent(out) :: model
       character(len=:), allocatable, intent(out) :: model_units
       type(error_type), allocatable, intent(out) :: error
       type(model_values) :: v
-      type(miller_model) :: defaults
       integer :: ios, k
       character(len=512) :: msg
       character(len=:), allocatable :: lines(:)
@@ -57,8 +60,10 @@ contains
       call check_length(error, where, 'name', v%name)
       call check_length(error, where, 'units', v%units)
       if (allocated(error)) return
-      if (lower(trim(v%name)) /= 'miller') then
-         call fatal_error(error, where//"name = '"//trim(v%name)//"' is not known (known: miller)")
+      call new_model(v%name, model, error)
+      if (allocated(error)) then
+         msg = error%message
+         call fatal_error(error, where//trim(msg))
          return
       end if
       model_units = lower(trim(v%units))
@@ -76,11 +81,17 @@ contains
       model%tm = v%tm
       model%youngs = v%youngs
       model%poisson = v%poisson
-      model%d0_fixed = v%d0
-      ! The thesis's YS = 18 ksi, in the model's unit unless given
-      if (v%d0_yield == unset) v%d0_yield = defaults%d0_yield*stress_factor('ksi', model_units)
-      model%d0_yield = v%d0_yield
-      model%d0_rate = v%d0_rate
+      call model%set_units(model_units)
+      ! The model's own settings, where given
+      if (v%d0 /= default_d0) call model%set_option('d0', v%d0, error)
+      if (.not. allocated(error) .and. v%d0_yield /= unset) &
+         call model%set_option('d0_yield', v%d0_yield, error)
+      if (.not. allocated(error) .and. v%d0_rate /= default_d0_rate) &
+         call model%set_option('d0_rate', v%d0_rate, error)
+      if (allocated(error)) then
+         msg = error%message
+         call fatal_error(error, where//trim(msg))
+      end if
    contains
       logical function required(val, var) result(missing)
          real(dp), intent(in) :: val
@@ -99,28 +110,26 @@ contains
       call model_namelist(v, ios, msg, unit=unit)
    end subroutine write_model_defaults
 
-   !> The &model namelist, starting from miller_model's defaults (temperature, tm and youngs
-   !> must be given; d0_yield unset is 18 ksi in the model's unit): read from text or
-   !> written to unit
+   !> The &model namelist (temperature, tm and youngs must be given; d0_yield unset is the
+   !> model's default in its unit): read from text or written to unit
    subroutine model_namelist(v, ios, msg, text, unit)
       type(model_values), intent(out) :: v
       integer, intent(out) :: ios
       character(len=*), intent(out) :: msg
       character(len=*), intent(in), optional :: text(:)
       integer, intent(in), optional :: unit
-      type(miller_model) :: defaults
       character(len=value_len) :: name, units
       real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
       namelist /model/ name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
-      name = default_name
+      name = default_model
       units = default_units
       temperature = unset
       tm = unset
       youngs = unset
-      poisson = defaults%poisson
-      d0 = defaults%d0_fixed
+      poisson = default_poisson
+      d0 = default_d0
       d0_yield = unset
-      d0_rate = defaults%d0_rate
+      d0_rate = default_d0_rate
       ios = 0
       msg = ''
       if (present(text)) read (text, nml=model, iostat=ios, iomsg=msg)
@@ -156,13 +165,11 @@ contains
       end if
    end subroutine check_plausible
 
-   !> Read &constants into model%c; every constant must be given
+   !> Read &constants into the model's constants; every constant must be given
    subroutine read_constants_group(file, model, error)
       type(nml_file), intent(in) :: file
-      type(miller_model), intent(inout) :: model
+      class(model_type), intent(inout) :: model
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: c(8)
-      character(len=2), parameter :: names(8) = ['a1', 'a2', 'b ', 'c2', 'h1', 'h2', 'n ', 'q ']
       integer :: ios, k, i
       character(len=512) :: msg
       character(len=:), allocatable :: lines(:)
@@ -173,49 +180,34 @@ contains
          return
       end if
       call group_text(file, k, lines)
-      call constants_namelist(c, ios, msg, text=lines)
+      call model%constants_namelist(unset, ios, msg, text=lines)
       if (ios /= 0) then
          call read_error(error, file%path, 'constants', ios, msg)
          return
       end if
-      if (any(c == unset)) then
-         missing = ''
-         do i = 1, size(c)
-            if (c(i) == unset) missing = missing//' '//trim(names(i))
-         end do
+      missing = ''
+      do i = 1, model%n_constants()
+         if (model%get_constant(i) == unset) missing = missing//' '//lower(model%constant_name(i))
+      end do
+      if (len(missing) > 0) then
          call group_error(error, file%path, 'constants', 'every constant must be set '// &
             '(missing: '//adjustl(missing)//')')
          return
       end if
-      model%c = miller_constants(c(1), c(2), c(3), c(4), c(5), c(6), c(7), c(8))
    end subroutine read_constants_group
 
-   !> Write &constants (no defaults: every constant is unset, -huge) to unit
-   subroutine write_constants_defaults(unit)
+   !> Write &constants of the model (no defaults: every constant is unset, -huge) to unit
+   subroutine write_constants_defaults(model, unit)
+      class(model_type), intent(in) :: model
       integer, intent(in) :: unit
-      real(dp) :: c(8)
-      integer :: ios
+      class(model_type), allocatable :: blank
+      integer :: ios, i
       character(len=512) :: msg
-      call constants_namelist(c, ios, msg, unit=unit)
+      allocate (blank, source=model)
+      do i = 1, blank%n_constants()
+         call blank%set_constant(i, unset)
+      end do
+      call blank%constants_namelist(unset, ios, msg, unit=unit)
    end subroutine write_constants_defaults
-
-   !> The &constants namelist, every constant unset: read from text or written to unit; c in
-   !> the order A1, A2, B, C2, H1, H2, n, Q
-   subroutine constants_namelist(c, ios, msg, text, unit)
-      real(dp), intent(out) :: c(8)
-      integer, intent(out) :: ios
-      character(len=*), intent(out) :: msg
-      character(len=*), intent(in), optional :: text(:)
-      integer, intent(in), optional :: unit
-      real(dp) :: a1, a2, b, c2, h1, h2, n, q
-      namelist /constants/ a1, a2, b, c2, h1, h2, n, q
-      a1 = unset; a2 = unset; b = unset; c2 = unset
-      h1 = unset; h2 = unset; n = unset; q = unset
-      ios = 0
-      msg = ''
-      if (present(text)) read (text, nml=constants, iostat=ios, iomsg=msg)
-      if (present(unit)) write (unit, nml=constants, iostat=ios, iomsg=msg)
-      c = [a1, a2, b, c2, h1, h2, n, q]
-   end subroutine constants_namelist
 
 end module usharp_input_model

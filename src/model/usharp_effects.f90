@@ -7,15 +7,17 @@
 module usharp_effects
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_miller, only: miller_model, flow_rate, back_recovery, drag_recovery, model_setup
+   use usharp_model, only: model_type
+   use usharp_model_miller, only: miller_model, flow_rate, back_recovery, drag_recovery
    implicit none
    private
 
    public :: test_effects, effect_info, n_effects, effect_catalogue, effect_index
    public :: effects_of, extended_rates, n_extended, lagged_value, lag_corners, effect_nparams
-   public :: param_global, param_per_test, effect_model
+   public :: param_global, param_per_test, effect_model, extended_size, extended_initial
 
-   !> States of the extended model: eps_in, R, D, accumulated inelastic strain p, R2
+   !> States of the extended Miller model: eps_in, R, D, accumulated inelastic strain p, R2;
+   !> of any other model its own states, then p and R2
    integer, parameter :: n_extended = 5
    !> How an effect's parameter is shared: one value for all tests, or one per test
    integer, parameter :: param_global = 1, param_per_test = 2
@@ -161,26 +163,60 @@ contains
    end function effects_of
 
    !> The model a test with effects eff sees: temperature T + dT, modulus
-   !> E*(1 + dE/E)*(1 + dlnE_dT*dT), set up again. B*theta follows the temperature, D0 stays
-   !> that of the nominal temperature: the virgin material's drag is a state of the specimen,
-   !> not of the thermocouple's reading (D0 from the yield stress at T + dT would keep a
-   !> hotter test exactly as strong at the reference rate, and make an offset shared by every
-   !> test a mere factor on B that the constants take up)
-   pure subroutine effect_model(model, eff, out, error)
-      type(miller_model), intent(in) :: model
+   !> E*(1 + dE/E)*(1 + dlnE_dT*dT), set up again. B*theta follows the temperature; the Miller
+   !> model's D0 stays that of the nominal temperature: the virgin material's drag is a state of
+   !> the specimen, not of the thermocouple's reading (D0 from the yield stress at T + dT would
+   !> keep a hotter test exactly as strong at the reference rate, and make an offset shared by
+   !> every test a mere factor on B that the constants take up). The nominal temperature is the
+   !> test's own when given, else the model's.
+   subroutine effect_model(model, eff, out, error, temperature)
+      class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
-      type(miller_model), intent(out) :: out
+      class(model_type), allocatable, intent(out) :: out
       type(error_type), allocatable, intent(out) :: error
+      !> K, the test's own temperature (when > 0) in place of the model's
+      real(dp), intent(in), optional :: temperature
       real(dp) :: d0_nominal
-      out = model
-      call model_setup(out, error)
+      allocate (out, source=model)
+      if (present(temperature)) then
+         if (temperature > 0.0_dp) out%temperature = temperature
+      end if
+      call out%setup(error)
       if (allocated(error)) return
-      d0_nominal = out%d0
-      out%temperature = model%temperature + eff%dtemp
+      d0_nominal = 0.0_dp
+      select type (out)
+      type is (miller_model)
+         d0_nominal = out%d0
+      end select
+      out%temperature = out%temperature + eff%dtemp
       out%youngs = model%youngs*(1.0_dp + eff%modulus)*(1.0_dp + eff%dlnE_dT*eff%dtemp)
-      call model_setup(out, error)
-      out%d0 = d0_nominal
+      call out%setup(error)
+      select type (out)
+      type is (miller_model)
+         out%d0 = d0_nominal
+      end select
    end subroutine effect_model
+
+   !> Number of states of the extended model
+   pure integer function extended_size(model) result(n)
+      class(model_type), intent(in) :: model
+      n = model%n_uniaxial() + 2
+   end function extended_size
+
+   !> Start of the extended state: the model's virgin state with, for the Miller model, the
+   !> initial back stress R0 and the drag stress D0*(1 + dD0/D0) + dD0; p = R2 = 0
+   pure subroutine extended_initial(model, eff, y)
+      class(model_type), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(out) :: y(:)
+      select type (model)
+      type is (miller_model)
+         y = [0.0_dp, eff%r0, model%d0*(1.0_dp + eff%strength) + eff%dd0, 0.0_dp, 0.0_dp]
+      class default
+         y = 0.0_dp
+         call model%uniaxial_initial(y(1:size(y) - 2))
+      end select
+   end subroutine extended_initial
 
    !> Value of a piecewise-linear control (corners tc, vc) seen through a first-order lag of
    !> time constant tau (s) starting at rest on vc(1), at time t in segment k; yk(k) holds the
@@ -222,6 +258,59 @@ contains
    !> also jac(i, j) = d ydot_i / d y_j, sigma depending on eps_in through dsig_depsin
    !> (the values are the same bit for bit with and without it).
    pure subroutine extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
+      class(model_type), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(in) :: sigma, y(:)
+      real(dp), intent(out) :: ydot(:)
+      real(dp), intent(in), optional :: dsig_depsin
+      real(dp), intent(out), optional :: jac(:, :)
+      select type (model)
+      type is (miller_model)
+         call miller_extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
+      class default
+         call wrapped_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
+      end select
+   end subroutine extended_rates
+
+   !> Any model's rates wrapped: its states y(1:m) driven by sigma - R2 (its rates depend on
+   !> eps_in only through sigma), then
+   !> dp/dt = |deps_in/dt| and dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. The Miller-specific
+   !> parts of the effects (softening of the drag, R0 and the drag offsets) do not apply.
+   pure subroutine wrapped_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
+      class(model_type), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(in) :: sigma, y(:)
+      real(dp), intent(out) :: ydot(:)
+      real(dp), intent(in), optional :: dsig_depsin
+      real(dp), intent(out), optional :: jac(:, :)
+      real(dp) :: sg, dfdy(size(y)), dfds(size(y) - 2)
+      integer :: m, np, nr
+      m = size(y) - 2
+      np = m + 1
+      nr = m + 2
+      if (present(jac)) then
+         ! The rates depend on eps_in only through sigma: with d sigma/d eps_in = 1 the first
+         ! column of the model's Jacobian is d ydot/d sigma; d sigma_eff/d R2 = -1
+         jac = 0.0_dp
+         call model%uniaxial_rates(sigma - y(nr), 1.0_dp, y(1:m), ydot(1:m), jac(1:m, 1:m))
+         dfds = jac(1:m, 1)
+         jac(1:m, 1) = dfds*dsig_depsin
+         jac(1:m, nr) = -dfds
+      else
+         call model%uniaxial_rates(sigma - y(nr), 0.0_dp, y(1:m), ydot(1:m))
+      end if
+      ydot(np) = abs(ydot(1))
+      ydot(nr) = eff%h3*ydot(1) - eff%gamma3*y(nr)*ydot(np)
+      if (.not. present(jac)) return
+      sg = sign(1.0_dp, ydot(1))
+      dfdy = sg*jac(1, :)
+      jac(np, :) = dfdy
+      jac(nr, :) = eff%h3*jac(1, :) - eff%gamma3*y(nr)*dfdy
+      jac(nr, nr) = jac(nr, nr) - eff%gamma3*ydot(np)
+   end subroutine wrapped_rates
+
+   !> The Miller model's extended rates (below)
+   pure subroutine miller_extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
       type(miller_model), intent(in) :: model
       type(test_effects), intent(in) :: eff
       real(dp), intent(in) :: sigma, y(n_extended)
@@ -261,5 +350,5 @@ contains
       jac(4, :) = df
       jac(5, :) = eff%h3*jac(1, :) - eff%gamma3*y(5)*df
       jac(5, 5) = jac(5, 5) - eff%gamma3*f
-   end subroutine extended_rates
+   end subroutine miller_extended_rates
 end module usharp_effects

@@ -18,9 +18,9 @@
 module usharp_upf
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_miller, only: miller_model, miller_constants, model_setup, gas_constant
-   use usharp_miller_update, only: miller_update, update_status_ok, update_status_cut, n_state, &
-                                   elastic_moduli
+   use usharp_model_miller, only: miller_model, miller_constants, model_setup, gas_constant
+   use usharp_model_miller, only: miller_update, n_state
+   use usharp_model, only: update_status_ok, update_status_cut, elastic_moduli
    implicit none
    private
 
@@ -139,7 +139,7 @@ contains
          end do
          return
       end if
-      call elastic_moduli(m, g, k)
+      call elastic_moduli(m%youngs, m%poisson, g, k)
       c = 0.0_dp
       do i = 1, 3
          do j = 1, 3
@@ -246,7 +246,7 @@ contains
       end do
       y0(13) = statev(7)
       if (y0(13) <= 0.0_dp) y0(13) = mat%model%d0
-      call elastic_moduli(mat%model, g, k)
+      call elastic_moduli(mat%model%youngs, mat%model%poisson, g, k)
       if (ntens == 3) then
          call plane_stress_update(mat%model, g, k, dt, y0, eps0, deps, sig, y, c, status)
       else

@@ -1,0 +1,365 @@
+!> What every part of usharp needs from a unified viscoplastic model, in one place: an
+!> abstract type that each model extends (one module per model, registered in
+!> usharp_model_registry). Drivers, the objective, the optimisers, identify, design, the
+!> deck writer and the user-material adapters hold a class(model_type) and know no model by
+!> name.
+!>
+!> A model provides
+!> - its constants: count, names, units (the power of the stress unit in each), literature
+!>   ranges (the default bounds and multi-start box), get and set by number, and its
+!>   &constants namelist (read and written with the constants' own names);
+!> - setup: checks of the constants and conditions, and what follows from them at the
+!>   model's temperature (temperature enters only here: rates and updates see the set-up
+!>   model, so a test at another temperature is the model set up again);
+!> - the uniaxial form: its state (the first component is the inelastic strain), the virgin
+!>   state, the rates with their analytic Jacobian (RODAS4 and CVODE), which states are
+!>   stresses (absolute tolerances) and the back stress and drag stress the outputs report;
+!> - the 3-D form: its state (Mandel vectors), the virgin state and the implicit J2 stress
+!>   update over an increment with its consistent tangent (the single-element driver and
+!>   the UMAT / USERMAT adapters);
+!> - the FE property list of its drop-in user material.
+!>
+!> Units: stresses in the model's unit (ksi or MPa), time in s, temperature in K.
+module usharp_model
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: lower
+   implicit none
+   private
+
+   public :: model_type, constant_index, constant_names, elastic_moduli
+   public :: update_status_ok, update_status_cut, block_scalar, block_strain, block_stress
+
+   !> Kinds of block in the FE state layout: a scalar, or a 6-component strain or stress
+   !> tensor (engineering shear strain, tensor shear stress in the code's order)
+   integer, parameter :: block_scalar = 0, block_strain = 1, block_stress = 2
+
+   !> Outcome of a 3-D stress update: converged, or the caller must retry with a smaller
+   !> increment
+   integer, parameter :: update_status_ok = 0, update_status_cut = 1
+
+   !> A unified viscoplastic model at one temperature. The components are what every model
+   !> has; a model's constants and derived quantities live in its extension.
+   type, abstract :: model_type
+      real(dp) :: temperature = 866.15_dp  !< K
+      real(dp) :: tm = 1800.0_dp           !< melting temperature, K
+      real(dp) :: youngs = 22.5e3_dp       !< Young's modulus, model stress unit
+      real(dp) :: poisson = 0.3_dp         !< Poisson's ratio
+   contains
+      !> The model's name as &model name gives it (lower case)
+      procedure(name_fn), deferred :: name
+      !> Number of constants
+      procedure(count_fn), deferred :: n_constants
+      !> Name of constant i (as logs and reports print it)
+      procedure(constant_name_fn), deferred :: constant_name
+      !> Power of the stress unit in the unit of constant i (1/ksi: -1)
+      procedure(power_fn), deferred :: stress_power
+      !> Literature range of constant i in the stress unit literature_units gives
+      procedure(range_sub), deferred :: literature_range
+      !> Stress unit of the literature ranges (ksi or MPa)
+      procedure(name_fn), deferred :: literature_units
+      !> Constant i
+      procedure(get_fn), deferred :: get_constant
+      !> Set constant i (setup must follow before the model is used)
+      procedure(set_sub), deferred :: set_constant
+      !> The &constants namelist: read from text (constants not given keep the value unset)
+      !> or written to unit
+      procedure(namelist_sub), deferred :: constants_namelist
+      !> Check constants and conditions and derive what depends on them and on temperature
+      procedure(setup_sub), deferred :: setup
+      !> Number of uniaxial states (the first is the inelastic strain)
+      procedure(count_fn), deferred :: n_uniaxial
+      !> The virgin uniaxial state
+      procedure(initial_sub), deferred :: uniaxial_initial
+      !> Whether uniaxial state i is a stress (absolute tolerance scaled by E) or a strain
+      procedure(is_stress_fn), deferred :: uniaxial_is_stress
+      !> Whether a uniaxial state lies inside the model (the rates are defined there)
+      procedure(admissible_fn), deferred :: admissible
+      !> Uniaxial rates and their Jacobian
+      procedure(rates_sub), deferred :: uniaxial_rates
+      !> Back stress and drag stress the outputs report for a uniaxial state
+      procedure(outputs_sub), deferred :: uniaxial_outputs
+      !> Number of 3-D states
+      procedure(count_fn), deferred :: n_state
+      !> The virgin 3-D state
+      procedure(initial_sub), deferred :: state_initial
+      !> Implicit J2 stress update with its consistent tangent
+      procedure(update_sub), deferred :: stress_update
+      !> Substeps the update takes per increment when it needs no more (nsub of an easy one)
+      procedure(count_fn), deferred :: update_substeps
+      !> Inelastic strain, back stress and drag stress in the 11 direction of a 3-D state
+      !> under uniaxial stress in 11, as the outputs report them
+      procedure(state_outputs_sub), deferred :: state_outputs
+      !> Number of properties of the drop-in user material
+      procedure(count_fn), deferred :: n_props
+      !> Name of property i
+      procedure(constant_name_fn), deferred :: prop_name
+      !> The property list of the model
+      procedure(props_sub), deferred :: to_props
+      !> The model from a property list at temperature temp (K), set up; message is empty when
+      !> the properties can be used, else one line naming the offending property
+      procedure(from_props_sub), deferred :: from_props
+      !> Layout of the FE state variables: block b of the 3-D state starts at y(y_first(b)),
+      !> is stored from statev(code_first(b)) and is of kind(b) (block_scalar, _strain, _stress)
+      procedure(layout_sub), deferred :: fe_layout
+      !> State variables an FE code must start from other than zero (the external backend
+      !> writes them after the properties, an APDL deck sets them by TB,STATE): their
+      !> positions in statev, values, short names and descriptions
+      procedure :: fe_start_values
+      !> A 3-D state read from an FE code's state variables, which start as zeros: its unset
+      !> parts take their virgin values
+      procedure(complete_sub), deferred :: complete_state
+      !> Derivative of the uniaxial rates in constant i by central differences, with what
+      !> depends on temperature kept (forward sensitivities); a model may do it faster
+      procedure :: rates_constant_derivative
+      !> The stress unit (ksi or MPa) of the constants: defaults that depend on it follow
+      procedure :: set_units
+      !> A setting of the model's own in &model (name, value); an error when it has none
+      procedure :: set_option
+      !> Stresses the set-up model derived that outputs report (name and value, model unit)
+      procedure :: derived_values
+   end type model_type
+
+   abstract interface
+      pure function name_fn(self) result(name)
+         import :: model_type
+         class(model_type), intent(in) :: self
+         character(len=:), allocatable :: name
+      end function name_fn
+
+      pure integer function count_fn(self) result(n)
+         import :: model_type
+         class(model_type), intent(in) :: self
+      end function count_fn
+
+      pure function constant_name_fn(self, i) result(name)
+         import :: model_type
+         class(model_type), intent(in) :: self
+         integer, intent(in) :: i
+         character(len=:), allocatable :: name
+      end function constant_name_fn
+
+      pure integer function power_fn(self, i) result(p)
+         import :: model_type
+         class(model_type), intent(in) :: self
+         integer, intent(in) :: i
+      end function power_fn
+
+      pure subroutine range_sub(self, i, low, high)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         integer, intent(in) :: i
+         real(dp), intent(out) :: low, high
+      end subroutine range_sub
+
+      pure real(dp) function get_fn(self, i) result(val)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         integer, intent(in) :: i
+      end function get_fn
+
+      pure subroutine set_sub(self, i, val)
+         import :: model_type, dp
+         class(model_type), intent(inout) :: self
+         integer, intent(in) :: i
+         real(dp), intent(in) :: val
+      end subroutine set_sub
+
+      !> With text: every constant is set to unset, then read; with unit: written
+      subroutine namelist_sub(self, unset, ios, msg, text, unit)
+         import :: model_type, dp
+         class(model_type), intent(inout) :: self
+         real(dp), intent(in) :: unset
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         character(len=*), intent(in), optional :: text(:)
+         integer, intent(in), optional :: unit
+      end subroutine namelist_sub
+
+      pure subroutine setup_sub(self, error)
+         import :: model_type, error_type
+         class(model_type), intent(inout) :: self
+         type(error_type), allocatable, intent(out) :: error
+      end subroutine setup_sub
+
+      pure subroutine initial_sub(self, y)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(out) :: y(:)
+      end subroutine initial_sub
+
+      pure logical function is_stress_fn(self, i) result(is_stress)
+         import :: model_type
+         class(model_type), intent(in) :: self
+         integer, intent(in) :: i
+      end function is_stress_fn
+
+      pure logical function admissible_fn(self, y) result(ok)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(in) :: y(:)
+      end function admissible_fn
+
+      !> Rates ydot of the state y at stress sigma and, if asked, jac(i, j) = d ydot_i / d y_j
+      !> where sigma depends on the inelastic strain y(1) through dsig_depsin (-E under strain
+      !> control, 0 under stress control). The values are the same with and without jac.
+      pure subroutine rates_sub(self, sigma, dsig_depsin, y, ydot, jac)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(in) :: sigma, dsig_depsin, y(:)
+         real(dp), intent(out) :: ydot(:)
+         real(dp), intent(out), optional :: jac(:, :)
+      end subroutine rates_sub
+
+      pure subroutine outputs_sub(self, y, back, drag)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(in) :: y(:)
+         real(dp), intent(out) :: back, drag
+      end subroutine outputs_sub
+
+      !> Stress update over one increment: eps0 the strain at its start, deps its increment
+      !> (Mandel: 11, 22, 33, sqrt2*12, sqrt2*23, sqrt2*13), dt the time step (s), y0 the
+      !> state at the start. On success status = update_status_ok with sigma, y and the
+      !> consistent tangent ddsde = d sigma / d eps; otherwise update_status_cut (the caller
+      !> retries smaller). nsub returns the substeps used, nsubsteps asks for a number.
+      pure subroutine update_sub(self, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, nsubsteps)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(in) :: eps0(6), deps(6), dt, y0(:)
+         real(dp), intent(out) :: sigma(6), y(:), ddsde(6, 6)
+         integer, intent(out) :: status, nsub
+         integer, intent(in), optional :: nsubsteps
+      end subroutine update_sub
+
+      pure subroutine state_outputs_sub(self, y, eps_in, back, drag)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(in) :: y(:)
+         real(dp), intent(out) :: eps_in, back, drag
+      end subroutine state_outputs_sub
+
+      pure subroutine props_sub(self, props)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(out) :: props(:)
+      end subroutine props_sub
+
+      pure subroutine from_props_sub(self, props, temp, message)
+         import :: model_type, dp
+         class(model_type), intent(inout) :: self
+         real(dp), intent(in) :: props(:), temp
+         character(len=*), intent(out) :: message
+      end subroutine from_props_sub
+
+      pure subroutine layout_sub(self, y_first, code_first, kind)
+         import :: model_type
+         class(model_type), intent(in) :: self
+         integer, allocatable, intent(out) :: y_first(:), code_first(:), kind(:)
+      end subroutine layout_sub
+
+      pure subroutine complete_sub(self, y)
+         import :: model_type, dp
+         class(model_type), intent(in) :: self
+         real(dp), intent(inout) :: y(:)
+      end subroutine complete_sub
+   end interface
+
+contains
+
+   !> d ydot / d c_i by central differences (relative step 1e-6) of models with constant i
+   !> changed and set up again: what depends on temperature follows the constant
+   pure subroutine rates_constant_derivative(self, i, sigma, dsig_depsin, y, dfdc)
+      class(model_type), intent(in) :: self
+      integer, intent(in) :: i
+      real(dp), intent(in) :: sigma, dsig_depsin, y(:)
+      real(dp), intent(out) :: dfdc(:)
+      class(model_type), allocatable :: mp, mm
+      type(error_type), allocatable :: error
+      real(dp) :: c, h, fp(size(y)), fm(size(y))
+      c = self%get_constant(i)
+      h = 1.0e-6_dp*abs(c)
+      allocate (mp, source=self)
+      allocate (mm, source=self)
+      call mp%set_constant(i, c + h)
+      call mm%set_constant(i, c - h)
+      call mp%setup(error)
+      if (.not. allocated(error)) call mm%setup(error)
+      if (allocated(error)) then
+         dfdc = 0.0_dp
+         return
+      end if
+      call mp%uniaxial_rates(sigma, dsig_depsin, y, fp)
+      call mm%uniaxial_rates(sigma, dsig_depsin, y, fm)
+      dfdc = (fp - fm)/(2.0_dp*h)
+   end subroutine rates_constant_derivative
+
+   !> No defaults depend on the unit
+   pure subroutine set_units(self, units)
+      class(model_type), intent(inout) :: self
+      character(len=*), intent(in) :: units
+   end subroutine set_units
+
+   !> No settings of its own
+   pure subroutine set_option(self, name, val, error)
+      class(model_type), intent(inout) :: self
+      character(len=*), intent(in) :: name
+      real(dp), intent(in) :: val
+      type(error_type), allocatable, intent(out) :: error
+      call fatal_error(error, name//' is not a setting of the '//self%name()//' model')
+   end subroutine set_option
+
+   !> Every state variable starts at zero
+   pure subroutine fe_start_values(self, pos, vals, names, notes)
+      class(model_type), intent(in) :: self
+      integer, allocatable, intent(out) :: pos(:)
+      real(dp), allocatable, intent(out) :: vals(:)
+      character(len=:), allocatable, intent(out) :: names(:), notes(:)
+      allocate (pos(0), vals(0))
+      allocate (character(len=1) :: names(0), notes(0))
+   end subroutine fe_start_values
+
+   !> Nothing derived to report
+   pure subroutine derived_values(self, names, vals)
+      class(model_type), intent(in) :: self
+      character(len=:), allocatable, intent(out) :: names(:)
+      real(dp), allocatable, intent(out) :: vals(:)
+      allocate (character(len=1) :: names(0))
+      allocate (vals(0))
+   end subroutine derived_values
+
+   !> Index of a constant by its (case-insensitive) name, 0 if the model has none of that name
+   pure integer function constant_index(model, name) result(idx)
+      class(model_type), intent(in) :: model
+      character(len=*), intent(in) :: name
+      integer :: i
+      idx = 0
+      do i = 1, model%n_constants()
+         if (lower(trim(adjustl(name))) == lower(model%constant_name(i))) idx = i
+      end do
+   end function constant_index
+
+   !> Names of the constants with indices idx (blank-padded to the longest)
+   pure function constant_names(model, idx) result(names)
+      class(model_type), intent(in) :: model
+      integer, intent(in) :: idx(:)
+      character(len=:), allocatable :: names(:)
+      integer :: j, w
+      w = 1
+      do j = 1, size(idx)
+         w = max(w, len(model%constant_name(idx(j))))
+      end do
+      allocate (character(len=w) :: names(size(idx)))
+      do j = 1, size(idx)
+         names(j) = model%constant_name(idx(j))
+      end do
+   end function constant_names
+
+   !> Shear and bulk moduli from E and Poisson's ratio
+   elemental subroutine elastic_moduli(youngs, poisson, g, k)
+      real(dp), intent(in) :: youngs, poisson
+      real(dp), intent(out) :: g, k
+      g = youngs/(2.0_dp*(1.0_dp + poisson))
+      k = youngs/(3.0_dp*(1.0_dp - 2.0_dp*poisson))
+   end subroutine elastic_moduli
+end module usharp_model
