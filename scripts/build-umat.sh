@@ -25,7 +25,8 @@ out="$(cd "$out" && pwd)"
 cd "$here"
 # The drop-in sources, in dependency order; the message module and the adapter per code
 core=(src/util/usharp_kinds.f90 src/util/usharp_error.f90 src/util/usharp_strings.f90
-      src/model/usharp_miller.f90 src/model/usharp_miller_update.f90 src/upf/usharp_upf.f90)
+      src/util/usharp_units.f90 src/model/usharp_model.f90 src/model/usharp_model_j2.f90
+      src/model/usharp_model_miller.f90 src/upf/usharp_upf.f90)
 report=src/upf/usharp_upf_report.f90
 warn=(-Wall -Wextra -Wimplicit-interface -Wno-unused-dummy-argument -Werror)
 flags=(-O2 -fPIC -std=f2018 "${warn[@]}")

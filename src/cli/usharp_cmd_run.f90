@@ -4,7 +4,7 @@ module usharp_cmd_run
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input
    use usharp_strings, only: str, real_str
-   use usharp_model, only: model_type, constant_names
+   use usharp_model, only: model_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
    use usharp_objective, only: fit_problem, setup_problem, simulated
@@ -60,8 +60,8 @@ contains
          character(len=200), allocatable :: report(:)
          character(len=:), allocatable :: dir
          real(dp), allocatable :: start(:), dvals(:)
-         character(len=:), allocatable :: names(:), dnames(:)
-         integer :: i, j
+         character(len=:), allocatable :: dnames(:)
+         integer :: i, j, w
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
          if (allocated(error)) return
@@ -93,7 +93,10 @@ contains
          call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume)
          if (allocated(error)) return
 
-         names = constant_names(cfg%model, [(j, j=1, cfg%model%n_constants())])
+         w = 1
+         do j = 1, cfg%model%n_constants()
+            w = max(w, len(cfg%model%constant_name(j)))
+         end do
          start = [(cfg%model%get_constant(j), j=1, cfg%model%n_constants())]
          call prob%model_of(out%opt%x, best, error)
          if (allocated(error)) return
@@ -116,7 +119,7 @@ contains
          end do
          summary = [character(len=200) :: summary, '  constant        start          fitted']
          do j = 1, size(start)
-            summary = [character(len=200) :: summary, '  '//names(j)//'  '// &
+            summary = [character(len=200) :: summary, '  '//pad(cfg%model%constant_name(j), w)//'  '// &
                real_str(start(j), 'es14.6')//'  '//real_str(best%get_constant(j), 'es14.6')// &
                merge('         ', '  (fixed)', cfg%fit%fitted(j))]
          end do
@@ -251,4 +254,11 @@ contains
       end associate
    end subroutine write_peaks
 
+   !> name blank-padded to width w
+   pure function pad(name, w) result(padded)
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: w
+      character(len=max(w, len(name))) :: padded
+      padded = name
+   end function pad
 end module usharp_cmd_run
