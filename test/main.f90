@@ -3,6 +3,7 @@ program tester
    use, intrinsic :: iso_fortran_env, only: output_unit
    use testdrive, only: error_type, unittest_type, testsuite_type, new_testsuite, skipped
    use test_model, only: collect_model
+   use test_models, only: collect_models
    use test_history, only: collect_history
    use test_driver, only: collect_driver
    use test_input, only: collect_input
@@ -28,6 +29,7 @@ program tester
 
    suites = [ &
       new_testsuite('model', collect_model), &
+      new_testsuite('models', collect_models), &
       new_testsuite('history', collect_history), &
       new_testsuite('driver', collect_driver), &
       new_testsuite('table', collect_table), &

@@ -542,6 +542,8 @@ contains
    !> defaults) has a row in the group's section of docs/reference/namelist.md
    subroutine test_reference_complete(error)
       use usharp_input_model, only: write_model_defaults, write_constants_defaults
+      use usharp_model, only: model_type
+      use usharp_model_registry, only: model_by_number, n_models
       use usharp_input_solver, only: write_solver_defaults
       use usharp_input_output, only: write_output_defaults
       use usharp_input_fit, only: write_fit_defaults
@@ -552,6 +554,7 @@ contains
       character(len=*), parameter :: reference = 'docs/reference/namelist.md'
       character(len=:), allocatable :: doc, missing
       character(len=16), allocatable :: names(:)
+      class(model_type), allocatable :: model
       integer :: g, i, unit
       logical :: exists
       inquire (file=reference, exist=exists)
@@ -566,7 +569,12 @@ contains
                delim='apostrophe')
          select case (trim(known_groups(g)))
          case ('model'); call write_model_defaults(unit)
-         case ('constants'); call write_constants_defaults(unit)
+         case ('constants')
+            ! Every registered model's constants
+            do i = 1, n_models
+               call model_by_number(i, model)
+               call write_constants_defaults(model, unit)
+            end do
          case ('solver'); call write_solver_defaults(unit)
          case ('output'); call write_output_defaults(unit)
          case ('fit'); call write_fit_defaults(unit)
