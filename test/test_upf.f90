@@ -5,7 +5,8 @@ module test_upf
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_abaqus, perm_ansys, &
-                         upf_ok, upf_cut, upf_invalid, n_upf_state
+                         upf_ok, upf_cut, upf_invalid
+   use usharp_model_miller, only: miller_model, n_upf_state => n_state
    implicit none
    private
    public :: collect_upf
@@ -59,6 +60,7 @@ contains
       real(dp), intent(in) :: de11, dt
       logical, intent(out) :: ok
       type(upf_result) :: res
+      type(miller_model) :: mm
       real(dp) :: d(6), s(6), v(n_upf_state), c(6, 6), a(2, 2), r(2)
       integer, allocatable :: lat(:)
       integer :: it, n
@@ -71,7 +73,7 @@ contains
       do it = 1, 30
          s = p%stress
          v = p%statev
-         call upf_update(props, temp, dt, perm_abaqus, n, p%stran(:n), d(:n), s(:n), v, c(:n, :n), res)
+         call upf_update(mm, props, temp, dt, perm_abaqus, n, p%stran(:n), d(:n), s(:n), v, c(:n, :n), res)
          if (res%status /= upf_ok) return
          if (maxval(abs(s(lat))) <= 1.0e-11_dp*max(maxval(abs(s(:n))), 22.5_dp)) exit
          a(:size(lat), :size(lat)) = c(lat, lat)
@@ -166,6 +168,7 @@ contains
       integer, intent(in) :: ntens
       type(point) :: p
       type(upf_result) :: res
+      type(miller_model) :: mm
       real(dp) :: d(ntens), s(ntens), sp(ntens), sm(ntens), v(n_upf_state), c(ntens, ntens)
       real(dp) :: fd(ntens, ntens), cd(ntens, ntens), h, dev, e_old
       integer :: j, k
@@ -183,7 +186,7 @@ contains
       if (ntens == 4) d(3) = -5.0e-5_dp
       s = p%stress(:ntens)
       v = p%statev
-      call upf_update(props, temp, 0.15_dp, perm_abaqus, ntens, p%stran(:ntens), d, s, v, c, res)
+      call upf_update(mm, props, temp, 0.15_dp, perm_abaqus, ntens, p%stran(:ntens), d, s, v, c, res)
       if (res%status /= upf_ok) then
          call test_failed(error, 'update did not converge')
          return
@@ -193,11 +196,11 @@ contains
          d(j) = d(j) + h
          sp = p%stress(:ntens)
          v = p%statev
-         call upf_update(props, temp, 0.15_dp, perm_abaqus, ntens, p%stran(:ntens), d, sp, v, cd, res)
+         call upf_update(mm, props, temp, 0.15_dp, perm_abaqus, ntens, p%stran(:ntens), d, sp, v, cd, res)
          d(j) = d(j) - 2*h
          sm = p%stress(:ntens)
          v = p%statev
-         call upf_update(props, temp, 0.15_dp, perm_abaqus, ntens, p%stran(:ntens), d, sm, v, cd, res)
+         call upf_update(mm, props, temp, 0.15_dp, perm_abaqus, ntens, p%stran(:ntens), d, sm, v, cd, res)
          d(j) = d(j) + h
          fd(:, j) = (sp - sm)/(2*h)
       end do
@@ -273,12 +276,13 @@ contains
    subroutine test_invalid(error)
       type(error_type), allocatable, intent(out) :: error
       type(upf_result) :: res
+      type(miller_model) :: mm
       real(dp) :: bad(13), s(6), v(13), c(6, 6), ce(6, 6), c4(4, 4), ce4(4, 4)
       bad = props
       bad(3) = -0.8_dp
       s = 1.0_dp
       v = 0.0_dp
-      call upf_update(bad, temp, 0.1_dp, perm_ansys, 6, [real(dp) :: 0, 0, 0, 0, 0, 0], &
+      call upf_update(mm, bad, temp, 0.1_dp, perm_ansys, 6, [real(dp) :: 0, 0, 0, 0, 0, 0], &
                       [1.0e-4_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp], s, v, c, res)
       call upf_elastic_tangent(props, perm_ansys, 6, ce)
       call check(error, res%status == upf_invalid .and. index(res%message, 'A1') > 0 .and. &
@@ -288,7 +292,7 @@ contains
       if (allocated(error)) return
       bad = props
       bad(13) = 800.0_dp   ! Tm below the temperature
-      call upf_update(bad, temp, 0.1_dp, perm_abaqus, 4, [real(dp) :: 0, 0, 0, 0], &
+      call upf_update(mm, bad, temp, 0.1_dp, perm_abaqus, 4, [real(dp) :: 0, 0, 0, 0], &
                       [1.0e-4_dp, 0.0_dp, 0.0_dp, 0.0_dp], s(1:4), v, c4, res)
       call upf_elastic_tangent(props, perm_abaqus, 4, ce4)
       call check(error, res%status == upf_invalid .and. index(res%message, 'Tm') > 0 .and. &
@@ -302,10 +306,11 @@ contains
       use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
       type(error_type), allocatable, intent(out) :: error
       type(upf_result) :: res
+      type(miller_model) :: mm
       real(dp) :: s(3), v(13), c(3, 3), ce(3, 3)
       s = [3.0_dp, 0.0_dp, 0.0_dp]
       v = 0.0_dp
-      call upf_update(props, temp, 0.1_dp, perm_abaqus, 3, [0.0_dp, 0.0_dp, 0.0_dp], &
+      call upf_update(mm, props, temp, 0.1_dp, perm_abaqus, 3, [0.0_dp, 0.0_dp, 0.0_dp], &
                       [1.0e-3_dp, ieee_value(1.0_dp, ieee_quiet_nan), 0.0_dp], s, v, c, res)
       call upf_elastic_tangent(props, perm_abaqus, 3, ce)
       call check(error, res%status == upf_cut .and. all(s == [3.0_dp, 0.0_dp, 0.0_dp]) .and. &
@@ -371,6 +376,7 @@ contains
       integer, parameter :: swap(13) = [1, 2, 3, 4, 6, 5, 7, 8, 9, 10, 11, 13, 12]
       type(error_type), allocatable, intent(out) :: error
       type(upf_result) :: res
+      type(miller_model) :: mm
       real(dp) :: sa(4), sb(4), sc(4), va(13), vb(13), vc(13), ca(4, 4), cb(4, 4), cc(4, 4)
       real(dp) :: e(4), d(4), z, z2(2), z3(3), z33(3, 3), z4(4), zb(4), zc(4), pnewdt, cutf
       real(dp) :: sse, spd, scd, rpl, drpldt, sedel, sedpl, epseq, epspl(4), epszz
@@ -397,7 +403,7 @@ contains
             call usermat(1, 1, 1, 1, 1, 1, 1, keycut, ndi, 1, nt, 13, 13, z, 0.5_dp, temp, z, &
                          sb(:nt), vb, cb(:nt, :nt), sedel, sedpl, epseq, e(:nt), d(:nt), epspl(:nt), &
                          props, z3, z, z33, z33, z2, epszz, cutf, z, z, z, z, z, z, z)
-            call upf_update(props, temp, 0.5_dp, perm_abaqus, nt, e(:nt), d(:nt), sc(:nt), vc, &
+            call upf_update(mm, props, temp, 0.5_dp, perm_abaqus, nt, e(:nt), d(:nt), sc(:nt), vc, &
                             cc(:nt, :nt), res)
             if (pnewdt < 1.0_dp .or. keycut /= 0 .or. res%status /= upf_ok) then
                call test_failed(error, 'an increment was cut')

@@ -13,7 +13,8 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
                 layer, kspt, kstep, kinc)
    use usharp_kinds, only: dp
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_abaqus, &
-                         n_upf_props, n_upf_state, upf_ok, upf_cut, upf_call_problem
+                         upf_ok, upf_cut, upf_call_problem
+   use usharp_model_miller, only: miller_model
    use usharp_upf_report, only: upf_report_invalid
    implicit none
    integer, intent(in) :: ndi, nshr, ntens, nstatv, nprops, noel, npt, layer, kspt, kstep, kinc
@@ -28,15 +29,19 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
    !> (small enough that the code stops at its minimum increment)
    real(dp), parameter :: cut_factor = 0.25_dp, stop_factor = 1.0e-6_dp
    type(upf_result) :: res
+   !> The model this adapter serves, set up from the properties at every call
+   type(miller_model) :: model
+   character(len=40) :: card
    rpl = 0.0_dp
    ddsddt = 0.0_dp
    drplde = 0.0_dp
    drpldt = 0.0_dp
-   res%message = upf_call_problem(nprops, nstatv, ndi, nshr, '*USER MATERIAL, CONSTANTS=13', &
-                                  '*DEPVAR', 'NDI', 'NSHR')
+   write (card, '(a,i0)') '*USER MATERIAL, CONSTANTS=', model%n_props()
+   res%message = upf_call_problem(model, nprops, nstatv, ndi, nshr, trim(card), '*DEPVAR', 'NDI', &
+                                  'NSHR')
    if (len_trim(res%message) == 0) then
-      call upf_update(props(1:n_upf_props), temp + dtemp, dtime, perm_abaqus, ntens, stran, &
-                      dstran, stress, statev(1:n_upf_state), ddsdde, res)
+      call upf_update(model, props(1:model%n_props()), temp + dtemp, dtime, perm_abaqus, ntens, stran, &
+                      dstran, stress, statev(1:model%n_state()), ddsdde, res)
       if (res%status == upf_ok) then
          sse = res%sse
          spd = spd + res%dspd

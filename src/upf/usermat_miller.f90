@@ -14,7 +14,8 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
                    var1, var2, var3, var4, var5, var6, var7)
    use usharp_kinds, only: dp
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_ansys, &
-                         n_upf_props, n_upf_state, upf_ok, upf_cut, upf_call_problem
+                         upf_ok, upf_cut, upf_call_problem
+   use usharp_model_miller, only: miller_model
    use usharp_upf_report, only: upf_report_invalid
    implicit none
    integer, intent(in) :: matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst
@@ -32,14 +33,19 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
    real(dp), intent(inout) :: cutFactor
    real(dp), intent(inout) :: var1, var2, var3, var4, var5, var6, var7
    type(upf_result) :: res
+   !> The model this adapter serves, set up from the properties at every call
+   type(miller_model) :: model
+   character(len=40) :: cards(2)
    character(len=12) :: mat
    integer :: i
    keycut = 0
-   res%message = upf_call_problem(nProp, nStatev, nDirect, nShear, 'TB,USER,mat,1,13', &
-                                  'TB,STATE,mat,,13', 'nDirect', 'nShear')
+   write (cards(1), '(a,i0)') 'TB,USER,mat,1,', model%n_props()
+   write (cards(2), '(a,i0)') 'TB,STATE,mat,,', model%n_state()
+   res%message = upf_call_problem(model, nProp, nStatev, nDirect, nShear, trim(cards(1)), &
+                                  trim(cards(2)), 'nDirect', 'nShear')
    if (len_trim(res%message) == 0) then
-      call upf_update(prop(1:n_upf_props), Temp + dTemp, dTime, perm_ansys, ncomp, Strain, &
-                      dStrain, stress, ustatev(1:n_upf_state), dsdePl, res)
+      call upf_update(model, prop(1:model%n_props()), Temp + dTemp, dTime, perm_ansys, ncomp, Strain, &
+                      dStrain, stress, ustatev(1:model%n_state()), dsdePl, res)
       if (res%status == upf_ok) then
          sedEl = res%sse
          sedPl = sedPl + res%dspd

@@ -1,16 +1,20 @@
-!> What the ANSYS USERMAT and Abaqus UMAT adapters share: the property list and its checks,
-!> the conversion between the FE codes' Voigt vectors (engineering shear strains) and the
-!> update's Mandel vectors for 3-D, plane strain, axisymmetric and plane stress elements, the
-!> state-variable layout, the energies, and the call of the Miller stress update.
+!> What the ANSYS USERMAT and Abaqus UMAT adapters share, for any model (usharp_model): the
+!> property list and its checks, the conversion between the FE codes' Voigt vectors
+!> (engineering shear strains) and the update's Mandel vectors for 3-D, plane strain,
+!> axisymmetric and plane stress elements, the state-variable layout, the energies, and the
+!> call of the model's stress update. An adapter passes a model of its kind, which the
+!> property list sets up at the increment's temperature.
 !>
-!> Properties (the original's TB,USER table, 13 values): 1 E, 2 Poisson, 3 A1, 4 A2, 5 B,
+!> Properties: the model's list (to_props), whose first two are E and Poisson's ratio. The
+!> Miller model's (the original's TB,USER table, 13 values): 1 E, 2 Poisson, 3 A1, 4 A2, 5 B,
 !> 6 C1 (carried for compatibility, not used by the published equations), 7 C2,
 !> 8 k (gas constant, cal/(mol K): theta uses Q/k), 9 H1, 10 H2, 11 n, 12 Q (cal/mol),
 !> 13 Tm (K). Temperature in K. Stresses in the unit of E and the constants.
 !>
-!> State variables (13, in the code's 3-D component order whatever the element): 1-6
-!> inelastic strain (engineering shear), 7 drag stress D (0 at the start: D0 is computed from
-!> the constants, as the original's TB,STATE initialised it), 8-13 back stress.
+!> State variables: the model's blocks (fe_layout) in the code's 3-D component order whatever
+!> the element, tensors of strain with engineering shear. The Miller model's (13): 1-6
+!> inelastic strain, 7 drag stress D (0 at the start: D0 is computed from the constants, as
+!> the original's TB,STATE initialised it), 8-13 back stress.
 !>
 !> Element families (ntens components of stress and strain in the code's vectors):
 !> 6: 3-D (code order perm), 4: plane strain and axisymmetric (11, 22, 33, 12),
@@ -18,24 +22,19 @@
 module usharp_upf
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_model_miller, only: miller_model, miller_constants, model_setup, gas_constant
-   use usharp_model_miller, only: miller_update, n_state
-   use usharp_model, only: update_status_ok, update_status_cut, elastic_moduli
+   use usharp_model, only: model_type, update_status_ok, update_status_cut, elastic_moduli, &
+                           block_strain, block_stress
    implicit none
    private
 
-   public :: upf_update, upf_update_material, upf_props, upf_material, upf_material_setup
+   public :: upf_update, upf_update_material
    public :: upf_elastic_tangent, upf_call_problem
-   public :: upf_result, n_upf_props, n_upf_state, perm_ansys, perm_abaqus
-   public :: upf_ok, upf_cut, upf_invalid, upf_prop_names
+   public :: upf_result, perm_ansys, perm_abaqus
+   public :: upf_ok, upf_cut, upf_invalid
 
-   integer, parameter :: n_upf_props = 13, n_upf_state = 13
    !> Position in the code's 6-vector of each Mandel component (11, 22, 33, 12, 23, 13)
    integer, parameter :: perm_ansys(6) = [1, 2, 3, 4, 5, 6]   ! 11 22 33 12 23 13
    integer, parameter :: perm_abaqus(6) = [1, 2, 3, 4, 6, 5]  ! 11 22 33 12 13 23
-   !> Names of the 13 properties, as the messages give them
-   character(len=7), parameter :: upf_prop_names(n_upf_props) = [character(len=7) :: 'E', &
-      'Poisson', 'A1', 'A2', 'B', 'C1', 'C2', 'k', 'H1', 'H2', 'n', 'Q', 'Tm']
    !> Outcome of an increment: done, repeat it smaller, or the material cannot be used
    integer, parameter :: upf_ok = 0, upf_cut = 1, upf_invalid = 2
    real(dp), parameter :: s2 = sqrt(2.0_dp)
@@ -44,11 +43,6 @@ module usharp_upf
    !> the stress and 1e-3 E; Newton iterations allowed for it
    real(dp), parameter :: tol_plane_stress = 1.0e-12_dp
    integer, parameter :: max_plane_stress_iterations = 30
-
-   !> The model of one material at one temperature, built from the property list
-   type :: upf_material
-      type(miller_model) :: model
-   end type upf_material
 
    !> What an increment returns besides stress, state and tangent
    type :: upf_result
@@ -62,51 +56,23 @@ module usharp_upf
 
 contains
 
-   !> The 13 properties of the TB,USER table (order above) for a model; C1 is written as 0
-   pure function upf_props(model) result(props)
-      type(miller_model), intent(in) :: model
-      real(dp) :: props(n_upf_props)
-      props = [model%youngs, model%poisson, model%c%a1, model%c%a2, model%c%b, 0.0_dp, model%c%c2, &
-               gas_constant, model%c%h1, model%c%h2, model%c%n, model%c%q, model%tm]
-   end function upf_props
-
-   !> The material from the 13 properties at temperature temp (K); message is empty when
-   !> the properties can be used, else one line naming the offending constant
-   pure subroutine upf_material_setup(props, temp, mat, message)
-      real(dp), intent(in) :: props(n_upf_props), temp
-      type(upf_material), intent(out) :: mat
-      character(len=*), intent(out) :: message
-      type(error_type), allocatable :: error
-      message = ''
-      if (.not. (props(8) > 0.0_dp .and. props(8) < huge(1.0_dp))) then
-         message = 'property 8, k (gas constant, cal/(mol K)), must be > 0'
-         return
-      end if
-      mat%model%youngs = props(1)
-      mat%model%poisson = props(2)
-      mat%model%c = miller_constants(a1=props(3), a2=props(4), b=props(5), c2=props(7), &
-                                     h1=props(9), h2=props(10), n=props(11), &
-                                     q=props(12)*gas_constant/props(8))
-      mat%model%tm = props(13)
-      mat%model%temperature = temp
-      call model_setup(mat%model, error)
-      if (allocated(error)) message = error%message
-   end subroutine upf_material_setup
-
    !> What is wrong with a call before any property is read: too few properties or state
    !> variables, or an element family the update does not serve (ndi direct and nshr shear
    !> components). Empty when the call can go ahead. The cards and names are the code's own,
    !> so that the message says what to change in its input.
-   pure function upf_call_problem(nprops, nstatv, ndi, nshr, props_card, state_card, ndi_name, &
-                                  nshr_name) result(message)
+   pure function upf_call_problem(model, nprops, nstatv, ndi, nshr, props_card, state_card, &
+                                  ndi_name, nshr_name) result(message)
+      class(model_type), intent(in) :: model
       integer, intent(in) :: nprops, nstatv, ndi, nshr
       character(len=*), intent(in) :: props_card, state_card, ndi_name, nshr_name
       character(len=200) :: message
       message = ''
-      if (nprops < n_upf_props) then
-         write (message, '(a,i0)') 'needs 13 constants ('//props_card//'), got ', nprops
-      else if (nstatv < n_upf_state) then
-         write (message, '(a,i0)') 'needs 13 state variables ('//state_card//'), got ', nstatv
+      if (nprops < model%n_props()) then
+         write (message, '(a,i0,a,i0)') 'needs ', model%n_props(), ' constants ('//props_card// &
+            '), got ', nprops
+      else if (nstatv < model%n_state()) then
+         write (message, '(a,i0,a,i0)') 'needs ', model%n_state(), ' state variables ('// &
+            state_card//'), got ', nstatv
       else if (.not. ((ndi == 3 .and. (nshr == 3 .or. nshr == 1)) .or. &
                       (ndi == 2 .and. nshr == 1))) then
          write (message, '(a,i0,a,i0,a)') 'elements with '//ndi_name//' = ', ndi, ', '// &
@@ -123,23 +89,22 @@ contains
       real(dp), intent(in) :: props(:)
       integer, intent(in) :: perm(6), ntens
       real(dp), intent(out) :: ddsdde(ntens, ntens)
-      type(miller_model) :: m
-      real(dp) :: c(6, 6), g, k
+      real(dp) :: c(6, 6), g, k, youngs, poisson
       integer :: i, j
-      m%youngs = 1.0_dp
-      m%poisson = 0.0_dp
+      youngs = 1.0_dp
+      poisson = 0.0_dp
       if (size(props) >= 2) then
-         if (props(1) > 0.0_dp .and. props(1) < huge(1.0_dp)) m%youngs = props(1)
-         if (props(2) > -1.0_dp .and. props(2) < 0.5_dp) m%poisson = props(2)
+         if (props(1) > 0.0_dp .and. props(1) < huge(1.0_dp)) youngs = props(1)
+         if (props(2) > -1.0_dp .and. props(2) < 0.5_dp) poisson = props(2)
       end if
       if (ntens /= 6 .and. ntens /= 4 .and. ntens /= 3) then
          ddsdde = 0.0_dp
          do i = 1, ntens
-            ddsdde(i, i) = m%youngs
+            ddsdde(i, i) = youngs
          end do
          return
       end if
-      call elastic_moduli(m%youngs, m%poisson, g, k)
+      call elastic_moduli(youngs, poisson, g, k)
       c = 0.0_dp
       do i = 1, 3
          do j = 1, 3
@@ -186,44 +151,46 @@ contains
       end do
    end subroutine tangent_to_code
 
-   !> One increment of a material point. props: the 13 properties; temp: K at the end of the
+   !> One increment of a material point. model: a model of the material's kind, set up here
+   !> from props, its property list; temp: K at the end of the
    !> increment; dt: s; perm: the code's 3-D order (perm_ansys or perm_abaqus); ntens: 6, 4
    !> or 3 (see the module header). stran: strain at the start, dstran: its increment
    !> (engineering shear), in the code's order for ntens components. On return with
    !> res%status = upf_ok, stress, statev and ddsdde hold the end values; otherwise stress
    !> and statev are unchanged and ddsdde is the elastic tangent (upf_cut: repeat the
    !> increment smaller; upf_invalid: res%message says which property is unusable).
-   pure subroutine upf_update(props, temp, dt, perm, ntens, stran, dstran, stress, statev, &
+   pure subroutine upf_update(model, props, temp, dt, perm, ntens, stran, dstran, stress, statev, &
                               ddsdde, res)
-      real(dp), intent(in) :: props(n_upf_props), temp, dt
+      class(model_type), intent(inout) :: model
+      real(dp), intent(in) :: props(:), temp, dt
       integer, intent(in) :: perm(6), ntens
       real(dp), intent(in) :: stran(ntens), dstran(ntens)
-      real(dp), intent(inout) :: stress(ntens), statev(n_upf_state)
+      real(dp), intent(inout) :: stress(ntens), statev(:)
       real(dp), intent(out) :: ddsdde(ntens, ntens)
       type(upf_result), intent(out) :: res
-      type(upf_material) :: mat
       call upf_elastic_tangent(props, perm, ntens, ddsdde)
       res%status = upf_invalid
-      call upf_material_setup(props, temp, mat, res%message)
+      call model%from_props(props, temp, res%message)
       if (len_trim(res%message) > 0) return
-      call upf_update_material(mat, dt, perm, ntens, stran, dstran, stress, statev, ddsdde, res)
+      call upf_update_material(model, dt, perm, ntens, stran, dstran, stress, statev, ddsdde, res)
    end subroutine upf_update
 
-   !> The same increment for a material already set up (upf_material_setup): the entry
-   !> point that holds no property list. On upf_cut and upf_invalid ddsdde is elastic.
-   pure subroutine upf_update_material(mat, dt, perm, ntens, stran, dstran, stress, statev, &
+   !> The same increment for a model already set up (from_props): the entry point that holds
+   !> no property list. On upf_cut and upf_invalid ddsdde is elastic.
+   pure subroutine upf_update_material(model, dt, perm, ntens, stran, dstran, stress, statev, &
                                        ddsdde, res)
-      type(upf_material), intent(in) :: mat
+      class(model_type), intent(in) :: model
       real(dp), intent(in) :: dt
       integer, intent(in) :: perm(6), ntens
       real(dp), intent(in) :: stran(ntens), dstran(ntens)
-      real(dp), intent(inout) :: stress(ntens), statev(n_upf_state)
+      real(dp), intent(inout) :: stress(ntens), statev(:)
       real(dp), intent(out) :: ddsdde(ntens, ntens)
       type(upf_result), intent(out) :: res
-      real(dp) :: eps0(6), deps(6), y0(n_state), y(n_state), sig(6), sig0(6), c(6, 6), g, k
-      real(dp) :: dein(6)
-      integer :: pos(6), i, status, nsub
-      call upf_elastic_tangent([mat%model%youngs, mat%model%poisson], perm, ntens, ddsdde)
+      real(dp) :: eps0(6), deps(6), y0(model%n_state()), y(model%n_state()), sig(6), sig0(6)
+      real(dp) :: c(6, 6), g, k, dein(6)
+      integer :: pos(6), i, status, nsub, b
+      integer, allocatable :: y_first(:), code_first(:), kind(:)
+      call upf_elastic_tangent([model%youngs, model%poisson], perm, ntens, ddsdde)
       res%status = upf_invalid
       if (ntens /= 6 .and. ntens /= 4 .and. ntens /= 3) then
          write (res%message, '(a,i0,a)') 'elements with ', ntens, &
@@ -241,16 +208,31 @@ contains
             eps0(i) = stran(pos(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
             deps(i) = dstran(pos(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
          end if
-         y0(i) = statev(perm(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
-         y0(6 + i) = statev(7 + perm(i))*w_mandel(i)
       end do
-      y0(13) = statev(7)
-      if (y0(13) <= 0.0_dp) y0(13) = mat%model%d0
-      call elastic_moduli(mat%model%youngs, mat%model%poisson, g, k)
+      ! The model's state from the code's: tensors to Mandel form, block by block
+      call model%fe_layout(y_first, code_first, kind)
+      do b = 1, size(kind)
+         associate (yf => y_first(b), cf => code_first(b))
+            select case (kind(b))
+            case (block_strain)
+               do i = 1, 6
+                  y0(yf - 1 + i) = statev(cf - 1 + perm(i))*merge(1.0_dp, 1.0_dp/s2, i <= 3)
+               end do
+            case (block_stress)
+               do i = 1, 6
+                  y0(yf - 1 + i) = statev(cf - 1 + perm(i))*w_mandel(i)
+               end do
+            case default
+               y0(yf) = statev(cf)
+            end select
+         end associate
+      end do
+      call model%complete_state(y0)
+      call elastic_moduli(model%youngs, model%poisson, g, k)
       if (ntens == 3) then
-         call plane_stress_update(mat%model, g, k, dt, y0, eps0, deps, sig, y, c, status)
+         call plane_stress_update(model, g, k, dt, y0, eps0, deps, sig, y, c, status)
       else
-         call miller_update(mat%model, eps0, deps, dt, y0, sig, y, c, status, nsub)
+         call model%stress_update(eps0, deps, dt, y0, sig, y, c, status, nsub)
       end if
       if (status /= update_status_ok) return
       res%status = upf_ok
@@ -264,10 +246,23 @@ contains
       res%eps33 = eps0(3) + deps(3)
       do i = 1, 6
          if (pos(i) > 0) stress(pos(i)) = sig(i)/w_mandel(i)
-         statev(perm(i)) = y(i)*merge(1.0_dp, s2, i <= 3)
-         statev(7 + perm(i)) = y(6 + i)/w_mandel(i)
       end do
-      statev(7) = y(13)
+      do b = 1, size(kind)
+         associate (yf => y_first(b), cf => code_first(b))
+            select case (kind(b))
+            case (block_strain)
+               do i = 1, 6
+                  statev(cf - 1 + perm(i)) = y(yf - 1 + i)*merge(1.0_dp, s2, i <= 3)
+               end do
+            case (block_stress)
+               do i = 1, 6
+                  statev(cf - 1 + perm(i)) = y(yf - 1 + i)/w_mandel(i)
+               end do
+            case default
+               statev(cf) = y(yf)
+            end select
+         end associate
+      end do
       call tangent_to_code(c, pos, ntens, ddsdde)
    end subroutine upf_update_material
 
@@ -285,10 +280,10 @@ contains
    !> the solution: the start value from s33 = 0 at the start state, exactly, the increment
    !> from the elastic guess on.
    pure subroutine plane_stress_update(model, g, k, dt, y0, eps0, deps, sig, y, c, status)
-      type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: g, k, dt, y0(n_state)
+      class(model_type), intent(in) :: model
+      real(dp), intent(in) :: g, k, dt, y0(:)
       real(dp), intent(inout) :: eps0(6), deps(6)
-      real(dp), intent(out) :: sig(6), y(n_state), c(6, 6)
+      real(dp), intent(out) :: sig(6), y(:), c(6, 6)
       integer, intent(out) :: status
       real(dp) :: lam, stiff33, tol
       integer :: it, nsub
@@ -299,7 +294,7 @@ contains
       deps(3) = (2.0_dp*g*y0(3) - lam*(eps0(1) + deps(1) + eps0(2) + deps(2)))/stiff33 - eps0(3)
       status = update_status_cut
       do it = 1, max_plane_stress_iterations
-         call miller_update(model, eps0, deps, dt, y0, sig, y, c, status, nsub)
+         call model%stress_update(eps0, deps, dt, y0, sig, y, c, status, nsub)
          if (status /= update_status_ok) return
          tol = tol_plane_stress*max(maxval(abs(sig)), 1.0e-3_dp*model%youngs)
          if (abs(sig(3)) <= tol) return
