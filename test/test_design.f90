@@ -17,7 +17,7 @@ module test_design
    use test_util, only: write_text, check_message
    implicit none
    private
-   public :: collect_design
+   public :: collect_design, synthetic_problem
 
    character(len=*), parameter :: model_groups(3) = [character(len=100) :: &
       "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &

@@ -20,6 +20,12 @@ module test_models
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_umat_driver, only: simulate_umat
+   use usharp_config, only: run_config
+   use usharp_input, only: read_config
+   use usharp_objective, only: fit_problem
+   use usharp_fit, only: run_fit, fit_outcome
+   use test_design, only: synthetic_problem
+   use test_util, only: write_text, scratch_dir
    implicit none
    private
    public :: collect_models, model_rates_jacobian, model_tangent, model_uniaxial_vs_update, &
@@ -37,7 +43,8 @@ contains
          new_unittest('every-model-rates-jacobian-fd', test_jacobian), &
          new_unittest('every-model-tangent-fd', test_tangent), &
          new_unittest('every-model-uniaxial-driver-matches-3d-update', test_uniaxial_vs_update), &
-         new_unittest('every-model-accuracy-tight-reference', test_accuracy)]
+         new_unittest('every-model-accuracy-tight-reference', test_accuracy), &
+         new_unittest('q-from-tests-at-three-temperatures', test_q_three_temperatures)]
    end subroutine collect_models
 
    !> Run check on every registered model set up with its defaults; failures name the model
@@ -285,6 +292,55 @@ contains
          if (allocated(error)) return
       end do
    end subroutine model_accuracy
+
+   !> Q, which enters only through theta(T), is determined by tests at several temperatures
+   !> (&test temperature): synthetic Miller tests at 538, 593 and 649 C with 1 % noise, B and
+   !> Q fitted from 2 B and 1.04 Q by Levenberg-Marquardt (usharp run's fit); Q within 2 %
+   subroutine test_q_three_temperatures(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(fit_outcome) :: out
+      real(dp), parameter :: b_true = 1.0e15_dp, q_true = 91000.0_dp
+      real(dp) :: q
+      call read_config(write_text('q-three-temperatures.nml', [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /", &
+         "&fit fitted = 'B', 'Q', method = 'lm' /", &
+         "&test name = 't811', history = 'cyclic', strain_range = 0.01, strain_rate = 1e-3,", &
+         "  cycles = 2, hold_max = 100.0, dt_out = 0.5, noise = 0.01, seed = 1,", &
+         "  temperature = 811.15 /", &
+         "&test name = 't866', history = 'cyclic', strain_range = 0.01, strain_rate = 1e-3,", &
+         "  cycles = 2, hold_max = 100.0, dt_out = 0.5, noise = 0.01, seed = 2,", &
+         "  temperature = 866.15 /", &
+         "&test name = 't922', history = 'cyclic', strain_range = 0.01, strain_rate = 1e-3,", &
+         "  cycles = 2, hold_max = 100.0, dt_out = 0.5, noise = 0.01, seed = 3,", &
+         "  temperature = 922.15 /"]), cfg, e)
+      if (.not. allocated(e)) call synthetic_problem(cfg, prob, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      ! The tests differ in temperature: their peaks must differ, or the check is void
+      call check(error, abs(prob%targets(1)%y_ex_max/prob%targets(3)%y_ex_max - 1.0_dp) > 0.05_dp, &
+                 'the tests at 538 and 649 C have the same peak stress')
+      if (allocated(error)) return
+      ! Start from 2 B and 1.04 Q (the data were made with the deck's constants)
+      call prob%cfg%model%set_constant(prob%idx(1), 2.0_dp*b_true)
+      call prob%cfg%model%set_constant(prob%idx(2), 1.04_dp*q_true)
+      call prob%cfg%model%setup(e)
+      if (.not. allocated(e)) call run_fit(prob, scratch_dir//'/q-three-temperatures', .false., out, &
+                                           e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      q = out%constants(2)
+      call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//rtoa(q)//' cal/mol, true '// &
+                 rtoa(q_true)//' (start '//rtoa(1.04_dp*q_true)//'), B '//rtoa(out%constants(1)))
+   end subroutine test_q_three_temperatures
 
    pure function itoa(i) result(s)
       integer, intent(in) :: i

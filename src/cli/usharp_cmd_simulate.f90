@@ -74,7 +74,8 @@ contains
             "' (history "//cfg%tests(i)%history_kind//', '// &
             merge('strain', 'stress', cfg%tests(i)%hist%control == control_strain)//' control)', &
             'regenerate: '//command, &
-            'model '//cfg%model%name()//', T = '//real_str(cfg%model%temperature, 'g0.8')// &
+            'model '//cfg%model%name()//', T = '//real_str(merge(cfg%tests(i)%temperature, &
+            cfg%model%temperature, cfg%tests(i)%temperature > 0.0_dp), 'g0.8')// &
             ' K, Tm = '//real_str(cfg%model%tm, 'g0.8')//' K, E = '// &
             real_str(cfg%model%youngs, 'g0.8')//' '//cfg%units]
          call cfg%model%derived_values(dnames, dvals)

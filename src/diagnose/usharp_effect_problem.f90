@@ -192,7 +192,7 @@ contains
             end if
          end if
          associate (tg => self%prob%targets(i), test => self%prob%cfg%tests(i))
-            call effect_model(model, eff(i), mt, error)
+            call effect_model(model, eff(i), mt, error, test%temperature)
             if (allocated(error)) return
             ! The stress channel lags by shift: the data at t saw the response at t - shift
             tout = min(max(tg%t - eff(i)%shift, test%hist%t(1)), test%hist%end_time())

@@ -41,6 +41,8 @@ module usharp_cvode_driver
       real(dp), allocatable :: tc(:), vc(:), yk(:)
       !> The model's own states (the extended model adds p and R2)
       integer :: nm = 0
+      !> The states that must stay positive (the model's positive_states)
+      integer, allocatable :: positive(:)
       !> With sensitivities: the constants (physical units) and their indices (model order)
       real(dp), allocatable :: p(:)
       integer, allocatable :: pidx(:)
@@ -93,6 +95,7 @@ contains
       allocate (ctx%model, source=model)
       ctx%extended = present(effects)
       ctx%nm = model%n_uniaxial()
+      ctx%positive = model%positive_states()
       if (ctx%extended) then
          n = int(extended_size(model), c_int)
          allocate (y(n), atol(n))
@@ -310,14 +313,17 @@ contains
       type(rhs_context), pointer :: ctx
       real(c_double), pointer :: y(:), f(:)
       real(dp) :: sigma, dsig
+      integer :: i
       call c_f_pointer(udata, ctx)
       y => FN_VGetArrayPointer(yv)
       f => FN_VGetArrayPointer(fv)
       ! A state outside the model: let CVODE retry with a smaller step
-      if (.not. ctx%model%admissible(y(1:ctx%nm))) then
-         ierr = 1
-         return
-      end if
+      do i = 1, size(ctx%positive)
+         if (.not. y(ctx%positive(i)) > 0.0_dp) then
+            ierr = 1
+            return
+         end if
+      end do
       call stress_of(ctx, t, y, sigma, dsig)
       if (ctx%extended) then
          call extended_rates(ctx%model, ctx%eff, sigma, y, f)

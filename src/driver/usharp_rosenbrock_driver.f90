@@ -29,6 +29,8 @@ module usharp_rosenbrock_driver
    !> compliance and the control's corners with their lagged values
    type :: rate_system
       class(model_type), allocatable :: model
+      !> The states that must stay positive (the model's positive_states)
+      integer, allocatable :: positive(:)
       type(segment_type) :: seg
       integer :: k = 1
       !> A smooth forcing (plain model): the spline's second derivatives at the samples
@@ -107,6 +109,7 @@ contains
       sys%extended = present(effects)
       if (sys%extended) then
          allocate (sys%model, source=model)
+         sys%positive = model%positive_states()
          sys%eff = effects
          sys%stiffness = model%youngs/(1.0_dp + effects%compliance)
          sys%tc = hist%t
@@ -144,6 +147,7 @@ contains
       type(rate_system), intent(inout) :: sys
       if (allocated(sys%model)) deallocate (sys%model)
       allocate (sys%model, source=model)
+      sys%positive = model%positive_states()
       sys%stiffness = model%youngs
       sys%smooth = hist%smooth()
       if (sys%smooth) then
@@ -221,13 +225,19 @@ contains
    !> or when not finite
    pure subroutine rates(sys, t, y, f, ok)
       type(rate_system), intent(in) :: sys
-      real(dp), intent(in) :: t, y(:)
-      real(dp), intent(out) :: f(:)
+      real(dp), intent(in) :: t
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: f(:)
       logical, intent(out) :: ok
       real(dp) :: sigma, dsig, dsig_dt
+      integer :: i
       f = 0.0_dp
-      ok = sys%model%admissible(y(1:size(y) - merge(2, 0, sys%extended)))
-      if (.not. ok) return
+      ! A loop: y(sys%positive) would make a temporary array at every call
+      do i = 1, size(sys%positive)
+         ok = y(sys%positive(i)) > 0.0_dp
+         if (.not. ok) return
+      end do
+      ok = .true.
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
       if (sys%extended) then
          call extended_rates(sys%model, sys%eff, sigma, y, f)
@@ -243,9 +253,10 @@ contains
    !> the same bit for bit as those of rates)
    pure subroutine rates_jacobian(sys, t, y, jac, dfdt, fy)
       type(rate_system), intent(in) :: sys
-      real(dp), intent(in) :: t, y(:)
-      real(dp), intent(out) :: jac(:, :), dfdt(:)
-      real(dp), intent(out), optional :: fy(:)
+      real(dp), intent(in) :: t
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: jac(:, :), dfdt(:)
+      real(dp), intent(out), optional, contiguous :: fy(:)
       real(dp) :: sigma, dsig, dsig_dt, f(size(y))
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
       if (sys%extended) then

@@ -61,7 +61,8 @@ contains
          strain = h%control == control_strain
          call split_name(ext%constants_file, cname, cext)
          call split_name(ext%output_file, oname, oext)
-         temp = apdl_real(cfg%model%temperature)
+         ! The test's own temperature, else the model's
+         temp = apdl_real(merge(test%temperature, cfg%model%temperature, test%temperature > 0.0_dp))
          np = cfg%model%n_props()
          call cfg%model%fe_start_values(spos, sval, snames, snotes)
          names_text = cfg%model%prop_name(1)

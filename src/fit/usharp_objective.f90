@@ -4,7 +4,7 @@ module usharp_objective
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error
-   use usharp_model, only: model_type
+   use usharp_model, only: model_type, model_at
    use usharp_history, only: control_stress
    use usharp_units, only: stress_factor
    use usharp_simulation, only: sim_result
@@ -407,9 +407,16 @@ contains
          type(error_type), allocatable :: err
          real(dp), allocatable :: deps(:, :), drdy(:), unit(:)
          integer :: jj
+         class(model_type), allocatable :: mt
          associate (test => self%cfg%tests(i), tg => self%targets(i))
-            call simulate_cvode(model, test%hist, tg%t, self%cfg%solver, res, err, &
-                                sens=self%idx, deps_in=deps)
+            if (test%temperature > 0.0_dp) then
+               ! The test's own temperature
+               call model_at(model, test%temperature, mt, err)
+            else
+               allocate (mt, source=model)
+            end if
+            if (.not. allocated(err)) call simulate_cvode(mt, test%hist, tg%t, self%cfg%solver, res, &
+                                                          err, sens=self%idx, deps_in=deps)
             oki = .not. allocated(err)
             if (.not. oki) return
             ! d y_sim / d eps_in: -E under strain control (stress), 1 under stress control

@@ -2,7 +2,7 @@
 module usharp_simulate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, prefix_error
-   use usharp_model, only: model_type
+   use usharp_model, only: model_type, model_at
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
@@ -16,21 +16,34 @@ module usharp_simulate
 
 contains
 
-   !> Simulate a test at its output interval with the chosen integrator; errors name the test
+   !> Simulate a test at its output interval with the chosen integrator, at the test's own
+   !> temperature if it has one; errors name the test
    subroutine simulate_test(model, solver, test, res, error)
       class(model_type), intent(in) :: model
       type(solver_options), intent(in) :: solver
       type(test_config), intent(in) :: test
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
-      if (solver%integrator == 'umat') then
-         call simulate_umat(model, test%hist, test%times(), solver, res, error)
-      else if (solver%integrator == 'rodas4') then
-         call simulate_rosenbrock(model, test%hist, test%times(), solver, res, error)
+      class(model_type), allocatable :: mt
+      if (test%temperature > 0.0_dp) then
+         call model_at(model, test%temperature, mt, error)
+         if (.not. allocated(error)) call simulate_with(mt)
       else
-         call simulate_cvode(model, test%hist, test%times(), solver, res, error)
+         call simulate_with(model)
       end if
       if (allocated(error)) call prefix_error(error, "test '"//test%name//"': ")
+   contains
+      subroutine simulate_with(m)
+         class(model_type), intent(in) :: m
+         if (solver%integrator == 'umat') then
+            call simulate_umat(m, test%hist, test%times(), solver, res, error)
+         else if (solver%integrator == 'rodas4') then
+            call simulate_rosenbrock(m, test%hist, test%times(), solver, &
+                                     res, error)
+         else
+            call simulate_cvode(m, test%hist, test%times(), solver, res, error)
+         end if
+      end subroutine simulate_with
    end subroutine simulate_test
 
    !> Add Gaussian noise of standard deviation level*max|stress| to the stress (synthetic

@@ -3,7 +3,10 @@
 !> &constants: usharp_input_model, &solver, &output, &fit, &design, &diagnose, &test:
 !> usharp_input_<group>). Every error names the file and the group and variable, or the line.
 module usharp_input
-   use usharp_error, only: error_type, prefix_error
+   use usharp_kinds, only: dp
+   use usharp_error, only: error_type, prefix_error, fatal_error
+   use usharp_strings, only: str
+   use usharp_model, only: model_type, model_at
    use usharp_config, only: run_config
    use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path
    use usharp_input_model, only: read_model_group, read_constants_group
@@ -46,8 +49,39 @@ contains
       if (.not. allocated(error)) call read_diagnose_group(file, cfg%tests, cfg%diagnose, error)
       if (allocated(error)) return
       call cfg%model%setup(error)
-      if (allocated(error)) call prefix_error(error, path//': &constants: ')
+      if (allocated(error)) then
+         call prefix_error(error, path//': &constants: ')
+         return
+      end if
+      call check_test_temperatures(path, cfg, error)
    end subroutine read_config
+
+   !> A test at a temperature of its own: within the model's range (as &model's), and the
+   !> model set up there
+   subroutine check_test_temperatures(path, cfg, error)
+      character(len=*), intent(in) :: path
+      type(run_config), intent(in) :: cfg
+      type(error_type), allocatable, intent(out) :: error
+      class(model_type), allocatable :: mt
+      integer :: i
+      do i = 1, size(cfg%tests)
+         associate (temp => cfg%tests(i)%temperature)
+            if (.not. temp > 0.0_dp) cycle
+            if (temp < 0.1_dp*cfg%model%tm .or. temp >= cfg%model%tm) then
+               call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': temperature = "// &
+                  str(temp)//' K must lie between a tenth of tm and tm = '//str(cfg%model%tm)// &
+                  ' K (temperatures are in kelvin)')
+               return
+            end if
+            call model_at(cfg%model, temp, mt, error)
+            if (allocated(error)) then
+               call prefix_error(error, path//": &test '"//cfg%tests(i)%name//"': at "// &
+                                 str(temp)//' K: ')
+               return
+            end if
+         end associate
+      end do
+   end subroutine check_test_temperatures
 
    !> read_config, then the command line's choices: the constants of another file (a
    !> best.nml; '' for none) and another output folder ('' for &output's)

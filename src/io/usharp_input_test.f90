@@ -59,6 +59,8 @@ module usharp_input_test
       real(dp) :: dt_out = 1.0_dp           !< output interval, s
       real(dp) :: noise = 0.0_dp            !< relative Gaussian noise on stress (synthetic data)
       integer :: seed = 1                   !< noise seed
+      !> K, the test's temperature; 0: the model's (&model temperature)
+      real(dp) :: temperature = 0.0_dp
       logical :: has_data = .false.
       type(data_spec) :: data
       character(len=:), allocatable :: weighting  !< threshold, relaxation, none, column
@@ -96,7 +98,7 @@ module usharp_input_test
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list), peak_share
+                  time_limit, rates(max_list), peak_share, temperature
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
    end type test_values
@@ -227,6 +229,12 @@ contains
       end if
       t%noise = v%noise
       t%seed = v%seed
+      if (.not. (v%temperature >= 0.0_dp)) then
+         call fatal_error(error, 'temperature = '//str(v%temperature)//' K: must be > 0 '// &
+                          '(0: the temperature of &model)')
+         return
+      end if
+      t%temperature = v%temperature
       t%sig = v%sig
       t%weighting = lower_text(trim(v%weighting))
       select case (t%weighting)
@@ -546,7 +554,7 @@ contains
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list), peak_share
+                  time_limit, rates(max_list), peak_share, temperature
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
       namelist /test/ name, history, dt_out, amp_first, amp_last, npeaks, quarter_time, levels, &
@@ -556,7 +564,7 @@ contains
          filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
          output_file, output_format, output_time, output_stress, output_unit, constants_file, &
          constants_format, time_limit, candidate, rates, target, gap_fill, peak_file, &
-         peak_columns, peak_share
+         peak_columns, peak_share, temperature
       name = ''
       history = ''
       file = ''
@@ -582,7 +590,7 @@ contains
       backend = 'internal'; command = ''; output_file = ''; output_format = 'prvar'
       output_time = 'TIME'; output_stress = 'STRESS'; output_unit = ''
       constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = d%ext%time_limit
-      candidate = d%candidate; rates = unset
+      candidate = d%candidate; rates = unset; temperature = d%temperature
       target = 'data'; gap_fill = 'cycles'; peak_file = ''; peak_share = d%peak_share
       peak_columns = [character(len=filter_len + 1) :: 'time_max', 'max', 'time_min', 'min']
       ios = 0
@@ -606,7 +614,7 @@ contains
       v%noise = noise; v%sig = sig; v%time_limit = time_limit; v%rates = rates
       v%candidate = candidate; v%npeaks = npeaks; v%repeats = repeats; v%cycles = cycles
       v%seed = seed; v%target = target; v%gap_fill = gap_fill; v%peak_file = peak_file
-      v%peak_columns = peak_columns; v%peak_share = peak_share
+      v%peak_columns = peak_columns; v%peak_share = peak_share; v%temperature = temperature
    end subroutine test_namelist
 
    !> History from a file of (time, value) points; control is 'strain' or 'stress'

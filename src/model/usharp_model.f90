@@ -27,7 +27,7 @@ module usharp_model
    implicit none
    private
 
-   public :: model_type, constant_index, constant_names, elastic_moduli
+   public :: model_type, constant_index, constant_names, elastic_moduli, model_at
    public :: update_status_ok, update_status_cut, block_scalar, block_strain, block_stress
 
    !> Kinds of block in the FE state layout: a scalar, or a 6-component strain or stress
@@ -73,8 +73,9 @@ module usharp_model
       procedure(initial_sub), deferred :: uniaxial_initial
       !> Whether uniaxial state i is a stress (absolute tolerance scaled by E) or a strain
       procedure(is_stress_fn), deferred :: uniaxial_is_stress
-      !> Whether a uniaxial state lies inside the model (the rates are defined there)
-      procedure(admissible_fn), deferred :: admissible
+      !> The uniaxial states that must stay positive (the rates are defined there only);
+      !> integrators shorten a step that leaves them
+      procedure(positive_fn), deferred :: positive_states
       !> Uniaxial rates and their Jacobian
       procedure(rates_sub), deferred :: uniaxial_rates
       !> Back stress and drag stress the outputs report for a uniaxial state
@@ -194,11 +195,11 @@ module usharp_model
          integer, intent(in) :: i
       end function is_stress_fn
 
-      pure logical function admissible_fn(self, y) result(ok)
-         import :: model_type, dp
+      pure function positive_fn(self) result(idx)
+         import :: model_type
          class(model_type), intent(in) :: self
-         real(dp), intent(in) :: y(:)
-      end function admissible_fn
+         integer, allocatable :: idx(:)
+      end function positive_fn
 
       !> Rates ydot of the state y at stress sigma and, if asked, jac(i, j) = d ydot_i / d y_j
       !> where sigma depends on the inelastic strain y(1) through dsig_depsin (-E under strain
@@ -206,9 +207,10 @@ module usharp_model
       pure subroutine rates_sub(self, sigma, dsig_depsin, y, ydot, jac)
          import :: model_type, dp
          class(model_type), intent(in) :: self
-         real(dp), intent(in) :: sigma, dsig_depsin, y(:)
-         real(dp), intent(out) :: ydot(:)
-         real(dp), intent(out), optional :: jac(:, :)
+         real(dp), intent(in) :: sigma, dsig_depsin
+         real(dp), intent(in), contiguous :: y(:)
+         real(dp), intent(out), contiguous :: ydot(:)
+         real(dp), intent(out), optional, contiguous :: jac(:, :)
       end subroutine rates_sub
 
       pure subroutine outputs_sub(self, y, back, drag)
@@ -327,6 +329,18 @@ contains
       allocate (character(len=1) :: names(0))
       allocate (vals(0))
    end subroutine derived_values
+
+   !> A copy of model at another temperature (K), set up there: what depends on temperature
+   !> follows (the Miller model's B*theta and D0)
+   subroutine model_at(model, temperature, out, error)
+      class(model_type), intent(in) :: model
+      real(dp), intent(in) :: temperature
+      class(model_type), allocatable, intent(out) :: out
+      type(error_type), allocatable, intent(out) :: error
+      allocate (out, source=model)
+      out%temperature = temperature
+      call out%setup(error)
+   end subroutine model_at
 
    !> Index of a constant by its (case-insensitive) name, 0 if the model has none of that name
    pure integer function constant_index(model, name) result(idx)

@@ -99,7 +99,7 @@ module usharp_model_miller
       procedure :: n_uniaxial => miller_n_uniaxial
       procedure :: uniaxial_initial => miller_uniaxial_initial
       procedure :: uniaxial_is_stress => miller_uniaxial_is_stress
-      procedure :: admissible => miller_admissible
+      procedure :: positive_states => miller_positive_states
       procedure :: uniaxial_rates => miller_uniaxial_rates
       procedure :: uniaxial_outputs => miller_uniaxial_outputs
       procedure :: n_state => miller_n_state
@@ -380,9 +380,9 @@ contains
       class(miller_model), intent(in) :: self
       real(dp), intent(in) :: sigma        !< stress, model unit
       real(dp), intent(in) :: dsig_depsin  !< d sigma / d eps_in
-      real(dp), intent(in) :: y(:)         !< eps_in (-), R, D (model unit)
-      real(dp), intent(out) :: ydot(:)     !< rates, 1/s and unit/s
-      real(dp), intent(out), optional :: jac(:, :)
+      real(dp), intent(in), contiguous :: y(:)         !< eps_in (-), R, D (model unit)
+      real(dp), intent(out), contiguous :: ydot(:)     !< rates, 1/s and unit/s
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
       real(dp) :: s, sg, sgr, d
       type(rate_terms) :: t
       s = sigma - y(2)
@@ -670,11 +670,11 @@ contains
    end function miller_uniaxial_is_stress
 
    !> The drag stress must stay positive
-   pure logical function miller_admissible(self, y) result(ok)
+   pure function miller_positive_states(self) result(idx)
       class(miller_model), intent(in) :: self
-      real(dp), intent(in) :: y(:)
-      ok = y(3) > 0.0_dp
-   end function miller_admissible
+      integer, allocatable :: idx(:)
+      idx = [3]
+   end function miller_positive_states
 
    pure subroutine miller_uniaxial_outputs(self, y, back, drag)
       class(miller_model), intent(in) :: self
