@@ -176,6 +176,7 @@ contains
       do iext = 1, 2
          sys = rate_system()
          sys%model = m
+         sys%positive = m%positive_states()
          sys%stiffness = m%youngs
          n = 3
          if (iext == 2) then

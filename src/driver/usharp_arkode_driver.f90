@@ -161,7 +161,7 @@ contains
       type(N_Vector) :: yv, fv
       type(c_ptr), value :: udata
       type(rate_system), pointer :: sys
-      real(c_double), pointer :: y(:), f(:)
+      real(c_double), pointer, contiguous :: y(:), f(:)
       logical :: ok
       call c_f_pointer(udata, sys)
       y => FN_VGetArrayPointer(yv)
@@ -177,7 +177,7 @@ contains
       type(SUNMatrix) :: jmat
       type(c_ptr), value :: udata
       type(rate_system), pointer :: sys
-      real(c_double), pointer :: y(:), jdata(:), jac(:, :)
+      real(c_double), pointer, contiguous :: y(:), jdata(:), jac(:, :)
       real(dp), allocatable :: dfdt(:)
       call c_f_pointer(udata, sys)
       y => FN_VGetArrayPointer(yv)

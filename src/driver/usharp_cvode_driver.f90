@@ -311,7 +311,7 @@ contains
       type(N_Vector) :: yv, fv
       type(c_ptr), value :: udata
       type(rhs_context), pointer :: ctx
-      real(c_double), pointer :: y(:), f(:)
+      real(c_double), pointer, contiguous :: y(:), f(:)
       real(dp) :: sigma, dsig
       integer :: i
       call c_f_pointer(udata, ctx)
@@ -339,7 +339,7 @@ contains
       type(SUNMatrix) :: jmat
       type(c_ptr), value :: udata
       type(rhs_context), pointer :: ctx
-      real(c_double), pointer :: y(:), jdata(:), jac(:, :)
+      real(c_double), pointer, contiguous :: y(:), jdata(:), jac(:, :)
       real(dp) :: sigma, dsig
       call c_f_pointer(udata, ctx)
       y => FN_VGetArrayPointer(yv)
@@ -361,7 +361,7 @@ contains
       type(N_Vector) :: yv, fv, ysv, ysdotv, tmp1, tmp2
       type(c_ptr), value :: udata
       type(rhs_context), pointer :: ctx
-      real(c_double), pointer :: y(:), sv(:), sd(:)
+      real(c_double), pointer, contiguous :: y(:), sv(:), sd(:)
       real(dp) :: sigma, dsig
       call c_f_pointer(udata, ctx)
       y => FN_VGetArrayPointer(yv)
@@ -375,8 +375,9 @@ contains
    !> The plain model's Jacobian (small arrays on the stack)
    subroutine plain_jacobian(ctx, sigma, dsig, y, jac)
       type(rhs_context), intent(in) :: ctx
-      real(dp), intent(in) :: sigma, dsig, y(:)
-      real(dp), intent(out) :: jac(:, :)
+      real(dp), intent(in) :: sigma, dsig
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: jac(:, :)
       real(dp) :: ydot(size(y))
       call ctx%model%uniaxial_rates(sigma, dsig, y, ydot, jac)
    end subroutine plain_jacobian
@@ -385,8 +386,9 @@ contains
    subroutine sens_rates(ctx, j, sigma, dsig, y, sv, sd)
       type(rhs_context), intent(in) :: ctx
       integer, intent(in) :: j
-      real(dp), intent(in) :: sigma, dsig, y(:), sv(:)
-      real(dp), intent(out) :: sd(:)
+      real(dp), intent(in) :: sigma, dsig
+      real(dp), intent(in), contiguous :: y(:), sv(:)
+      real(dp), intent(out), contiguous :: sd(:)
       real(dp) :: f0(size(y)), dfdc(size(y)), jac(size(y), size(y))
       call ctx%model%uniaxial_rates(sigma, dsig, y, f0, jac)
       call ctx%model%rates_constant_derivative(ctx%pidx(j), sigma, dsig, y, dfdc)

@@ -15,6 +15,7 @@ module usharp_effects
    public :: test_effects, effect_info, n_effects, effect_catalogue, effect_index
    public :: effects_of, extended_rates, n_extended, lagged_value, lag_corners, effect_nparams
    public :: param_global, param_per_test, effect_model, extended_size, extended_initial
+   public :: wrapped_rates
 
    !> States of the extended Miller model: eps_in, R, D, accumulated inelastic strain p, R2;
    !> of any other model its own states, then p and R2
