@@ -28,6 +28,7 @@ module test_models
    use usharp_effects, only: test_effects, extended_rates, wrapped_rates
    use test_design, only: synthetic_problem
    use test_util, only: write_text, scratch_dir
+   use usharp_filesys, only: make_dir
    implicit none
    private
    public :: collect_models, model_rates_jacobian, model_tangent, model_uniaxial_vs_update, &
@@ -368,6 +369,7 @@ contains
       call prob%cfg%model%set_constant(prob%idx(1), 2.0_dp*b_true)
       call prob%cfg%model%set_constant(prob%idx(2), 1.04_dp*q_true)
       call prob%cfg%model%setup(e)
+      if (.not. allocated(e)) call make_dir(scratch_dir//'/q-three-temperatures', e)
       if (.not. allocated(e)) call run_fit(prob, scratch_dir//'/q-three-temperatures', .false., out, &
                                            e, force=.true.)
       if (allocated(e)) then
