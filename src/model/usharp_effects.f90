@@ -261,10 +261,11 @@ contains
    pure subroutine extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
       class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
-      real(dp), intent(in) :: sigma, y(:)
-      real(dp), intent(out) :: ydot(:)
+      real(dp), intent(in) :: sigma
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: ydot(:)
       real(dp), intent(in), optional :: dsig_depsin
-      real(dp), intent(out), optional :: jac(:, :)
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
       select type (model)
       type is (miller_model)
          call miller_extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
@@ -280,11 +281,12 @@ contains
    pure subroutine wrapped_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
       class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
-      real(dp), intent(in) :: sigma, y(:)
-      real(dp), intent(out) :: ydot(:)
+      real(dp), intent(in) :: sigma
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: ydot(:)
       real(dp), intent(in), optional :: dsig_depsin
-      real(dp), intent(out), optional :: jac(:, :)
-      real(dp) :: sg, dfdy(size(y)), dfds(size(y) - 2)
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
+      real(dp) :: sg, dfdy(size(y)), dfds(size(y) - 2), jm(size(y) - 2, size(y) - 2)
       integer :: m, np, nr
       m = size(y) - 2
       np = m + 1
@@ -292,9 +294,11 @@ contains
       if (present(jac)) then
          ! The rates depend on eps_in only through sigma: with d sigma/d eps_in = 1 the first
          ! column of the model's Jacobian is d ydot/d sigma; d sigma_eff/d R2 = -1
+         ! The model's Jacobian in an array of its own: jac(1:m, 1:m) is not contiguous
+         call model%uniaxial_rates(sigma - y(nr), 1.0_dp, y(1:m), ydot(1:m), jm)
          jac = 0.0_dp
-         call model%uniaxial_rates(sigma - y(nr), 1.0_dp, y(1:m), ydot(1:m), jac(1:m, 1:m))
-         dfds = jac(1:m, 1)
+         jac(1:m, 1:m) = jm
+         dfds = jm(:, 1)
          jac(1:m, 1) = dfds*dsig_depsin
          jac(1:m, nr) = -dfds
       else
