@@ -274,7 +274,8 @@ contains
    pure subroutine rates_constant_derivative(self, i, sigma, dsig_depsin, y, dfdc)
       class(model_type), intent(in) :: self
       integer, intent(in) :: i
-      real(dp), intent(in) :: sigma, dsig_depsin, y(:)
+      real(dp), intent(in) :: sigma, dsig_depsin
+      real(dp), intent(in), contiguous :: y(:)
       real(dp), intent(out) :: dfdc(:)
       class(model_type), allocatable :: mp, mm
       type(error_type), allocatable :: error

@@ -727,7 +727,8 @@ contains
    pure subroutine miller_rates_constant_derivative(self, i, sigma, dsig_depsin, y, dfdc)
       class(miller_model), intent(in) :: self
       integer, intent(in) :: i
-      real(dp), intent(in) :: sigma, dsig_depsin, y(:)
+      real(dp), intent(in) :: sigma, dsig_depsin
+      real(dp), intent(in), contiguous :: y(:)
       real(dp), intent(out) :: dfdc(:)
       type(miller_model) :: mp, mm
       real(dp) :: c, h, theta, fp(n_uniaxial), fm(n_uniaxial)
