@@ -29,6 +29,7 @@ module test_models
    use test_design, only: synthetic_problem
    use test_util, only: write_text, scratch_dir
    use usharp_filesys, only: make_dir
+   use usharp_strings, only: str, real_str
    implicit none
    private
    public :: collect_models, model_rates_jacobian, model_tangent, model_uniaxial_vs_update, &
@@ -125,7 +126,7 @@ contains
             sigma = model%youngs*(eps - y(1))
             call jacobian_check(model, sigma, merge(-model%youngs, 0.0_dp, mode == 1), y, eps, error)
             if (allocated(error)) then
-               error%message = 'step '//itoa(k)//merge(' (strain control): ', ' (stress control): ', &
+               error%message = 'step '//str(k)//merge(' (strain control): ', ' (stress control): ', &
                                mode == 1)//error%message
                return
             end if
@@ -155,7 +156,7 @@ contains
          if (maxval(abs(r(:, 1))/(abs(y) + 1.0e-6_dp)) < 1.0e-12_dp) return
       end do
       call test_failed(error, 'backward Euler on the uniaxial rates did not converge at strain '// &
-                       rtoa(eps))
+                       real_str(eps, 'es10.3'))
    end subroutine implicit_step
 
    !> Jacobian at (sigma, y) against central differences, each row scaled by its largest entry
@@ -186,9 +187,9 @@ contains
          scale = maxval(abs(fd(j, :)*sc))
          if (scale == 0.0_dp) cycle
          if (maxval(abs(jac(j, :) - fd(j, :))*sc)/scale > tol_derivative) then
-            call test_failed(error, 'rates Jacobian row '//itoa(j)//' differs from central '// &
-               'differences by '//rtoa(maxval(abs(jac(j, :) - fd(j, :))*sc)/scale)//' relative (strain '// &
-               rtoa(eps)//')')
+            call test_failed(error, 'rates Jacobian row '//str(j)//' differs from central '// &
+               'differences by '//real_str(maxval(abs(jac(j, :) - fd(j, :))*sc)/scale, 'es10.3')// &
+               ' relative (strain '//real_str(eps, 'es10.3')//')')
             return
          end if
       end do
@@ -211,7 +212,7 @@ contains
          deps = 4.0e-4_dp*unit_strain
          call model%stress_update(eps0, deps, 1.0_dp, y0, sig, y, c, st, nsub)
          if (st /= update_status_ok) then
-            call test_failed(error, 'the update did not converge while loading, increment '//itoa(k))
+            call test_failed(error, 'the update did not converge while loading, increment '//str(k))
             return
          end if
          eps0 = eps0 + deps
@@ -231,7 +232,7 @@ contains
          fd(:, j) = (sp - sm)/(2*1.0e-7_dp)
       end do
       dev = maxval(abs(c - fd))/maxval(abs(fd))
-      call check(error, dev <= tol_derivative, 'max |C - FD| / max |FD| = '//rtoa(dev))
+      call check(error, dev <= tol_derivative, 'max |C - FD| / max |FD| = '//real_str(dev, 'es10.3'))
       if (allocated(error)) return
       ! The increment must be inelastic, or the check says nothing about the viscoplastic part
       call model%stress_update(eps0, deps, 0.15_dp, y0, sig, y, c, st, nsub)
@@ -257,12 +258,12 @@ contains
          call simulate_rosenbrock(model, h, tout, opts, rr, uerr)
          if (.not. allocated(uerr)) call simulate_umat(model, h, tout, opts, ru, uerr)
          if (allocated(uerr)) then
-            call test_failed(error, 'thesis test '//itoa(k)//': '//uerr%message)
+            call test_failed(error, 'thesis test '//str(k)//': '//uerr%message)
             return
          end if
          dev = maxval(abs(ru%stress - rr%stress))/maxval(abs(rr%stress))
-         call check(error, dev <= tol_update, 'thesis test '//itoa(k)// &
-                    ': max |3-D update - uniaxial| / peak = '//rtoa(dev))
+         call check(error, dev <= tol_update, 'thesis test '//str(k)// &
+                    ': max |3-D update - uniaxial| / peak = '//real_str(dev, 'es10.3'))
          if (allocated(error)) return
       end do
    end subroutine model_uniaxial_vs_update
@@ -288,12 +289,12 @@ contains
          call simulate_rosenbrock(model, h, tout, opts, rr, uerr)
          if (.not. allocated(uerr)) call simulate_cvode(model, h, tout, tight, ref, uerr)
          if (allocated(uerr)) then
-            call test_failed(error, 'thesis test '//itoa(k)//': '//uerr%message)
+            call test_failed(error, 'thesis test '//str(k)//': '//uerr%message)
             return
          end if
          dev = maxval(abs(rr%stress - ref%stress))/maxval(abs(ref%stress))
-         call check(error, dev <= tol_accuracy, 'thesis test '//itoa(k)// &
-                    ': max |RODAS4 - tight CVODE| / peak = '//rtoa(dev))
+         call check(error, dev <= tol_accuracy, 'thesis test '//str(k)// &
+                    ': max |RODAS4 - tight CVODE| / peak = '//real_str(dev, 'es10.3'))
          if (allocated(error)) return
       end do
    end subroutine model_accuracy
@@ -319,10 +320,10 @@ contains
          call extended_rates(m, eff, 20.0_dp*sign(1.0_dp, y(1)), y, f1, -m%youngs, j1)
          call wrapped_rates(m, eff, 20.0_dp*sign(1.0_dp, y(1)), y, f2, -m%youngs, j2)
          call check(error, all(abs(f1 - f2) <= 1.0e-10_dp*abs(f1) + 1.0e-14_dp*maxval(abs(f1))) &
-                    .and. maxval(abs(j1 - j2))/maxval(abs(j1)) < 1.0e-10_dp, 'state '//itoa(k)// &
+                    .and. maxval(abs(j1 - j2))/maxval(abs(j1)) < 1.0e-10_dp, 'state '//str(k)// &
                     ': wrapped rates differ from the Miller extended form by '// &
-                    rtoa(maxval(abs(f1 - f2))/maxval(abs(f1)))//' (rates), '// &
-                    rtoa(maxval(abs(j1 - j2))/maxval(abs(j1)))//' (Jacobian)')
+                    real_str(maxval(abs(f1 - f2))/maxval(abs(f1)), 'es10.3')//' (rates), '// &
+                    real_str(maxval(abs(j1 - j2))/maxval(abs(j1)), 'es10.3')//' (Jacobian)')
          if (allocated(error)) return
       end do
    end subroutine test_wrapped_rates
@@ -337,7 +338,7 @@ contains
       type(fit_problem) :: prob
       type(fit_outcome) :: out
       real(dp), parameter :: b_true = 1.0e15_dp, q_true = 91000.0_dp
-      real(dp) :: q
+      real(dp) :: q, diff
       call read_config(write_text('q-three-temperatures.nml', [character(len=100) :: &
          "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3 /", &
          "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
@@ -360,10 +361,9 @@ contains
       ! The responses must differ with temperature, or the check is void (the Miller model's
       ! D0 keeps the stress at the reference rate of the D0 formula the same at every
       ! temperature: the difference is in the rate dependence, the relaxation)
-      call check(error, maxval(abs(prob%targets(1)%y_ex - prob%targets(3)%y_ex))/ &
-                 prob%targets(1)%y_ex_max > 0.05_dp, 'the tests at 538 and 649 C differ by '// &
-                 rtoa(maxval(abs(prob%targets(1)%y_ex - prob%targets(3)%y_ex))/prob%targets(1)%y_ex_max)// &
-                 ' of the peak only')
+      diff = maxval(abs(prob%targets(1)%y_ex - prob%targets(3)%y_ex))/prob%targets(1)%y_ex_max
+      call check(error, diff > 0.05_dp, 'the tests at 538 and 649 C differ by '// &
+                 real_str(diff, 'es10.3')//' of the peak only')
       if (allocated(error)) return
       ! Start from 2 B and 1.04 Q (the data were made with the deck's constants)
       call prob%cfg%model%set_constant(prob%idx(1), 2.0_dp*b_true)
@@ -377,23 +377,8 @@ contains
          return
       end if
       q = out%constants(2)
-      call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//rtoa(q)//' cal/mol, true '// &
-                 rtoa(q_true)//' (start '//rtoa(1.04_dp*q_true)//'), B '//rtoa(out%constants(1)))
+      call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//real_str(q, 'es10.3')// &
+                 ' cal/mol, true '//real_str(q_true, 'es10.3')//' (start '// &
+                 real_str(1.04_dp*q_true, 'es10.3')//'), B '//real_str(out%constants(1), 'es10.3'))
    end subroutine test_q_three_temperatures
-
-   pure function itoa(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=12) :: buf
-      write (buf, '(i0)') i
-      s = trim(buf)
-   end function itoa
-
-   pure function rtoa(x) result(s)
-      real(dp), intent(in) :: x
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(es10.3)') x
-      s = trim(adjustl(buf))
-   end function rtoa
 end module test_models
