@@ -20,6 +20,7 @@ program tester
    use test_cluster, only: collect_cluster
    use test_diagnose_data, only: collect_diagnose_data
    use test_chaboche, only: collect_chaboche
+   use test_tmf, only: collect_tmf
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -30,6 +31,7 @@ program tester
    suites = [ &
       new_testsuite('model', collect_model), &
       new_testsuite('models', collect_models), &
+      new_testsuite('tmf', collect_tmf), &
       new_testsuite('history', collect_history), &
       new_testsuite('driver', collect_driver), &
       new_testsuite('table', collect_table), &

@@ -78,6 +78,9 @@ contains
             cfg%model%temperature, cfg%tests(i)%temperature > 0.0_dp), 'g0.8')// &
             ' K, Tm = '//real_str(cfg%model%tm, 'g0.8')//' K, E = '// &
             real_str(cfg%model%youngs, 'g0.8')//' '//cfg%units]
+         if (allocated(cfg%tests(i)%hist%temp)) header(3) = trim(header(3))//' (at the start; '// &
+            'the temperature follows the command from '//real_str(minval(cfg%tests(i)%hist%temp), &
+            'g0.8')//' to '//real_str(maxval(cfg%tests(i)%hist%temp), 'g0.8')//' K)'
          call cfg%model%derived_values(dnames, dvals)
          do k = 1, size(dvals)
             header(3) = trim(header(3))//', '//trim(dnames(k))//' = '//real_str(dvals(k), 'g0.8')// &

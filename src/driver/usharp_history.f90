@@ -11,7 +11,7 @@ module usharp_history
    public :: history_type, control_strain, control_stress, segment_type
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
    public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
-   public :: rate_jump_history, spline_eval
+   public :: rate_jump_history, spline_eval, add_tmf_temperature
 
    !> Control modes
    integer, parameter :: control_strain = 1, control_stress = 2
@@ -26,6 +26,8 @@ module usharp_history
       real(dp), allocatable :: v(:)  !< strain (-) or stress (model unit) at the corners
       real(dp), allocatable :: d2(:)   !< smooth only: second derivative at t, per s**2
       integer, allocatable :: stops(:) !< smooth only: indices of the corners, first and last
+      !> Non-isothermal only: the temperature at the corners (K), linear between them
+      real(dp), allocatable :: temp(:)
    contains
       procedure :: value_at => history_value_at
       procedure :: end_time => history_end_time
@@ -161,6 +163,34 @@ contains
       seg%v0 = self%v(k)
       seg%slope = (self%v(k + 1) - self%v(k))/(self%t(k + 1) - self%t(k))
    end function history_segment
+
+   !> A thermomechanical history: the temperature follows the command linearly between its
+   !> extremes, tlow at the lowest command and thigh at the highest (in phase), or the other
+   !> way round (out of phase); a piecewise-linear history only, whose corners then carry
+   !> the temperature's corners too
+   pure subroutine add_tmf_temperature(hist, tlow, thigh, in_phase, error)
+      type(history_type), intent(inout) :: hist
+      !> K
+      real(dp), intent(in) :: tlow, thigh
+      logical, intent(in) :: in_phase
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: lo, hi
+      real(dp), allocatable :: u(:)
+      if (hist%smooth()) then
+         call fatal_error(error, 'a temperature cycle needs a piecewise-linear history, '// &
+                          'not a measured signal as smooth forcing')
+         return
+      end if
+      lo = minval(hist%v)
+      hi = maxval(hist%v)
+      if (.not. hi > lo) then
+         call fatal_error(error, 'a temperature cycle needs a command that changes')
+         return
+      end if
+      u = (hist%v - lo)/(hi - lo)
+      if (.not. in_phase) u = 1.0_dp - u
+      hist%temp = tlow + (thigh - tlow)*u
+   end subroutine add_tmf_temperature
 
    !> Value of a segment at time t (s), extended linearly
    elemental real(dp) function segment_value(self, t) result(v)

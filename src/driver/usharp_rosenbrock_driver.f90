@@ -7,7 +7,7 @@
 !> With effects it integrates the extended model of usharp_effects (the model's states, p
 !> and R2; its analytic Jacobian), as CVODE does.
 module usharp_rosenbrock_driver
-   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
@@ -44,6 +44,8 @@ module usharp_rosenbrock_driver
       type(test_effects) :: eff
       real(dp) :: stiffness = 0.0_dp
       real(dp), allocatable :: tc(:), vc(:), yk(:)
+      !> Non-isothermal: the history's corner times (s) and temperatures there (K)
+      real(dp), allocatable :: tt(:), temp(:)
    end type rate_system
 
    !> RODAS4 (Hairer and Wanner 1996, Sec. IV.7) in the form G K_i = f(t + alpha_i h,
@@ -118,6 +120,10 @@ contains
          n = extended_size(model)
          allocate (y0(n), atol(n))
          call extended_initial(model, effects, y0)
+         if (allocated(hist%temp)) then
+            sys%tt = hist%t
+            sys%temp = hist%temp
+         end if
          ! p is a strain, R2 a stress
          atol(n - 1:n) = [as, ar]
       else
@@ -154,6 +160,10 @@ contains
          sys%tc = hist%t
          sys%vc = hist%v
          sys%mc = hist%d2
+      end if
+      if (allocated(hist%temp)) then
+         sys%tt = hist%t
+         sys%temp = hist%temp
       end if
    end subroutine plain_system
 
@@ -239,12 +249,8 @@ contains
       end do
       ok = .true.
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
-      if (sys%extended) then
-         call extended_rates(sys%model, sys%eff, sigma, y, f)
-      else
-         call sys%model%uniaxial_rates(sigma, dsig, y, f)
-      end if
-      ok = all(ieee_is_finite(f))
+      call system_rates(sys, t, 0.0_dp, sigma, dsig, y, f, ok)
+      if (ok) ok = all(ieee_is_finite(f))
    end subroutine rates
 
    !> Jacobian in the state and the rates' time derivative (through the load), both from
@@ -257,15 +263,81 @@ contains
       real(dp), intent(in), contiguous :: y(:)
       real(dp), intent(out), contiguous :: jac(:, :), dfdt(:)
       real(dp), intent(out), optional, contiguous :: fy(:)
-      real(dp) :: sigma, dsig, dsig_dt, f(size(y))
+      real(dp) :: sigma, dsig, dsig_dt, f(size(y)), fp(size(y)), fm(size(y)), rate
+      real(dp), parameter :: dtemp = 0.01_dp
+      logical :: ok
+      integer :: k
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
-      if (sys%extended) then
-         call extended_rates(sys%model, sys%eff, sigma, y, f, 1.0_dp, jac)
-      else
-         call sys%model%uniaxial_rates(sigma, 1.0_dp, y, f, jac)
-      end if
+      call system_rates(sys, t, 0.0_dp, sigma, 1.0_dp, y, f, ok, jac)
       if (present(fy)) fy = f
       dfdt = jac(:, 1)*dsig_dt
       jac(:, 1) = jac(:, 1)*dsig
+      if (allocated(sys%temp) .and. ok) then
+         ! Through the temperature too: central differences in T (K); theta(T) changes by
+         ! some 6 % per K, so 0.01 K leaves a relative error near 1e-7
+         k = temperature_segment(sys, t)
+         rate = (sys%temp(k + 1) - sys%temp(k))/(sys%tt(k + 1) - sys%tt(k))
+         if (rate /= 0.0_dp) then
+            call system_rates(sys, t, dtemp, sigma, dsig, y, fp, ok)
+            if (ok) call system_rates(sys, t, -dtemp, sigma, dsig, y, fm, ok)
+            if (ok) dfdt = dfdt + (fp - fm)/(2.0_dp*dtemp)*rate
+         end if
+      end if
    end subroutine rates_jacobian
+
+   !> The rates (and their Jacobian) of the model, or of the model with its effects, at
+   !> stress sigma; under a temperature history those of a copy of the model moved to the
+   !> temperature at time t (s) plus shift (K). ok false where the model cannot be moved there
+   pure subroutine system_rates(sys, t, shift, sigma, dsig, y, f, ok, jac)
+      type(rate_system), intent(in) :: sys
+      real(dp), intent(in) :: t, shift, sigma, dsig
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: f(:)
+      logical, intent(out) :: ok
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
+      class(model_type), allocatable :: m
+      type(error_type), allocatable :: error
+      integer :: k
+      ok = .true.
+      if (.not. allocated(sys%temp)) then
+         call model_rates(sys, sys%model, sigma, dsig, y, f, jac)
+         return
+      end if
+      k = temperature_segment(sys, t)
+      allocate (m, source=sys%model)
+      call m%set_temperature(sys%temp(k) + (sys%temp(k + 1) - sys%temp(k))* &
+                             (t - sys%tt(k))/(sys%tt(k + 1) - sys%tt(k)) + shift, error)
+      ok = .not. allocated(error)
+      if (ok) then
+         call model_rates(sys, m, sigma, dsig, y, f, jac)
+      else
+         ! Rates that no step accepts
+         f = ieee_value(1.0_dp, ieee_quiet_nan)
+         if (present(jac)) jac = 0.0_dp
+      end if
+   end subroutine system_rates
+
+   !> The rates of model, plain or with the system's effects
+   pure subroutine model_rates(sys, model, sigma, dsig, y, f, jac)
+      type(rate_system), intent(in) :: sys
+      class(model_type), intent(in) :: model
+      real(dp), intent(in) :: sigma, dsig
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: f(:)
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
+      if (sys%extended) then
+         call extended_rates(model, sys%eff, sigma, y, f, dsig, jac)
+      else
+         call model%uniaxial_rates(sigma, dsig, y, f, jac)
+      end if
+   end subroutine model_rates
+
+   !> The linear piece of a temperature history that holds time t (s): the current segment
+   !> of the integration
+   pure integer function temperature_segment(sys, t) result(k)
+      type(rate_system), intent(in) :: sys
+      real(dp), intent(in) :: t
+      k = min(max(sys%k, 1), size(sys%tt) - 1)
+      if (t > sys%tt(k + 1)) k = min(k + 1, size(sys%tt) - 1)
+   end function temperature_segment
 end module usharp_rosenbrock_driver

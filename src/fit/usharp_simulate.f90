@@ -1,7 +1,7 @@
 !> Simulating one configured test: output times, the integrator, error context
 module usharp_simulate
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, prefix_error
+   use usharp_error, only: error_type, prefix_error, fatal_error
    use usharp_model, only: model_type, model_at
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
@@ -35,7 +35,10 @@ contains
    contains
       subroutine simulate_with(m)
          class(model_type), intent(in) :: m
-         if (solver%integrator == 'umat') then
+         if (allocated(test%hist%temp) .and. solver%integrator /= 'rodas4') then
+            call fatal_error(error, "a temperature cycle (tmf_temperatures) needs integrator "// &
+                             "= 'rodas4', not '"//trim(solver%integrator)//"'")
+         else if (solver%integrator == 'umat') then
             call simulate_umat(m, test%hist, test%times(), solver, res, error)
          else if (solver%integrator == 'rodas4') then
             call simulate_rosenbrock(m, test%hist, test%times(), solver, &

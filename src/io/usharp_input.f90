@@ -63,23 +63,32 @@ contains
       type(run_config), intent(in) :: cfg
       type(error_type), allocatable, intent(out) :: error
       class(model_type), allocatable :: mt
-      integer :: i
+      real(dp), allocatable :: temps(:)
+      integer :: i, j
       do i = 1, size(cfg%tests)
-         associate (temp => cfg%tests(i)%temperature)
-            if (.not. temp > 0.0_dp) cycle
-            if (temp < 0.1_dp*cfg%model%tm .or. temp >= cfg%model%tm) then
-               call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': temperature = "// &
-                  str(temp)//' K must lie between a tenth of tm and tm = '//str(cfg%model%tm)// &
-                  ' K (temperatures are in kelvin)')
-               return
-            end if
-            call model_at(cfg%model, temp, mt, error)
-            if (allocated(error)) then
-               call prefix_error(error, path//": &test '"//cfg%tests(i)%name//"': at "// &
-                                 str(temp)//' K: ')
-               return
-            end if
-         end associate
+         ! A temperature cycle is checked at its two ends
+         if (allocated(cfg%tests(i)%hist%temp)) then
+            temps = [minval(cfg%tests(i)%hist%temp), maxval(cfg%tests(i)%hist%temp)]
+         else
+            temps = [cfg%tests(i)%temperature]
+         end if
+         do j = 1, size(temps)
+            associate (temp => temps(j))
+               if (.not. temp > 0.0_dp) cycle
+               if (temp < 0.1_dp*cfg%model%tm .or. temp >= cfg%model%tm) then
+                  call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': temperature = "// &
+                     str(temp)//' K must lie between a tenth of tm and tm = '//str(cfg%model%tm)// &
+                     ' K (temperatures are in kelvin)')
+                  return
+               end if
+               call model_at(cfg%model, temp, mt, error)
+               if (allocated(error)) then
+                  call prefix_error(error, path//": &test '"//cfg%tests(i)%name//"': at "// &
+                                    str(temp)//' K: ')
+                  return
+               end if
+            end associate
+         end do
       end do
    end subroutine check_test_temperatures
 

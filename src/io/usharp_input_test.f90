@@ -7,7 +7,7 @@ module usharp_input_test
    use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
                              thesis_lcf_history, relaxation_history, ratchet_history, &
                              cyclic_history, tensile_history, creep_history, rate_jump_history, &
-                             output_times
+                             add_tmf_temperature, output_times
    use usharp_forcing, only: measured_history
    use usharp_cycles, only: gap_filled_history, match_peaks
    use usharp_sort, only: order_of
@@ -93,12 +93,12 @@ module usharp_input_test
                                   filter_column, data_format, weighting, backend, output_file, &
                                   output_format, output_time, output_stress, output_unit, &
                                   constants_file, constants_format, command, target, &
-                                  gap_fill, peak_file
+                                  gap_fill, peak_file, tmf_phase
       character(len=filter_len + 1) :: filter(max_list), peak_columns(4)
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list), peak_share, temperature
+                  time_limit, rates(max_list), peak_share, temperature, tmf_temperatures(2)
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
    end type test_values
@@ -363,6 +363,8 @@ contains
          call fatal_error(error, "history = '"//trim(v%history)//"' is not known (thesis_lcf, "// &
             'relaxation, ratchet, cyclic, tensile, rate_jump, creep, file, data)')
       end select
+      if (allocated(error)) return
+      if (any(v%tmf_temperatures /= 0.0_dp)) call add_tmf(v, t, error)
       if (allocated(error) .or. t%target == 'data') return
       if (t%hist%control /= control_strain .or. t%ext%enabled) then
          call fatal_error(error, "target = '"//t%target//"' needs a strain-controlled history "// &
@@ -371,6 +373,44 @@ contains
       end if
       call add_peak_points(t, v%peak_columns, error)
    end subroutine build_test
+
+   !> A thermomechanical test: the temperature follows the command between the two of
+   !> tmf_temperatures (K), in or out of phase; the model is set up at the temperature the
+   !> test starts at (the initial state's)
+   pure subroutine add_tmf(v, t, error)
+      type(test_values), intent(in) :: v
+      type(test_config), intent(inout) :: t
+      type(error_type), allocatable, intent(out) :: error
+      logical :: in_phase
+      if (.not. all(v%tmf_temperatures > 0.0_dp)) then
+         call fatal_error(error, 'tmf_temperatures = '//str(v%tmf_temperatures(1))//', '// &
+                          str(v%tmf_temperatures(2))//' K: needs two temperatures > 0 K')
+         return
+      end if
+      if (v%temperature > 0.0_dp) then
+         call fatal_error(error, 'temperature and tmf_temperatures are both set: a test '// &
+                          'runs at one temperature or under a temperature cycle')
+         return
+      end if
+      if (t%ext%enabled) then
+         call fatal_error(error, 'tmf_temperatures needs the internal backend')
+         return
+      end if
+      select case (lower_text(trim(v%tmf_phase)))
+      case ('in', 'in-phase'); in_phase = .true.
+      case ('out', 'out-of-phase'); in_phase = .false.
+      case default
+         call fatal_error(error, "tmf_phase = '"//trim(v%tmf_phase)//"' is not known (in, out)")
+         return
+      end select
+      call add_tmf_temperature(t%hist, minval(v%tmf_temperatures), maxval(v%tmf_temperatures), &
+                               in_phase, error)
+      if (allocated(error)) then
+         call prefix_error(error, 'tmf_temperatures: ')
+         return
+      end if
+      t%temperature = t%hist%temp(1)
+   end subroutine add_tmf
 
    !> The measured peak stresses of test t's peak_file (columns: time of the maximum, the
    !> maximum, time of the minimum, the minimum) as compared points at the turning points of
@@ -549,12 +589,12 @@ contains
                                   filter_column, data_format, weighting, backend, output_file, &
                                   output_format, output_time, output_stress, output_unit, &
                                   constants_file, constants_format, command, target, &
-                                  gap_fill, peak_file
+                                  gap_fill, peak_file, tmf_phase
       character(len=filter_len + 1) :: filter(max_list), peak_columns(4)
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list), peak_share, temperature
+                  time_limit, rates(max_list), peak_share, temperature, tmf_temperatures(2)
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
       namelist /test/ name, history, dt_out, amp_first, amp_last, npeaks, quarter_time, levels, &
@@ -564,7 +604,7 @@ contains
          filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
          output_file, output_format, output_time, output_stress, output_unit, constants_file, &
          constants_format, time_limit, candidate, rates, target, gap_fill, peak_file, &
-         peak_columns, peak_share, temperature
+         peak_columns, peak_share, temperature, tmf_temperatures, tmf_phase
       name = ''
       history = ''
       file = ''
@@ -591,6 +631,7 @@ contains
       output_time = 'TIME'; output_stress = 'STRESS'; output_unit = ''
       constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = d%ext%time_limit
       candidate = d%candidate; rates = unset; temperature = d%temperature
+      tmf_temperatures = 0.0_dp; tmf_phase = 'in'
       target = 'data'; gap_fill = 'cycles'; peak_file = ''; peak_share = d%peak_share
       peak_columns = [character(len=filter_len + 1) :: 'time_max', 'max', 'time_min', 'min']
       ios = 0
@@ -615,6 +656,7 @@ contains
       v%candidate = candidate; v%npeaks = npeaks; v%repeats = repeats; v%cycles = cycles
       v%seed = seed; v%target = target; v%gap_fill = gap_fill; v%peak_file = peak_file
       v%peak_columns = peak_columns; v%peak_share = peak_share; v%temperature = temperature
+      v%tmf_temperatures = tmf_temperatures; v%tmf_phase = tmf_phase
    end subroutine test_namelist
 
    !> History from a file of (time, value) points; control is 'strain' or 'stress'

@@ -119,6 +119,10 @@ module usharp_model
       procedure :: set_option
       !> Stresses the set-up model derived that outputs report (name and value, model unit)
       procedure :: derived_values
+      !> The set-up model moved to another temperature during a test (a thermomechanical
+      !> history): the rates follow the temperature, the initial state stays that of the
+      !> temperature the model was set up at
+      procedure :: set_temperature
    end type model_type
 
    abstract interface
@@ -330,6 +334,17 @@ contains
       allocate (character(len=1) :: names(0))
       allocate (vals(0))
    end subroutine derived_values
+
+   !> Any model: set up again at the new temperature (what only the initial state uses is
+   !> derived again too, and then not used)
+   pure subroutine set_temperature(self, temperature, error)
+      class(model_type), intent(inout) :: self
+      !> K
+      real(dp), intent(in) :: temperature
+      type(error_type), allocatable, intent(out) :: error
+      self%temperature = temperature
+      call self%setup(error)
+   end subroutine set_temperature
 
    !> A copy of model at another temperature (K), set up there: what depends on temperature
    !> follows (the Miller model's B*theta and D0)

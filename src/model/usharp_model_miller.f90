@@ -118,6 +118,7 @@ module usharp_model_miller
       procedure :: set_units => miller_set_units
       procedure :: set_option => miller_set_option
       procedure :: derived_values => miller_derived_values
+      procedure :: set_temperature => miller_set_temperature
    end type miller_model
 
    !> The scalar parts of the rates at equivalent overstress x, back stress r and drag stress D,
@@ -826,6 +827,19 @@ contains
       names = [character(len=2) :: 'D0']
       vals = [self%d0]
    end subroutine miller_derived_values
+
+   !> Temperature enters the rates only through B*theta(T) (Eq. 5); D0, the initial drag,
+   !> stays that of the temperature the model was set up at
+   pure subroutine miller_set_temperature(self, temperature, error)
+      class(miller_model), intent(inout) :: self
+      !> K
+      real(dp), intent(in) :: temperature
+      type(error_type), allocatable, intent(out) :: error
+      self%temperature = temperature
+      self%btheta = self%c%b*theta_miller(self%c%q, self%tm, temperature)
+      if (.not. ieee_is_finite(self%btheta) .or. self%btheta <= 0.0_dp) &
+         call fatal_error(error, 'B*theta(T) = '//str(self%btheta)//' 1/s is not representable')
+   end subroutine miller_set_temperature
 
    !> YS of the D0 formula: the thesis's 18 ksi in the model's unit
    pure subroutine miller_set_units(self, units)
