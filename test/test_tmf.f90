@@ -17,7 +17,7 @@ module test_tmf
    use usharp_fit, only: run_fit, fit_outcome
    use usharp_filesys, only: make_dir
    use test_design, only: synthetic_problem
-   use test_util, only: write_text, scratch_dir, check_message
+   use test_util, only: write_text, scratch_dir, check_message, rtoa
    implicit none
    private
    public :: collect_tmf
@@ -221,12 +221,4 @@ contains
       if (.not. allocated(e)) call simulate_test(cfg%model, cfg%solver, cfg%tests(1), res, e)
       call check_message(error, e, "needs integrator = 'rodas4'")
    end subroutine test_input
-
-   pure function rtoa(x) result(s)
-      real(dp), intent(in) :: x
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(es10.3)') x
-      s = trim(adjustl(buf))
-   end function rtoa
 end module test_tmf

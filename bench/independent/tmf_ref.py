@@ -14,19 +14,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from miller_ref import TABLE4, E_NOM, theta, drag0
-
-
-def corners(strain_range, rate, cycles):
-    """Corners (t, strain) of the triangle wave 0 -> +a -> -a -> ... -> 0"""
-    a = 0.5 * strain_range
-    q = a / rate
-    t, v = [0.0], [0.0]
-    for _ in range(cycles):
-        for val in (a, 0.0, -a, 0.0):
-            t.append(t[-1] + q)
-            v.append(val)
-    return np.array(t), np.array(v)
+from miller_ref import TABLE4, E_NOM, theta, drag0, cyclic
 
 
 def simulate(tc, vc, tout, tmin, tmax, phase, c):
@@ -87,7 +75,7 @@ def main():
     p.add_argument('--q', type=float, default=TABLE4['Q'])
     a = p.parse_args()
     c = dict(TABLE4, Q=a.q)
-    tc, vc = corners(a.range, a.rate, a.cycles)
+    _, tc, vc = cyclic(a.range, a.rate, a.cycles)
     t = np.union1d(np.round(np.arange(0.0, tc[-1] + 1e-9, a.dt), 9), tc)
     eps, sig, temp = simulate(tc, vc, t, a.tmin, a.tmax, a.phase, c)
     with open(a.out, 'w') as f:
