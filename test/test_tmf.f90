@@ -17,7 +17,8 @@ module test_tmf
    use usharp_fit, only: run_fit, fit_outcome
    use usharp_filesys, only: make_dir
    use test_design, only: synthetic_problem
-   use test_util, only: write_text, scratch_dir, check_message, rtoa
+   use test_util, only: write_text, scratch_dir, check_message
+   use usharp_strings, only: real_str
    implicit none
    private
    public :: collect_tmf
@@ -75,7 +76,7 @@ contains
       if (allocated(error)) return
       call check(error, all(a%stress == b%stress) .and. all(a%eps_in == b%eps_in), &
                  'a cycle between 900 and 900 K differs from the test at 900 K by '// &
-                 rtoa(maxval(abs(a%stress - b%stress)))//' ksi')
+                 real_str(maxval(abs(a%stress - b%stress)), 'es10.3')//' ksi')
    end subroutine test_isothermal
 
    !> d f/d t at fixed state from rates_jacobian (the load's analytic part and the
@@ -111,14 +112,14 @@ contains
          call rates(sys, t + h, y, fp, okp)
          call rates(sys, t - h, y, fm, okm)
          if (.not. (okp .and. okm)) then
-            call test_failed(error, 'rates failed at t = '//rtoa(t))
+            call test_failed(error, 'rates failed at t = '//real_str(t, 'es10.3'))
             return
          end if
          worst = max(worst, maxval(abs(dfdt - (fp - fm)/(2.0_dp*h))/(abs(dfdt) + 1.0e-3_dp*maxval(abs(dfdt)))))
       end do
-      write (*, '(4x,a)') 'd f/d t against central differences: '//rtoa(worst)//' relative'
+      write (*, '(4x,a)') 'd f/d t against central differences: '//real_str(worst, 'es10.3')//' relative'
       call check(error, worst <= 1.0e-5_dp, 'time derivative of the rates differs from central '// &
-                 'differences by '//rtoa(worst)//' relative')
+                 'differences by '//real_str(worst, 'es10.3')//' relative')
    end subroutine test_time_derivative
 
    !> The default tolerances against RODAS4 at rtol 1e-10 (within 1e-4 of the peak stress),
@@ -138,8 +139,8 @@ contains
                                  "&solver integrator = 'rodas4', rtol = 1e-10, atol_strain = 1e-14 /"), b, error)
          if (allocated(error)) return
          dev = maxval(abs(a%stress - b%stress))/maxval(abs(b%stress))
-         write (*, '(4x,a)') trim(phase(k))//' of phase: '//rtoa(dev)//' of the peak from rtol 1e-10'
-         call check(error, dev <= 1.0e-4_dp, trim(phase(k))//' of phase: '//rtoa(dev)// &
+         write (*, '(4x,a)') trim(phase(k))//' of phase: '//real_str(dev, 'es10.3')//' of the peak from rtol 1e-10'
+         call check(error, dev <= 1.0e-4_dp, trim(phase(k))//' of phase: '//real_str(dev, 'es10.3')// &
                     ' of the peak from the tight reference')
          if (allocated(error)) return
       end do
@@ -159,7 +160,7 @@ contains
       ain = (maxval(a%stress) + minval(a%stress))/maxval(abs(a%stress))
       aout = (maxval(b%stress) + minval(b%stress))/maxval(abs(b%stress))
       call check(error, ain < -0.05_dp .and. aout > 0.05_dp, 'mean stress / peak: in phase '// &
-                 rtoa(ain)//', out of phase '//rtoa(aout))
+                 real_str(ain, 'es10.3')//', out of phase '//real_str(aout, 'es10.3'))
    end subroutine test_phase
 
    !> One in-phase cycle with a hold at each temperature extreme determines B and Q together
@@ -192,9 +193,9 @@ contains
          return
       end if
       q = out%constants(2)
-      write (*, '(4x,a)') 'B '//rtoa(out%constants(1))//' 1/s, Q '//rtoa(q)//' cal/mol'
-      call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//rtoa(q)//' cal/mol, true '// &
-                 rtoa(q_true)//', B '//rtoa(out%constants(1)))
+      write (*, '(4x,a)') 'B '//real_str(out%constants(1), 'es10.3')//' 1/s, Q '//real_str(q, 'es10.3')//' cal/mol'
+      call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//real_str(q, 'es10.3')//' cal/mol, true '// &
+                 real_str(q_true, 'es10.3')//', B '//real_str(out%constants(1), 'es10.3'))
    end subroutine test_b_and_q
 
    !> One line naming the variable for each misuse

@@ -3,10 +3,9 @@ module test_util
    use testdrive, only: error_type, test_failed, skip_test
    use usharp_error, only: uerror => error_type
    use usharp_filesys, only: make_dir
-   use usharp_kinds, only: dp
    implicit none
    private
-   public :: scratch_dir, write_text, usharp_exe, require_exe, read_text, check_message, rtoa
+   public :: scratch_dir, write_text, usharp_exe, require_exe, read_text, check_message
 
    !> Scratch folder for test files (inside the build tree, never in the sources)
    character(len=*), parameter :: scratch_dir = 'build/test-scratch'
@@ -82,12 +81,4 @@ contains
       exe = usharp_exe()
       if (len(exe) == 0) call skip_test(error, 'usharp executable not found next to the tester')
    end subroutine require_exe
-   !> A number for a test's message (es10.3, no blanks)
-   pure function rtoa(x) result(s)
-      real(dp), intent(in) :: x
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(es10.3)') x
-      s = trim(adjustl(buf))
-   end function rtoa
 end module test_util
