@@ -42,7 +42,7 @@ cat > "$out/selfcheck.nml" <<'NML'
   noise = 0.01 /
 NML
 
-echo "machine: $(nproc) cores; load before: $(uptime | sed 's/.*load average: //')"
+echo "machine: $(nproc --all) cores; load before: $(uptime | sed 's/.*load average: //')"
 printf '%-34s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "2 ranks" "ratio" "results"
 if [ -d ../shared/realdata/a617-950C ]; then
   t1=$(wall x "$exe" run -q -o "$out/fit1" decks/a617-950C-fit.nml)
