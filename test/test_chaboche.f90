@@ -4,6 +4,11 @@ module test_chaboche
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
+   use usharp_history, only: history_type, history_from_points, control_strain
+   use usharp_simulation, only: solver_options, sim_result
+   use usharp_cvode_driver, only: simulate_cvode
+   use usharp_rosenbrock_driver, only: simulate_rosenbrock
+   use usharp_umat_driver, only: simulate_umat
    use usharp_model_chaboche, only: chaboche_model, chaboche_setup, chaboche_uniaxial_rates, &
       chaboche_update, chaboche_n_uniaxial, chaboche_n_state, chaboche_ok, chaboche_n_constants, &
       chaboche_get_constant, chaboche_set_constant, chaboche_constant_index, chaboche_constant_names, &
@@ -26,7 +31,8 @@ contains
          new_unittest('tangent-fd-elastic', test_tangent_elastic), &
          new_unittest('tangent-fd-strongly-inelastic', test_tangent_inelastic), &
          new_unittest('update-matches-uniaxial-rates', test_update_vs_rates), &
-         new_unittest('update-first-order-and-1e-4-of-peak', test_accuracy)]
+         new_unittest('update-first-order-and-1e-4-of-peak', test_accuracy), &
+         new_unittest('drivers-within-1e-4-of-peak-of-tight-reference', test_drivers)]
    end subroutine collect_chaboche
 
    !> A set of constants of the size found for Alloy 617 near 950 C, with both recovery
@@ -351,6 +357,48 @@ contains
       call check(error, all([err(1)/err(2), err(2)/err(3)] > 1.7_dp) .and. &
                  all([err(1)/err(2), err(2)/err(3)] < 2.3_dp) .and. xerr <= 1.0e-4_dp, trim(buf))
    end subroutine test_accuracy
+
+   !> The uniaxial drivers through the model interface (RODAS4 and CVODE at their default
+   !> tolerances, the single-element umat path at its default increments) against the RK4
+   !> reference on two cycles at 1e-3/s and one at 1e-4/s
+   subroutine test_drivers(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(chaboche_model) :: m
+      type(history_type) :: h
+      type(solver_options) :: opts
+      type(sim_result) :: res
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: tout(:), sr(:)
+      real(dp) :: dev(3), ea, rate, tq
+      integer :: k, ncyc
+      character(len=200) :: buf
+      m = test_chaboche_model()
+      do k = 1, 2
+         ea = 0.005_dp - 0.001_dp*(k - 1)
+         rate = 1.0e-3_dp/10**(k - 1)
+         ncyc = 3 - k
+         tq = ea/rate
+         call history_from_points([0.0_dp, tq, 3*tq, 5*tq, 7*tq, 8*tq], &
+                                  [0.0_dp, ea, -ea, ea, -ea, 0.0_dp], control_strain, h, uerr)
+         tout = sample_times(ea, rate, ncyc)
+         allocate (sr(size(tout)))
+         call chaboche_uniaxial_rk4(m, ea, rate, ncyc, 4000, tout, sr)
+         call simulate_rosenbrock(m, h, tout, opts, res, uerr)
+         if (.not. allocated(uerr)) dev(1) = maxval(abs(res%stress - sr))/maxval(abs(sr))
+         if (.not. allocated(uerr)) call simulate_cvode(m, h, tout, opts, res, uerr)
+         if (.not. allocated(uerr)) dev(2) = maxval(abs(res%stress - sr))/maxval(abs(sr))
+         if (.not. allocated(uerr)) call simulate_umat(m, h, tout, opts, res, uerr)
+         if (.not. allocated(uerr)) dev(3) = maxval(abs(res%stress - sr))/maxval(abs(sr))
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         write (buf, '(a,es8.1,a,3es10.3)') 'rate ', rate, ': |driver - RK4| / peak, RODAS4, CVODE, umat: ', dev
+         call check(error, all(dev(1:2) <= 1.0e-4_dp) .and. dev(3) <= 5.0e-3_dp, trim(buf))
+         if (allocated(error)) return
+         deallocate (sr)
+      end do
+   end subroutine test_drivers
 
    pure function real_str(x) result(s)
       real(dp), intent(in) :: x

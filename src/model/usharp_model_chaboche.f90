@@ -15,19 +15,22 @@
 !> which reduces to the uniaxial form with x_i = 3/2 X_i,11.
 !> The 3-D update is backward Euler in Mandel form (11, 22, 33, sqrt2*12, sqrt2*23, sqrt2*13),
 !> state y = (inelastic strain (6), X1 (6), X2 (6), R), with the consistent tangent.
+!> chaboche_model is its implementation of usharp_model's model_type; temperature enters
+!> only through the constants, which are those at the model's temperature.
 module usharp_model_chaboche
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
+   use usharp_model, only: model_type, elastic_moduli, update_status_ok, update_status_cut, &
+                           block_scalar, block_strain, block_stress
    use usharp_model_j2, only: deviator_projector, solve_dense, m_vec
    implicit none
    private
 
    public :: chaboche_constants, chaboche_model, chaboche_setup
    public :: chaboche_get_constant, chaboche_set_constant, chaboche_constant_index
-   public :: chaboche_flow, chaboche_uniaxial_rates, chaboche_update, chaboche_initial_state
-   public :: chaboche_moduli
+   public :: chaboche_flow, chaboche_uniaxial_rates, chaboche_update
 
    !> Number of back stresses
    integer, parameter, public :: chaboche_n_back = 2
@@ -49,14 +52,17 @@ module usharp_model_chaboche
    real(dp), parameter, public :: chaboche_literature_high(chaboche_n_constants) = &
       [150.0_dp, 3000.0_dp, 15.0_dp, 200.0_dp, 50.0_dp, 3.0e5_dp, 3000.0_dp, 5.0e4_dp, 500.0_dp, &
        1.0e-4_dp, 6.0_dp, 1.0e-4_dp, 6.0_dp]
-   !> Power of the stress unit in each constant's unit (A_i: 1 - m_i, handled by the caller)
+   !> Power of the stress unit in each constant's unit. A_i is in MPa**(1 - m_i), a power that
+   !> depends on m_i: it is given as 0, so its default box holds in MPa only
    integer, parameter, public :: chaboche_stress_power(chaboche_n_constants) = &
       [1, 1, 0, 1, 0, 1, 0, 1, 0, 0, 0, 0, 0]
    !> Number of uniaxial and of multiaxial state variables
    integer, parameter, public :: chaboche_n_uniaxial = 2 + chaboche_n_back
    integer, parameter, public :: chaboche_n_state = 7 + 6*chaboche_n_back
    !> Outcome of the update: converged, or the caller must retry with a smaller increment
-   integer, parameter, public :: chaboche_ok = 0, chaboche_cut = 1
+   integer, parameter, public :: chaboche_ok = update_status_ok, chaboche_cut = update_status_cut
+   !> Properties of the drop-in user material: E, Poisson's ratio, then the constants
+   integer, parameter :: n_props = 2 + chaboche_n_constants
    !> Backward Euler substeps per increment by default, Newton iterations, halvings
    integer, parameter, public :: chaboche_default_substeps = 8
    integer, parameter :: max_newton = 30, max_halvings = 12
@@ -74,24 +80,50 @@ module usharp_model_chaboche
       real(dp) :: m(chaboche_n_back) = [1.0_dp, 3.0_dp]      !< -, static recovery exponents
    end type chaboche_constants
 
-   !> A Chaboche model at one temperature
-   type :: chaboche_model
+   !> A Chaboche model at one temperature (temperature, youngs and poisson from model_type;
+   !> the constants are those at that temperature)
+   type, extends(model_type) :: chaboche_model
       type(chaboche_constants) :: c
-      real(dp) :: temperature = 1223.15_dp  !< K (the constants are those at this temperature)
-      real(dp) :: youngs = 144000.0_dp      !< Young's modulus, model stress unit
-      real(dp) :: poisson = 0.3_dp          !< Poisson's ratio
+   contains
+      procedure :: name => ch_name
+      procedure :: n_constants => ch_n_constants
+      procedure :: constant_name => ch_constant_name
+      procedure :: stress_power => ch_stress_power
+      procedure :: literature_range => ch_literature_range
+      procedure :: literature_units => ch_literature_units
+      procedure :: get_constant => ch_get_constant
+      procedure :: set_constant => ch_set_constant
+      procedure :: constants_namelist => ch_constants_namelist
+      procedure :: setup => chaboche_setup
+      procedure :: n_uniaxial => ch_n_uniaxial
+      procedure :: uniaxial_initial => ch_initial
+      procedure :: uniaxial_is_stress => ch_uniaxial_is_stress
+      procedure :: admissible => ch_admissible
+      procedure :: uniaxial_rates => ch_uniaxial_rates
+      procedure :: uniaxial_outputs => ch_uniaxial_outputs
+      procedure :: n_state => ch_n_state
+      procedure :: state_initial => ch_initial
+      procedure :: stress_update => ch_stress_update
+      procedure :: update_substeps => ch_update_substeps
+      procedure :: state_outputs => ch_state_outputs
+      procedure :: n_props => ch_n_props
+      procedure :: prop_name => ch_prop_name
+      procedure :: to_props => ch_to_props
+      procedure :: from_props => ch_from_props
+      procedure :: fe_layout => ch_fe_layout
+      procedure :: complete_state => ch_complete_state
    end type chaboche_model
 
 contains
 
-   !> Check that the constants are admissible
-   pure subroutine chaboche_setup(model, error)
-      type(chaboche_model), intent(in) :: model
+   !> Check that the constants and the elastic constants are admissible (nothing is derived)
+   pure subroutine chaboche_setup(self, error)
+      class(chaboche_model), intent(inout) :: self
       type(error_type), allocatable, intent(out) :: error
       integer :: i
       real(dp) :: v
       do i = 1, chaboche_n_constants
-         v = chaboche_get_constant(model%c, i)
+         v = chaboche_get_constant(self%c, i)
          if (.not. ieee_is_finite(v)) then
             call fatal_error(error, 'constant '//trim(chaboche_constant_names(i))//' is not finite')
             return
@@ -108,11 +140,11 @@ contains
          end select
          if (allocated(error)) return
       end do
-      if (.not. ieee_is_finite(model%youngs) .or. model%youngs <= 0.0_dp) then
-         call fatal_error(error, "Young's modulus E must be > 0, got "//str(model%youngs))
-      else if (.not. ieee_is_finite(model%poisson) .or. model%poisson <= -1.0_dp &
-               .or. model%poisson >= 0.5_dp) then
-         call fatal_error(error, "Poisson's ratio must lie in (-1, 0.5), got "//str(model%poisson))
+      if (.not. ieee_is_finite(self%youngs) .or. self%youngs <= 0.0_dp) then
+         call fatal_error(error, "Young's modulus E must be > 0, got "//str(self%youngs))
+      else if (.not. ieee_is_finite(self%poisson) .or. self%poisson <= -1.0_dp &
+               .or. self%poisson >= 0.5_dp) then
+         call fatal_error(error, "Poisson's ratio must lie in (-1, 0.5), got "//str(self%poisson))
       end if
    end subroutine chaboche_setup
 
@@ -160,21 +192,6 @@ contains
          if (lower(trim(adjustl(name))) == lower(trim(chaboche_constant_names(i)))) idx = i
       end do
    end function chaboche_constant_index
-
-   !> Initial state of the uniaxial (n = chaboche_n_uniaxial) or multiaxial form: all zero
-   pure function chaboche_initial_state(n) result(y)
-      integer, intent(in) :: n
-      real(dp) :: y(n)
-      y = 0.0_dp
-   end function chaboche_initial_state
-
-   !> Shear and bulk moduli from E and Poisson's ratio
-   elemental subroutine chaboche_moduli(model, g, k)
-      type(chaboche_model), intent(in) :: model
-      real(dp), intent(out) :: g, k
-      g = model%youngs/(2.0_dp*(1.0_dp + model%poisson))
-      k = model%youngs/(3.0_dp*(1.0_dp - 2.0_dp*model%poisson))
-   end subroutine chaboche_moduli
 
    !> Equivalent inelastic strain rate p_dot = <(x - s0 - R)/eta>**n (1/s) at equivalent
    !> effective stress x and isotropic hardening R, and its derivative with respect to the
@@ -269,7 +286,7 @@ contains
       integer :: level, i, isub, st, base
       logical :: ok
 
-      call chaboche_moduli(model, g, k)
+      call elastic_moduli(model%youngs, model%poisson, g, k)
       p = deviator_projector()
       status = chaboche_cut
       base = chaboche_default_substeps
@@ -414,4 +431,220 @@ contains
       jac(nr, nr) = 1.0_dp + dt*model%c%b*f + dt*bq*f_o
       drde(nr, :) = -3.0_dp*g*dt*bq*f_o*nhp
    end subroutine residual
+
+   ! ---- chaboche_model as a model_type ----
+
+   pure function ch_name(self) result(name)
+      class(chaboche_model), intent(in) :: self
+      character(len=:), allocatable :: name
+      name = 'chaboche'
+   end function ch_name
+
+   pure integer function ch_n_constants(self) result(n)
+      class(chaboche_model), intent(in) :: self
+      n = chaboche_n_constants
+   end function ch_n_constants
+
+   pure function ch_constant_name(self, i) result(name)
+      class(chaboche_model), intent(in) :: self
+      integer, intent(in) :: i
+      character(len=:), allocatable :: name
+      name = trim(chaboche_constant_names(i))
+   end function ch_constant_name
+
+   pure integer function ch_stress_power(self, i) result(p)
+      class(chaboche_model), intent(in) :: self
+      integer, intent(in) :: i
+      p = chaboche_stress_power(i)
+   end function ch_stress_power
+
+   pure subroutine ch_literature_range(self, i, low, high)
+      class(chaboche_model), intent(in) :: self
+      integer, intent(in) :: i
+      real(dp), intent(out) :: low, high
+      low = chaboche_literature_low(i)
+      high = chaboche_literature_high(i)
+   end subroutine ch_literature_range
+
+   pure function ch_literature_units(self) result(name)
+      class(chaboche_model), intent(in) :: self
+      character(len=:), allocatable :: name
+      name = 'MPa'
+   end function ch_literature_units
+
+   pure real(dp) function ch_get_constant(self, i) result(val)
+      class(chaboche_model), intent(in) :: self
+      integer, intent(in) :: i
+      val = chaboche_get_constant(self%c, i)
+   end function ch_get_constant
+
+   pure subroutine ch_set_constant(self, i, val)
+      class(chaboche_model), intent(inout) :: self
+      integer, intent(in) :: i
+      real(dp), intent(in) :: val
+      call chaboche_set_constant(self%c, i, val)
+   end subroutine ch_set_constant
+
+   !> &constants: s0, eta, n, q, b, c1, g1, c2, g2, a1, m1, a2, m2
+   subroutine ch_constants_namelist(self, unset, ios, msg, text, unit)
+      class(chaboche_model), intent(inout) :: self
+      real(dp), intent(in) :: unset
+      integer, intent(out) :: ios
+      character(len=*), intent(out) :: msg
+      character(len=*), intent(in), optional :: text(:)
+      integer, intent(in), optional :: unit
+      real(dp) :: s0, eta, n, q, b, c1, g1, c2, g2, a1, m1, a2, m2
+      namelist /constants/ s0, eta, n, q, b, c1, g1, c2, g2, a1, m1, a2, m2
+      ios = 0
+      msg = ''
+      if (present(text)) then
+         s0 = unset; eta = unset; n = unset; q = unset; b = unset
+         c1 = unset; g1 = unset; c2 = unset; g2 = unset
+         a1 = unset; m1 = unset; a2 = unset; m2 = unset
+         read (text, nml=constants, iostat=ios, iomsg=msg)
+         self%c = chaboche_constants(s0, eta, n, q, b, [c1, c2], [g1, g2], [a1, a2], [m1, m2])
+      end if
+      if (present(unit)) then
+         s0 = self%c%s0; eta = self%c%eta; n = self%c%n; q = self%c%q; b = self%c%b
+         c1 = self%c%c(1); g1 = self%c%g(1); c2 = self%c%c(2); g2 = self%c%g(2)
+         a1 = self%c%a(1); m1 = self%c%m(1); a2 = self%c%a(2); m2 = self%c%m(2)
+         write (unit, nml=constants, iostat=ios, iomsg=msg)
+      end if
+   end subroutine ch_constants_namelist
+
+   pure integer function ch_n_uniaxial(self) result(n)
+      class(chaboche_model), intent(in) :: self
+      n = chaboche_n_uniaxial
+   end function ch_n_uniaxial
+
+   !> The virgin state (uniaxial and 3-D): all zero
+   pure subroutine ch_initial(self, y)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(out) :: y(:)
+      y = 0.0_dp
+   end subroutine ch_initial
+
+   pure logical function ch_uniaxial_is_stress(self, i) result(is_stress)
+      class(chaboche_model), intent(in) :: self
+      integer, intent(in) :: i
+      is_stress = i > 1
+   end function ch_uniaxial_is_stress
+
+   !> Every finite state is inside the model
+   pure logical function ch_admissible(self, y) result(ok)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(in) :: y(:)
+      ok = all(ieee_is_finite(y))
+   end function ch_admissible
+
+   pure subroutine ch_uniaxial_rates(self, sigma, dsig_depsin, y, ydot, jac)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(in) :: sigma, dsig_depsin, y(:)
+      real(dp), intent(out) :: ydot(:)
+      real(dp), intent(out), optional :: jac(:, :)
+      call chaboche_uniaxial_rates(self, sigma, dsig_depsin, y, ydot, jac)
+   end subroutine ch_uniaxial_rates
+
+   !> Back stress: the sum of the back stresses; drag stress: the current threshold s0 + R
+   pure subroutine ch_uniaxial_outputs(self, y, back, drag)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(in) :: y(:)
+      real(dp), intent(out) :: back, drag
+      back = sum(y(2:chaboche_n_uniaxial - 1))
+      drag = self%c%s0 + y(chaboche_n_uniaxial)
+   end subroutine ch_uniaxial_outputs
+
+   pure integer function ch_n_state(self) result(n)
+      class(chaboche_model), intent(in) :: self
+      n = chaboche_n_state
+   end function ch_n_state
+
+   pure subroutine ch_stress_update(self, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, &
+                                    nsubsteps)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(in) :: eps0(6), deps(6), dt, y0(:)
+      real(dp), intent(out) :: sigma(6), y(:), ddsde(6, 6)
+      integer, intent(out) :: status, nsub
+      integer, intent(in), optional :: nsubsteps
+      call chaboche_update(self, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, nsubsteps)
+   end subroutine ch_stress_update
+
+   pure integer function ch_update_substeps(self) result(n)
+      class(chaboche_model), intent(in) :: self
+      n = chaboche_default_substeps
+   end function ch_update_substeps
+
+   !> Uniaxial back stress x = 3/2 X_11 summed over the back stresses; threshold s0 + R
+   pure subroutine ch_state_outputs(self, y, eps_in, back, drag)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(in) :: y(:)
+      real(dp), intent(out) :: eps_in, back, drag
+      integer :: i
+      eps_in = y(1)
+      back = 0.0_dp
+      do i = 1, chaboche_n_back
+         back = back + 1.5_dp*y(1 + 6*i)
+      end do
+      drag = self%c%s0 + y(chaboche_n_state)
+   end subroutine ch_state_outputs
+
+   pure integer function ch_n_props(self) result(n)
+      class(chaboche_model), intent(in) :: self
+      n = n_props
+   end function ch_n_props
+
+   !> E, Poisson, then the constants in their order
+   pure function ch_prop_name(self, i) result(name)
+      class(chaboche_model), intent(in) :: self
+      integer, intent(in) :: i
+      character(len=:), allocatable :: name
+      select case (i)
+      case (1); name = 'E'
+      case (2); name = 'Poisson'
+      case default; name = trim(chaboche_constant_names(i - 2))
+      end select
+   end function ch_prop_name
+
+   pure subroutine ch_to_props(self, props)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(out) :: props(:)
+      integer :: i
+      props(1) = self%youngs
+      props(2) = self%poisson
+      do i = 1, chaboche_n_constants
+         props(2 + i) = chaboche_get_constant(self%c, i)
+      end do
+   end subroutine ch_to_props
+
+   pure subroutine ch_from_props(self, props, temp, message)
+      class(chaboche_model), intent(inout) :: self
+      real(dp), intent(in) :: props(:), temp
+      character(len=*), intent(out) :: message
+      type(error_type), allocatable :: error
+      integer :: i
+      message = ''
+      self%youngs = props(1)
+      self%poisson = props(2)
+      do i = 1, chaboche_n_constants
+         call chaboche_set_constant(self%c, i, props(2 + i))
+      end do
+      self%temperature = temp
+      call chaboche_setup(self, error)
+      if (allocated(error)) message = error%message
+   end subroutine ch_from_props
+
+   !> State variables: 1-6 inelastic strain, 7-12 and 13-18 the back stresses, 19 R
+   pure subroutine ch_fe_layout(self, y_first, code_first, kind)
+      class(chaboche_model), intent(in) :: self
+      integer, allocatable, intent(out) :: y_first(:), code_first(:), kind(:)
+      y_first = [1, 7, 13, 19]
+      code_first = [1, 7, 13, 19]
+      kind = [block_strain, block_stress, block_stress, block_scalar]
+   end subroutine ch_fe_layout
+
+   !> The virgin state is zero, as an FE code starts its state variables
+   pure subroutine ch_complete_state(self, y)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(inout) :: y(:)
+   end subroutine ch_complete_state
 end module usharp_model_chaboche

@@ -6,13 +6,14 @@ module usharp_model_registry
    use usharp_strings, only: lower
    use usharp_model, only: model_type
    use usharp_model_miller, only: miller_model
+   use usharp_model_chaboche, only: chaboche_model
    implicit none
    private
 
    public :: new_model, model_names, default_model, model_by_number, n_models
 
    !> Number of registered models
-   integer, parameter :: n_models = 1
+   integer, parameter :: n_models = 2
    !> The model &model name selects when it is not given
    character(len=*), parameter :: default_model = 'miller'
 
@@ -24,6 +25,7 @@ contains
       class(model_type), allocatable, intent(out) :: model
       select case (i)
       case (1); allocate (miller_model :: model)
+      case (2); allocate (chaboche_model :: model)
       end select
    end subroutine model_by_number
 
