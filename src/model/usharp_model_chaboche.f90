@@ -45,9 +45,10 @@ module usharp_model_chaboche
        '1/(MPa^(m1-1) s)', '-', '1/(MPa^(m2-1) s)', '-']
    !> Default box of the constants for a model in MPa, wide enough for Chaboche sets of nickel
    !> alloys and austenitic steels between about 0.4 and 0.75 Tm (a multi-start box, not one
-   !> publication's range); the recovery constants A_i span decades
+   !> publication's range; the search runs in log10 of the constants, so every bound is > 0);
+   !> the recovery constants A_i span decades
    real(dp), parameter, public :: chaboche_literature_low(chaboche_n_constants) = &
-      [0.0_dp, 50.0_dp, 2.0_dp, 0.0_dp, 0.5_dp, 1.0e4_dp, 100.0_dp, 1.0e3_dp, 5.0_dp, &
+      [1.0_dp, 50.0_dp, 2.0_dp, 1.0_dp, 0.5_dp, 1.0e4_dp, 100.0_dp, 1.0e3_dp, 5.0_dp, &
        1.0e-14_dp, 1.0_dp, 1.0e-14_dp, 1.0_dp]
    real(dp), parameter, public :: chaboche_literature_high(chaboche_n_constants) = &
       [150.0_dp, 3000.0_dp, 15.0_dp, 200.0_dp, 50.0_dp, 3.0e5_dp, 3000.0_dp, 5.0e4_dp, 500.0_dp, &
