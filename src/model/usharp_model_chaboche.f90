@@ -220,7 +220,7 @@ contains
       if (a <= 0.0_dp) then
          h = 0.0_dp
          h_x = 0.0_dp
-      else if (m == 1.0_dp) then
+      else if (m <= 1.0_dp) then
          h = a
          h_x = 0.0_dp
       else if (x <= 0.0_dp) then
