@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
-# The drop-in Miller user material, in two forms:
+# The drop-in user material of a model (MODEL: miller, the default, or chaboche), in two forms:
 # - OUTDIR/lib<NAME>.so (default MILLER, for a CalculiX material named @ABAQUS_MILLER), built
 #   with every gfortran warning that applies to a user subroutine turned into an error;
 # - single-file sources, one per FE code, in fixed form (72 columns, continuation mark in
 #   column 6), the form in which the vendors' build scripts compile .f and .F files:
-#     OUTDIR/umat_miller_abaqus.f     abaqus job=... user=umat_miller_abaqus.f
-#     OUTDIR/umat_miller_calculix.f   linked into CalculiX (or built into lib<NAME>.so)
-#     OUTDIR/usermat_miller_ansys.F   the ANSYS user-programmable-feature build
+#     OUTDIR/umat_<MODEL>_abaqus.f     abaqus job=... user=umat_<MODEL>_abaqus.f
+#     OUTDIR/umat_<MODEL>_calculix.f   linked into CalculiX (or built into lib<NAME>.so)
+#     OUTDIR/usermat_<MODEL>_ansys.F   the ANSYS user-programmable-feature build
 #   The modules come in dependency order; only the message routine differs between codes.
+#   The adapters are src/upf/umat_miller.f90 and usermat_miller.f90; for another model the
+#   model's module and type take the Miller model's place in them (OUTDIR/src).
 # Unused-dummy-argument warnings are off: the FE codes' fixed argument lists hold arguments
 # the model does not need.
-# usage: scripts/build-umat.sh [--check] OUTDIR [NAME]
+# usage: scripts/build-umat.sh [--check] OUTDIR [NAME [MODEL]]
 #   --check: also compile each single-file source as the vendor's build would treat it
 #            (gfortran -c -ffixed-form, warnings as errors) and build lib<NAME>.so from the
 #            CalculiX single file as well.
@@ -18,16 +20,41 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 check=0
 if [ "${1:-}" = "--check" ]; then check=1; shift; fi
-out="${1:?usage: build-umat.sh [--check] OUTDIR [NAME]}"
+out="${1:?usage: build-umat.sh [--check] OUTDIR [NAME [MODEL]]}"
 name="${2:-MILLER}"
+model="${3:-miller}"
+Model="$(echo "${model:0:1}" | tr a-z A-Z)${model:1}"
+case "$model" in miller | chaboche) ;; *) echo "build-umat: model '$model' is not known (miller, chaboche)" >&2; exit 2 ;; esac
 mkdir -p "$out"
 out="$(cd "$out" && pwd)"
 cd "$here"
 # The drop-in sources, in dependency order; the message module and the adapter per code
 core=(src/util/usharp_kinds.f90 src/util/usharp_error.f90 src/util/usharp_strings.f90
       src/util/usharp_units.f90 src/model/usharp_model.f90 src/model/usharp_model_j2.f90
-      src/model/usharp_model_miller.f90 src/upf/usharp_upf.f90)
-report=src/upf/usharp_upf_report.f90
+      "src/model/usharp_model_${model}.f90" src/upf/usharp_upf.f90)
+umat=src/upf/umat_miller.f90
+usermat=src/upf/usermat_miller.f90
+rdir=src/upf
+if [ "$model" != miller ]; then
+  # The same adapters with the model's module and type; their header says which model
+  mkdir -p "$out/src"
+  for a in umat usermat; do
+    sed -e "s/usharp_model_miller/usharp_model_${model}/g; s/miller_model/${model}_model/g" \
+        -e "1,/^subroutine/{/^!>/d}" "src/upf/${a}_miller.f90" > "$out/src/${a}_${model}.f90.tmp"
+    { echo "!> The ${a} adapter of src/upf/${a}_miller.f90 for the ${Model} model (written by"
+      echo "!> scripts/build-umat.sh); its properties and state variables: docs/guide/fe-users.md"
+      cat "$out/src/${a}_${model}.f90.tmp"; } > "$out/src/${a}_${model}.f90"
+    rm -f "$out/src/${a}_${model}.f90.tmp"
+  done
+  umat="$out/src/umat_${model}.f90"
+  usermat="$out/src/usermat_${model}.f90"
+  # The message routines name the model
+  for r in usharp_upf_report.f90 usharp_upf_report_abaqus.inc usharp_upf_report_ansys.inc; do
+    sed -e "s/usharp Miller material/usharp ${Model} material/g; s/usermat_miller/usermat_${model}/g" \
+      "src/upf/$r" > "$out/src/$r"
+  done
+  rdir="$out/src"
+fi
 warn=(-Wall -Wextra -Wimplicit-interface -Wno-unused-dummy-argument -Werror)
 flags=(-O2 -fPIC -std=f2018 "${warn[@]}")
 
@@ -119,19 +146,20 @@ to_fixed() {
 
 single() { # output file, report module, adapter
   local dst="$1" rep="$2" adapter="$3"
-  { echo "! Miller viscoplastic model: single-file user material (fixed form),"
+  { echo "! ${Model} viscoplastic model: single-file user material (fixed form),"
     echo "! written by usharp's scripts/build-umat.sh; see docs/guide/fe-users.md"
     to_fixed "${core[@]}" "$rep" "$adapter"; } > "$dst.tmp"
   mv "$dst.tmp" "$dst"
 }
-single "$out/umat_miller_abaqus.f" src/upf/usharp_upf_report_abaqus.inc src/upf/umat_miller.f90
-single "$out/umat_miller_calculix.f" "$report" src/upf/umat_miller.f90
-single "$out/usermat_miller_ansys.F" src/upf/usharp_upf_report_ansys.inc src/upf/usermat_miller.f90
+report="$rdir/usharp_upf_report.f90"
+single "$out/umat_${model}_abaqus.f" "$rdir/usharp_upf_report_abaqus.inc" "$umat"
+single "$out/umat_${model}_calculix.f" "$report" "$umat"
+single "$out/usermat_${model}_ansys.F" "$rdir/usharp_upf_report_ansys.inc" "$usermat"
 
 # The library from the free-form sources (CalculiX's umat and the ANSYS usermat together)
 objs=()
 mkdir -p "$out/mod"
-for f in "${core[@]}" "$report" src/upf/usermat_miller.f90 src/upf/umat_miller.f90; do
+for f in "${core[@]}" "$report" "$usermat" "$umat"; do
   o="$out/mod/$(basename "${f%.f90}").o"
   gfortran "${flags[@]}" -J "$out/mod" -c "$f" -o "$o"
   objs+=("$o")
@@ -140,7 +168,7 @@ gfortran -shared -o "$out/lib${name}.so" "${objs[@]}"
 
 if [ $check -eq 1 ]; then
   # Each single file as the vendor compiles it: fixed form, no extra options
-  for f in umat_miller_abaqus.f umat_miller_calculix.f usermat_miller_ansys.F; do
+  for f in "umat_${model}_abaqus.f" "umat_${model}_calculix.f" "usermat_${model}_ansys.F"; do
     d="$out/check-${f%.*}"; mkdir -p "$d"
     over=$(awk 'length($0) > 72' "$out/$f" | wc -l)
     [ "$over" -eq 0 ] || { echo "build-umat: $f has $over lines longer than 72 columns"; exit 1; }
@@ -150,6 +178,6 @@ if [ $check -eq 1 ]; then
     echo "build-umat: $f compiles as fixed form with -Wall -Wextra -Werror"
   done
   # The CalculiX single file alone makes the whole library
-  (cd "$out/check-umat_miller_calculix" && gfortran -shared -o "lib${name}.so" umat_miller_calculix.o)
+  (cd "$out/check-umat_${model}_calculix" && gfortran -shared -o "lib${name}.so" "umat_${model}_calculix.o")
 fi
 echo "$out/lib${name}.so"

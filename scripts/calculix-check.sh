@@ -3,7 +3,8 @@
 # behaviour support once, cached outside the repository, load the Miller UMAT as
 # @ABAQUS_MILLER from libMILLER.so (built from the single-file fixed-form CalculiX source),
 # run the shipped examples: a C3D8 unit cube under the thesis's LCF and relaxation histories,
-# compared with usharp's uniaxial driver, and the axisymmetric notched bar under cyclic load,
+# compared with usharp's uniaxial driver (and the same cubes with the Chaboche model's UMAT),
+# and the axisymmetric notched bar under cyclic load,
 # compared with a refined-increment reference, with the Newton iterations measured.
 # Exit 0: compared and within limits; 77: skipped (the reason is printed); other: failed.
 # The cache folder: $USHARP_CCX_CACHE (default ~/.cache/usharp-ccx).
@@ -72,25 +73,35 @@ NML
 # The shipped C3D8 unit-cube decks (examples/fe/cube): uniaxial stress by symmetry planes,
 # axial displacement on the top face, one *STEP per segment of the history
 for t in lcf relax; do cp "$here/examples/fe/cube/cube-$t.inp" "$work/$t.inp" || fail "examples/fe/cube/cube-$t.inp missing"; done
-status=0
-for t in lcf relax; do
-  (cd "$work" && LD_LIBRARY_PATH="$work/lib:${LD_LIBRARY_PATH:-}" OMP_NUM_THREADS=1 timeout 1200 "$ccx" -i "$t" > "$t.log" 2>&1) \
-    || { tail -5 "$work/$t.log"; fail "ccx did not finish the $t cube (see $work/$t.log)"; }
-  # .dat: per increment a header with the time, then 'elem ip sxx syy szz sxy sxz syz'
+# Run cube t in folder d with the libraries of d/lib; its axial and lateral stresses per time
+# (.dat: per increment a header with the time, then 'elem ip sxx syy szz sxy sxz syz') into
+# d/t.ccx.txt
+run_cube() { # folder, test
+  local d="$1" t="$2"
+  (cd "$d" && LD_LIBRARY_PATH="$d/lib:${LD_LIBRARY_PATH:-}" OMP_NUM_THREADS=1 timeout 1200 "$ccx" -i "$t" > "$t.log" 2>&1) \
+    || { tail -5 "$d/$t.log"; fail "ccx did not finish the $t cube (see $d/$t.log)"; }
   awk '/stresses \(elem/ { t = $NF; next } NF == 8 && $1 == 1 { n[t]++; sz[t] += $5; sx[t] += $3; sy[t] += $4 }
        END { for (k in n) printf "%.10g %.10g %.10g %.10g\n", k, sz[k]/n[k], sx[k]/n[k], sy[k]/n[k] }' \
-       "$work/$t.dat" | sort -g > "$work/$t.ccx.txt"
-  [ -s "$work/$t.ccx.txt" ] || fail "no stresses in $work/$t.dat"
-  # Compare with the driver's curve interpolated at the ccx times
-  awk -v test="$t" 'NR == FNR { if ($1 !~ /^#/) { n++; td[n] = $1; sd[n] = $3 }; next }
+       "$d/$t.dat" | sort -g > "$d/$t.ccx.txt"
+  [ -s "$d/$t.ccx.txt" ] || fail "no stresses in $d/$t.dat"
+}
+# Compare d/t.ccx.txt with the driver's curve d/driver/t.sim.txt interpolated at the ccx
+# times: within 1 % of peak, lateral stress below 1e-6 of peak
+compare_cube() { # folder, test, label, stress unit
+  awk -v test="$3: $2" -v unit="$4" 'NR == FNR { if ($1 !~ /^#/) { n++; td[n] = $1; sd[n] = $3 }; next }
        { while (j < n - 1 && td[j + 1] < $1) j++; if (j < 1) j = 1
          w = ($1 - td[j]) / (td[j + 1] - td[j]); s = (1 - w) * sd[j] + w * sd[j + 1]
          d = $2 - s; if (d < 0) d = -d; if (d > dmax) dmax = d
          p = s < 0 ? -s : s; if (p > peak) peak = p
          l = ($3 < 0 ? -$3 : $3); if (($4 < 0 ? -$4 : $4) > l) l = ($4 < 0 ? -$4 : $4); if (l > lat) lat = l; m++ }
-       END { printf "calculix-check: %s: %d increments, max |ccx - driver| / peak = %.3e (peak %.3f ksi), max |lateral stress| = %.2e ksi\n", test, m, dmax / peak, peak, lat
+       END { printf "calculix-check: %s: %d increments, max |ccx - driver| / peak = %.3e (peak %.3f %s), max |lateral stress| = %.2e %s\n", test, m, dmax / peak, peak, unit, lat, unit
              exit (dmax / peak <= 0.01 && lat <= 1e-6 * peak) ? 0 : 1 }' \
-       "$work/driver/$t.sim.txt" "$work/$t.ccx.txt" || status=1
+       "$1/driver/$2.sim.txt" "$1/$2.ccx.txt"
+}
+status=0
+for t in lcf relax; do
+  run_cube "$work" "$t"
+  compare_cube "$work" "$t" "Miller" ksi || status=1
 done
 [ $status -eq 0 ] || fail "CalculiX and the uniaxial driver differ by more than 1 % of peak, or lateral stress not zero"
 # The expected table shipped with the cube (axial stress at the ends of the history's segments)
@@ -101,6 +112,37 @@ awk 'FILENAME ~ /expected/ { if ($1 !~ /^#/ && NF >= 3) e[$1 " " sprintf("%.4f",
      END { printf "calculix-check: cube: %d segment ends against examples/fe/cube/expected.txt, max diff %.2e ksi\n", n, dm
            exit (n >= 20 && dm <= 1e-3) ? 0 : 1 }' "$here/examples/fe/cube/expected.txt" "$work/lcf.ccx.txt" "$work/relax.ccx.txt" \
   || fail "the cube differs from examples/fe/cube/expected.txt"
+
+# The Chaboche model's drop-in in the same cubes: its library from the single CalculiX file,
+# the Miller decks with the Chaboche material card (15 constants, 19 state variables; MPa),
+# against usharp's uniaxial driver
+ch="$work/chaboche"
+bash "$here/scripts/build-umat.sh" --check "$work/umat-chaboche" CHABOCHE chaboche >/dev/null \
+  || fail "the Chaboche UMAT library did not build"
+mkdir -p "$ch/lib" && cp "$work/umat-chaboche/check-umat_chaboche_calculix/libCHABOCHE.so" "$ch/lib/" \
+  || fail "the single-file Chaboche UMAT library is missing"
+cat > "$ch/driver.nml" <<'NML'
+&model name='chaboche', units='MPa', temperature=866.15, tm=1800.0, youngs=144000.0, poisson=0.3 /
+&constants s0=10.0, eta=500.0, n=5.0, q=30.0, b=20.0, c1=8.0e4, g1=1500.0, c2=5.0e3, g2=60.0,
+  a1=1.0e-7, m1=2.0, a2=1.0e-6, m2=3.0 /
+&output out_dir='driver' /
+&test name='lcf', history='thesis_lcf', dt_out=0.05 /
+&test name='relax', history='relaxation', dt_out=0.05 /
+NML
+(cd "$ch" && "$exe" simulate driver.nml -q) || fail "usharp simulate failed (Chaboche)"
+for t in lcf relax; do
+  awk 'BEGIN { skip = 0 }
+       /^\*USER MATERIAL/ { print "*USER MATERIAL,CONSTANTS=15"
+                            print "144000.,0.3,10.,500.,5.,30.,20.,80000.,"
+                            print "1500.,5000.,60.,1.E-7,2.,1.E-6,3."; skip = 2; next }
+       skip > 0 { skip--; next }
+       /^\*DEPVAR/ { print; getline; print "19"; next }
+       { gsub(/@ABAQUS_MILLER/, "@ABAQUS_CHABOCHE"); print }' "$work/$t.inp" > "$ch/$t.inp"
+  grep -q "CONSTANTS=15" "$ch/$t.inp" || fail "the Chaboche cube deck $ch/$t.inp was not written"
+  run_cube "$ch" "$t"
+  compare_cube "$ch" "$t" "Chaboche" MPa || status=1
+done
+[ $status -eq 0 ] || fail "Chaboche: CalculiX and the uniaxial driver differ by more than 1 % of peak, or lateral stress not zero"
 
 # An unusable constant (A1 < 0): one line naming it on standard output per element and attempt,
 # then CalculiX cuts the increment below its minimum and stops with an error
