@@ -99,7 +99,7 @@ module usharp_model_chaboche
       procedure :: n_uniaxial => ch_n_uniaxial
       procedure :: uniaxial_initial => ch_initial
       procedure :: uniaxial_is_stress => ch_uniaxial_is_stress
-      procedure :: admissible => ch_admissible
+      procedure :: positive_states => ch_positive_states
       procedure :: uniaxial_rates => ch_uniaxial_rates
       procedure :: uniaxial_outputs => ch_uniaxial_outputs
       procedure :: n_state => ch_n_state
@@ -531,18 +531,19 @@ contains
       is_stress = i > 1
    end function ch_uniaxial_is_stress
 
-   !> Every finite state is inside the model
-   pure logical function ch_admissible(self, y) result(ok)
+   !> No state must stay positive (the back stresses change sign, R is bounded by the rates)
+   pure function ch_positive_states(self) result(idx)
       class(chaboche_model), intent(in) :: self
-      real(dp), intent(in) :: y(:)
-      ok = all(ieee_is_finite(y))
-   end function ch_admissible
+      integer, allocatable :: idx(:)
+      allocate (idx(0))
+   end function ch_positive_states
 
    pure subroutine ch_uniaxial_rates(self, sigma, dsig_depsin, y, ydot, jac)
       class(chaboche_model), intent(in) :: self
-      real(dp), intent(in) :: sigma, dsig_depsin, y(:)
-      real(dp), intent(out) :: ydot(:)
-      real(dp), intent(out), optional :: jac(:, :)
+      real(dp), intent(in) :: sigma, dsig_depsin
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: ydot(:)
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
       call chaboche_uniaxial_rates(self, sigma, dsig_depsin, y, ydot, jac)
    end subroutine ch_uniaxial_rates
 
