@@ -31,7 +31,9 @@ contains
          new_unittest('tangent-fd-inelastic-with-shear', test_tangent), &
          new_unittest('update-matches-uniaxial-rates', test_update_vs_rates), &
          new_unittest('update-first-order-and-1e-4-of-peak', test_accuracy), &
-         new_unittest('drivers-within-1e-4-of-peak-of-tight-reference', test_drivers)]
+         new_unittest('drivers-within-1e-4-of-peak-of-tight-reference', test_drivers), &
+         new_unittest('arrhenius-rates-scale-with-theta', test_arrhenius), &
+         new_unittest('arrhenius-settings-checked', test_arrhenius_input)]
    end subroutine collect_chaboche
 
    !> A set of constants of the size found for Alloy 617 near 950 C, with both recovery
@@ -320,6 +322,59 @@ contains
          deallocate (sr)
       end do
    end subroutine test_drivers
+
+   !> With an activation energy the rates and their Jacobian at T are theta(T) times those at
+   !> tref, theta = exp(-activation/k (1/T - 1/tref)); at tref they are those of the model
+   !> without one, bit for bit
+   subroutine test_arrhenius(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(chaboche_model) :: m0, m
+      type(uerror), allocatable :: uerr
+      real(dp), parameter :: qa = 60000.0_dp, tref = 1223.15_dp, temp = 1173.15_dp
+      real(dp) :: y(nu), f0(nu), f(nu), j0(nu, nu), j(nu, nu), theta
+      m0 = test_chaboche_model()
+      m0%temperature = tref
+      call chaboche_setup(m0, uerr)
+      m = m0
+      call m%set_option('activation', qa, uerr)
+      if (.not. allocated(uerr)) call m%set_option('tref', tref, uerr)
+      if (.not. allocated(uerr)) call chaboche_setup(m, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      y = [1.0e-3_dp, 60.0_dp, 25.0_dp, 12.0_dp]
+      call chaboche_uniaxial_rates(m0, 150.0_dp, -m0%youngs, y, f0, j0)
+      call chaboche_uniaxial_rates(m, 150.0_dp, -m%youngs, y, f, j)
+      call check(error, all(f == f0) .and. all(j == j0), 'at tref the rates differ from the '// &
+                 'model without an activation energy')
+      if (allocated(error)) return
+      m%temperature = temp
+      call chaboche_setup(m, uerr)
+      theta = exp(-qa/1.9859_dp*(1.0_dp/temp - 1.0_dp/tref))
+      call chaboche_uniaxial_rates(m, 150.0_dp, -m%youngs, y, f, j)
+      call check(error, maxval(abs(f - theta*f0)/abs(theta*f0)) <= 1.0e-12_dp .and. &
+                 maxval(abs(j - theta*j0))/maxval(abs(theta*j0)) <= 1.0e-12_dp, &
+                 'rates at 1173.15 K against theta = '//real_str(theta)//' times those at 1223.15 K: '// &
+                 real_str(maxval(abs(f - theta*f0)/abs(theta*f0))))
+   end subroutine test_arrhenius
+
+   !> The settings' checks: a negative activation energy, a Miller model given one
+   subroutine test_arrhenius_input(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(chaboche_model) :: m
+      type(uerror), allocatable :: uerr
+      m = test_chaboche_model()
+      call m%set_option('activation', -1.0_dp, uerr)
+      call check(error, allocated(uerr), 'a negative activation energy passed')
+      if (allocated(error)) return
+      m%temperature = 1200.0_dp
+      m%activation = 50000.0_dp
+      call chaboche_setup(m, uerr)
+      call check(error, allocated(uerr), 'an activation energy without tref passed')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'needs tref') > 0, uerr%message)
+   end subroutine test_arrhenius_input
 
    pure function real_str(x) result(s)
       real(dp), intent(in) :: x

@@ -28,7 +28,7 @@ module usharp_input_model
    !> The &model variables as given
    type :: model_values
       character(len=value_len) :: name, units
-      real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
+      real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate, activation, tref
    end type model_values
 
 contains
@@ -88,6 +88,11 @@ contains
          call model%set_option('d0_yield', v%d0_yield, error)
       if (.not. allocated(error) .and. v%d0_rate /= default_d0_rate) &
          call model%set_option('d0_rate', v%d0_rate, error)
+      ! An activation energy: the constants hold at tref, by default the &model temperature
+      if (.not. allocated(error) .and. v%activation /= 0.0_dp) &
+         call model%set_option('activation', v%activation, error)
+      if (.not. allocated(error) .and. (v%activation /= 0.0_dp .or. v%tref /= 0.0_dp)) &
+         call model%set_option('tref', merge(v%tref, v%temperature, v%tref /= 0.0_dp), error)
       if (allocated(error)) then
          msg = error%message
          call fatal_error(error, where//trim(msg))
@@ -119,8 +124,9 @@ contains
       character(len=*), intent(in), optional :: text(:)
       integer, intent(in), optional :: unit
       character(len=value_len) :: name, units
-      real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
-      namelist /model/ name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate
+      real(dp) :: temperature, tm, youngs, poisson, d0, d0_yield, d0_rate, activation, tref
+      namelist /model/ name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate, &
+         activation, tref
       name = default_model
       units = default_units
       temperature = unset
@@ -130,11 +136,14 @@ contains
       d0 = default_d0
       d0_yield = unset
       d0_rate = default_d0_rate
+      activation = 0.0_dp
+      tref = 0.0_dp
       ios = 0
       msg = ''
       if (present(text)) read (text, nml=model, iostat=ios, iomsg=msg)
       if (present(unit)) write (unit, nml=model, iostat=ios, iomsg=msg)
-      v = model_values(name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate)
+      v = model_values(name, units, temperature, tm, youngs, poisson, d0, d0_yield, d0_rate, &
+                       activation, tref)
    end subroutine model_namelist
 
    !> Values no metal test has are a wrong unit: temperatures are in K, youngs in the model's

@@ -15,10 +15,16 @@
 !> which reduces to the uniaxial form with x_i = 3/2 X_i,11.
 !> The 3-D update is backward Euler in Mandel form (11, 22, 33, sqrt2*12, sqrt2*23, sqrt2*13),
 !> state y = (inelastic strain (6), X1 (6), X2 (6), R), with the consistent tangent.
-!> chaboche_model is its implementation of usharp_model's model_type; temperature enters
-!> only through the constants, which are those at the model's temperature.
+!> chaboche_model is its implementation of usharp_model's model_type. The constants are those
+!> at a reference temperature tref; with an activation energy (cal/mol, &model activation)
+!> every rate process follows the Arrhenius factor
+!>    theta = exp(-activation/k (1/T - 1/tref)):   p_dot -> theta p_dot (eta -> eta theta**(-1/n)),
+!>    A_i -> theta A_i,
+!> so the rates at T are theta times those at tref (temperature-compensated time); without it
+!> the constants hold at every temperature.
 module usharp_model_chaboche
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use usharp_units, only: gas_constant
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
@@ -85,6 +91,12 @@ module usharp_model_chaboche
    !> the constants are those at that temperature)
    type, extends(model_type) :: chaboche_model
       type(chaboche_constants) :: c
+      !> cal/mol, activation energy of the rate processes (0: none)
+      real(dp) :: activation = 0.0_dp
+      !> K, the temperature the constants hold at (with an activation energy)
+      real(dp) :: tref = 0.0_dp
+      !> Derived at the model's temperature: eta's factor theta**(-1/n) and A_i's theta
+      real(dp) :: eta_factor = 1.0_dp, rate_factor = 1.0_dp
    contains
       procedure :: name => ch_name
       procedure :: n_constants => ch_n_constants
@@ -113,6 +125,8 @@ module usharp_model_chaboche
       procedure :: from_props => ch_from_props
       procedure :: fe_layout => ch_fe_layout
       procedure :: complete_state => ch_complete_state
+      procedure :: set_option => ch_set_option
+      procedure :: derived_values => ch_derived_values
    end type chaboche_model
 
 contains
@@ -147,7 +161,63 @@ contains
                .or. self%poisson >= 0.5_dp) then
          call fatal_error(error, "Poisson's ratio must lie in (-1, 0.5), got "//str(self%poisson))
       end if
+      if (allocated(error)) return
+      self%eta_factor = 1.0_dp
+      self%rate_factor = 1.0_dp
+      if (self%activation > 0.0_dp) then
+         if (.not. self%tref > 0.0_dp) then
+            call fatal_error(error, 'an activation energy needs tref, the temperature the '// &
+                             'constants hold at')
+            return
+         end if
+         self%rate_factor = exp(-self%activation/gas_constant* &
+                                (1.0_dp/self%temperature - 1.0_dp/self%tref))
+         self%eta_factor = self%rate_factor**(-1.0_dp/self%c%n)
+         if (.not. (ieee_is_finite(self%eta_factor) .and. self%rate_factor > 0.0_dp .and. &
+                    ieee_is_finite(self%rate_factor))) &
+            call fatal_error(error, 'the Arrhenius factor at '//str(self%temperature)//' K is '// &
+                             'not representable (activation '//str(self%activation)//' cal/mol)')
+      end if
    end subroutine chaboche_setup
+
+   !> &model activation (cal/mol, >= 0) and tref (K, > 0: the temperature the constants
+   !> hold at)
+   pure subroutine ch_set_option(self, name, val, error)
+      class(chaboche_model), intent(inout) :: self
+      character(len=*), intent(in) :: name
+      real(dp), intent(in) :: val
+      type(error_type), allocatable, intent(out) :: error
+      select case (name)
+      case ('activation')
+         if (.not. (val >= 0.0_dp .and. ieee_is_finite(val))) then
+            call fatal_error(error, 'activation = '//str(val)//' cal/mol must be >= 0')
+            return
+         end if
+         self%activation = val
+      case ('tref')
+         if (.not. (val > 0.0_dp .and. ieee_is_finite(val))) then
+            call fatal_error(error, 'tref = '//str(val)//' K must be > 0')
+            return
+         end if
+         self%tref = val
+      case default
+         call fatal_error(error, name//' is not a setting of the chaboche model')
+      end select
+   end subroutine ch_set_option
+
+   !> With an activation energy: the Arrhenius factor at the model's temperature
+   pure subroutine ch_derived_values(self, names, vals)
+      class(chaboche_model), intent(in) :: self
+      character(len=:), allocatable, intent(out) :: names(:)
+      real(dp), allocatable, intent(out) :: vals(:)
+      if (self%activation > 0.0_dp) then
+         names = [character(len=5) :: 'theta']
+         vals = [self%rate_factor]
+      else
+         allocate (character(len=1) :: names(0))
+         allocate (vals(0))
+      end if
+   end subroutine ch_derived_values
 
    !> Constant number i (order of chaboche_constant_names)
    pure real(dp) function chaboche_get_constant(c, i) result(val)
@@ -202,13 +272,13 @@ contains
       real(dp), intent(in) :: x, r
       real(dp), intent(out) :: f, f_o
       real(dp) :: z
-      z = (x - model%c%s0 - r)/model%c%eta
+      z = (x - model%c%s0 - r)/(model%c%eta*model%eta_factor)
       if (z <= 0.0_dp) then
          f = 0.0_dp
          f_o = 0.0_dp
       else
          f = exp(model%c%n*log(z))
-         f_o = model%c%n*f/(z*model%c%eta)
+         f_o = model%c%n*f/(z*model%c%eta*model%eta_factor)
       end if
    end subroutine chaboche_flow
 
@@ -250,7 +320,7 @@ contains
       call chaboche_flow(model, abs(s), y(nr), f, f_o)
       ydot(1) = f*sg
       do i = 1, chaboche_n_back
-         call recovery(model%c%a(i), model%c%m(i), abs(y(1 + i)), h, h_x)
+         call recovery(model%c%a(i)*model%rate_factor, model%c%m(i), abs(y(1 + i)), h, h_x)
          ydot(1 + i) = model%c%c(i)*ydot(1) - model%c%g(i)*y(1 + i)*f - h*y(1 + i)
       end do
       ydot(nr) = model%c%b*(model%c%q - y(nr))*f
@@ -261,7 +331,7 @@ contains
       dp_dy(nr) = -f_o
       jac(1, :) = sg*dp_dy
       do i = 1, chaboche_n_back
-         call recovery(model%c%a(i), model%c%m(i), abs(y(1 + i)), h, h_x)
+         call recovery(model%c%a(i)*model%rate_factor, model%c%m(i), abs(y(1 + i)), h, h_x)
          jac(1 + i, :) = model%c%c(i)*jac(1, :) - model%c%g(i)*y(1 + i)*dp_dy
          ! d(h(|x|) x)/dx = h + h_x |x|
          jac(1 + i, 1 + i) = jac(1 + i, 1 + i) - model%c%g(i)*f - h - h_x*abs(y(1 + i))
@@ -406,7 +476,7 @@ contains
          ci = model%c%c(i)
          gi = model%c%g(i)
          ji = sqrt(1.5_dp*dot_product(xi, xi))
-         call recovery(model%c%a(i), model%c%m(i), ji, h, h_x)
+         call recovery(model%c%a(i)*model%rate_factor, model%c%m(i), ji, h, h_x)
          ! d(h(J_i) X_i)/dX_i = h I + h_x X_i (x) 3/2 X_i/J_i
          if (ji > 0.0_dp) then
             mh = xi/ji

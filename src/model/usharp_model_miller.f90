@@ -15,6 +15,7 @@
 !> which reduces to Eqs. 2-4 in uniaxial stress.
 module usharp_model_miller
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
+   use usharp_units, only: gas_constant
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
@@ -26,13 +27,13 @@ module usharp_model_miller
    private
 
    public :: miller_constants, miller_model, n_constants, constant_names
+   public :: gas_constant
    public :: theta_miller, model_setup, check_constants, initial_drag
    public :: get_constant, set_constant, constant_index
    public :: flow_rate, back_recovery, drag_recovery, rate_terms, rate_terms_at
    public :: miller_update, n_state
 
    !> Universal gas constant in cal/(mol K), as the thesis uses it
-   real(dp), parameter, public :: gas_constant = 1.9859_dp
    !> Number of named constants (A1, A2, B, C2, H1, H2, n, Q)
    integer, parameter :: n_constants = 8
    !> Names of the constants in the order used for fitting and logs

@@ -1,4 +1,4 @@
-!> Stress units
+!> Units: stress units, and the gas constant of the activation energies (cal/mol)
 module usharp_units
    use usharp_kinds, only: dp
    implicit none
@@ -8,6 +8,8 @@ module usharp_units
 
    !> MPa in one ksi
    real(dp), parameter, public :: ksi_to_mpa = 6.894757293168361_dp
+   !> Gas constant in cal/(mol K): activation energies are in cal/mol, as the thesis's Q
+   real(dp), parameter, public :: gas_constant = 1.9859_dp
 
 contains
 
