@@ -38,7 +38,8 @@ contains
          new_unittest('tmf-against-tight-reference', test_tight), &
          new_unittest('tmf-phase-sets-the-asymmetry', test_phase), &
          new_unittest('tmf-b-and-q-from-one-test', test_b_and_q), &
-         new_unittest('tmf-input-checks', test_input)]
+         new_unittest('tmf-input-checks', test_input), &
+         new_unittest('tmf-chaboche-arrhenius-against-tight-reference', test_chaboche)]
    end subroutine collect_tmf
 
    !> A deck of the Miller model with one cyclic test; extra: the test's further variables
@@ -197,6 +198,38 @@ contains
       call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//real_str(q, 'es10.3')//' cal/mol, true '// &
                  real_str(q_true, 'es10.3')//', B '//real_str(out%constants(1), 'es10.3'))
    end subroutine test_b_and_q
+
+   !> The Chaboche model with an activation energy (its constants at 1223.15 K) under an
+   !> out-of-phase cycle 1123.15-1223.15 K: the default tolerances against RODAS4 at rtol
+   !> 1e-10 (within 1e-4 of peak), and the cycle's stresses differ from the isothermal test's
+   subroutine test_chaboche(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: head(4) = [character(len=120) :: &
+         "&model name = 'chaboche', units = 'MPa', temperature = 1223.15, tm = 1630.0,", &
+         "  youngs = 144000.0, activation = 95000.0 /", &
+         "&constants s0 = 10, eta = 500, n = 5, q = 30, b = 20, c1 = 8e4, g1 = 1500, c2 = 5e3,", &
+         "  g2 = 60, a1 = 1e-7, m1 = 2, a2 = 1e-6, m2 = 3 /"]
+      character(len=*), parameter :: cyc = "&test name = 'c', history = 'cyclic', "// &
+         "strain_range = 0.01, strain_rate = 1e-4, cycles = 2, dt_out = 1.0, "
+      type(sim_result) :: a, b, c
+      real(dp) :: dev, diff
+      call simulate_deck(write_text('tmf-ch-a.nml', [character(len=200) :: head, &
+         cyc//"tmf_temperatures = 1123.15, 1223.15, tmf_phase = 'out' /"]), a, error)
+      if (allocated(error)) return
+      call simulate_deck(write_text('tmf-ch-b.nml', [character(len=200) :: head, &
+         "&solver integrator = 'rodas4', rtol = 1e-10, atol_strain = 1e-14 /", &
+         cyc//"tmf_temperatures = 1123.15, 1223.15, tmf_phase = 'out' /"]), b, error)
+      if (allocated(error)) return
+      call simulate_deck(write_text('tmf-ch-c.nml', [character(len=200) :: head, cyc//"/"]), c, error)
+      if (allocated(error)) return
+      dev = maxval(abs(a%stress - b%stress))/maxval(abs(b%stress))
+      diff = maxval(abs(a%stress - c%stress))/maxval(abs(c%stress))
+      write (*, '(4x,a)') 'Chaboche out of phase: '//real_str(dev, 'es10.3')//' of the peak from '// &
+         'rtol 1e-10; '//real_str(diff, 'es10.3')//' of the peak from the test at 1223.15 K'
+      call check(error, dev <= 1.0e-4_dp .and. diff > 0.05_dp, 'Chaboche cycle: '// &
+                 real_str(dev, 'es10.3')//' of the peak from the tight reference, '// &
+                 real_str(diff, 'es10.3')//' from the isothermal test')
+   end subroutine test_chaboche
 
    !> One line naming the variable for each misuse
    subroutine test_input(error)
