@@ -15,7 +15,7 @@ module usharp_diagnose_refit
    use usharp_identify, only: robust_covariance
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
-                                    fit_structured, held_quiet, tell, explains_most
+                                    held_quiet, tell, explains_most
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, best_of_starts, global_points, &
                                        free_params, effect_fit, at_bound, copy_constants
    use usharp_diagnose_baseline, only: per_test, all_regions
@@ -427,14 +427,15 @@ contains
       e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
       e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
       e%significant = e%dbic < -bic_margin
-      ! Something to explain: a structured gap in the fit tests, or in the held-out ones
-      ! when the noise estimate of the fit tests runs high (a curved response lifts
-      ! the second differences: the fit tests' gap can hide under their floor while
-      ! BIC, free of the noise estimate, shows the effect)
+      ! No structured gap above the floors is asked for: the floors test every direction of
+      ! the residual at once against a noise estimate (which a curved response lifts), BIC
+      ! tests the effect's own direction, free of it. An extensometer drift of 2e-5 over
+      ! each thesis test lowered BIC by 37 with its magnitudes right while both sets' gaps
+      ! lay below their floors; on clean data no effect lowered BIC by bic_margin (0 of 50
+      ! independent cases)
       ! A delay below the sampling interval is as well explained by the timing of the
       ! channels' samples: a finding only when it removes most of the gap
-      e%confirmed = e%significant .and. e%plausible .and. (e%resolved .or. explains_most(e, res)) .and. &
-                    (fit_structured(res) .or. .not. held_quiet(res))
+      e%confirmed = e%significant .and. e%plausible .and. (e%resolved .or. explains_most(e, res))
       if (held_quiet(res)) then
          e%confirmed = e%confirmed .and. e%held_gap <= res%floor_held
       else
