@@ -12,7 +12,7 @@ module test_diagnose
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
-   use usharp_effects, only: test_effects, lagged_value, effect_model
+   use usharp_effects, only: test_effects, lagged_value, effect_model, extended_rates, n_extended
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use usharp_strings, only: real_str
@@ -67,6 +67,8 @@ contains
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
+         new_unittest('softening-saturates-jacobian-against-differences', test_softening), &
+         new_unittest('separating-test-softening-against-initial', test_separate_softening), &
          new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
    end subroutine collect_diagnose
 
@@ -126,7 +128,8 @@ contains
       eff%r0 = 1.0_dp
       eff%dd0 = -0.5_dp
       eff%strength = 0.04_dp
-      eff%soften = 1.0_dp
+      eff%soften = 0.1_dp
+      eff%soften_rate = 50.0_dp
       eff%h3 = 1500.0_dp
       eff%gamma3 = 300.0_dp
       tight%integrator = 'cvode'
@@ -568,6 +571,100 @@ contains
                     real_str(sp%d(sp%best), 'es10.3')//'; '//res%verdict)
       end associate
    end subroutine test_separate
+
+   !> The saturating softening: at p = 0 the plain flow, at p >> 1/b the flow of the drag
+   !> D(1 - a); its Jacobian columns in D and p against central differences half-way to
+   !> saturation, for softening and hardening
+   subroutine test_softening(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: model
+      type(test_effects) :: eff, none
+      real(dp) :: y(n_extended), f(n_extended), g(n_extended), fp(n_extended), fm(n_extended)
+      real(dp) :: jac(n_extended, n_extended), yp(n_extended), ym(n_extended), fd, h, worst
+      real(dp), parameter :: sigma = 25.0_dp
+      integer :: j, sgn
+      character(len=120) :: buf
+      call thesis_model(model)
+      eff%soften = 0.15_dp
+      eff%soften_rate = 200.0_dp
+      y = [1.0e-3_dp, 1.0_dp, model%d0, 0.0_dp, 0.0_dp]
+      call extended_rates(model, eff, sigma, y, f)
+      call extended_rates(model, none, sigma, y, g)
+      call check(error, all(f == g), 'softening acts at p = 0')
+      if (allocated(error)) return
+      y(4) = 1.0_dp
+      call extended_rates(model, eff, sigma, y, f)
+      y(3) = model%d0*(1.0_dp - eff%soften)
+      call extended_rates(model, none, sigma, y, g)
+      write (buf, '(a,2es12.4)') 'saturated flow rate against the drag D(1 - a): ', f(1), g(1)
+      call check(error, abs(f(1) - g(1)) <= 1.0e-12_dp*abs(g(1)) .and. f(1) > 1.0e-3_dp*g(1), trim(buf))
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do sgn = -1, 1, 2
+         eff%soften = sgn*0.15_dp
+         y = [1.0e-3_dp, 1.0_dp, model%d0, 0.005_dp, 0.2_dp]
+         call extended_rates(model, eff, sigma, y, f, -model%youngs, jac)
+         do j = 3, 4
+            h = 1.0e-6_dp*abs(y(j))
+            yp = y
+            ym = y
+            yp(j) = y(j) + h
+            ym(j) = y(j) - h
+            call extended_rates(model, eff, sigma, yp, fp)
+            call extended_rates(model, eff, sigma, ym, fm)
+            fd = maxval(abs(jac(:, j) - (fp - fm)/(2.0_dp*h)))/maxval(abs((fp - fm)/(2.0_dp*h)))
+            worst = max(worst, fd)
+         end do
+      end do
+      write (buf, '(a,es10.2)') 'softening Jacobian columns D, p: worst |jac - difference|/max ', worst
+      call check(error, worst <= 1.0e-6_dp, trim(buf))
+   end subroutine test_softening
+
+   !> A softening that saturates within the first loading (a = 0.1, b = 1000) and a drag
+   !> offset of the initial state (-0.1 D0) predict the later cycles alike; the separating
+   !> step finds a candidate that tells them apart (D above 10, a fresh first loading) and
+   !> the verdict names it
+   subroutine test_separate_softening(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(miller_model) :: model
+      call write_relaxation_data('a.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text('diag-separate-soft.nml', [character(len=100) :: &
+         model_groups, "&fit fitted = 'B', method = 'lm' /", "&diagnose holdout = 'b' /", &
+         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
+         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      select type (m => ctx%prob%cfg%model)
+      type is (miller_model)
+         model = m
+      end select
+      if (.not. allocated(e)) call model_setup(model, e)
+      call check(error, .not. allocated(e), 'baseline failed')
+      if (allocated(error)) return
+      allocate (res%effects(2))
+      res%effects(1)%k = 7
+      res%effects(1)%name = 'softening'
+      res%effects(1)%p_all = [0.1_dp, 1000.0_dp]
+      res%effects(2)%k = 5
+      res%effects(2)%name = 'initial'
+      res%effects(2)%p_all = [0.0_dp, -0.1_dp*model%d0]
+      res%effects(1)%c = res%c
+      res%effects(2)%c = res%c
+      res%alike = [1, 2]
+      res%verdict = 'v'
+      call separate(ctx, res)
+      associate (sp => res%seps(1))
+         call check(error, sp%d(sp%best) > 10.0_dp .and. &
+                    index(res%verdict, 'would tell softening from initial') > 0 .and. &
+                    index(res%verdict, trim(sp%names(sp%best))) > 0, 'softening and initial not told '// &
+                    'apart: D '//real_str(sp%d(sp%best), 'es10.3')//'; '//res%verdict)
+      end associate
+   end subroutine test_separate_softening
 
    !> Zero-width F descriptors print a leading zero and no bare point
    subroutine test_number_format(error)

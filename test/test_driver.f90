@@ -184,7 +184,8 @@ contains
             sys%extended = .true.
             sys%eff%compliance = 0.05_dp
             sys%eff%lag = 0.5_dp
-            sys%eff%soften = 1.5_dp
+            sys%eff%soften = 0.2_dp
+            sys%eff%soften_rate = 80.0_dp
             sys%eff%h3 = 4000.0_dp
             sys%eff%gamma3 = 300.0_dp
             sys%stiffness = m%youngs/(1.0_dp + sys%eff%compliance)

@@ -21,7 +21,12 @@ module usharp_diagnose_numerics
    private
 
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
-   public :: free_params, effect_fit, at_bound
+   public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0
+
+   !> 1/strain, rate of the saturating softening where its screening holds it (it has no
+   !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
+   !> accumulated inelastic strain
+   real(dp), parameter :: soften_rate0 = 100.0_dp
 
 contains
 
@@ -185,9 +190,24 @@ contains
       end if
    end function free_params
 
+   !> Starts (a, b: columns) of a fit of the saturating softening: zero at the rate
+   !> soften_rate0, then a tenth of the physical limit of a with either sign (softening,
+   !> hardening) at rates a decade below, at and a decade above it (its rate has no gradient
+   !> at a = 0, and from one rate a fit can stay in the basin of another)
+   pure function softening_starts(info) result(ps)
+      type(effect_info), intent(in) :: info
+      real(dp) :: ps(2, 7)
+      integer :: j
+      ps(:, 1) = [0.0_dp, soften_rate0]
+      do j = 0, 5
+         ps(:, j + 2) = [merge(1.0_dp, -1.0_dp, mod(j, 2) == 0)*0.1_dp*info%plausible(1), &
+                         soften_rate0*10.0_dp**(j/2 - 1)]
+      end do
+   end function softening_starts
+
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
    !> and zero effect (the second back stress from a small modulus, so that its rate has a
-   !> gradient)
+   !> gradient; the softening at the rate soften_rate0)
    subroutine effect_fit(ctx, k, ep)
       type(diagnose_context), intent(in) :: ctx
       !> Catalogue effect
@@ -196,6 +216,7 @@ contains
       call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
       ep%pfree = free_params(ep, ctx%ifit, .false.)
       if (k == 8) ep%p0 = [0.01_dp*ctx%peak, ctx%opts%gamma3]
+      if (k == 7) ep%p0 = [0.0_dp, soften_rate0]
    end subroutine effect_fit
 
    !> n Latin-hypercube points of the constants (log10) over the &fit multi-start box,

@@ -11,7 +11,8 @@ module usharp_diagnose_screen
    use usharp_optimiser, only: optimum_type
    use usharp_sort, only: order_of
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell
-   use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit
+   use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
+                                       softening_starts, soften_rate0
    implicit none
    private
 
@@ -78,6 +79,7 @@ contains
       nc = size(ctx%prob%idx)
       call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
       if (k == 8) ep%p0(2) = ctx%opts%gamma3
+      if (k == 7) ep%p0(2) = soften_rate0
       ep%pfree = free_params(ep, ctx%ifit, .true.)
       x = ep%start()
       ! With the effect at zero the constants' columns are the baseline's (the same numbers:
@@ -152,7 +154,7 @@ contains
       type(effect_problem), intent(in) :: ep
       type(effect_info), intent(in) :: info
       real(dp), allocatable :: xs(:, :)
-      real(dp), allocatable :: x0(:)
+      real(dp), allocatable :: x0(:), ps(:, :)
       integer :: nc, np, j, s, nsign, combo
       x0 = ep%start()
       nc = size(x0) - count(ep%pfree)
@@ -164,6 +166,15 @@ contains
          xs = spread(x0, 2, 3)
          xs(nc + 1, 2) = 0.03_dp*ep%p0(2)
          xs(nc + 1, 3) = 0.10_dp*ep%p0(2)
+         return
+      end if
+      if (ep%k == 7 .and. np == 2) then
+         ! The saturating softening of either sign at three rates (softening_starts)
+         ps = softening_starts(info)
+         allocate (xs(size(x0), size(ps, 2)))
+         xs = spread(x0, 2, size(ps, 2))
+         xs(nc + 1, :) = ps(1, :)/ep%pscale(1)
+         xs(nc + 2, :) = ps(2, :)/ep%pscale(2)
          return
       end if
       ! (nested: Fortran's .or. may evaluate plausible(1:np) even when np > 2)

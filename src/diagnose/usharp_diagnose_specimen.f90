@@ -22,7 +22,8 @@ module usharp_diagnose_specimen
    use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
-   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, &
+                                       soften_rate0
    use usharp_diagnose_profile, only: profile_interval, profile_result
    implicit none
    private
@@ -188,6 +189,7 @@ contains
             if (cat(k)%sharing == param_per_test) ek%pfree(jj) = mod(jj - 1, nt) + 1 == ispec
          end do
          if (k == 8) ek%p0 = [0.01_dp*peak, opts%gamma3]
+         if (k == 7) ek%p0 = [0.0_dp, soften_rate0]
          se_out%q = count(ek%pfree)
          call ek%bounds(lo, hi)
          ! The second back stress also from saturations of 3 and 10 % of the peak at three
@@ -200,6 +202,8 @@ contains
                starts = reshape([starts, [sats((jj - 1)/3 + 1)*peak*g3, g3]], [np, size(starts, 2) + 1])
             end do
          end if
+         ! The saturating softening of either sign at three rates (the first is the zero start)
+         if (k == 7) starts = softening_starts(cat(k))
          se_out%nevals = 0
          do jj = 1, size(starts, 2)
             ek%p0 = starts(:, jj)

@@ -83,7 +83,7 @@ contains
       case (6)
          p = [draw(0.2_dp, 0.5_dp, .true.)]           ! delta, s
       case (7)
-         p = [draw(0.5_dp, 1.5_dp, .false.)]          ! s
+         p = [draw(0.04_dp, 0.1_dp, .false.), draw(30.0_dp, 300.0_dp, .false.)]   ! a, b
       case (8)
          sat = draw(0.05_dp, 0.12_dp, .false.)*peak
          p = [0.0_dp, draw(150.0_dp, 400.0_dp, .false.)]

@@ -36,7 +36,10 @@ module usharp_effects
       real(dp) :: r0 = 0.0_dp          !< initial back stress, model unit
       real(dp) :: dd0 = 0.0_dp         !< offset of the initial drag stress, model unit
       real(dp) :: shift = 0.0_dp       !< s, the stress channel lags the strain channel
-      real(dp) :: soften = 0.0_dp      !< -, drag in the flow law D*exp(-soften*p)
+      !> -, cyclic softening: drag in the flow law D*(1 - soften*(1 - exp(-soften_rate*p))),
+      !> saturating at the share soften (negative: hardening)
+      real(dp) :: soften = 0.0_dp
+      real(dp) :: soften_rate = 0.0_dp !< -, its rate: 1/(accumulated inelastic strain to 63 %)
       real(dp) :: h3 = 0.0_dp          !< model unit, modulus of the second back stress
       real(dp) :: gamma3 = 0.0_dp      !< -, its dynamic recovery: dR2 = H3 deps_in - gamma3 R2 dp
       !> 1/s, extensometer drift: the measured strain is the specimen's plus drift*(t - t0), t0
@@ -86,10 +89,13 @@ contains
       cat(6) = effect_info('shift', 'time offset: the stress channel lags the strain '// &
          'channel by delta', 1, param_global, ['delta       ', '            '], &
          ['s           ', '            '], [1.0_dp, 1.0_dp], [.false., .false.], [.true., .true.], [5.0_dp, 0.0_dp])
-      cat(7) = effect_info('softening', 'cyclic softening/damage: drag in the flow law '// &
-         'reduced as D*exp(-s*p), p accumulated inelastic strain', 1, param_global, &
-         ['s           ', '            '], ['-           ', '            '], [1.0_dp, 1.0_dp], &
-         [.false., .false.], [.true., .true.], [20.0_dp, 0.0_dp])
+      ! Cyclic softening saturates (a drag that fell without end would reach zero): over
+      ! p << 1/b the form is D*(1 - a*b*p), a softening that has not yet saturated. The rate
+      ! b has no gradient at a = 0: screening holds it (usharp_diagnose_numerics)
+      cat(7) = effect_info('softening', 'saturating cyclic softening: flow-law drag '// &
+         'D*(1 - a*(1 - exp(-b*p))), p inelastic strain', 2, param_global, &
+         ['a           ', 'b           '], ['-           ', '-           '], [0.1_dp, 100.0_dp], &
+         [.false., .true.], [.true., .false.], [0.5_dp, huge(1.0_dp)])
       cat(8) = effect_info('backstress2', 'second back stress of faster rate: '// &
          'dR2 = H3 deps_in - gamma3 R2 |deps_in|', 2, param_global, ['H3          ', &
          'gamma3      '], ['stress      ', '-           '], [peak, 1000.0_dp], &
@@ -153,6 +159,7 @@ contains
          eff%shift = p(1)
       case (7)
          eff%soften = p(1)
+         if (size(p) > 1) eff%soften_rate = p(2)
       case (8)
          eff%h3 = p(1)
          if (size(p) > 1) eff%gamma3 = p(2)
@@ -254,8 +261,9 @@ contains
    end function lag_corners
 
    !> Rates of the extended state y = (eps_in, R, D, p, R2) at stress sigma: Miller's
-   !> Eqs. 2-4 with the flow driven by sigma - R - R2 and the drag D*exp(-soften*p) in the
-   !> flow law; dp/dt = |deps_in/dt|; dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. With jac,
+   !> Eqs. 2-4 with the flow driven by sigma - R - R2 and the drag
+   !> D*(1 - soften*(1 - exp(-soften_rate*p))) in the flow law (kept above 1e-3 D);
+   !> dp/dt = |deps_in/dt|; dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. With jac,
    !> also jac(i, j) = d ydot_i / d y_j, sigma depending on eps_in through dsig_depsin
    !> (the values are the same bit for bit with and without it).
    pure subroutine extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
@@ -322,10 +330,16 @@ contains
       real(dp), intent(out) :: ydot(n_extended)
       real(dp), intent(in), optional :: dsig_depsin
       real(dp), intent(out), optional :: jac(n_extended, n_extended)
-      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, sg, sgr, w, df(n_extended)
+      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, soft, dsoft, sg, sgr, w, df(n_extended)
       s = sigma - y(2) - y(5)
-      e = exp(-eff%soften*y(4))
-      d_flow = y(3)*e
+      e = exp(-eff%soften_rate*y(4))
+      soft = 1.0_dp - eff%soften*(1.0_dp - e)
+      dsoft = -eff%soften*eff%soften_rate*e
+      if (soft < 1.0e-3_dp) then
+         soft = 1.0e-3_dp
+         dsoft = 0.0_dp
+      end if
+      d_flow = y(3)*soft
       if (present(jac)) then
          call flow_rate(model, abs(s), d_flow, f, f_x, f_d)
          call back_recovery(model, abs(y(2)), g, g_r)
@@ -342,10 +356,10 @@ contains
       ydot(4) = f
       ydot(5) = eff%h3*ydot(1) - eff%gamma3*y(5)*f
       if (.not. present(jac)) return
-      ! df/dy through x = |s| and the flow's drag D*exp(-soften*p)
+      ! df/dy through x = |s| and the flow's drag D*soft(p)
       sg = sign(1.0_dp, s)
       sgr = sign(1.0_dp, y(2))
-      df = [f_x*sg*dsig_depsin, -f_x*sg, f_d*e, -f_d*eff%soften*d_flow, -f_x*sg]
+      df = [f_x*sg*dsig_depsin, -f_x*sg, f_d*soft, f_d*y(3)*dsoft, -f_x*sg]
       jac(1, :) = sg*df
       jac(2, :) = model%c%h1*jac(1, :)
       jac(2, 2) = jac(2, 2) - g_r
