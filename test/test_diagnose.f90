@@ -534,17 +534,9 @@ contains
    subroutine test_separate(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
       type(diagnose_context) :: ctx
       type(diagnose_result) :: res
-      call write_relaxation_data('a.txt', 1.0_dp, e)
-      if (.not. allocated(e)) call read_config(write_text('diag-separate.nml', [character(len=100) :: &
-         model_groups, "&fit fitted = 'B', method = 'lm' /", "&diagnose holdout = 'b' /", &
-         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
-         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]), cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call separation_baseline('diag-separate.nml', ctx, res, e)
       call check(error, .not. allocated(e), 'baseline failed')
       if (allocated(error)) return
       allocate (res%effects(2))
@@ -627,18 +619,10 @@ contains
    subroutine test_separate_softening(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
       type(diagnose_context) :: ctx
       type(diagnose_result) :: res
       type(miller_model) :: model
-      call write_relaxation_data('a.txt', 1.0_dp, e)
-      if (.not. allocated(e)) call read_config(write_text('diag-separate-soft.nml', [character(len=100) :: &
-         model_groups, "&fit fitted = 'B', method = 'lm' /", "&diagnose holdout = 'b' /", &
-         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
-         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]), cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call separation_baseline('diag-separate-soft.nml', ctx, res, e)
       select type (m => ctx%prob%cfg%model)
       type is (miller_model)
          model = m
@@ -665,6 +649,23 @@ contains
                     'apart: D '//real_str(sp%d(sp%best), 'es10.3')//'; '//res%verdict)
       end associate
    end subroutine test_separate_softening
+
+   !> The baseline of the separating-step tests: B fitted to relaxation test a, b held out
+   subroutine separation_baseline(deck, ctx, res, e)
+      character(len=*), intent(in) :: deck
+      type(diagnose_context), intent(out) :: ctx
+      type(diagnose_result), intent(out) :: res
+      type(uerror), allocatable, intent(out) :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      call write_relaxation_data('a.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text(deck, [character(len=100) :: &
+         model_groups, "&fit fitted = 'B', method = 'lm' /", "&diagnose holdout = 'b' /", &
+         "&test name = 'a', history = 'relaxation', data_file = 'a.txt' /", &
+         "&test name = 'b', history = 'relaxation', data_file = 'a.txt' /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+   end subroutine separation_baseline
 
    !> Zero-width F descriptors print a leading zero and no bare point
    subroutine test_number_format(error)

@@ -21,7 +21,7 @@ module usharp_diagnose_numerics
    private
 
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
-   public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0
+   public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -204,6 +204,34 @@ contains
                          soften_rate0*10.0_dp**(j/2 - 1)]
       end do
    end function softening_starts
+
+   !> Share of the drag the saturating softening a, b (catalogue effect 7) takes away by the
+   !> end of the tests of ep at x: |a|(1 - exp(-b p_end)), p_end the largest accumulated
+   !> inelastic strain a test reaches (the sum of its inelastic strain's changes between
+   !> output points). What the data measure: where b p_end << 1 they give a*b, not a, and a
+   !> fitted a beyond its limit is an extrapolation past the tests
+   function softening_reached(ep, x, a, b) result(share)
+      type(effect_problem), intent(in) :: ep
+      real(dp), intent(in) :: x(:), a, b
+      real(dp) :: share
+      real(dp), allocatable :: r(:), ein(:)
+      real(dp) :: p_end
+      integer :: it, k0, n
+      logical :: ok
+      allocate (r(ep%nres()), ein(ep%nres()))
+      call ep%residual_at(x, r, ok, eps_in=ein)
+      ! a test that fails to simulate: judged by a itself
+      share = abs(a)
+      if (.not. ok) return
+      p_end = 0.0_dp
+      k0 = 0
+      do it = 1, size(ep%tests)
+         n = size(ep%prob%targets(ep%tests(it))%t)
+         if (n > 0) p_end = max(p_end, abs(ein(k0 + 1)) + sum(abs(ein(k0 + 2:k0 + n) - ein(k0 + 1:k0 + n - 1))))
+         k0 = k0 + n
+      end do
+      share = abs(a)*(1.0_dp - exp(-b*p_end))
+   end function softening_reached
 
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
    !> and zero effect (the second back stress from a small modulus, so that its rate has a

@@ -17,7 +17,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     held_quiet, tell, explains_most
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, best_of_starts, global_points, &
-                                       free_params, effect_fit, at_bound, copy_constants
+                                       free_params, effect_fit, at_bound, copy_constants, softening_reached
    use usharp_diagnose_baseline, only: per_test, all_regions
    implicit none
    private
@@ -267,7 +267,7 @@ contains
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
       call name_params(ctx, res, ep, e)
-      call judge_magnitude(ctx, res, ep, p, e)
+      call judge_magnitude(ctx, res, ep, x, p, e)
    end subroutine magnitudes
 
    !> Names of e's free parameters (per-test ones with their test's name)
@@ -296,13 +296,14 @@ contains
    !> Every magnitude of e's refit (parameters p, all tests) against its physical limit: by
    !> value (each test's value of a per-test parameter); the second back stress by its
    !> saturation H3/gamma3 against the peak stress (a back stress beyond the stress it is
-   !> part of is no back stress). A delay (shift, lag) below the sampling interval of the data
-   !> is not resolved by them.
-   subroutine judge_magnitude(ctx, res, ep, p, e)
+   !> part of is no back stress); the softening by the share of the drag it takes away within
+   !> the fit tests (softening_reached). A delay (shift, lag) below the sampling interval of
+   !> the data is not resolved by them.
+   subroutine judge_magnitude(ctx, res, ep, x, p, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_problem), intent(in) :: ep
-      real(dp), intent(in) :: p(:)
+      real(dp), intent(in) :: x(:), p(:)
       type(effect_outcome), intent(inout) :: e
       real(dp) :: v
       integer :: j, g, nt
@@ -317,10 +318,14 @@ contains
                end do
             end do
          else
-            do j = 1, size(ep%p0)
-               if (ep%pfree(j) .and. info%plausible(j) < huge(1.0_dp)) &
-                  call worse_of(abs(p(j))/info%plausible(j), info%pname(j))
-            end do
+            if (info%name == 'softening' .and. size(p) >= 2) then
+               call worse_of(softening_reached(ep, x, p(1), p(2))/info%plausible(1), 'a(1 - exp(-b p))')
+            else
+               do j = 1, size(ep%p0)
+                  if (ep%pfree(j) .and. info%plausible(j) < huge(1.0_dp)) &
+                     call worse_of(abs(p(j))/info%plausible(j), info%pname(j))
+               end do
+            end if
             if (info%name == 'backstress2' .and. size(p) >= 2) then
                if (p(2) > 0.0_dp) call worse_of(abs(p(1)/p(2))/ctx%peak, 'H3/gamma3')
             end if

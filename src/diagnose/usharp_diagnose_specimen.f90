@@ -23,7 +23,7 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, &
-                                       soften_rate0
+                                       soften_rate0, softening_reached
    use usharp_diagnose_profile, only: profile_interval, profile_result
    implicit none
    private
@@ -233,6 +233,7 @@ contains
          allocate (se_out%p_lo(size(p)), se_out%p_hi(size(p)), se_out%lo_open(size(p)), &
                    se_out%hi_open(size(p)), se_out%pname(size(p)), se_out%punit(size(p)))
          se_out%plausible = .true.
+         if (k == 7) se_out%plausible = softening_reached(ek, o%x, p(1), p(2)) <= cat(k)%plausible(1)
          g = 0
          do jj = 1, np
             if (.not. ek%pfree(jj)) cycle
@@ -240,7 +241,8 @@ contains
             associate (grp => merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test))
                se_out%pname(g) = cat(k)%pname(grp)
                se_out%punit(g) = cat(k)%punit(grp)
-               se_out%plausible = se_out%plausible .and. abs(p(g)) <= cat(k)%plausible(grp)
+               ! the softening: by the share of the drag it takes away within the test
+               if (k /= 7) se_out%plausible = se_out%plausible .and. abs(p(g)) <= cat(k)%plausible(grp)
             end associate
             ! The rise of the objective at the 95 % ends: the sandwich over the naive variance
             scale = o%f/max(sr%m - se_out%q, 1)
