@@ -22,6 +22,7 @@ module test_diagnose
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_diagnose_types, only: effect_outcome
    use usharp_diagnose_verdict, only: conclude
+   use usharp_diagnose_refit, only: judge
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use test_util, only: write_text, check_message
@@ -65,6 +66,7 @@ contains
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
+         new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
          new_unittest('softening-saturates-jacobian-against-differences', test_softening), &
@@ -511,6 +513,43 @@ contains
          e%worse = [.false., .false., .false.]
       end function outcome
    end subroutine test_parsimony
+
+   !> Both sets' gaps below their floors: an effect that lowers BIC by 30, plausible and
+   !> keeping the held-out tests at their noise level is confirmed; the same effect opening a
+   !> held-out gap is not, nor is a delay below the sampling interval (nothing structured for
+   !> it to remove), nor one that lowers BIC by less than bic_margin
+   subroutine test_below_floors(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_outcome) :: e
+      ctx%opts%confirm_shrink = 0.5_dp
+      res%m = 1000
+      res%f0 = 1.0_dp
+      res%gap_fit = 0.1_dp
+      res%floor_fit = 0.2_dp
+      res%gap_held = 0.05_dp
+      res%floor_held = 0.1_dp
+      e%q = 2
+      e%f_after = exp(-(30.0_dp + 2.0_dp*log(1000.0_dp))/1000.0_dp)
+      e%held_gap = 0.01_dp
+      call judge(ctx, res, e)
+      call check(error, e%significant .and. e%confirmed, 'BIC -30 below the floors not confirmed')
+      if (allocated(error)) return
+      e%held_gap = 0.5_dp
+      call judge(ctx, res, e)
+      call check(error, .not. e%confirmed, 'confirmed although it opens a held-out gap')
+      if (allocated(error)) return
+      e%held_gap = 0.01_dp
+      e%resolved = .false.
+      call judge(ctx, res, e)
+      call check(error, .not. e%confirmed, 'a delay below the sampling interval confirmed below the floors')
+      if (allocated(error)) return
+      e%resolved = .true.
+      e%f_after = exp(-(5.0_dp + 2.0_dp*log(1000.0_dp))/1000.0_dp)
+      call judge(ctx, res, e)
+      call check(error, .not. e%significant .and. .not. e%confirmed, 'BIC -5 confirmed')
+   end subroutine test_below_floors
 
    !> The leading n_refit effects are refitted and those the screening cannot tell from the
    !> last of them (predicted BIC within 10 % or bic_margin), not one more
