@@ -170,13 +170,14 @@ contains
       end select
    end function effects_of
 
-   !> The model a test with effects eff sees: temperature T + dT, modulus
-   !> E*(1 + dE/E)*(1 + dlnE_dT*dT), set up again. B*theta follows the temperature; the Miller
-   !> model's D0 stays that of the nominal temperature: the virgin material's drag is a state of
-   !> the specimen, not of the thermocouple's reading (D0 from the yield stress at T + dT would
-   !> keep a hotter test exactly as strong at the reference rate, and make an offset shared by
-   !> every test a mere factor on B that the constants take up). The nominal temperature is the
-   !> test's own when given, else the model's.
+   !> The model a test with effects eff sees: modulus E*(1 + dE/E)*(1 + dlnE_dT*dT), set up at
+   !> the nominal temperature, then moved to T + dT by set_temperature: what the rates take
+   !> from temperature follows (Miller: B*theta), the initial state stays that of the nominal
+   !> temperature (Miller's D0: the virgin material's drag is a state of the specimen, not of
+   !> the thermocouple's reading; D0 from the yield stress at T + dT would keep a hotter test
+   !> exactly as strong at the reference rate, and make an offset shared by every test a mere
+   !> factor on B that the constants take up). The nominal temperature is the test's own when
+   !> given, else the model's.
    subroutine effect_model(model, eff, out, error, temperature)
       class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
@@ -184,25 +185,14 @@ contains
       type(error_type), allocatable, intent(out) :: error
       !> K, the test's own temperature (when > 0) in place of the model's
       real(dp), intent(in), optional :: temperature
-      real(dp) :: d0_nominal
       allocate (out, source=model)
       if (present(temperature)) then
          if (temperature > 0.0_dp) out%temperature = temperature
       end if
-      call out%setup(error)
-      if (allocated(error)) return
-      d0_nominal = 0.0_dp
-      select type (out)
-      type is (miller_model)
-         d0_nominal = out%d0
-      end select
-      out%temperature = out%temperature + eff%dtemp
       out%youngs = model%youngs*(1.0_dp + eff%modulus)*(1.0_dp + eff%dlnE_dT*eff%dtemp)
       call out%setup(error)
-      select type (out)
-      type is (miller_model)
-         out%d0 = d0_nominal
-      end select
+      if (allocated(error)) return
+      call out%set_temperature(out%temperature + eff%dtemp, error)
    end subroutine effect_model
 
    !> Number of states of the extended model
