@@ -5,7 +5,7 @@ program bench_umat
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_model_miller, only: miller_model, model_setup
-   use usharp_model_miller, only: miller_update, n_state
+   use usharp_model_miller, only: n_state
    use usharp_history, only: history_type, output_times, thesis_history
    use usharp_simulation, only: solver_options, sim_result
    use usharp_umat_driver, only: simulate_umat
@@ -26,9 +26,9 @@ program bench_umat
    y0 = [ein, 8.0_dp*[2.0_dp/3, -1.0_dp/3, -1.0_dp/3, 0.0_dp, 0.0_dp, 0.0_dp], 11.5_dp]
    call system_clock(c0, rate)
    do rep = 1, ncalls
-      call miller_update(m, ein + [8.0e-4_dp, -2.4e-4_dp, -2.4e-4_dp, 0.0_dp, 0.0_dp, 0.0_dp], &
-                         [2.0e-5_dp, -9.0e-6_dp, -9.0e-6_dp, 0.0_dp, 0.0_dp, 0.0_dp], 0.15_dp, y0, sig, y, &
-                         c, st, nsub)
+      call m%stress_update(ein + [8.0e-4_dp, -2.4e-4_dp, -2.4e-4_dp, 0.0_dp, 0.0_dp, 0.0_dp], &
+                           [2.0e-5_dp, -9.0e-6_dp, -9.0e-6_dp, 0.0_dp, 0.0_dp, 0.0_dp], 0.15_dp, y0, sig, &
+                           y, c, st, nsub)
    end do
    call system_clock(c1)
    t = real(c1 - c0, dp)/real(rate, dp)

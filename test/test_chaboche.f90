@@ -11,9 +11,10 @@ module test_chaboche
    use usharp_umat_driver, only: simulate_umat
    use test_models, only: model_rates_jacobian, model_tangent
    use usharp_model_chaboche, only: chaboche_model, chaboche_setup, chaboche_uniaxial_rates, &
-      chaboche_update, chaboche_n_uniaxial, chaboche_n_state, chaboche_ok, chaboche_n_constants, &
+      chaboche_n_uniaxial, chaboche_n_state, chaboche_n_constants, &
       chaboche_get_constant, chaboche_set_constant, chaboche_constant_index, chaboche_constant_names, &
       chaboche_literature_low, chaboche_literature_high
+   use usharp_model, only: update_status_ok
    implicit none
    private
    public :: collect_chaboche, test_chaboche_model, chaboche_uniaxial_rk4, chaboche_uniaxial_update
@@ -193,8 +194,8 @@ contains
          ! Lateral strain increment: start from the last one scaled, then Newton on s22 = 0
          deps(2:3) = -m%poisson*deps(1)
          do it = 1, 20
-            call chaboche_update(m, eps, deps, dt, y, s, ynew, c, st, nsub, nsubsteps)
-            if (st /= chaboche_ok) return
+            call m%stress_update(eps, deps, dt, y, s, ynew, c, st, nsub, nsubsteps)
+            if (st /= update_status_ok) return
             if (abs(s(2)) <= 1.0e-10_dp*max(abs(s(1)), 1.0_dp)) exit
             deps(2:3) = deps(2:3) - s(2)/(c(2, 2) + c(2, 3))
          end do

@@ -4,7 +4,7 @@ module test_update
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_model_miller, only: miller_model, model_setup
-   use usharp_model_miller, only: miller_update, n_state
+   use usharp_model_miller, only: n_state
    use usharp_model, only: update_status_ok
    use usharp_history, only: history_type, output_times
    use usharp_simulation, only: solver_options, sim_result
@@ -79,7 +79,7 @@ contains
       real(dp) :: sig(6), y(n_state), c(6, 6), fd(6, 6), sp(6), sm(6), cdum(6, 6), d(6), hstep, dev
       integer :: j, st, nsub
       character(len=100) :: buf
-      call miller_update(m, eps0, deps, dt, y0, sig, y, c, st, nsub)
+      call m%stress_update(eps0, deps, dt, y0, sig, y, c, st, nsub)
       if (st /= update_status_ok) then
          call test_failed(error, 'update did not converge')
          return
@@ -88,8 +88,8 @@ contains
       do j = 1, 6
          d = 0.0_dp
          d(j) = hstep
-         call miller_update(m, eps0, deps + d, dt, y0, sp, y, cdum, st, nsub)
-         call miller_update(m, eps0, deps - d, dt, y0, sm, y, cdum, st, nsub)
+         call m%stress_update(eps0, deps + d, dt, y0, sp, y, cdum, st, nsub)
+         call m%stress_update(eps0, deps - d, dt, y0, sm, y, cdum, st, nsub)
          fd(:, j) = (sp - sm)/(2*hstep)
       end do
       dev = maxval(abs(c - fd))/maxval(abs(fd))

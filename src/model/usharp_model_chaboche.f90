@@ -28,15 +28,15 @@ module usharp_model_chaboche
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
-   use usharp_model, only: model_type, elastic_moduli, update_status_ok, update_status_cut, &
-                           block_scalar, block_strain, block_stress
-   use usharp_model_j2, only: deviator_projector, solve_dense, m_vec
+   use usharp_model, only: update_status_ok, update_status_cut, block_scalar, block_strain, &
+                           block_stress
+   use usharp_model_j2, only: j2_model, solve_dense
    implicit none
    private
 
    public :: chaboche_constants, chaboche_model, chaboche_setup
    public :: chaboche_get_constant, chaboche_set_constant, chaboche_constant_index
-   public :: chaboche_flow, chaboche_uniaxial_rates, chaboche_update
+   public :: chaboche_flow, chaboche_uniaxial_rates
 
    !> Number of back stresses
    integer, parameter, public :: chaboche_n_back = 2
@@ -66,13 +66,11 @@ module usharp_model_chaboche
    !> Number of uniaxial and of multiaxial state variables
    integer, parameter, public :: chaboche_n_uniaxial = 2 + chaboche_n_back
    integer, parameter, public :: chaboche_n_state = 7 + 6*chaboche_n_back
-   !> Outcome of the update: converged, or the caller must retry with a smaller increment
-   integer, parameter, public :: chaboche_ok = update_status_ok, chaboche_cut = update_status_cut
    !> Properties of the drop-in user material: E, Poisson's ratio, then the constants
    integer, parameter :: n_props = 2 + chaboche_n_constants
-   !> Backward Euler substeps per increment by default, Newton iterations, halvings
+   !> Backward Euler substeps per increment by default, Newton iterations per substep
    integer, parameter, public :: chaboche_default_substeps = 8
-   integer, parameter :: max_newton = 30, max_halvings = 12
+   integer, parameter :: max_newton = 30
 
    !> The Chaboche constants (units for a model in MPa)
    type :: chaboche_constants
@@ -89,7 +87,7 @@ module usharp_model_chaboche
 
    !> A Chaboche model at one temperature (temperature, youngs and poisson from model_type;
    !> the constants are those at that temperature)
-   type, extends(model_type) :: chaboche_model
+   type, extends(j2_model) :: chaboche_model
       type(chaboche_constants) :: c
       !> cal/mol, activation energy of the rate processes (0: none)
       real(dp) :: activation = 0.0_dp
@@ -116,7 +114,7 @@ module usharp_model_chaboche
       procedure :: uniaxial_outputs => ch_uniaxial_outputs
       procedure :: n_state => ch_n_state
       procedure :: state_initial => ch_initial
-      procedure :: stress_update => ch_stress_update
+      procedure :: local_step => local_newton
       procedure :: update_substeps => ch_update_substeps
       procedure :: state_outputs => ch_state_outputs
       procedure :: n_props => ch_n_props
@@ -340,91 +338,36 @@ contains
       jac(nr, nr) = jac(nr, nr) - model%c%b*f
    end subroutine chaboche_uniaxial_rates
 
-   !> Stress update over one increment. eps0: strain at the start, deps: its increment,
-   !> dt: time step (s), y0: state at the start (Mandel). On success status is chaboche_ok;
-   !> otherwise y = y0, sigma and ddsde are the elastic trial and status = chaboche_cut asks
-   !> the caller for a smaller increment. The increment is integrated in substeps
-   !> (chaboche_default_substeps or nsubsteps, doubled while Newton fails); nsub returns how
-   !> many were used.
-   pure subroutine chaboche_update(model, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, nsubsteps)
-      type(chaboche_model), intent(in) :: model
-      real(dp), intent(in) :: eps0(6), deps(6), dt, y0(chaboche_n_state)
-      real(dp), intent(out) :: sigma(6), y(chaboche_n_state), ddsde(6, 6)
-      integer, intent(out) :: status, nsub
-      integer, intent(in), optional :: nsubsteps
-      real(dp) :: dyde(chaboche_n_state, 6), ycur(chaboche_n_state), ynew(chaboche_n_state)
-      real(dp) :: dydecur(chaboche_n_state, 6), g, k, frac, p(6, 6)
-      integer :: level, i, isub, st, base
-      logical :: ok
-
-      call elastic_moduli(model%youngs, model%poisson, g, k)
-      p = deviator_projector()
-      status = chaboche_cut
-      base = chaboche_default_substeps
-      if (present(nsubsteps)) base = max(1, nsubsteps)
-      nsub = 0
-      do level = 0, max_halvings
-         nsub = base*2**level
-         ycur = y0
-         dydecur = 0.0_dp
-         ok = .true.
-         do isub = 1, nsub
-            frac = real(isub, dp)/real(nsub, dp)
-            call local_newton(model, g, p, eps0 + frac*deps, ycur, dt/nsub, frac, dydecur, &
-                              ynew, dyde, st)
-            if (st /= chaboche_ok) then
-               ok = .false.
-               exit
-            end if
-            ycur = ynew
-            dydecur = dyde
-         end do
-         if (ok) then
-            status = chaboche_ok
-            exit
-         end if
-      end do
-      if (status /= chaboche_ok) then
-         ycur = y0
-         dydecur = 0.0_dp
-      end if
-      y = ycur
-      sigma = 2.0_dp*g*(matmul(p, eps0 + deps) - y(1:6)) + k*sum((eps0 + deps)*m_vec)*m_vec
-      ddsde = 2.0_dp*g*p + k*spread(m_vec, 1, 6)*spread(m_vec, 2, 6)
-      do i = 1, 6
-         ddsde(:, i) = ddsde(:, i) - 2.0_dp*g*dydecur(1:6, i)
-      end do
-   end subroutine chaboche_update
-
-   !> Backward Euler on one subincrement by Newton's method with the analytic Jacobian;
-   !> dyde carries the sensitivity of the state to the end strain of the whole increment
-   pure subroutine local_newton(model, g, p, eps, yprev, dt, frac, dyde_prev, y, dyde, status)
-      type(chaboche_model), intent(in) :: model
-      real(dp), intent(in) :: g, p(6, 6), eps(6), yprev(chaboche_n_state), dt, frac
-      real(dp), intent(in) :: dyde_prev(chaboche_n_state, 6)
-      real(dp), intent(out) :: y(chaboche_n_state), dyde(chaboche_n_state, 6)
+   !> The local step of the 3-D update (j2_model): backward Euler on one subincrement by
+   !> Newton's method with the analytic Jacobian; dyde carries the sensitivity of the state
+   !> to the end strain of the whole increment
+   pure subroutine local_newton(self, g, p, eps, yprev, dt, frac, dyde_prev, y, dyde, status)
+      class(chaboche_model), intent(in) :: self
+      real(dp), intent(in) :: g, p(6, 6), eps(6), dt, frac
+      real(dp), intent(in), contiguous :: yprev(:), dyde_prev(:, :)
+      real(dp), intent(out), contiguous :: y(:), dyde(:, :)
       integer, intent(out) :: status
       real(dp) :: r(chaboche_n_state), jac(chaboche_n_state, chaboche_n_state)
       real(dp) :: drde(chaboche_n_state, 6), dy(chaboche_n_state, 1), tol_strain, tol_stress
       integer :: it, info, ns
       ns = chaboche_n_state
-      status = chaboche_cut
+      status = update_status_cut
       y = yprev
       tol_strain = 1.0e-13_dp + 1.0e-11_dp*maxval(abs(yprev(1:6)))
-      tol_stress = 1.0e-11_dp*max(maxval(abs(yprev(7:ns))), 1.0e-3_dp*model%youngs)
+      tol_stress = 1.0e-11_dp*max(maxval(abs(yprev(7:ns))), 1.0e-3_dp*self%youngs)
       do it = 1, max_newton
-         call residual(model, g, p, eps, yprev, dt, y, r, jac, drde)
+         call residual(self, g, p, eps, yprev, dt, y, r, jac, drde)
          if (.not. all(ieee_is_finite(r)) .or. .not. all(ieee_is_finite(jac))) return
          dy(:, 1) = -r
          call solve_dense(jac, dy, info)
          if (info /= 0 .or. .not. all(ieee_is_finite(dy))) return
          y = y + dy(:, 1)
          if (maxval(abs(dy(1:6, 1))) <= tol_strain .and. maxval(abs(dy(7:ns, 1))) <= tol_stress) then
-            call residual(model, g, p, eps, yprev, dt, y, r, jac, drde)
+            call residual(self, g, p, eps, yprev, dt, y, r, jac, drde)
             dyde = dyde_prev - frac*drde
             call solve_dense(jac, dyde, info)
             if (info /= 0 .or. .not. all(ieee_is_finite(dyde))) return
-            status = chaboche_ok
+            status = update_status_ok
             return
          end if
       end do
@@ -630,16 +573,6 @@ contains
       class(chaboche_model), intent(in) :: self
       n = chaboche_n_state
    end function ch_n_state
-
-   pure subroutine ch_stress_update(self, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, &
-                                    nsubsteps)
-      class(chaboche_model), intent(in) :: self
-      real(dp), intent(in) :: eps0(6), deps(6), dt, y0(:)
-      real(dp), intent(out) :: sigma(6), y(:), ddsde(6, 6)
-      integer, intent(out) :: status, nsub
-      integer, intent(in), optional :: nsubsteps
-      call chaboche_update(self, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, nsubsteps)
-   end subroutine ch_stress_update
 
    pure integer function ch_update_substeps(self) result(n)
       class(chaboche_model), intent(in) :: self

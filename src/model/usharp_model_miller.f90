@@ -20,9 +20,9 @@ module usharp_model_miller
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
    use usharp_units, only: stress_factor
-   use usharp_model, only: model_type, elastic_moduli, update_status_ok, update_status_cut, &
-                           block_scalar, block_strain, block_stress
-   use usharp_model_j2, only: deviator_projector, solve_dense, m_vec
+   use usharp_model, only: update_status_ok, update_status_cut, block_scalar, block_strain, &
+                           block_stress
+   use usharp_model_j2, only: j2_model, solve_dense
    implicit none
    private
 
@@ -31,7 +31,7 @@ module usharp_model_miller
    public :: theta_miller, model_setup, check_constants, initial_drag
    public :: get_constant, set_constant, constant_index
    public :: flow_rate, back_recovery, drag_recovery, rate_terms, rate_terms_at
-   public :: miller_update, n_state
+   public :: n_state
 
    !> Universal gas constant in cal/(mol K), as the thesis uses it
    !> Number of named constants (A1, A2, B, C2, H1, H2, n, Q)
@@ -71,14 +71,14 @@ module usharp_model_miller
    character(len=7), parameter :: prop_names(n_props) = [character(len=7) :: 'E', &
       'Poisson', 'A1', 'A2', 'B', 'C1', 'C2', 'k', 'H1', 'H2', 'n', 'Q', 'Tm']
    !> Newton iterations per (sub)increment and halvings of the increment before giving up
-   integer, parameter :: max_newton = 25, max_halvings = 12
+   integer, parameter :: max_newton = 25
    !> Backward Euler substeps per increment: the increments of an FE solution (0.15 s in the
    !> thesis's deck) are too coarse for first-order accuracy across the knee of the sinh law
    integer, parameter, public :: default_substeps = 8
 
    !> A Miller model at one temperature (temperature, tm, youngs and poisson from
    !> model_type), ready for rate evaluation
-   type, extends(model_type) :: miller_model
+   type, extends(j2_model) :: miller_model
       type(miller_constants) :: c
       real(dp) :: d0_fixed = 0.0_dp        !< initial drag stress if > 0, else computed
       real(dp) :: d0_yield = 18.0_dp       !< YS in the D0 formula, model stress unit
@@ -105,7 +105,7 @@ module usharp_model_miller
       procedure :: uniaxial_outputs => miller_uniaxial_outputs
       procedure :: n_state => miller_n_state
       procedure :: state_initial => miller_state_initial
-      procedure :: stress_update => miller_stress_update
+      procedure :: local_step => local_newton
       procedure :: update_substeps => miller_update_substeps
       procedure :: state_outputs => miller_state_outputs
       procedure :: rates_constant_derivative => miller_rates_constant_derivative
@@ -406,85 +406,27 @@ contains
       jac(3, 2) = -self%c%h2*t%f_x*sg*t%w + self%c%h2*t%f*sgr
       jac(3, 3) = self%c%h2*(t%f_d*t%w - 3.0_dp*t%a*t%f*d**2) - t%h_d
    end subroutine miller_uniaxial_rates
-   !> Stress update over one increment. eps0: strain at the start, deps: its increment,
-   !> dt: time step (s), y0: state at the start (Mandel; D > 0). On success status is
-   !> update_status_ok; otherwise sigma, y and ddsde are unchanged from the elastic trial and
-   !> status = update_status_cut asks the caller for a smaller increment.
-   !> The increment is integrated in substeps (default_substeps equal ones, or nsubsteps);
-   !> nsub returns how many were used (more when Newton needed halvings).
-   pure subroutine miller_update(model, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, nsubsteps)
-      type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: eps0(6), deps(6), dt, y0(n_state)
-      real(dp), intent(out) :: sigma(6), y(n_state), ddsde(6, 6)
-      integer, intent(out) :: status, nsub
-      integer, intent(in), optional :: nsubsteps
-      integer :: base
-      real(dp) :: dyde(n_state, 6), ycur(n_state), ynew(n_state), dydecur(n_state, 6), g, k, frac
-      real(dp) :: p(6, 6)
-      integer :: level, i, isub, st
-      logical :: ok
 
-      call elastic_moduli(model%youngs, model%poisson, g, k)
-      p = deviator_projector()
-      status = update_status_cut
-      nsub = 0
-      base = default_substeps
-      if (present(nsubsteps)) base = max(1, nsubsteps)
-      ! Try base substeps, then 2, 4, ... times as many (strain linear in time)
-      do level = 0, max_halvings
-         nsub = base*2**level
-         ycur = y0
-         dydecur = 0.0_dp
-         ok = .true.
-         do isub = 1, nsub
-            frac = real(isub, dp)/real(nsub, dp)
-            call local_newton(model, g, p, eps0 + frac*deps, ycur, dt/nsub, frac, dydecur, &
-                              ynew, dyde, st)
-            if (st /= update_status_ok) then
-               ok = .false.
-               exit
-            end if
-            ycur = ynew
-            dydecur = dyde
-         end do
-         if (ok) then
-            status = update_status_ok
-            exit
-         end if
-      end do
-      if (status /= update_status_ok) then
-         y = y0
-         ycur = y0
-         dydecur = 0.0_dp
-      else
-         y = ycur
-      end if
-      sigma = 2.0_dp*g*(matmul(p, eps0 + deps) - y(1:6)) + k*sum((eps0 + deps)*m_vec)*m_vec
-      ddsde = 2.0_dp*g*p + k*spread(m_vec, 1, 6)*spread(m_vec, 2, 6)
-      do i = 1, 6
-         ddsde(:, i) = ddsde(:, i) - 2.0_dp*g*dydecur(1:6, i)
-      end do
-   end subroutine miller_update
-
-   !> Backward Euler on one subincrement by Newton's method with the analytic Jacobian.
+   !> The local step of the 3-D update (j2_model): backward Euler on one subincrement by Newton's method with the analytic Jacobian.
    !> frac is the share of the whole strain increment reached at its end, dyde_prev the
    !> sensitivity of the starting state to the end strain of the whole increment; dyde
    !> returns the same for the new state (chain rule across subincrements).
-   pure subroutine local_newton(model, g, p, eps, yprev, dt, frac, dyde_prev, y, dyde, status)
-      type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: g, p(6, 6), eps(6), yprev(n_state), dt, frac, dyde_prev(n_state, 6)
-      real(dp), intent(out) :: y(n_state), dyde(n_state, 6)
+   pure subroutine local_newton(self, g, p, eps, yprev, dt, frac, dyde_prev, y, dyde, status)
+      class(miller_model), intent(in) :: self
+      real(dp), intent(in) :: g, p(6, 6), eps(6), dt, frac
+      real(dp), intent(in), contiguous :: yprev(:), dyde_prev(:, :)
+      real(dp), intent(out), contiguous :: y(:), dyde(:, :)
       integer, intent(out) :: status
       real(dp) :: r(n_state), jac(n_state, n_state), drde(n_state, 6), dy(n_state, 1)
       real(dp) :: tol_strain, tol_stress, scale_s
       integer :: it, info
       status = update_status_cut
       y = yprev
-      scale_s = max(maxval(abs(yprev(7:13))), 1.0e-3_dp*model%youngs)
+      scale_s = max(maxval(abs(yprev(7:13))), 1.0e-3_dp*self%youngs)
       tol_strain = 1.0e-13_dp + 1.0e-11_dp*maxval(abs(yprev(1:6)))
       tol_stress = 1.0e-11_dp*scale_s
       do it = 1, max_newton
-         call residual(model, g, p, eps, yprev, dt, y, r, jac, drde)
+         call residual(self, g, p, eps, yprev, dt, y, r, jac, drde)
          if (.not. all(ieee_is_finite(r)) .or. .not. all(ieee_is_finite(jac))) return
          dy(:, 1) = -r
          call solve_dense(jac, dy, info)
@@ -494,7 +436,7 @@ contains
          if (maxval(abs(dy(1:6, 1))) <= tol_strain .and. maxval(abs(dy(7:13, 1))) <= tol_stress) then
             ! Converged: the sensitivity by the implicit function theorem at the solution,
             ! d r/d y * dy/de = -(d r/d eps * frac - dyde_prev)
-            call residual(model, g, p, eps, yprev, dt, y, r, jac, drde)
+            call residual(self, g, p, eps, yprev, dt, y, r, jac, drde)
             dyde = dyde_prev - frac*drde
             call solve_dense(jac, dyde, info)
             if (info /= 0 .or. .not. all(ieee_is_finite(dyde))) return
@@ -698,16 +640,6 @@ contains
       y = 0.0_dp
       y(13) = self%d0
    end subroutine miller_state_initial
-
-   pure subroutine miller_stress_update(self, eps0, deps, dt, y0, sigma, y, ddsde, status, &
-                                        nsub, nsubsteps)
-      class(miller_model), intent(in) :: self
-      real(dp), intent(in) :: eps0(6), deps(6), dt, y0(:)
-      real(dp), intent(out) :: sigma(6), y(:), ddsde(6, 6)
-      integer, intent(out) :: status, nsub
-      integer, intent(in), optional :: nsubsteps
-      call miller_update(self, eps0, deps, dt, y0, sigma, y, ddsde, status, nsub, nsubsteps)
-   end subroutine miller_stress_update
 
    pure integer function miller_update_substeps(self) result(n)
       class(miller_model), intent(in) :: self
