@@ -33,7 +33,7 @@ module test_models
    implicit none
    private
    public :: collect_models, model_rates_jacobian, model_tangent, model_uniaxial_vs_update, &
-             model_accuracy
+             model_accuracy, fit_b_q_from_offset
 
    !> The checks' thresholds
    real(dp), parameter :: tol_derivative = 1.0e-6_dp, tol_update = 5.0e-3_dp, tol_accuracy = 1.0e-4_dp
@@ -365,20 +365,32 @@ contains
       call check(error, diff > 0.05_dp, 'the tests at 538 and 649 C differ by '// &
                  real_str(diff, 'es10.3')//' of the peak only')
       if (allocated(error)) return
-      ! Start from 2 B and 1.04 Q (the data were made with the deck's constants)
-      call prob%cfg%model%set_constant(prob%idx(1), 2.0_dp*b_true)
-      call prob%cfg%model%set_constant(prob%idx(2), 1.04_dp*q_true)
-      call prob%cfg%model%setup(e)
-      if (.not. allocated(e)) call make_dir(scratch_dir//'/q-three-temperatures', e)
-      if (.not. allocated(e)) call run_fit(prob, scratch_dir//'/q-three-temperatures', .false., out, &
-                                           e, force=.true.)
+      call fit_b_q_from_offset(prob, b_true, q_true, 'q-three-temperatures', out, e)
       if (allocated(e)) then
          call test_failed(error, e%message)
          return
       end if
       q = out%constants(2)
+      write (*, '(4x,a)') 'B '//real_str(out%constants(1), 'es10.3')//' 1/s, Q '// &
+         real_str(q, 'es10.3')//' cal/mol'
       call check(error, abs(q/q_true - 1.0_dp) <= 0.02_dp, 'Q fitted '//real_str(q, 'es10.3')// &
                  ' cal/mol, true '//real_str(q_true, 'es10.3')//' (start '// &
                  real_str(1.04_dp*q_true, 'es10.3')//'), B '//real_str(out%constants(1), 'es10.3'))
    end subroutine test_q_three_temperatures
+
+   !> Fit B and Q (the fitted constants of prob, in that order) from 2 B and 1.04 Q, where the
+   !> data were made with b_true (1/s) and q_true (cal/mol); the fit's logs in
+   !> scratch_dir/name
+   subroutine fit_b_q_from_offset(prob, b_true, q_true, name, out, e)
+      type(fit_problem), intent(inout) :: prob
+      real(dp), intent(in) :: b_true, q_true
+      character(len=*), intent(in) :: name
+      type(fit_outcome), intent(out) :: out
+      type(uerror), allocatable, intent(out) :: e
+      call prob%cfg%model%set_constant(prob%idx(1), 2.0_dp*b_true)
+      call prob%cfg%model%set_constant(prob%idx(2), 1.04_dp*q_true)
+      call prob%cfg%model%setup(e)
+      if (.not. allocated(e)) call make_dir(scratch_dir//'/'//name, e)
+      if (.not. allocated(e)) call run_fit(prob, scratch_dir//'/'//name, .false., out, e, force=.true.)
+   end subroutine fit_b_q_from_offset
 end module test_models

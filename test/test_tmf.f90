@@ -14,10 +14,10 @@ module test_tmf
    use usharp_simulate, only: simulate_test
    use usharp_rosenbrock_driver, only: rate_system, rates, rates_jacobian, plain_system
    use usharp_objective, only: fit_problem
-   use usharp_fit, only: run_fit, fit_outcome
-   use usharp_filesys, only: make_dir
+   use usharp_fit, only: fit_outcome
    use test_design, only: synthetic_problem
-   use test_util, only: write_text, scratch_dir, check_message
+   use test_models, only: fit_b_q_from_offset
+   use test_util, only: write_text, check_message
    use usharp_strings, only: real_str
    implicit none
    private
@@ -184,11 +184,7 @@ contains
          call test_failed(error, e%message)
          return
       end if
-      call prob%cfg%model%set_constant(prob%idx(1), 2.0_dp*b_true)
-      call prob%cfg%model%set_constant(prob%idx(2), 1.04_dp*q_true)
-      call prob%cfg%model%setup(e)
-      if (.not. allocated(e)) call make_dir(scratch_dir//'/tmf-bq', e)
-      if (.not. allocated(e)) call run_fit(prob, scratch_dir//'/tmf-bq', .false., out, e, force=.true.)
+      call fit_b_q_from_offset(prob, b_true, q_true, 'tmf-bq', out, e)
       if (allocated(e)) then
          call test_failed(error, e%message)
          return
