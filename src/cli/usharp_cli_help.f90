@@ -55,8 +55,8 @@ contains
    pure function main_help() result(text)
       character(len=:), allocatable :: text
       text = 'usage: usharp <command> [options] <input.nml>'//nl//nl// &
-         'Determines the constants of a unified viscoplastic model (Miller) from mechanical'//nl// &
-         'tests given in a namelist input file.'//nl//nl// &
+         'Determines the constants of a unified viscoplastic model (Miller, Chaboche) from'//nl// &
+         'mechanical tests given in a namelist input file.'//nl//nl// &
          'commands:'//nl// &
          '  run        fit the constants of &fit to the data of every &test'//nl// &
          '  predict    apply a fit''s constants (-c best.nml) to other tests: errors, curves'//nl// &
