@@ -1,4 +1,4 @@
-!> Effects the Miller model leaves out, for `usharp diagnose`: each is a documented extension
+!> Effects a model leaves out, for `usharp diagnose`: each is a documented extension
 !> of the simulation or of the measurement with its own parameters, and each is neutral when
 !> its parameters are zero. test_effects holds what one test's simulation sees; the catalogue
 !> names the effects, their parameters (global or one per test) and their scales.
@@ -7,8 +7,8 @@
 module usharp_effects
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_model, only: model_type
-   use usharp_model_miller, only: miller_model, flow_rate, back_recovery, drag_recovery
+   use usharp_model, only: model_type, wrapped_rates
+   use usharp_effect_values, only: test_effects
    implicit none
    private
 
@@ -24,28 +24,6 @@ module usharp_effects
    integer, parameter :: param_global = 1, param_per_test = 2
    !> Number of effects in the catalogue
    integer, parameter :: n_effects = 9
-
-   !> What one test's simulation sees (all zero: the plain Miller model)
-   type :: test_effects
-      real(dp) :: compliance = 0.0_dp  !< kappa: machine strain kappa*sigma/E in the measured strain (-)
-      real(dp) :: lag = 0.0_dp         !< s, first-order lag of the applied control value
-      real(dp) :: dtemp = 0.0_dp       !< K, offset of the test temperature
-      real(dp) :: dlnE_dT = 0.0_dp     !< 1/K, d ln E / dT used with dtemp
-      real(dp) :: modulus = 0.0_dp     !< relative change of E (specimen scatter)
-      real(dp) :: strength = 0.0_dp    !< relative change of D0 (specimen scatter)
-      real(dp) :: r0 = 0.0_dp          !< initial back stress, model unit
-      real(dp) :: dd0 = 0.0_dp         !< offset of the initial drag stress, model unit
-      real(dp) :: shift = 0.0_dp       !< s, the stress channel lags the strain channel
-      !> -, cyclic softening: drag in the flow law D*(1 - soften*(1 - exp(-soften_rate*p))),
-      !> saturating at the share soften (negative: hardening)
-      real(dp) :: soften = 0.0_dp
-      real(dp) :: soften_rate = 0.0_dp !< -, its rate: 1/(accumulated inelastic strain to 63 %)
-      real(dp) :: h3 = 0.0_dp          !< model unit, modulus of the second back stress
-      real(dp) :: gamma3 = 0.0_dp      !< -, its dynamic recovery: dR2 = H3 deps_in - gamma3 R2 dp
-      !> 1/s, extensometer drift: the measured strain is the specimen's plus drift*(t - t0), t0
-      !> the test's start (a strain-controlled specimen sees the command less the drift)
-      real(dp) :: drift = 0.0_dp
-   end type test_effects
 
    !> One catalogue entry
    type :: effect_info
@@ -201,19 +179,13 @@ contains
       n = model%n_uniaxial() + 2
    end function extended_size
 
-   !> Start of the extended state: the model's virgin state with, for the Miller model, the
-   !> initial back stress R0 and the drag stress D0*(1 + dD0/D0) + dD0; p = R2 = 0
+   !> Start of the extended state (the model's extended_initial): its virgin state, for the
+   !> Miller model with the initial back stress R0 and the drag D0*(1 + dD0/D0) + dD0; p = R2 = 0
    pure subroutine extended_initial(model, eff, y)
       class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
       real(dp), intent(out) :: y(:)
-      select type (model)
-      type is (miller_model)
-         y = [0.0_dp, eff%r0, model%d0*(1.0_dp + eff%strength) + eff%dd0, 0.0_dp, 0.0_dp]
-      class default
-         y = 0.0_dp
-         call model%uniaxial_initial(y(1:size(y) - 2))
-      end select
+      call model%extended_initial(eff, y)
    end subroutine extended_initial
 
    !> Value of a piecewise-linear control (corners tc, vc) seen through a first-order lag of
@@ -250,12 +222,12 @@ contains
       end do
    end function lag_corners
 
-   !> Rates of the extended state y = (eps_in, R, D, p, R2) at stress sigma: Miller's
-   !> Eqs. 2-4 with the flow driven by sigma - R - R2 and the drag
-   !> D*(1 - soften*(1 - exp(-soften_rate*p))) in the flow law (kept above 1e-3 D);
-   !> dp/dt = |deps_in/dt|; dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. With jac,
-   !> also jac(i, j) = d ydot_i / d y_j, sigma depending on eps_in through dsig_depsin
-   !> (the values are the same bit for bit with and without it).
+   !> Rates of the extended state (the model's states, then p and R2) at stress sigma, as the
+   !> model's extended_rates says: any model's rates driven by sigma - R2, with
+   !> dp/dt = |deps_in/dt| and dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt; the Miller model's
+   !> with its drag softened in the flow law too. With jac, also jac(i, j) = d ydot_i / d y_j,
+   !> sigma depending on eps_in through dsig_depsin (the values are the same bit for bit with
+   !> and without it).
    pure subroutine extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
       class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
@@ -264,100 +236,7 @@ contains
       real(dp), intent(out), contiguous :: ydot(:)
       real(dp), intent(in), optional :: dsig_depsin
       real(dp), intent(out), optional, contiguous :: jac(:, :)
-      select type (model)
-      type is (miller_model)
-         call miller_extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
-      class default
-         call wrapped_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
-      end select
+      call model%extended_rates(eff, sigma, y, ydot, dsig_depsin, jac)
    end subroutine extended_rates
 
-   !> Any model's rates wrapped: its states y(1:m) driven by sigma - R2 (its rates depend on
-   !> eps_in only through sigma), then
-   !> dp/dt = |deps_in/dt| and dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. The Miller-specific
-   !> parts of the effects (softening of the drag, R0 and the drag offsets) do not apply.
-   pure subroutine wrapped_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
-      class(model_type), intent(in) :: model
-      type(test_effects), intent(in) :: eff
-      real(dp), intent(in) :: sigma
-      real(dp), intent(in), contiguous :: y(:)
-      real(dp), intent(out), contiguous :: ydot(:)
-      real(dp), intent(in), optional :: dsig_depsin
-      real(dp), intent(out), optional, contiguous :: jac(:, :)
-      real(dp) :: sg, dfdy(size(y)), dfds(size(y) - 2), jm(size(y) - 2, size(y) - 2)
-      integer :: m, np, nr
-      m = size(y) - 2
-      np = m + 1
-      nr = m + 2
-      if (present(jac)) then
-         ! The rates depend on eps_in only through sigma: with d sigma/d eps_in = 1 the first
-         ! column of the model's Jacobian is d ydot/d sigma; d sigma_eff/d R2 = -1
-         ! The model's Jacobian in an array of its own: jac(1:m, 1:m) is not contiguous
-         call model%uniaxial_rates(sigma - y(nr), 1.0_dp, y(1:m), ydot(1:m), jm)
-         jac = 0.0_dp
-         jac(1:m, 1:m) = jm
-         dfds = jm(:, 1)
-         jac(1:m, 1) = dfds*dsig_depsin
-         jac(1:m, nr) = -dfds
-      else
-         call model%uniaxial_rates(sigma - y(nr), 0.0_dp, y(1:m), ydot(1:m))
-      end if
-      ydot(np) = abs(ydot(1))
-      ydot(nr) = eff%h3*ydot(1) - eff%gamma3*y(nr)*ydot(np)
-      if (.not. present(jac)) return
-      sg = sign(1.0_dp, ydot(1))
-      dfdy = sg*jac(1, :)
-      jac(np, :) = dfdy
-      jac(nr, :) = eff%h3*jac(1, :) - eff%gamma3*y(nr)*dfdy
-      jac(nr, nr) = jac(nr, nr) - eff%gamma3*ydot(np)
-   end subroutine wrapped_rates
-
-   !> The Miller model's extended rates (below)
-   pure subroutine miller_extended_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
-      type(miller_model), intent(in) :: model
-      type(test_effects), intent(in) :: eff
-      real(dp), intent(in) :: sigma, y(n_extended)
-      real(dp), intent(out) :: ydot(n_extended)
-      real(dp), intent(in), optional :: dsig_depsin
-      real(dp), intent(out), optional :: jac(n_extended, n_extended)
-      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, soft, dsoft, sg, sgr, w, df(n_extended)
-      s = sigma - y(2) - y(5)
-      e = exp(-eff%soften_rate*y(4))
-      soft = 1.0_dp - eff%soften*(1.0_dp - e)
-      dsoft = -eff%soften*eff%soften_rate*e
-      if (soft < 1.0e-3_dp) then
-         soft = 1.0e-3_dp
-         dsoft = 0.0_dp
-      end if
-      d_flow = y(3)*soft
-      if (present(jac)) then
-         call flow_rate(model, abs(s), d_flow, f, f_x, f_d)
-         call back_recovery(model, abs(y(2)), g, g_r)
-         call drag_recovery(model, y(3), h, h_d)
-      else
-         call flow_rate(model, abs(s), d_flow, f)
-         call back_recovery(model, abs(y(2)), g)
-         call drag_recovery(model, y(3), h)
-      end if
-      w = model%c%c2 + abs(y(2)) - model%c%a2/model%c%a1*y(3)**3
-      ydot(1) = sign(f, s)
-      ydot(2) = model%c%h1*ydot(1) - sign(g, y(2))
-      ydot(3) = model%c%h2*f*w - h
-      ydot(4) = f
-      ydot(5) = eff%h3*ydot(1) - eff%gamma3*y(5)*f
-      if (.not. present(jac)) return
-      ! df/dy through x = |s| and the flow's drag D*soft(p)
-      sg = sign(1.0_dp, s)
-      sgr = sign(1.0_dp, y(2))
-      df = [f_x*sg*dsig_depsin, -f_x*sg, f_d*soft, f_d*y(3)*dsoft, -f_x*sg]
-      jac(1, :) = sg*df
-      jac(2, :) = model%c%h1*jac(1, :)
-      jac(2, 2) = jac(2, 2) - g_r
-      jac(3, :) = model%c%h2*w*df
-      jac(3, 2) = jac(3, 2) + model%c%h2*f*sgr
-      jac(3, 3) = jac(3, 3) - 3.0_dp*model%c%h2*f*model%c%a2/model%c%a1*y(3)**2 - h_d
-      jac(4, :) = df
-      jac(5, :) = eff%h3*jac(1, :) - eff%gamma3*y(5)*df
-      jac(5, 5) = jac(5, 5) - eff%gamma3*f
-   end subroutine miller_extended_rates
 end module usharp_effects

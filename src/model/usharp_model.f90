@@ -24,10 +24,11 @@ module usharp_model
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower
+   use usharp_effect_values, only: test_effects
    implicit none
    private
 
-   public :: model_type, constant_index, constant_names, elastic_moduli, model_at
+   public :: model_type, constant_index, constant_names, elastic_moduli, model_at, wrapped_rates
    public :: update_status_ok, update_status_cut, block_scalar, block_strain, block_stress
 
    !> Kinds of block in the FE state layout: a scalar, or a 6-component strain or stress
@@ -123,6 +124,12 @@ module usharp_model
       !> history): the rates follow the temperature, the initial state stays that of the
       !> temperature the model was set up at
       procedure :: set_temperature
+      !> The rates of the model with the effects of usharp diagnose (its states, then the
+      !> accumulated inelastic strain p and a second back stress R2): by default its own rates
+      !> wrapped (wrapped_rates); a model whose states the effects also act on overrides it
+      procedure :: extended_rates => model_extended_rates
+      !> The extended start: by default the model's virgin state, p = R2 = 0
+      procedure :: extended_initial => model_extended_initial
    end type model_type
 
    abstract interface
@@ -345,6 +352,67 @@ contains
       self%temperature = temperature
       call self%setup(error)
    end subroutine set_temperature
+
+   !> Any model's rates with the effects: wrapped_rates
+   pure subroutine model_extended_rates(self, eff, sigma, y, ydot, dsig_depsin, jac)
+      class(model_type), intent(in) :: self
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(in) :: sigma
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: ydot(:)
+      real(dp), intent(in), optional :: dsig_depsin
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
+      call wrapped_rates(self, eff, sigma, y, ydot, dsig_depsin, jac)
+   end subroutine model_extended_rates
+
+   !> The model's virgin state, then p = R2 = 0
+   pure subroutine model_extended_initial(self, eff, y)
+      class(model_type), intent(in) :: self
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(out) :: y(:)
+      y = 0.0_dp
+      call self%uniaxial_initial(y(1:size(y) - 2))
+   end subroutine model_extended_initial
+
+   !> Any model's rates wrapped: its states y(1:m) driven by sigma - R2 (its rates depend on
+   !> eps_in only through sigma), then
+   !> dp/dt = |deps_in/dt| and dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt. The effects on states
+   !> of a model's own (Miller: the softened drag, R0 and the drag offsets) do not apply.
+   pure subroutine wrapped_rates(model, eff, sigma, y, ydot, dsig_depsin, jac)
+      class(model_type), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(in) :: sigma
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: ydot(:)
+      real(dp), intent(in), optional :: dsig_depsin
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
+      real(dp) :: sg, dfdy(size(y)), dfds(size(y) - 2), jm(size(y) - 2, size(y) - 2)
+      integer :: m, np, nr
+      m = size(y) - 2
+      np = m + 1
+      nr = m + 2
+      if (present(jac)) then
+         ! The rates depend on eps_in only through sigma: with d sigma/d eps_in = 1 the first
+         ! column of the model's Jacobian is d ydot/d sigma; d sigma_eff/d R2 = -1
+         ! The model's Jacobian in an array of its own: jac(1:m, 1:m) is not contiguous
+         call model%uniaxial_rates(sigma - y(nr), 1.0_dp, y(1:m), ydot(1:m), jm)
+         jac = 0.0_dp
+         jac(1:m, 1:m) = jm
+         dfds = jm(:, 1)
+         jac(1:m, 1) = dfds*dsig_depsin
+         jac(1:m, nr) = -dfds
+      else
+         call model%uniaxial_rates(sigma - y(nr), 0.0_dp, y(1:m), ydot(1:m))
+      end if
+      ydot(np) = abs(ydot(1))
+      ydot(nr) = eff%h3*ydot(1) - eff%gamma3*y(nr)*ydot(np)
+      if (.not. present(jac)) return
+      sg = sign(1.0_dp, ydot(1))
+      dfdy = sg*jac(1, :)
+      jac(np, :) = dfdy
+      jac(nr, :) = eff%h3*jac(1, :) - eff%gamma3*y(nr)*dfdy
+      jac(nr, nr) = jac(nr, nr) - eff%gamma3*ydot(np)
+   end subroutine wrapped_rates
 
    !> A copy of model at another temperature (K), set up there: what depends on temperature
    !> follows (the Miller model's B*theta and D0)

@@ -16,6 +16,7 @@
 module usharp_model_miller
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
    use usharp_units, only: gas_constant
+   use usharp_effect_values, only: test_effects
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
@@ -120,6 +121,8 @@ module usharp_model_miller
       procedure :: set_option => miller_set_option
       procedure :: derived_values => miller_derived_values
       procedure :: set_temperature => miller_set_temperature
+      procedure :: extended_rates => miller_extended_rates
+      procedure :: extended_initial => miller_extended_initial
    end type miller_model
 
    !> The scalar parts of the rates at equivalent overstress x, back stress r and drag stress D,
@@ -797,4 +800,65 @@ contains
          call fatal_error(error, name//' is not a setting of the miller model')
       end select
    end subroutine miller_set_option
+
+   !> Rates of the extended state y = (eps_in, R, D, p, R2) at stress sigma: Eqs. 2-4 with the
+   !> flow driven by sigma - R - R2 and the drag D*(1 - soften*(1 - exp(-soften_rate*p))) in
+   !> the flow law (kept above 1e-3 D); dp/dt = |deps_in/dt|;
+   !> dR2/dt = H3 deps_in/dt - gamma3 R2 dp/dt
+   pure subroutine miller_extended_rates(self, eff, sigma, y, ydot, dsig_depsin, jac)
+      class(miller_model), intent(in) :: self
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(in) :: sigma
+      real(dp), intent(in), contiguous :: y(:)
+      real(dp), intent(out), contiguous :: ydot(:)
+      real(dp), intent(in), optional :: dsig_depsin
+      real(dp), intent(out), optional, contiguous :: jac(:, :)
+      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, soft, dsoft, sg, sgr, w, df(size(y))
+      s = sigma - y(2) - y(5)
+      e = exp(-eff%soften_rate*y(4))
+      soft = 1.0_dp - eff%soften*(1.0_dp - e)
+      dsoft = -eff%soften*eff%soften_rate*e
+      if (soft < 1.0e-3_dp) then
+         soft = 1.0e-3_dp
+         dsoft = 0.0_dp
+      end if
+      d_flow = y(3)*soft
+      if (present(jac)) then
+         call flow_rate(self, abs(s), d_flow, f, f_x, f_d)
+         call back_recovery(self, abs(y(2)), g, g_r)
+         call drag_recovery(self, y(3), h, h_d)
+      else
+         call flow_rate(self, abs(s), d_flow, f)
+         call back_recovery(self, abs(y(2)), g)
+         call drag_recovery(self, y(3), h)
+      end if
+      w = self%c%c2 + abs(y(2)) - self%c%a2/self%c%a1*y(3)**3
+      ydot(1) = sign(f, s)
+      ydot(2) = self%c%h1*ydot(1) - sign(g, y(2))
+      ydot(3) = self%c%h2*f*w - h
+      ydot(4) = f
+      ydot(5) = eff%h3*ydot(1) - eff%gamma3*y(5)*f
+      if (.not. present(jac)) return
+      ! df/dy through x = |s| and the flow's drag D*soft(p)
+      sg = sign(1.0_dp, s)
+      sgr = sign(1.0_dp, y(2))
+      df = [f_x*sg*dsig_depsin, -f_x*sg, f_d*soft, f_d*y(3)*dsoft, -f_x*sg]
+      jac(1, :) = sg*df
+      jac(2, :) = self%c%h1*jac(1, :)
+      jac(2, 2) = jac(2, 2) - g_r
+      jac(3, :) = self%c%h2*w*df
+      jac(3, 2) = jac(3, 2) + self%c%h2*f*sgr
+      jac(3, 3) = jac(3, 3) - 3.0_dp*self%c%h2*f*self%c%a2/self%c%a1*y(3)**2 - h_d
+      jac(4, :) = df
+      jac(5, :) = eff%h3*jac(1, :) - eff%gamma3*y(5)*df
+      jac(5, 5) = jac(5, 5) - eff%gamma3*f
+   end subroutine miller_extended_rates
+
+   !> The extended start: R0 = eff%r0, the drag D0*(1 + strength) + dD0; p = R2 = 0
+   pure subroutine miller_extended_initial(self, eff, y)
+      class(miller_model), intent(in) :: self
+      type(test_effects), intent(in) :: eff
+      real(dp), intent(out) :: y(:)
+      y = [0.0_dp, eff%r0, self%d0*(1.0_dp + eff%strength) + eff%dd0, 0.0_dp, 0.0_dp]
+   end subroutine miller_extended_initial
 end module usharp_model_miller
