@@ -248,6 +248,11 @@ contains
       if (allocated(error)) return
       call read_config(deck('tmf-cvode', 'tmf_temperatures = 811.15, 922.15', &
                             "&solver integrator = 'cvode' /"), cfg, e)
+      call check_message(error, e, "&solver: integrator = 'cvode': &test 'c' has a temperature cycle")
+      if (allocated(error)) return
+      ! The simulation refuses it too, for a configuration made without the reader
+      call read_config(deck('tmf-cvode-2', 'tmf_temperatures = 811.15, 922.15'), cfg, e)
+      cfg%solver%integrator = 'cvode'
       if (.not. allocated(e)) call simulate_test(cfg%model, cfg%solver, cfg%tests(1), res, e)
       call check_message(error, e, "needs integrator = 'rodas4'")
    end subroutine test_input

@@ -56,7 +56,8 @@ contains
       call check_test_temperatures(path, cfg, error)
    end subroutine read_config
 
-   !> A test at a temperature of its own: within the model's range (as &model's), and the
+   !> A test at a temperature of its own (or under a temperature cycle, which needs RODAS4):
+   !> within the model's range (as &model's), and the
    !> model set up there
    subroutine check_test_temperatures(path, cfg, error)
       character(len=*), intent(in) :: path
@@ -67,6 +68,12 @@ contains
       integer :: i, j
       do i = 1, size(cfg%tests)
          ! A temperature cycle is checked at its two ends
+         if (allocated(cfg%tests(i)%hist%temp) .and. cfg%solver%integrator /= 'rodas4') then
+            call fatal_error(error, path//": &solver: integrator = '"//trim(cfg%solver%integrator)// &
+               "': &test '"//cfg%tests(i)%name//"' has a temperature cycle (tmf_temperatures), "// &
+               "which needs 'rodas4'")
+            return
+         end if
          if (allocated(cfg%tests(i)%hist%temp)) then
             temps = [minval(cfg%tests(i)%hist%temp), maxval(cfg%tests(i)%hist%temp)]
          else
