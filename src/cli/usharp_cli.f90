@@ -69,7 +69,8 @@ contains
          if (cmd%selfcheck) then
             call selfcheck_command(cmd%input, cmd%out_dir, summary, error, journal_mode(cmd))
          else
-            call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, stage)
+            call diagnose_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, stage, &
+                                  journal_mode(cmd))
          end if
       case ('run')
          call run_command(cmd%input, cmd%out_dir, cmd%constants, cmd%resume, summary, error, progress, &

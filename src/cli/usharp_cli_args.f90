@@ -30,7 +30,8 @@ module usharp_cli_args
       character(len=:), allocatable :: constants
       !> -t, --test: `simulate` only this test
       character(len=:), allocatable :: only_test
-      !> --resume: `run`, `design`, `diagnose --selfcheck` continue a stopped run from its journal
+      !> --resume: `run`, `design`, `diagnose` (and its --selfcheck) continue a stopped run from its
+      !> journal
       logical :: resume = .false.
       !> --force: start again over an earlier run's journal
       logical :: force = .false.
@@ -172,12 +173,6 @@ contains
          i = i + 1
       end do
 
-      if ((cmd%resume .or. cmd%force .or. cmd%auto_resume) .and. cmd%name == 'diagnose' .and. &
-          .not. cmd%selfcheck) then
-         call fatal_error(error, '--resume, --force and --auto-resume go with diagnose --selfcheck', &
-                          stat_usage)
-         return
-      end if
       if (cmd%resume .and. cmd%force) then
          call fatal_error(error, '--resume continues the journal, --force overwrites it: give one', &
                           stat_usage)

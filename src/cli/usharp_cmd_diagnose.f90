@@ -5,7 +5,8 @@ module usharp_cmd_diagnose
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, write_report, &
-                              diagnose_options_of, diagnose_progress
+                              diagnose_options_of, diagnose_progress, diagnose_journal
+   use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
    use usharp_error, only: fatal_error, stat_input
@@ -21,15 +22,21 @@ contains
 
    !> Diagnose path's tests: the baseline fitted to the fit tests from the deck's constants
    !> or those of constants_file (a best.nml, only a start); progress, when given, is told of
-   !> each step (app passes it on a terminal without --quiet)
-   subroutine diagnose_command(path, out_dir, constants_file, lines, error, progress)
+   !> each step (app passes it on a terminal without --quiet). Its optimisations are kept in
+   !> <out_dir>/diagnose/diagnose.journal (mode: see run_tasks), so that a diagnosis stopped
+   !> by a signal continues with --resume; the per-specimen mode runs whole.
+   subroutine diagnose_command(path, out_dir, constants_file, lines, error, progress, mode)
       character(len=*), intent(in) :: path, out_dir, constants_file
       character(len=200), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       procedure(diagnose_progress), optional :: progress
+      character(len=*), intent(in), optional :: mode
       type(run_config) :: cfg
       type(diagnose_options) :: opts
       type(diagnose_result) :: res
+      type(diagnose_journal) :: journal
+      type(error_type), allocatable :: e
+      character(len=:), allocatable :: dir
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
       call diagnose_options_of(cfg, opts, error)
@@ -42,9 +49,22 @@ contains
       ! Under MPI every rank runs the diagnosis, the starts of its global stages spread over
       ! them; rank 0 writes the report
       opts%over_ranks = n_ranks() > 1
-      call diagnose_run(cfg, opts, res, error, progress=progress)
+      dir = join_path(cfg%out_dir, 'diagnose')
+      call make_dir(dir, error)
+      if (allocated(error)) return
+      if (present(mode)) then
+         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file), &
+                           mode, error)
+      else
+         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file), &
+                           'start', error)
+      end if
+      if (allocated(error)) return
+      call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
+      call journal%close(e)
+      if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
       if (allocated(error) .or. .not. is_root()) return
-      call write_report(join_path(cfg%out_dir, 'diagnose'), res, opts, lines, error)
+      call write_report(dir, res, opts, lines, error)
    end subroutine diagnose_command
 
    !> Per-specimen mode: each named specimen (or every test) against its replicates;

@@ -43,12 +43,13 @@ module usharp_diagnose
    use usharp_diagnose_separate, only: separate
    use usharp_diagnose_report, only: diagnose_report, write_report
    use usharp_diagnose_profile, only: profile_leading
+   use usharp_diagnose_journal, only: diagnose_journal
    implicit none
    private
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
    public :: write_report, gn_decrease, diagnose_options_of, held_quiet
-   public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading
+   public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict
    integer, parameter :: deciding_lhs = 2
@@ -56,16 +57,19 @@ module usharp_diagnose
 contains
 
    !> Diagnose the fit of cfg's tests from cfg's constants (a start: the baseline is fitted to
-   !> the fit tests); experiments: the data given directly; progress: told of each step
-   subroutine diagnose_run(cfg, opts, res, error, experiments, progress)
+   !> the fit tests); experiments: the data given directly; progress: told of each step;
+   !> journal: an open journal its units are kept in and replayed from (every rank runs the
+   !> diagnosis with it; a stop signal ends it with an error naming --resume)
+   subroutine diagnose_run(cfg, opts, res, error, experiments, progress, journal)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(diagnose_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
       procedure(diagnose_progress), optional :: progress
+      type(diagnose_journal), intent(inout), target, optional :: journal
       type(diagnose_context) :: ctx
-      call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress)
+      call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal)
       if (allocated(error)) return
       call screen(ctx, res, error)
       if (allocated(error)) return
@@ -139,7 +143,7 @@ contains
    !> The first step of a diagnosis: the baseline fitted to the fit tests alone (the held-out
    !> tests' data are not read before it is fitted: only their prediction follows), its
    !> regions and floors; ctx is what the later steps work on
-   subroutine diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress)
+   subroutine diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(diagnose_context), intent(out) :: ctx
@@ -147,6 +151,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
       procedure(diagnose_progress), optional :: progress
+      !> See diagnose_run
+      type(diagnose_journal), intent(inout), target, optional :: journal
       integer(int64) :: clock0
       call system_clock(clock0)
       call step_done(res, '')
@@ -156,6 +162,7 @@ contains
       ! after prepare, which makes ctx anew
       ctx%clock0 = clock0
       if (present(progress)) ctx%progress => progress
+      if (present(journal)) ctx%journal => journal
       call tell(ctx, 'baseline fit', res%nevals)
       call fit_baseline(ctx, res, error)
       if (allocated(error)) return

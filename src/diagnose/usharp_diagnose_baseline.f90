@@ -10,11 +10,11 @@ module usharp_diagnose_baseline
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se, &
                              inelastic_points, serration_in_runs, serration_stat, serration_p
-   use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_options, only: gap_z
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
-   use usharp_diagnose_numerics, only: set_constants_at, best_of_starts, global_points, at_bound, &
+   use usharp_diagnose_units, only: lm_unit, starts_unit
+   use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, &
                                        jacobian, pseudo_inverse
    implicit none
    private
@@ -35,17 +35,18 @@ contains
       real(dp), allocatable :: lo(:), hi(:)
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
       call base%bounds(lo, hi)
-      call levenberg_marquardt(base, min(max(base%start(), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, 100, &
-                               ctx%opts%max_evals, opt, error)
+      call lm_unit(ctx%journal, base, min(max(base%start(), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, 100, &
+                   ctx%opts%max_evals, opt, error)
       if (allocated(error)) return
       res%nevals = res%nevals + opt%nevals
       res%baseline_starts = 1 + max(ctx%prob%cfg%fit%multistart, 0)
       if (ctx%prob%cfg%fit%multistart > 0) then
          call step_done(res, 'baseline from the given constants')
          call tell(ctx, 'baseline fit from '//str(res%baseline_starts)//' starts', res%nevals)
-         call best_of_starts(base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
-                             lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
-                             over_ranks=ctx%opts%over_ranks)
+         call starts_unit(ctx%journal, base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
+                          lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, error, &
+                          over_ranks=ctx%opts%over_ranks)
+         if (allocated(error)) return
       end if
       ! Global starts come later, only when the local refits leave a structured gap
       allocate (res%x_global(size(ctx%prob%idx), 0))

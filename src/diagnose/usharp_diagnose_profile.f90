@@ -10,7 +10,8 @@ module usharp_diagnose_profile
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_optimiser, only: least_squares_type, optimum_type
-   use usharp_levenberg, only: levenberg_marquardt
+   use usharp_diagnose_journal, only: diagnose_journal
+   use usharp_diagnose_units, only: lm_unit
    use usharp_identify, only: robust_covariance
    use usharp_effect_problem, only: effect_problem
    use usharp_diagnose_types, only: diagnose_context, diagnose_result
@@ -71,7 +72,7 @@ contains
    !> [lo, hi]: the constants (every other coordinate) refitted by Levenberg-Marquardt
    !> (difference step h, at most max_evals evaluations each) at each trial value.
    subroutine profile_interval(obj, x_hat, f_hat, j, lo, hi, h, se, scale, log_scale, max_evals, &
-                               pr, error)
+                               pr, error, journal)
       class(least_squares_type), intent(in) :: obj
       real(dp), intent(in) :: x_hat(:), f_hat
       integer, intent(in) :: j
@@ -86,10 +87,15 @@ contains
       integer, intent(in) :: max_evals
       type(profile_result), intent(out) :: pr
       type(error_type), allocatable, intent(out) :: error
+      !> The diagnosis's journal, whose units its refits are
+      type(diagnose_journal), pointer, intent(in), optional :: journal
+      type(diagnose_journal), pointer :: jr
       type(held_problem) :: hp
       integer :: side
       real(dp) :: ends(2)
       logical :: open(2)
+      jr => null()
+      if (present(journal)) jr => journal
       allocate (hp%base, source=obj)
       hp%j = j
       pr%threshold = chi2_95*scale
@@ -137,7 +143,7 @@ contains
             if (at_bound) un = ubound
             hp%value = from_u(un)
             if (size(xr) > 0) then
-               call levenberg_marquardt(hp, xr, lor, hir, h, 1.0e-10_dp, 60, max_evals, opt, error)
+               call lm_unit(jr, hp, xr, lor, hir, h, 1.0e-10_dp, 60, max_evals, opt, error)
                if (allocated(error)) return
             else
                opt%x = xr
@@ -221,7 +227,8 @@ contains
             scale = e%f_after/max(size(r) - size(e%x_fit), 1)
             if (naive(j, j) > 0.0_dp .and. cov(j, j) > 0.0_dp) scale = cov(j, j)/naive(j, j)
             call profile_interval(ep, e%x_fit, e%f_after, j, lo, hi, ctx%h, se, scale, &
-                                  nonneg(g) .and. e%x_fit(j) > 0.0_dp, profile_evals, pr, error)
+                                  nonneg(g) .and. e%x_fit(j) > 0.0_dp, profile_evals, pr, error, &
+                                  ctx%journal)
             if (allocated(error)) return
             res%nevals = res%nevals + pr%nevals
             e%p_lo(g) = pr%lo*pscale(g)

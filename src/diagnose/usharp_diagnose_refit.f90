@@ -10,15 +10,15 @@ module usharp_diagnose_refit
    use usharp_objective, only: fit_problem
    use usharp_effects, only: param_per_test
    use usharp_effect_problem, only: effect_problem, new_effect_problem
-   use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_identify, only: robust_covariance
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most
-   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, best_of_starts, global_points, &
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, &
                                        free_params, effect_fit, at_bound, copy_constants, softening_reached
    use usharp_diagnose_baseline, only: per_test, all_regions
+   use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
    private
 
@@ -81,8 +81,9 @@ contains
       call base%bounds(lo, hi)
       opt%f = res%f0
       opt%x = log10(res%c)
-      call best_of_starts(base, res%x_global, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
-                          over_ranks=ctx%opts%over_ranks)
+      call starts_unit(ctx%journal, base, res%x_global, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
+                       error, over_ranks=ctx%opts%over_ranks)
+      if (allocated(error)) return
       res%f0_global = opt%f
       counted = sum(res%effects%nevals)
       do j = 1, size(res%effects)
@@ -194,19 +195,20 @@ contains
       if (e%refitted .and. present(starts)) then
          ! Its own end point, continued (on real data 100 LM steps can stop short: Alloy
          ! 617's initial refit went on from 278 to 198), stands unless one is lower
-         call levenberg_marquardt(ep, e%x_fit, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, &
-                                  opt, error)
+         call lm_unit(ctx%journal, ep, e%x_fit, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, &
+                      opt, error)
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
          allocate (fs(size(starts, 2)))
-         call best_of_starts(ep, with_params(e, starts), lo, hi, ctx%h, ctx%opts%max_evals, opt, &
-                             e%nevals, fs, ctx%opts%over_ranks)
+         call starts_unit(ctx%journal, ep, with_params(e, starts), lo, hi, ctx%h, ctx%opts%max_evals, opt, &
+                          e%nevals, error, fs, ctx%opts%over_ranks)
+         if (allocated(error)) return
          e%nstarts = e%nstarts + size(fs)
          e%f_lo = min(e%f_lo, opt%f)
          e%f_hi = max(e%f_hi, maxval(fs, fs < huge(1.0_dp)), opt%f)
          moved = opt%f < (1.0_dp - 1.0e-6_dp)*e%f_after
       else
-         call levenberg_marquardt(ep, e%x, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)
+         call lm_unit(ctx%journal, ep, e%x, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)
          if (allocated(error)) return
          e%nevals = opt%nevals
          e%nstarts = 1
@@ -214,11 +216,14 @@ contains
          e%f_hi = opt%f
          ! Also from the next screening end points and the global starts; the lowest
          ! objective is kept
-         if (allocated(e%x_alt)) call best_of_starts(ep, e%x_alt(:, :min(ctx%opts%refit_starts - 1, &
-            size(e%x_alt, 2))), lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals, &
-            over_ranks=ctx%opts%over_ranks)
-         call best_of_starts(ep, with_params(e, res%x_global), lo, hi, ctx%h, ctx%opts%max_evals, &
-                             opt, e%nevals, over_ranks=ctx%opts%over_ranks)
+         if (allocated(e%x_alt)) then
+            call starts_unit(ctx%journal, ep, e%x_alt(:, :min(ctx%opts%refit_starts - 1, size(e%x_alt, 2))), &
+                             lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals, error, &
+                             over_ranks=ctx%opts%over_ranks)
+            if (allocated(error)) return
+         end if
+         call starts_unit(ctx%journal, ep, with_params(e, res%x_global), lo, hi, ctx%h, ctx%opts%max_evals, &
+                          opt, e%nevals, error, over_ranks=ctx%opts%over_ranks)
       end if
    end subroutine fit_constants
 
@@ -367,7 +372,7 @@ contains
       x0 = eh%start()
       if (size(x0) > 0) then
          call eh%bounds(lo, hi)
-         call levenberg_marquardt(eh, x0, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)
+         call lm_unit(ctx%journal, eh, x0, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
          x0 = opt%x

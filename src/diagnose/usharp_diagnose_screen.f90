@@ -7,10 +7,11 @@ module usharp_diagnose_screen
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_effects, only: effect_info, param_global
    use usharp_effect_problem, only: effect_problem, new_effect_problem
-   use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_sort, only: order_of
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell
+   use usharp_diagnose_units, only: lm_unit
+   use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
                                        softening_starts, soften_rate0
    implicit none
@@ -115,19 +116,20 @@ contains
          ! The zero start is where the screening's Jacobian was taken: its first step uses it
          if (j == 1 .and. complete .and. size(xs, 1) == size(x) .and. size(je, 2) == size(x)) then
             if (all(min(max(xs(:, 1), lo), hi) == x)) then
-               call levenberg_marquardt(ep, x, lo, hi, ctx%h, 1.0e-9_dp, 3, ctx%opts%max_evals, opt, &
-                                        error, jac0=je)
+               call lm_unit(ctx%journal, ep, x, lo, hi, ctx%h, 1.0e-9_dp, 3, ctx%opts%max_evals, opt, &
+                            error, jac0=je)
             else
-               call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
-                                        merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+               call lm_unit(ctx%journal, ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
+                            merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
             end if
          else
-            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
-                                     merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+            call lm_unit(ctx%journal, ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
+                         merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
          end if
          if (allocated(error)) then
-            ! A start where the model fails is passed over; the zero start must work
-            if (j == 1) return
+            ! A start where the model fails is passed over; the zero start must work (and a
+            ! stop signal ends the diagnosis)
+            if (j == 1 .or. unit_stopped(ctx%journal)) return
             deallocate (error)
             cycle
          end if

@@ -7,6 +7,7 @@ module usharp_diagnose_types
    use usharp_effects, only: test_effects, effect_info
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: diagnose_options
+   use usharp_diagnose_journal, only: diagnose_journal
    implicit none
    private
 
@@ -63,6 +64,8 @@ module usharp_diagnose_types
       !> Told of each step (null: nobody listens)
       procedure(diagnose_progress), pointer, nopass :: progress => null()
       integer(int64) :: clock0 = 0           !< system clock at the start
+      !> The journal its units are kept in and replayed from (null: none)
+      type(diagnose_journal), pointer :: journal => null()
    end type diagnose_context
 
    !> One effect: screening, and the refit when it led

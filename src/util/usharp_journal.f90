@@ -1,0 +1,182 @@
+!> The journal of a long computation made of units done in a fixed order (the tasks of a task
+!> farm, the optimisations of a diagnosis): each unit's result as text, so that a stopped run
+!> continues (--resume) from the units done. Every rank reads it, rank 0 alone writes.
+!>
+!> The file: a fingerprint line (the input, data files included), then per unit a line
+!> `task <k> <n>`, the n lines of its result and a line `end <k>`; a block cut short by a
+!> kill is dropped when it is read, and the units are numbered 1, 2, ... without a gap.
+module usharp_journal
+   use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
+   use usharp_strings, only: str
+   use usharp_filesys, only: raw_file, file_exists, read_line
+   use usharp_mpi, only: is_root, any_rank, parallel_sync
+   implicit none
+   private
+
+   public :: task_text, journal_file
+
+   !> One unit's result
+   type :: task_text
+      character(len=:), allocatable :: s
+   end type task_text
+
+   !> An open journal: the units read back from it (done) and the file rank 0 appends to
+   type :: journal_file
+      !> The results found on opening it, in order (none when started anew)
+      type(task_text), allocatable :: done(:)
+      character(len=:), allocatable :: path
+      type(raw_file), private :: out
+      logical, private :: is_open = .false.
+   contains
+      procedure :: open => journal_open
+      procedure :: put => journal_put
+      procedure :: close => journal_close
+   end type journal_file
+
+   character(len=*), parameter :: fingerprint_tag = '# fingerprint '
+
+contains
+
+   !> Open the journal at path for a run whose input has this fingerprint. mode: 'start' (a
+   !> journal with results is an error), 'force' (start again over it), 'resume' (continue
+   !> it; it must exist and have the same fingerprint) or 'auto' (resume when it holds
+   !> results, else start). Collective over the ranks. most: the units the run has at most.
+   subroutine journal_open(self, path, fingerprint, mode, error, most)
+      class(journal_file), intent(inout) :: self
+      character(len=*), intent(in) :: path, fingerprint, mode
+      type(error_type), allocatable, intent(out) :: error
+      integer, intent(in), optional :: most
+      character(len=:), allocatable :: old_fingerprint
+      logical :: resuming
+      integer :: k
+      self%path = path
+      allocate (self%done(0))
+      resuming = mode == 'resume'
+      if (mode == 'auto') resuming = has_results(path)
+      if (resuming) then
+         call read_journal(path, self%done, old_fingerprint, error)
+         if (.not. allocated(error) .and. old_fingerprint /= fingerprint) &
+            call fatal_error(error, path//': cannot resume: the input changed since the '// &
+               'journal was written (start again with --force)', stat_input)
+         if (.not. allocated(error) .and. present(most)) then
+            if (size(self%done) > most) call fatal_error(error, path//': cannot resume: it '// &
+               'holds more tasks than this run has', stat_input)
+         end if
+         if (allocated(error)) return
+      else if (mode /= 'force' .and. has_results(path)) then
+         call fatal_error(error, path//': holds the journal of an earlier run; continue it '// &
+            'with --resume, or start again and overwrite it with --force', stat_usage)
+         return
+      end if
+      ! Every rank has read the journal before rank 0 writes it again
+      call parallel_sync()
+      if (is_root()) then
+         call self%out%create(path, error)
+         if (.not. allocated(error)) call self%out%put(fingerprint_tag//fingerprint//new_line('a'), error)
+         do k = 1, size(self%done)
+            if (.not. allocated(error)) call self%out%put(block(k, self%done(k)%s), error)
+         end do
+      end if
+      self%is_open = .true.
+      if (any_rank(allocated(error))) then
+         if (.not. allocated(error)) call fatal_error(error, path//': rank 0 cannot write it')
+         call self%close()
+      end if
+   end subroutine journal_open
+
+   !> Unit k's result (lines each ended by new_line('a')) appended, by rank 0
+   subroutine journal_put(self, k, text, error)
+      class(journal_file), intent(inout) :: self
+      integer, intent(in) :: k
+      character(len=*), intent(in) :: text
+      type(error_type), allocatable, intent(out) :: error
+      if (self%is_open .and. is_root()) call self%out%put(block(k, text), error)
+   end subroutine journal_put
+
+   !> Close the journal (rank 0's file); error: the close failed
+   subroutine journal_close(self, error)
+      class(journal_file), intent(inout) :: self
+      type(error_type), allocatable, intent(out), optional :: error
+      type(error_type), allocatable :: e
+      if (.not. self%is_open) return
+      self%is_open = .false.
+      if (.not. is_root()) return
+      call self%out%close(e)
+      if (present(error) .and. allocated(e)) call move_alloc(e, error)
+   end subroutine journal_close
+
+   !> Unit k's block in the journal
+   pure function block(k, text) result(b)
+      integer, intent(in) :: k
+      character(len=*), intent(in) :: text
+      character(len=:), allocatable :: b
+      b = 'task '//str(k)//' '//str(count_lines(text))//new_line('a')//text//'end '//str(k)// &
+          new_line('a')
+   end function block
+
+   pure integer function count_lines(text) result(n)
+      character(len=*), intent(in) :: text
+      integer :: i
+      n = 0
+      do i = 1, len(text)
+         if (text(i:i) == new_line('a')) n = n + 1
+      end do
+   end function count_lines
+
+   !> Whether a journal holds a result
+   logical function has_results(path)
+      character(len=*), intent(in) :: path
+      type(task_text), allocatable :: done(:)
+      character(len=:), allocatable :: fp
+      type(error_type), allocatable :: error
+      has_results = .false.
+      if (.not. file_exists(path)) return
+      call read_journal(path, done, fp, error)
+      has_results = .not. allocated(error) .and. size(done) > 0
+   end function has_results
+
+   !> The fingerprint and the whole results, in order, of a journal
+   subroutine read_journal(path, done, fingerprint, error)
+      character(len=*), intent(in) :: path
+      type(task_text), allocatable, intent(out) :: done(:)
+      character(len=:), allocatable, intent(out) :: fingerprint
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: line, text
+      integer :: unit, ios, k, n, j
+      character(len=8) :: word
+      allocate (done(0))
+      fingerprint = ''
+      if (.not. file_exists(path)) then
+         call fatal_error(error, path//': no journal to resume from (start without --resume)', stat_input)
+         return
+      end if
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) then
+         call fatal_error(error, path//': cannot read it', stat_input)
+         return
+      end if
+      do
+         call read_line(unit, line, ios)
+         if (ios /= 0) exit
+         if (index(line, fingerprint_tag) == 1) then
+            fingerprint = line(len(fingerprint_tag) + 1:)
+            cycle
+         end if
+         read (line, *, iostat=ios) word, k, n
+         if (ios /= 0 .or. word /= 'task' .or. k /= size(done) + 1) exit
+         text = ''
+         do j = 1, n
+            call read_line(unit, line, ios)
+            if (ios /= 0) exit
+            text = text//line//new_line('a')
+         end do
+         ! A block cut short by a kill is not a result
+         if (ios /= 0) exit
+         call read_line(unit, line, ios)
+         if (ios /= 0 .or. line /= 'end '//str(k)) exit
+         done = [done, task_text(text)]
+      end do
+      close (unit)
+   end subroutine read_journal
+
+end module usharp_journal
