@@ -2,13 +2,15 @@
 # Run one usharp job so that a scheduler may stop it and start it again: the command runs with
 # --auto-resume (a fresh start, or the continuation of the journal in its output folder), a
 # TERM sent to this script (SLURM's --signal=B:TERM@..., PBS's qdel, a wall-time limit) is
-# passed on to usharp, which ends after the evaluation under way and notes it in fit.log, and
+# passed on to usharp, which ends after the evaluation under way (a fit: noted in fit.log; a
+# design, self-check or diagnosis: after the task or optimisation under way), and
 # the job is then put back in the queue when the scheduler can (USHARP_REQUEUE).
 #
 # usage: usharp-job.sh INPUT.nml [OUT_DIR]
 # environment:
 #   USHARP          the usharp executable (default: usharp on PATH)
-#   USHARP_COMMAND  the command: run (default), design, or 'diagnose --selfcheck'
+#   USHARP_COMMAND  the command: run (default), design, diagnose or 'diagnose --selfcheck'
+#                   (each keeps a journal in its output folder and resumes from it)
 #   USHARP_THREADS  OpenMP threads per rank (default: the allocation's CPUs per task, else all cores)
 #   USHARP_LAUNCHER the MPI launcher and its options for a run over ranks (e.g. 'srun' or
 #                   'mpirun -np 16'; default: none, one process)

@@ -125,7 +125,9 @@ contains
             'noise level of the data, screens the catalogue of unmodelled effects, refits the'//nl// &
             'leading ones (AIC/BIC, 95 % intervals) and predicts the held-out tests with them.'//nl// &
             'Writes <out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv,'//nl// &
-            'steps.csv (simulations and time of each step) and plots. With --selfcheck:'//nl// &
+            'steps.csv (simulations and time of each step), plots and diagnose.journal'//nl// &
+            '(each optimisation''s outcome: a diagnosis stopped by SIGTERM continues with'//nl// &
+            '--resume to the same report; not the per-specimen mode). With --selfcheck:'//nl// &
             'injects each effect into synthetic data (the built-in matrix, or the given'//nl// &
             'file), diagnoses it and writes <out_dir>/selfcheck.md and selfcheck.journal'//nl// &
             '(every repetition; under mpirun or srun spread over the ranks).'//nl// &
@@ -133,7 +135,7 @@ contains
             'options:'//nl// &
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
             '      --selfcheck       the self-check on synthetic data'//nl// &
-            '  (with --selfcheck)'//nl//journal_options// &
+            journal_options// &
             common_options
       case ('deck')
          text = 'usage: usharp deck [options] [<test>] <input.nml>'//nl//nl// &
