@@ -29,7 +29,10 @@ contains
          new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume), &
          new_unittest('mpi-selfcheck-same-on-1-and-2-ranks', test_mpi_selfcheck), &
          new_unittest('mpi-design-same-on-1-and-2-ranks', test_mpi_design), &
-         new_unittest('mpi-diagnose-same-on-1-and-2-ranks', test_mpi_diagnose)]
+         new_unittest('mpi-diagnose-same-on-1-and-2-ranks', test_mpi_diagnose), &
+         new_unittest('diagnose-stopped-by-term-resumes-to-same-report', test_diagnose_resume), &
+         new_unittest('diagnose-resume-refused-after-input-changed', test_diagnose_changed), &
+         new_unittest('mpi-diagnose-2-ranks-stopped-resume-on-1-rank', test_mpi_diagnose_resume)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -280,25 +283,196 @@ contains
    end subroutine test_mpi_design
 
    !> The thesis diagnosis (decks/thesis-diagnose.nml) with a baseline from 2 Latin-hypercube
-   !> starts besides the deck's constants, on 1 and 2 ranks: the same report and tables
-   subroutine test_mpi_diagnose(error)
-      type(error_type), allocatable, intent(out) :: error
+   !> starts besides the deck's constants (so that its baseline's starts are spread over the
+   !> ranks), written as scratch_dir/name; data: the folder of its data files
+   function diagnose_deck(name, data) result(deck)
+      character(len=*), intent(in) :: name, data
       character(len=:), allocatable :: deck
-      character(len=4096) :: cwd
-      call get_environment_variable('PWD', cwd)
-      deck = write_text('mpi-diagnose.nml', [character(len=4200) :: model_groups, &
+      deck = write_text(name, [character(len=4200) :: model_groups, &
          "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = 2 /", &
          "&diagnose holdout = 'ratchet' /", &
          "&test name = 'lcf', history = 'thesis_lcf', dt_out = 0.5, amp_first = 0.0005, "// &
          "amp_last = 0.005, npeaks = 12, quarter_time = 10.0, weighting = 'threshold', sig = 14.0, "// &
-         "data_file = '"//trim(cwd)//"/data/thesis-noise1/lcf.sim.txt' /", &
+         "data_file = '"//data//"/lcf.sim.txt' /", &
          "&test name = 'relax', history = 'relaxation', dt_out = 1.0, weighting = 'relaxation', "// &
          "levels = 0.00075, 0.001, ramp_time = 1.0, holds = 600.0, 600.0, "// &
-         "data_file = '"//trim(cwd)//"/data/thesis-noise1/relax.sim.txt' /", &
+         "data_file = '"//data//"/relax.sim.txt' /", &
          "&test name = 'ratchet', history = 'ratchet', dt_out = 1.0, up = 0.0005, down = 0.00025, "// &
-         "repeats = 15, seg_time = 40.0, data_file = '"//trim(cwd)//"/data/thesis-noise1/ratchet.sim.txt' /"])
-      call check_same_on_ranks(error, 'mpi-diagnose', 'diagnose '//deck, &
-         [character(len=30) :: 'diagnose/report.md', 'diagnose/effects.csv', 'diagnose/regions.csv', &
-         'diagnose/residuals.csv'])
+         "repeats = 15, seg_time = 40.0, data_file = '"//data//"/ratchet.sim.txt' /"])
+   end function diagnose_deck
+
+   !> The data folder of the thesis diagnosis (absolute)
+   function thesis_data() result(data)
+      character(len=:), allocatable :: data
+      character(len=4096) :: cwd
+      call get_environment_variable('PWD', cwd)
+      data = trim(cwd)//'/data/thesis-noise1'
+   end function thesis_data
+
+   !> The diagnosis of diagnose_deck on 1 and 2 ranks: the same report, tables and journal
+   subroutine test_mpi_diagnose(error)
+      type(error_type), allocatable, intent(out) :: error
+      call check_same_on_ranks(error, 'mpi-diagnose', 'diagnose '//diagnose_deck('mpi-diagnose.nml', &
+         thesis_data()), [character(len=30) :: 'diagnose/report.md', 'diagnose/effects.csv', &
+         'diagnose/regions.csv', 'diagnose/residuals.csv', 'diagnose/diagnose.journal'])
    end subroutine test_mpi_diagnose
+
+   !> The files a diagnosis writes in folders a and b are the same (steps.csv without its
+   !> times)
+   subroutine check_same_diagnosis(error, a, b)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in) :: a, b
+      character(len=*), parameter :: files(*) = [character(len=16) :: 'report.md', 'effects.csv', &
+         'regions.csv', 'residuals.csv', 'diagnose.journal']
+      integer :: k, stat
+      do k = 1, size(files)
+         call check(error, same_file(a//'/diagnose/'//trim(files(k)), b//'/diagnose/'//trim(files(k))), &
+                    trim(files(k))//' differs from the uninterrupted diagnosis ('//a//', '//b//')')
+         if (allocated(error)) return
+      end do
+      call execute_command_line('bash -c "cmp -s <(cut -d, -f1,2 '//a//'/diagnose/steps.csv) '// &
+                                '<(cut -d, -f1,2 '//b//'/diagnose/steps.csv)"', exitstat=stat)
+      call check(error, stat == 0, 'the simulations of each step differ (steps.csv)')
+   end subroutine check_same_diagnosis
+
+   !> Start `command` (the diagnosis into folder b) in the background, wait until its journal
+   !> holds `units` whole units (at most 120 s), send TERM; its stderr goes to b.log, its exit
+   !> status to b.rc
+   subroutine stop_diagnosis(command, b, units)
+      character(len=*), intent(in) :: command, b
+      integer, intent(in) :: units
+      character(len=:), allocatable :: script
+      script = command//' > /dev/null 2> '//b//'.log & p=$!; n=0; '// &
+         'while [ "$(cat '//b//'/diagnose/diagnose.journal 2>/dev/null | grep -c ^end)" -lt '//str(units)// &
+         ' ] && [ $n -lt 2400 ]; do sleep 0.05; n=$((n+1)); done; kill -TERM $p; wait $p; '// &
+         'echo $? > '//b//'.rc'
+      call execute_command_line('bash -c '''//script//'''')
+   end subroutine stop_diagnosis
+
+   !> The number in a file ('' or unreadable: -1)
+   integer function number_in(path) result(n)
+      character(len=*), intent(in) :: path
+      character(len=:), allocatable :: text
+      integer :: ios
+      n = -1
+      text = read_text(path)
+      read (text, *, iostat=ios) n
+      if (ios /= 0) n = -1
+   end function number_in
+
+   !> A whole diagnosis and the same stopped by TERM after 10 of its units are journaled:
+   !> exit 143 naming --resume, no report; a start without --resume is refused; --resume
+   !> writes the report, tables and journal of the whole one, bit for bit
+   subroutine test_diagnose_resume(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, deck, a, b
+      integer :: stat
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call make_dir(scratch_dir, e)
+      exe = 'OMP_NUM_THREADS=1 '//exe
+      deck = diagnose_deck('diagnose-resume.nml', thesis_data())
+      a = scratch_dir//'/diagnose-whole'
+      b = scratch_dir//'/diagnose-stopped'
+      call execute_command_line('rm -rf '//a//' '//b)
+      call execute_command_line(exe//' diagnose -q -o '//a//' '//deck//' > /dev/null', exitstat=stat)
+      call check(error, stat == 0, 'uninterrupted diagnosis')
+      if (allocated(error)) return
+      call stop_diagnosis(exe//' diagnose -q -o '//b//' '//deck, b, 10)
+      call check(error, number_in(b//'.rc') == 143, 'the diagnosis stopped by TERM must exit 143, not '// &
+                 read_text(b//'.rc')//read_text(b//'.log'))
+      if (allocated(error)) return
+      call check(error, index(read_text(b//'.log'), 'continue with --resume') > 0, &
+                 'no message naming --resume: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      call check(error, len(read_text(b//'/diagnose/report.md')) == 0, 'the stopped diagnosis wrote a report')
+      if (allocated(error)) return
+      call execute_command_line(exe//' diagnose -q -o '//b//' '//deck//' > /dev/null 2>> '//b//'.log', &
+                                exitstat=stat)
+      call check(error, stat == 2, 'a start over the journal without --resume or --force must be refused')
+      if (allocated(error)) return
+      call execute_command_line(exe//' diagnose -q --resume -o '//b//' '//deck//' > /dev/null 2>> '// &
+                                b//'.log', exitstat=stat)
+      call check(error, stat == 0, 'resume: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      call check_same_diagnosis(error, a, b)
+   end subroutine test_diagnose_resume
+
+   !> A stopped diagnosis resumed after its deck changed, or after a data file changed: a
+   !> one-line input error naming the journal; with the input as it was it resumes
+   subroutine test_diagnose_changed(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, deck, b, data, log
+      integer :: stat
+      character(len=4096) :: cwd
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call make_dir(scratch_dir, e)
+      exe = 'OMP_NUM_THREADS=1 '//exe
+      ! The data copied, so that one of them can change
+      call get_environment_variable('PWD', cwd)
+      data = trim(cwd)//'/'//scratch_dir//'/diagnose-changed-data'
+      call execute_command_line('rm -rf '//data//'; mkdir -p '//data//'; cp '//thesis_data()//'/*.txt '//data)
+      deck = diagnose_deck('diagnose-changed.nml', data)
+      b = scratch_dir//'/diagnose-changed'
+      call execute_command_line('rm -rf '//b)
+      call stop_diagnosis(exe//' diagnose -q -o '//b//' '//deck, b, 3)
+      call check(error, number_in(b//'.rc') == 143, 'not stopped by TERM: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      ! The deck changed (a comment added)
+      call execute_command_line('echo "! changed" >> '//deck)
+      call execute_command_line(exe//' diagnose -q --resume -o '//b//' '//deck//' > /dev/null 2> '// &
+                                b//'.log2', exitstat=stat)
+      log = read_text(b//'.log2')
+      call check(error, stat == 1 .and. index(log, b//'/diagnose/diagnose.journal: cannot resume') > 0 &
+                 .and. index(log, new_line('a')) == len(log), 'changed deck: exit '//str(stat)//', '//log)
+      if (allocated(error)) return
+      ! The deck as it was, a data file changed (its last line dropped)
+      deck = diagnose_deck('diagnose-changed.nml', data)
+      call execute_command_line('sed -i ''$d'' '//data//'/relax.sim.txt')
+      call execute_command_line(exe//' diagnose -q --resume -o '//b//' '//deck//' > /dev/null 2> '// &
+                                b//'.log2', exitstat=stat)
+      log = read_text(b//'.log2')
+      call check(error, stat == 1 .and. index(log, b//'/diagnose/diagnose.journal: cannot resume') > 0, &
+                 'changed data file: exit '//str(stat)//', '//log)
+      if (allocated(error)) return
+      ! With the data as they were, the journal resumes
+      call execute_command_line('cp '//thesis_data()//'/relax.sim.txt '//data)
+      call stop_diagnosis(exe//' diagnose -q --resume -o '//b//' '//deck, b, 5)
+      call check(error, number_in(b//'.rc') == 143, 'the unchanged input must resume: '//read_text(b//'.log'))
+   end subroutine test_diagnose_changed
+
+   !> The diagnosis of diagnose_deck on 2 ranks stopped by TERM (to mpirun, which passes it
+   !> on) once 10 units are journaled, resumed on 1 rank: the report, tables and journal of an
+   !> uninterrupted diagnosis on 1 rank
+   subroutine test_mpi_diagnose_resume(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: exe, mpirun, deck, a, b
+      integer :: stat
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call require_mpirun(mpirun, error)
+      if (allocated(error)) return
+      call make_dir(scratch_dir, e)
+      deck = diagnose_deck('mpi-diagnose-resume.nml', thesis_data())
+      a = scratch_dir//'/mpi-diagnose-rs-whole'
+      b = scratch_dir//'/mpi-diagnose-rs-stopped'
+      call execute_command_line('rm -rf '//a//' '//b)
+      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' diagnose -q -o '//a//' '//deck//' > /dev/null', &
+                                exitstat=stat)
+      call check(error, stat == 0, 'uninterrupted diagnosis')
+      if (allocated(error)) return
+      call stop_diagnosis(mpirun//exe//' diagnose -q -o '//b//' '//deck, b, 10)
+      call check(error, index(read_text(b//'.log'), 'continue with --resume') > 0 .and. &
+                 number_in(b//'.rc') /= 0, 'the 2-rank diagnosis was not stopped by TERM: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' diagnose -q --resume -o '//b//' '//deck// &
+                                ' > /dev/null 2>> '//b//'.log', exitstat=stat)
+      call check(error, stat == 0, 'resume on 1 rank: '//read_text(b//'.log'))
+      if (allocated(error)) return
+      call check_same_diagnosis(error, a, b)
+   end subroutine test_mpi_diagnose_resume
 end module test_cluster
