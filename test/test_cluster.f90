@@ -360,24 +360,34 @@ contains
       if (ios /= 0) n = -1
    end function number_in
 
-   !> A whole diagnosis and the same stopped by TERM after 10 of its units are journaled:
-   !> exit 143 naming --resume, no report; a start without --resume is refused; --resume
-   !> writes the report, tables and journal of the whole one, bit for bit
-   subroutine test_diagnose_resume(error)
+   !> The usharp executable, diagnose_deck as scratch_dir/name.nml, and its diagnosis on 1
+   !> rank into scratch_dir/name-whole (a; b: name-stopped, removed), or a skip or failure
+   subroutine reference_diagnosis(name, exe, deck, a, b, error)
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable, intent(out) :: exe, deck, a, b
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=:), allocatable :: exe, deck, a, b
       integer :: stat
       call require_exe(exe, error)
       if (allocated(error)) return
       call make_dir(scratch_dir, e)
       exe = 'OMP_NUM_THREADS=1 '//exe
-      deck = diagnose_deck('diagnose-resume.nml', thesis_data())
-      a = scratch_dir//'/diagnose-whole'
-      b = scratch_dir//'/diagnose-stopped'
+      deck = diagnose_deck(name//'.nml', thesis_data())
+      a = scratch_dir//'/'//name//'-whole'
+      b = scratch_dir//'/'//name//'-stopped'
       call execute_command_line('rm -rf '//a//' '//b)
       call execute_command_line(exe//' diagnose -q -o '//a//' '//deck//' > /dev/null', exitstat=stat)
       call check(error, stat == 0, 'uninterrupted diagnosis')
+   end subroutine reference_diagnosis
+
+   !> A whole diagnosis and the same stopped by TERM after 10 of its units are journaled:
+   !> exit 143 naming --resume, no report; a start without --resume is refused; --resume
+   !> writes the report, tables and journal of the whole one, bit for bit
+   subroutine test_diagnose_resume(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, deck, a, b
+      integer :: stat
+      call reference_diagnosis('diagnose-resume', exe, deck, a, b, error)
       if (allocated(error)) return
       call stop_diagnosis(exe//' diagnose -q -o '//b//' '//deck, b, 10)
       call check(error, number_in(b//'.rc') == 143, 'the diagnosis stopped by TERM must exit 143, not '// &
@@ -449,28 +459,19 @@ contains
    !> uninterrupted diagnosis on 1 rank
    subroutine test_mpi_diagnose_resume(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
       character(len=:), allocatable :: exe, mpirun, deck, a, b
       integer :: stat
-      call require_exe(exe, error)
-      if (allocated(error)) return
       call require_mpirun(mpirun, error)
       if (allocated(error)) return
-      call make_dir(scratch_dir, e)
-      deck = diagnose_deck('mpi-diagnose-resume.nml', thesis_data())
-      a = scratch_dir//'/mpi-diagnose-rs-whole'
-      b = scratch_dir//'/mpi-diagnose-rs-stopped'
-      call execute_command_line('rm -rf '//a//' '//b)
-      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' diagnose -q -o '//a//' '//deck//' > /dev/null', &
-                                exitstat=stat)
-      call check(error, stat == 0, 'uninterrupted diagnosis')
+      call reference_diagnosis('mpi-diagnose-resume', exe, deck, a, b, error)
       if (allocated(error)) return
-      call stop_diagnosis(mpirun//exe//' diagnose -q -o '//b//' '//deck, b, 10)
+      ! (exe begins with OMP_NUM_THREADS=1, which mpirun's environment has already)
+      call stop_diagnosis(mpirun//exe(19:)//' diagnose -q -o '//b//' '//deck, b, 10)
       call check(error, index(read_text(b//'.log'), 'continue with --resume') > 0 .and. &
                  number_in(b//'.rc') /= 0, 'the 2-rank diagnosis was not stopped by TERM: '//read_text(b//'.log'))
       if (allocated(error)) return
-      call execute_command_line('OMP_NUM_THREADS=1 '//exe//' diagnose -q --resume -o '//b//' '//deck// &
-                                ' > /dev/null 2>> '//b//'.log', exitstat=stat)
+      call execute_command_line(exe//' diagnose -q --resume -o '//b//' '//deck//' > /dev/null 2>> '// &
+                                b//'.log', exitstat=stat)
       call check(error, stat == 0, 'resume on 1 rank: '//read_text(b//'.log'))
       if (allocated(error)) return
       call check_same_diagnosis(error, a, b)
