@@ -171,7 +171,7 @@ def main():
                     u = a.u
                 case = os.path.join(work, f'{mname}-{row}-{rep}')
                 label = make_case(mname, row, u, rng, case, a.noise)
-                p = subprocess.run([a.exe, 'diagnose', 'diagnose.nml', '-o', 'out'], cwd=case,
+                p = subprocess.run([a.exe, 'diagnose', 'diagnose.nml', '--force', '-o', 'out'], cwd=case,
                                    capture_output=True, text=True)
                 with open(os.path.join(case, 'report.md'), 'w') as f:
                     f.write(p.stdout + p.stderr)
