@@ -70,7 +70,8 @@ contains
       end if
       ! Once stopped, every later unit says so (without asking the other ranks again)
       if (jr%stopped == 0) then
-         if (any_rank(stop_signal() /= 0)) jr%stopped = max(stop_signal(), 15)
+         ! (a rank the signal did not reach says SIGTERM, what a launcher passes on)
+         if (any_rank(stop_signal() /= 0)) jr%stopped = merge(stop_signal(), 15, stop_signal() /= 0)
       end if
       if (jr%stopped /= 0) call fatal_error(error, 'stopped by a signal after '//str(jr%next - 1)// &
          ' units of the diagnosis; continue with --resume', 128 + jr%stopped)
