@@ -41,13 +41,15 @@ contains
 
    !> Central-difference Jacobian of the residuals with respect to x = log10 c (step h); the
    !> points are simulated as one parallel batch. r0: residuals at x.
-   subroutine jacobian_log10(prob, x, h, r0, jac, f0, nevals, error)
+   subroutine jacobian_log10(prob, x, h, r0, jac, f0, nevals, error, spread)
       type(fit_problem), intent(in) :: prob
       real(dp), intent(in) :: x(:), h
       real(dp), allocatable, intent(out) :: r0(:), jac(:, :)
       real(dp), intent(out) :: f0
       integer, intent(out) :: nevals
       type(error_type), allocatable, intent(out) :: error
+      !> Ranks in lockstep split the points (see fit_problem's batch)
+      logical, intent(in), optional :: spread
       integer :: n, m, j
       real(dp), allocatable :: xs(:, :), rs(:, :), fs(:), pt(:, :)
       integer, allocatable :: status(:)
@@ -63,7 +65,7 @@ contains
          xs(j, 2*j) = x(j) + h
          xs(j, 2*j + 1) = x(j) - h
       end do
-      call prob%batch(xs, 0, rs, fs, pt, status, msg, 'identify')
+      call prob%batch(xs, 0, rs, fs, pt, status, msg, 'identify', spread)
       nevals = 2*n + 1
       do j = 1, 2*n + 1
          if (status(j) /= eval_ok) then
@@ -100,11 +102,13 @@ contains
    end function robust_covariance
 
    !> The identifiability of the fitted constants of prob at c (physical units)
-   subroutine identify_at(prob, c, h, res, error)
+   subroutine identify_at(prob, c, h, res, error, spread)
       type(fit_problem), intent(in) :: prob
       real(dp), intent(in) :: c(:), h
       type(identify_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
+      !> Every rank calls this with the same c and they split the Jacobian's points
+      logical, intent(in), optional :: spread
       type(fit_problem) :: logprob
       real(dp), allocatable :: r0(:), jac(:, :), cov(:, :), pinv(:, :)
       real(dp) :: f0, t95, q95, lo, hi
@@ -114,7 +118,7 @@ contains
       tied = 0
       logprob = prob
       logprob%cfg%fit%log_search = .true.
-      call jacobian_log10(logprob, log10(c), h, r0, jac, f0, res%nevals, error)
+      call jacobian_log10(logprob, log10(c), h, r0, jac, f0, res%nevals, error, spread)
       if (allocated(error)) return
       res%names = constant_names(prob%cfg%model, prob%idx)
       res%c = c

@@ -15,7 +15,7 @@ module usharp_cmd_run
    use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
-   use usharp_mpi, only: is_root
+   use usharp_mpi, only: is_root, n_ranks, any_rank, share
    implicit none
    private
 
@@ -62,6 +62,7 @@ contains
          real(dp), allocatable :: start(:), dvals(:)
          character(len=:), allocatable :: dnames(:)
          integer :: i, j, w
+         logical :: spread
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
          if (allocated(error)) return
@@ -75,10 +76,13 @@ contains
          end if
          call setup_problem(cfg, prob, error)
          if (allocated(error)) return
-         ! Under MPI the other ranks search starts for rank 0, which writes everything
+         ! Under MPI the other ranks search starts for rank 0, which writes everything, and
+         ! compute their share of the identifiability report
+         spread = cfg%fit%identify .and. n_ranks() > 1
          if (.not. is_root()) then
             call run_fit(prob, dir, resume, out, error, force=overwrite, constants_file=constants_file, &
                          auto_resume=auto_resume)
+            if (spread) call identify_over_ranks(prob, out, allocated(error), ident, report_error)
             return
          end if
          call make_dir(dir, error)
@@ -91,6 +95,7 @@ contains
             return
          end if
          call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume)
+         if (spread) call identify_over_ranks(prob, out, allocated(error), ident, report_error)
          if (allocated(error)) return
 
          w = 1
@@ -132,7 +137,7 @@ contains
             ', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
             '<test>.fit.txt']
          if (cfg%fit%identify) then
-            call identify_at(prob, out%constants, cfg%fit%fd_step, ident, report_error)
+            if (.not. spread) call identify_at(prob, out%constants, cfg%fit%fd_step, ident, report_error)
             if (allocated(report_error)) then
                ! The fit stands: its results are written; the report's failure is a warning
                report = [character(len=200) :: 'warning: the identifiability report failed: '// &
@@ -150,6 +155,21 @@ contains
             'identifiability report failed: '//report_error%message, stat_report)
       end subroutine locked_run
    end subroutine run_command
+
+   !> The identifiability report at rank 0's optimum, its Jacobian's points split over the
+   !> ranks (every rank calls this after the fit; nothing when the fit failed on any rank)
+   subroutine identify_over_ranks(prob, out, failed, ident, report_error)
+      type(fit_problem), intent(in) :: prob
+      type(fit_outcome), intent(in) :: out    !< the fit's outcome (rank 0's counts)
+      logical, intent(in) :: failed           !< the fit ended with an error on this rank
+      type(identify_result), intent(out) :: ident
+      type(error_type), allocatable, intent(out) :: report_error
+      real(dp), allocatable :: c(:)
+      if (any_rank(failed)) return
+      if (is_root()) c = out%constants
+      call share(c, 0)
+      call identify_at(prob, c, prob%cfg%fit%fd_step, ident, report_error, spread=.true.)
+   end subroutine identify_over_ranks
 
    subroutine write_best(file, path, best, out, error)
       character(len=*), intent(in) :: file, path

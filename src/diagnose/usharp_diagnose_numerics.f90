@@ -16,7 +16,7 @@ module usharp_diagnose_numerics
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
    use usharp_diagnose_types, only: diagnose_context
-   use usharp_mpi, only: n_ranks, this_rank, owner_of, share, sum_over_ranks
+   use usharp_mpi, only: n_ranks, this_rank, share, sum_over_ranks, task_deal, ranks_that_ran
    implicit none
    private
 
@@ -284,19 +284,24 @@ contains
       logical, intent(in), optional :: over_ranks
       type(optimum_type), allocatable :: alts(:)
       type(error_type), allocatable :: error
-      logical, allocatable :: ok(:)
+      logical, allocatable :: ok(:), ran(:)
+      integer, allocatable :: owner(:)
+      type(task_deal) :: deal
       logical :: spread
       integer :: j, n0
       spread = .false.
       if (present(over_ranks)) spread = over_ranks .and. n_ranks() > 1
       if (present(fs)) fs = huge(1.0_dp)
-      allocate (alts(size(xs, 2)), ok(size(xs, 2)))
+      allocate (alts(size(xs, 2)), ok(size(xs, 2)), ran(size(xs, 2)))
       ok = .false.
       n0 = ep%nevals
-      do j = 1, size(xs, 2)
-         if (spread) then
-            if (owner_of(j, 1, n_ranks()) /= this_rank()) cycle
-         end if
+      ran = .false.
+      ! Spread: each start to the next rank that is free
+      call deal%open(1, size(xs, 2), alone=.not. spread)
+      do
+         j = deal%take()
+         if (j == 0) exit
+         ran(j) = .true.
          call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
                                   max_evals, alts(j), error)
          if (allocated(error)) then
@@ -305,9 +310,11 @@ contains
          end if
          ok(j) = .true.
       end do
+      call deal%close()
       if (spread) then
+         owner = ranks_that_ran(ran)
          do j = 1, size(xs, 2)
-            call share_optimum(alts(j), ok(j), owner_of(j, 1, n_ranks()))
+            call share_optimum(alts(j), ok(j), owner(j))
          end do
          ep%nevals = n0 + sum_over_ranks(ep%nevals - n0)
       end if

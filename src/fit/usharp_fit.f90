@@ -20,7 +20,8 @@ module usharp_fit
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
-   use usharp_mpi, only: n_ranks, this_rank, is_root, owner_of, share, parallel_sync, tasks_per_share
+   use usharp_mpi, only: n_ranks, this_rank, is_root, share, parallel_sync, tasks_per_share, task_deal, &
+                         ranks_that_ran
    implicit none
    private
 
@@ -579,8 +580,9 @@ contains
       end associate
    end subroutine search
 
-   !> The starts of a multi-start fit spread over the MPI ranks, round robin in chunks (see
-   !> tasks_per_share; OpenMP threads inside each start), each searched on its own with its
+   !> The starts of a multi-start fit spread over the MPI ranks in chunks (see tasks_per_share),
+   !> each start to the next rank that is free (OpenMP threads inside each start), each
+   !> searched on its own with its
    !> evaluations kept; after a chunk every rank receives every start's evaluations, and rank
    !> 0 runs the search again over all starts in their order, replaying them, so that the
    !> logs, the journal and the result are those of one process. Starts a journal holds
@@ -595,10 +597,12 @@ contains
       type(fit_objective) :: dry, w
       type(optimum_type) :: one
       type(error_type), allocatable :: e
+      type(task_deal) :: deal
+      integer, allocatable :: owner(:)
       integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk
       np = n_ranks()
       nstarts = max(1, obj%prob%cfg%fit%multistart)
-      allocate (logs(nstarts))
+      allocate (logs(nstarts), owner(nstarts))
       do s = 1, nstarts
          allocate (logs(s)%recs(0), logs(s)%jacs(0))
       end do
@@ -625,13 +629,14 @@ contains
       chunk = np*tasks_per_share(nstarts - first_open + 1, np)
       do s0 = first_open, nstarts, chunk
          s1 = min(s0 + chunk - 1, nstarts)
-         ! This rank's starts of the chunk (round robin), one after the other; after a stop
-         ! the rest are not run
-         do s = s0 + this_rank(), s1, np
-            logs(s)%stat = stat_not_run
-            if (s > s0 + this_rank()) then
-               if (logs(s - np)%stat /= 0) cycle
-            end if
+         ! The chunk's starts dealt to the ranks as they become free, each searched on its
+         ! own; after a stop this rank takes no more
+         logs(s0:s1)%stat = stat_not_run
+         call deal%open(s0, s1)
+         do
+            if (stop_signal() /= 0) exit
+            s = deal%take()
+            if (s == 0) exit
             w = worker(obj)
             w%replay = logs(s)%recs
             w%replay_jac = logs(s)%jacs
@@ -642,11 +647,16 @@ contains
             logs(s)%jacs = w%kept_jac
             logs(s)%nsimulated = w%nsimulated
             logs(s)%stat = 0
-            if (allocated(e)) logs(s)%stat = e%stat
+            if (allocated(e)) then
+               logs(s)%stat = e%stat
+               exit
+            end if
          end do
+         call deal%close()
+         owner(s0:s1) = ranks_that_ran(logs(s0:s1)%stat /= stat_not_run)
          do t = s0, s1
-            call share_start(logs(t), owner_of(t, s0, np), size(obj%prob%targets), size(obj%prob%idx), &
-                             obj%prob%nres())
+            if (owner(t) >= 0) call share_start(logs(t), owner(t), size(obj%prob%targets), &
+                                                size(obj%prob%idx), obj%prob%nres())
          end do
          ! A start stopped (a signal, too many failures): the rest is left to the replay
          if (any(logs(s0:s1)%stat /= 0)) exit

@@ -16,6 +16,7 @@ module usharp_objective
    use usharp_external, only: run_external
    use usharp_filesys, only: join_path
    use usharp_strings, only: str
+   use usharp_mpi, only: n_ranks, this_rank, block_of, share_blocks
    implicit none
    private
 
@@ -440,7 +441,7 @@ contains
    !> external work folders: a batch outside the fit's evaluations gives a prefix of its own so
    !> that no two runs share a folder), simulated in parallel with OpenMP; each point is
    !> independent of the others
-   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages, prefix)
+   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages, prefix, spread)
       class(fit_problem), intent(in) :: self
       real(dp), intent(in) :: xs(:, :)
       integer, intent(in) :: k0
@@ -448,15 +449,32 @@ contains
       integer, intent(out) :: status(:)
       character(len=message_len), intent(out) :: messages(:)
       character(len=*), intent(in), optional :: prefix
+      !> Ranks in lockstep (every rank calls this with the same points) each simulate their
+      !> block of the points (block_of) and every rank receives every result: the same as
+      !> one rank, bit for bit, since each point is simulated the same wherever it is
+      logical, intent(in), optional :: spread
       character(len=:), allocatable :: tag0
-      integer :: j
+      integer :: j, lo, hi
+      logical :: split
       tag0 = ''
       if (present(prefix)) tag0 = prefix
+      split = .false.
+      if (present(spread)) split = spread .and. n_ranks() > 1
+      lo = 1
+      hi = size(xs, 2)
+      if (split) call block_of(size(xs, 2), this_rank(), n_ranks(), lo, hi)
       !$omp parallel do schedule(dynamic)
-      do j = 1, size(xs, 2)
+      do j = lo, hi
          call one_point(j)
       end do
       !$omp end parallel do
+      if (split) then
+         call share_blocks(rs)
+         call share_blocks(fs)
+         call share_blocks(per_test)
+         call share_blocks(status)
+         call share_blocks(messages)
+      end if
    contains
       subroutine one_point(j)
          integer, intent(in) :: j

@@ -1,14 +1,19 @@
 !> The one place that speaks MPI (the mpi_f08 module): start and stop, this process's rank and
 !> the number of ranks, and the broadcasts with which independent results computed on the
 !> ranks are shared so that every rank (and rank 0, which writes the files) holds them in one
-!> fixed order. A program started without an MPI launcher (mpirun, srun) does not start MPI
-!> at all: it is a single rank and every procedure here is a no-op.
+!> fixed order; the deal that hands independent tasks to the ranks as they become free; the
+!> blocks of a batch of points that ranks in lockstep split among them. A program started
+!> without an MPI launcher (mpirun, srun) does not start MPI at all: it is a single rank and
+!> every procedure here makes no MPI call.
 module usharp_mpi
    use mpi_f08, only: MPI_Init_thread, MPI_Initialized, MPI_Finalized, MPI_Finalize, MPI_Comm_rank, &
                       MPI_Comm_size, MPI_Bcast, MPI_Allreduce, MPI_Abort, MPI_Barrier, &
                       MPI_Get_library_version, MPI_MAX_LIBRARY_VERSION_STRING, MPI_COMM_WORLD, MPI_INTEGER, &
                       MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, MPI_SUM, &
-                      MPI_THREAD_FUNNELED
+                      MPI_THREAD_FUNNELED, MPI_MAX, MPI_Win, MPI_Win_allocate, MPI_Win_free, &
+                      MPI_Win_lock_all, MPI_Win_unlock_all, MPI_Win_lock, MPI_Win_unlock, MPI_Put, &
+                      MPI_Fetch_and_op, MPI_Win_flush, MPI_LOCK_EXCLUSIVE, MPI_INFO_NULL, MPI_ADDRESS_KIND
+   use, intrinsic :: iso_c_binding, only: c_ptr
    use usharp_kinds, only: dp
    use usharp_strings, only: str
    implicit none
@@ -16,6 +21,27 @@ module usharp_mpi
 
    public :: parallel_start, parallel_stop, parallel_abort, this_rank, n_ranks, is_root, owner_of
    public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share, sum_over_ranks
+   public :: task_deal, ranks_that_ran, block_of, share_blocks
+
+   !> Tasks first to last handed out one at a time to whichever rank asks first (a rank asks
+   !> when it is free, so unequal tasks even out): a counter on rank 0 that every rank
+   !> fetches and increments atomically (MPI one-sided, passive target), or a plain counter
+   !> when there is one rank
+   type :: task_deal
+      private
+      integer :: next = 0, last = 0
+      logical :: shared = .false.
+      type(MPI_Win) :: win
+   contains
+      procedure :: open => deal_open
+      procedure :: take => deal_take
+      procedure :: close => deal_close
+   end type task_deal
+
+   !> Every rank sends its block of a batch's columns to all (see block_of)
+   interface share_blocks
+      module procedure share_blocks_reals, share_blocks_matrix, share_blocks_ints, share_blocks_text
+   end interface share_blocks
 
    !> Broadcast from one rank to all: the receivers' arrays take the sender's size
    interface share
@@ -121,6 +147,128 @@ contains
       integer, intent(in) :: ntasks, nranks
       c = max(1, min((ntasks + nranks - 1)/nranks, 8))
    end function tasks_per_share
+
+   !> Start dealing tasks first to last (every rank must call it, unless alone)
+   subroutine deal_open(self, first, last, alone)
+      class(task_deal), intent(inout) :: self
+      integer, intent(in) :: first, last
+      !> This rank takes every task itself (no MPI call; the others do not take part)
+      logical, intent(in), optional :: alone
+      integer(MPI_ADDRESS_KIND) :: bytes
+      type(c_ptr) :: base
+      integer :: start(1)
+      self%next = first
+      self%last = last
+      self%shared = running()
+      if (present(alone)) self%shared = self%shared .and. .not. alone
+      if (.not. self%shared) return
+      if (n_ranks() == 1) then
+         self%shared = .false.
+         return
+      end if
+      bytes = 0
+      if (is_root()) bytes = storage_size(start)/8
+      call MPI_Win_allocate(bytes, storage_size(start)/8, MPI_INFO_NULL, MPI_COMM_WORLD, base, self%win)
+      if (is_root()) then
+         start = first
+         call MPI_Win_lock(MPI_LOCK_EXCLUSIVE, 0, 0, self%win)
+         call MPI_Put(start, 1, MPI_INTEGER, 0, 0_MPI_ADDRESS_KIND, 1, MPI_INTEGER, self%win)
+         call MPI_Win_unlock(0, self%win)
+      end if
+      ! No rank takes a task before the counter holds first
+      call MPI_Barrier(MPI_COMM_WORLD)
+      call MPI_Win_lock_all(0, self%win)
+   end subroutine deal_open
+
+   !> The next task for this rank, or 0 when all are taken
+   integer function deal_take(self) result(k)
+      class(task_deal), intent(inout) :: self
+      integer :: one, got
+      if (self%shared) then
+         one = 1
+         call MPI_Fetch_and_op(one, got, MPI_INTEGER, 0, 0_MPI_ADDRESS_KIND, MPI_SUM, self%win)
+         call MPI_Win_flush(0, self%win)
+         k = got
+      else
+         k = self%next
+         self%next = self%next + 1
+      end if
+      if (k > self%last) k = 0
+   end function deal_take
+
+   !> Stop dealing (every rank that opened it shared must call it, after its last task)
+   subroutine deal_close(self)
+      class(task_deal), intent(inout) :: self
+      if (.not. self%shared) return
+      call MPI_Win_unlock_all(self%win)
+      call MPI_Win_free(self%win)
+      self%shared = .false.
+   end subroutine deal_close
+
+   !> The rank that ran each task, from each rank's own list of which it ran (-1: none
+   !> did); every rank must call it
+   function ranks_that_ran(ran) result(owner)
+      logical, intent(in) :: ran(:)
+      integer :: owner(size(ran)), mine(size(ran))
+      mine = merge(this_rank(), -1, ran)
+      owner = mine
+      if (running() .and. size(ran) > 0) &
+         call MPI_Allreduce(mine, owner, size(ran), MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
+   end function ranks_that_ran
+
+   !> The block lo:hi of n points that rank r of nranks computes when ranks in lockstep split
+   !> a batch: consecutive, the first n mod nranks ranks one point more (lo > hi: none)
+   pure subroutine block_of(n, r, nranks, lo, hi)
+      integer, intent(in) :: n, r, nranks
+      integer, intent(out) :: lo, hi
+      integer :: base, extra
+      base = n/nranks
+      extra = mod(n, nranks)
+      lo = r*base + min(r, extra) + 1
+      hi = lo + base - 1
+      if (r < extra) hi = hi + 1
+   end subroutine block_of
+
+   subroutine share_blocks_reals(a)
+      real(dp), intent(inout) :: a(:)
+      integer :: r, lo, hi
+      if (.not. running()) return
+      do r = 0, n_ranks() - 1
+         call block_of(size(a), r, n_ranks(), lo, hi)
+         if (hi >= lo) call MPI_Bcast(a(lo:hi), hi - lo + 1, MPI_DOUBLE_PRECISION, r, MPI_COMM_WORLD)
+      end do
+   end subroutine share_blocks_reals
+
+   subroutine share_blocks_matrix(a)
+      real(dp), intent(inout) :: a(:, :)
+      integer :: r, lo, hi
+      if (.not. running()) return
+      do r = 0, n_ranks() - 1
+         call block_of(size(a, 2), r, n_ranks(), lo, hi)
+         if (hi >= lo) call MPI_Bcast(a(:, lo:hi), size(a, 1)*(hi - lo + 1), MPI_DOUBLE_PRECISION, r, &
+                                      MPI_COMM_WORLD)
+      end do
+   end subroutine share_blocks_matrix
+
+   subroutine share_blocks_ints(a)
+      integer, intent(inout) :: a(:)
+      integer :: r, lo, hi
+      if (.not. running()) return
+      do r = 0, n_ranks() - 1
+         call block_of(size(a), r, n_ranks(), lo, hi)
+         if (hi >= lo) call MPI_Bcast(a(lo:hi), hi - lo + 1, MPI_INTEGER, r, MPI_COMM_WORLD)
+      end do
+   end subroutine share_blocks_ints
+
+   subroutine share_blocks_text(a)
+      character(len=*), intent(inout) :: a(:)
+      integer :: r, lo, hi
+      if (.not. running()) return
+      do r = 0, n_ranks() - 1
+         call block_of(size(a), r, n_ranks(), lo, hi)
+         if (hi >= lo) call MPI_Bcast(a(lo:hi), len(a)*(hi - lo + 1), MPI_CHARACTER, r, MPI_COMM_WORLD)
+      end do
+   end subroutine share_blocks_text
 
    !> The sum of n over the ranks (every rank must call it)
    integer function sum_over_ranks(n) result(total)

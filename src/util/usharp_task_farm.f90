@@ -1,5 +1,6 @@
 !> Independent tasks (the repetitions of the self-check, the tests of a design) spread over the
-!> MPI ranks, round robin in chunks (OpenMP threads inside each task), with their results kept
+!> MPI ranks in chunks, each task to the next rank that is free (OpenMP threads inside each
+!> task), with their results kept
 !> in a journal in the order of the tasks: every rank receives every result, rank 0 alone
 !> writes, and a stopped run continues (--resume) on any number of ranks. A result is text
 !> (numbers written at full precision), and the caller reads every result back from that text,
@@ -10,8 +11,8 @@ module usharp_task_farm
    use usharp_strings, only: str
    use usharp_journal, only: task_text, journal_file
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
-   use usharp_mpi, only: n_ranks, this_rank, is_root, owner_of, share, any_rank, parallel_sync, &
-                         tasks_per_share
+   use usharp_mpi, only: n_ranks, this_rank, is_root, share, any_rank, parallel_sync, &
+                         tasks_per_share, task_deal, ranks_that_ran
    implicit none
    private
 
@@ -54,7 +55,8 @@ contains
       type(journal_file) :: out
       type(error_type), allocatable :: e
       character(len=:), allocatable :: text, message
-      integer, allocatable :: stat(:)
+      integer, allocatable :: stat(:), owner(:)
+      type(task_deal) :: deal
       integer :: np, k, k0, k1, ndone, chunk
       allocate (results(ntasks))
       ndone = 0
@@ -67,54 +69,53 @@ contains
       call catch_stop_signals()
       np = n_ranks()
       chunk = np*tasks_per_share(ntasks - ndone, np)
-      allocate (stat(ntasks))
+      allocate (stat(ntasks), owner(ntasks))
       do k0 = ndone + 1, ntasks, chunk
          k1 = min(k0 + chunk - 1, ntasks)
-         ! This rank's tasks of the chunk (round robin), one after the other; after an error
-         ! or a stop signal the rest are not run
+         ! The chunk's tasks dealt to the ranks as they become free; after an error or a stop
+         ! signal this rank takes no more
          message = ''
-         stat(k0:k1) = 0
-         do k = k0 + this_rank(), k1, np
-            stat(k) = stat_not_run
-            if (k > k0 + this_rank()) then
-               if (stat(k - np) /= 0) cycle
-            end if
-            if (stop_signal() /= 0) cycle
+         stat(k0:k1) = stat_not_run
+         call deal%open(k0, k1)
+         do
+            if (stop_signal() /= 0) exit
+            k = deal%take()
+            if (k == 0) exit
             call tasks%run(k, text, e)
             if (allocated(e)) then
                stat(k) = e%stat
                message = e%message
-            else
-               stat(k) = 0
-               results(k)%s = text
+               exit
             end if
+            stat(k) = 0
+            results(k)%s = text
          end do
-         ! Every rank receives every result of the chunk; rank 0 journals them in order, up
-         ! to the first that is missing
+         call deal%close()
+         ! Every rank learns who ran each task and receives every result of the chunk; rank 0
+         ! journals them in order, up to the first that is missing
+         owner(k0:k1) = ranks_that_ran(stat(k0:k1) /= stat_not_run)
          do k = k0, k1
-            associate (owner => owner_of(k, k0, np))
-               if (n_ranks() > 1) then
-                  call share_one(stat(k), owner)
-                  if (stat(k) == 0) then
-                     if (.not. allocated(results(k)%s)) results(k)%s = ''
-                     call share(results(k)%s, owner)
-                  else if (stat(k) /= stat_not_run) then
-                     if (this_rank() /= owner) message = ''
-                     call share(message, owner)
-                  end if
+            if (owner(k) >= 0 .and. np > 1) then
+               call share_one(stat(k), owner(k))
+               if (stat(k) == 0) then
+                  if (.not. allocated(results(k)%s)) results(k)%s = ''
+                  call share(results(k)%s, owner(k))
+               else
+                  if (this_rank() /= owner(k)) message = ''
+                  call share(message, owner(k))
                end if
-               if (stat(k) == 0 .and. .not. allocated(error)) then
-                  if (len(journal) > 0 .and. is_root()) call out%put(k, results(k)%s, e)
-                  if (allocated(e)) call move_alloc(e, error)
-               else if (.not. allocated(error)) then
-                  if (stat(k) == stat_not_run) then
-                     call fatal_error(error, 'stopped by a signal after '//str(k - 1)//' of '// &
-                        str(ntasks)//' tasks; continue with --resume', 128 + max(stop_signal(), 15))
-                  else
-                     call fatal_error(error, message, stat(k))
-                  end if
+            end if
+            if (stat(k) == 0 .and. .not. allocated(error)) then
+               if (len(journal) > 0 .and. is_root()) call out%put(k, results(k)%s, e)
+               if (allocated(e)) call move_alloc(e, error)
+            else if (.not. allocated(error)) then
+               if (stat(k) == stat_not_run) then
+                  call fatal_error(error, 'stopped by a signal after '//str(k - 1)//' of '// &
+                     str(ntasks)//' tasks; continue with --resume', 128 + max(stop_signal(), 15))
+               else
+                  call fatal_error(error, message, stat(k))
                end if
-            end associate
+            end if
          end do
          if (allocated(error)) exit
          if (any_rank(stop_signal() /= 0) .and. k1 < ntasks) then
