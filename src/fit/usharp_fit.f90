@@ -21,7 +21,7 @@ module usharp_fit
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
    use usharp_mpi, only: n_ranks, this_rank, is_root, share, parallel_sync, tasks_per_share, task_deal, &
-                         ranks_that_ran
+                         ranks_that_ran, any_rank
    implicit none
    private
 
@@ -71,6 +71,9 @@ module usharp_fit
       logical :: capture = .false.
       !> Stop with stat_exhausted where a simulation would be needed (replay what is there)
       logical :: replay_only = .false.
+      !> Every rank runs this same search at once and they split each batch of points (see
+      !> fit_problem's batch); a stop is decided by all; the ranks other than 0 keep nothing
+      logical :: lockstep = .false.
       character(len=:), allocatable :: tag  !< before the evaluation's number in external work folders
       type(journal_record), allocatable :: kept(:)
       type(cached_jacobian), allocatable :: kept_jac(:)
@@ -165,17 +168,40 @@ contains
       if (.not. done) then
          call may_simulate(self, error)
          if (allocated(error)) return
-         call self%prob%jacobian(x, jac, done)
+         if (self%lockstep) then
+            call jacobian_of_root(self, x, jac, done)
+         else
+            call self%prob%jacobian(x, jac, done)
+         end if
          self%nsimulated = self%nsimulated + 1
       end if
       if (.not. done) return
       self%nsens = i
+      if (self%lockstep .and. .not. is_root()) return
       if (self%capture) then
          self%kept_jac = [self%kept_jac, cached_jacobian(x, jac)]
       else
          call self%log%record_jacobian(i, x, jac, error)
       end if
    end subroutine fit_jacobian
+
+   !> A sensitivity Jacobian computed by rank 0 and sent to every rank (lockstep: one
+   !> simulation, not split)
+   subroutine jacobian_of_root(self, x, jac, done)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: jac(:, :)
+      logical, intent(out) :: done
+      real(dp), allocatable :: flat(:)
+      done = .false.
+      if (is_root()) then
+         call self%prob%jacobian(x, jac, done)
+         flat = reshape(jac, [size(jac)])
+      end if
+      call share(flat, 0)
+      jac = reshape(flat, shape(jac))
+      done = any_rank(done)
+   end subroutine jacobian_of_root
 
    !> Residuals at several points, simulated in parallel (OpenMP) and then logged in order,
    !> so the logs and the result do not depend on the number of threads
@@ -209,7 +235,8 @@ contains
          call may_simulate(self, error)
          if (allocated(error)) return
          call self%prob%batch(xs(:, nr + 1:), k0 + nr, rs(:, nr + 1:), fs(nr + 1:), &
-                              per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:), tag_of(self))
+                              per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:), tag_of(self), &
+                              self%lockstep)
          self%nsimulated = self%nsimulated + size(xs, 2) - nr
          call check_stop(self, error)
          if (allocated(error)) return
@@ -274,6 +301,11 @@ contains
       type(error_type), allocatable, intent(out) :: error
       integer :: sig
       sig = stop_signal()
+      ! In lockstep every rank stops at the same evaluation
+      if (self%lockstep) then
+         if (.not. any_rank(sig /= 0)) return
+         sig = max(sig, 15)
+      end if
       if (sig == 0) return
       call fatal_error(error, 'stopped by signal '//str(sig)//' after '//str(self%nevals)// &
                        ' evaluations; continue with --resume', 128 + sig)
@@ -293,7 +325,7 @@ contains
       self%nevals = self%nevals + 1
       k = self%nevals
       if (self%capture) then
-         call keep(self, x, f, per_test, status, message, r)
+         if (.not. self%lockstep) call keep(self, x, f, per_test, status, message, r)
       else
          call self%log%record(k, status, f, per_test, x, self%constants_of(x), error, r)
          if (allocated(error)) return
@@ -414,12 +446,15 @@ contains
       obj%nresumed = size(obj%replay)
       obj%fingerprint = fingerprint
       parallel = n_ranks() > 1 .and. prob%cfg%fit%multistart > 0
-      ! Under MPI, rank 0 alone writes the logs, once every rank has read the journal; a fit
-      ! of one start is made by rank 0 alone
+      ! A Levenberg-Marquardt fit of one start is made by every rank at once, each simulating
+      ! its share of every batch of points (the difference Jacobian's columns); the direct
+      ! searches of one start evaluate one point at a time, made by rank 0 alone
+      obj%lockstep = n_ranks() > 1 .and. .not. parallel .and. prob%cfg%fit%method == 'lm'
+      ! Under MPI, rank 0 alone writes the logs, once every rank has read the journal
       call parallel_sync()
       if (.not. is_root()) then
          obj%capture = .true.
-         if (.not. parallel) return
+         if (.not. (parallel .or. obj%lockstep)) return
       end if
       if (is_root()) call obj%log%open(dir, fingerprint, prob%nres(), size(prob%idx), error)
       if (allocated(error)) then
@@ -433,9 +468,12 @@ contains
       call system_clock(obj%clock0, rate)
       if (parallel) then
          call parallel_search(obj, outcome%opt, outcome%nstarts, error)
-         if (.not. is_root()) return
       else
          call search(obj, outcome%opt, outcome%nstarts, error)
+      end if
+      if (.not. is_root()) then
+         call release_stop_signals()
+         return
       end if
       ! Past the search a signal ends the process at once (the results are written whole)
       call release_stop_signals()
@@ -664,7 +702,7 @@ contains
          if (is_root() .and. s1 < nstarts) then
             call obj%log%close()
             dry = worker(obj)
-            call in_order(logs, dry%replay, dry%replay_jac)
+            call in_order(logs, dry%replay, dry%replay_jac, .false.)
             dry%replay_only = .true.
             dry%capture = .false.
             call dry%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), e)
@@ -679,24 +717,50 @@ contains
       if (allocated(error)) return
       if (obj%nresumed > 0) call obj%log%event('resumed: replaying '//str(obj%nresumed)// &
                                                ' evaluations from '//journal_name)
-      call in_order(logs, obj%replay, obj%replay_jac)
+      call in_order(logs, obj%replay, obj%replay_jac, .true.)
       call search(obj, opt, nstarts, error)
       obj%nsimulated = obj%nsimulated + nsim
    end subroutine parallel_search
 
    !> The starts' evaluations in the order of the starts, up to the first start that stopped
-   subroutine in_order(logs, recs, jacs)
-      type(start_log), intent(in) :: logs(:)
+   !> (in one pass: a start's residual vectors may take hundreds of megabytes). take: move the
+   !> residuals out of logs instead of copying them (logs are not needed again)
+   subroutine in_order(logs, recs, jacs, take)
+      type(start_log), intent(inout) :: logs(:)
       type(journal_record), allocatable, intent(inout) :: recs(:)
       type(cached_jacobian), allocatable, intent(inout) :: jacs(:)
-      integer :: s
+      logical, intent(in) :: take
+      integer :: s, j, k, kj, last
+      last = size(logs)
+      do s = 1, size(logs)
+         if (logs(s)%stat /= 0) then
+            last = s
+            exit
+         end if
+      end do
       if (allocated(recs)) deallocate (recs)
       if (allocated(jacs)) deallocate (jacs)
-      allocate (recs(0), jacs(0))
-      do s = 1, size(logs)
-         recs = [recs, logs(s)%recs]
-         jacs = [jacs, logs(s)%jacs]
-         if (logs(s)%stat /= 0) exit
+      allocate (recs(sum([(size(logs(s)%recs), s=1, last)])), jacs(sum([(size(logs(s)%jacs), s=1, last)])))
+      k = 0
+      kj = 0
+      do s = 1, last
+         do j = 1, size(logs(s)%recs)
+            k = k + 1
+            associate (from => logs(s)%recs(j))
+               recs(k)%status = from%status
+               recs(k)%f = from%f
+               recs(k)%per_test = from%per_test
+               recs(k)%x = from%x
+               if (allocated(from%message)) recs(k)%message = from%message
+               if (take) then
+                  if (allocated(from%r)) call move_alloc(from%r, recs(k)%r)
+               else
+                  if (allocated(from%r)) recs(k)%r = from%r
+               end if
+            end associate
+         end do
+         jacs(kj + 1:kj + size(logs(s)%jacs)) = logs(s)%jacs
+         kj = kj + size(logs(s)%jacs)
       end do
    end subroutine in_order
 
