@@ -32,7 +32,9 @@ contains
          new_unittest('mpi-diagnose-same-on-1-and-2-ranks', test_mpi_diagnose), &
          new_unittest('diagnose-stopped-by-term-resumes-to-same-report', test_diagnose_resume), &
          new_unittest('diagnose-resume-refused-after-input-changed', test_diagnose_changed), &
-         new_unittest('mpi-diagnose-2-ranks-stopped-resume-on-1-rank', test_mpi_diagnose_resume)]
+         new_unittest('mpi-diagnose-2-ranks-stopped-resume-on-1-rank', test_mpi_diagnose_resume), &
+         new_unittest('mpi-unequal-starts-dealt-same-on-1-and-2-ranks', test_mpi_unequal_starts), &
+         new_unittest('mpi-one-start-lm-in-lockstep-same-on-1-and-2-ranks', test_mpi_lockstep)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -100,18 +102,23 @@ contains
    !> Thesis run 2's tests fitted by Levenberg-Marquardt from 20 starts of at most 30
    !> evaluations each (about 600 evaluations; on 2 ranks two chunks of starts, see
    !> tasks_per_share, so that a run can be stopped after the first is journaled)
-   function multistart_deck(nstarts) result(path)
-      !> number of starts
+   function multistart_deck(nstarts, max_evals) result(path)
+      !> number of starts (0: one, from the deck's constants)
       integer, intent(in) :: nstarts
+      !> at most this many evaluations per start (30 unless given)
+      integer, intent(in), optional :: max_evals
       character(len=:), allocatable :: path
       character(len=4096) :: cwd
+      integer :: most
+      most = 30
+      if (present(max_evals)) most = max_evals
       call get_environment_variable('PWD', cwd)
-      path = write_text('mpi-multistart-'//str(nstarts)//'.nml', [character(len=4200) :: &
+      path = write_text('mpi-multistart-'//str(nstarts)//'-'//str(most)//'.nml', [character(len=4200) :: &
          "&model name = 'miller', units = 'ksi', temperature = 866.15, tm = 1800.0, youngs = 22.5e3 /", &
          '&constants a1 = 1.0, a2 = 1.0e-5, b = 1.0e13, c2 = 0.1, h1 = 100.0, h2 = 100.0, n = 1.0, '// &
          'q = 91000.0 /', &
          "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', multistart = "//str(nstarts)//", "// &
-         "objective = 'eq7', max_evals = 30, max_failures = 200 /", &
+         "objective = 'eq7', max_evals = "//str(most)//", max_failures = 200 /", &
          "&test name = 'lcf', history = 'thesis_lcf', dt_out = 1.0, data_file = '"//trim(cwd)// &
          "/data/thesis/lcf.sim.txt', time_column = 'time', stress_column = 'stress', "// &
          "weighting = 'threshold', sig = 14.0 /", &
@@ -222,6 +229,28 @@ contains
       call check_same_fit(error, a, b)
    end subroutine test_mpi_resume
 
+
+   !> Five starts of unequal cost (their simulations take longer or shorter with their
+   !> constants; each start goes to the rank that is free first, so the ranks that run them
+   !> depend on the timing): the same journal, cache, logs, result and identifiability report (its Jacobian's
+   !> points split over the ranks) as 1 rank
+   subroutine test_mpi_unequal_starts(error)
+      type(error_type), allocatable, intent(out) :: error
+      call check_same_on_ranks(error, 'mpi-unequal', 'run '//multistart_deck(5, 60), [character(len=20) :: &
+         'fit.journal', 'fit.cache', 'fit.log', 'GUESS.TXT', 'FOM.TXT', 'identify.txt'])
+      if (allocated(error)) return
+      call check(error, index(read_text(scratch_dir//'/mpi-unequal-2/summary.txt'), 'identifiability') > 0, &
+                 'no identifiability report in the 2-rank summary')
+   end subroutine test_mpi_unequal_starts
+
+   !> A Levenberg-Marquardt fit of one start on 2 ranks in lockstep (each simulates its share
+   !> of every difference Jacobian's points): the journal, cache, logs, result and report of
+   !> 1 rank, bit for bit
+   subroutine test_mpi_lockstep(error)
+      type(error_type), allocatable, intent(out) :: error
+      call check_same_on_ranks(error, 'mpi-lockstep', 'run '//multistart_deck(0, 40), [character(len=20) :: &
+         'fit.journal', 'fit.cache', 'fit.log', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'identify.txt'])
+   end subroutine test_mpi_lockstep
 
    !> A command on 1 rank and on 2 ranks into two folders; the files named must be the same
    !> (the self-check's report after its time is taken out)
