@@ -140,9 +140,10 @@ contains
       if (running()) call MPI_Barrier(MPI_COMM_WORLD)
    end subroutine parallel_sync
 
-   !> How many of ntasks independent tasks each of nranks ranks runs before the results are
-   !> shared (and journaled): all of them, so that a rank never waits for another's slower
-   !> task, but at most 8, so that a run killed outright loses little
+   !> How many of ntasks independent tasks each of nranks ranks runs, on average, before the
+   !> results are shared (and journaled): all of them, so that the ranks wait for each other
+   !> once, but at most 8, so that a run killed outright loses little (with the tasks dealt
+   !> as ranks become free, the wait at a chunk's end is about one task)
    pure integer function tasks_per_share(ntasks, nranks) result(c)
       integer, intent(in) :: ntasks, nranks
       c = max(1, min((ntasks + nranks - 1)/nranks, 8))
