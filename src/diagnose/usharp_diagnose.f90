@@ -34,12 +34,13 @@ module usharp_diagnose
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
-                                    fit_structured, diagnose_progress, tell, step_done
+                                    fit_structured, diagnose_progress, tell, step_done, joint_wanted, &
+                                    named_effect
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
    use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding
-   use usharp_diagnose_verdict, only: conclude
+   use usharp_diagnose_verdict, only: conclude, joint_verdict
    use usharp_diagnose_separate, only: separate
    use usharp_diagnose_report, only: diagnose_report, write_report
    use usharp_diagnose_profile, only: profile_leading
@@ -48,7 +49,7 @@ module usharp_diagnose
    private
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
-   public :: write_report, gn_decrease, diagnose_options_of, held_quiet
+   public :: write_report, gn_decrease, diagnose_options_of, held_quiet, named_effect
    public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict
@@ -71,6 +72,22 @@ contains
       type(diagnose_context) :: ctx
       call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal)
       if (allocated(error)) return
+      call diagnose_effects(ctx, res, error)
+      if (allocated(error)) return
+      if (joint_wanted(res, opts%joint)) then
+         call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal)
+         if (allocated(error)) return
+      end if
+      call tell(ctx, 'done', res%nevals)
+   end subroutine diagnose_run
+
+   !> The steps after the baseline: screening, refits, the verdict, the leading effect's
+   !> profile intervals and the test that would separate effects alike
+   subroutine diagnose_effects(ctx, res, error)
+      type(diagnose_context), intent(inout) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      associate (opts => ctx%opts)
       call screen(ctx, res, error)
       if (allocated(error)) return
       call step_done(res, 'screening')
@@ -120,8 +137,53 @@ contains
       ! Last: when effects explain the gap equally well, the test that would separate them
       call separate(ctx, res)
       call step_done(res, 'separating test')
-      call tell(ctx, 'done', res%nevals)
-   end subroutine diagnose_run
+      end associate
+   end subroutine diagnose_effects
+
+   !> The held-out tests fitted too (see joint_wanted): the whole diagnosis again with every
+   !> test fitted, from the baseline's constants; its verdict becomes this one's, worded for
+   !> the weaker evidence (an effect found so was fitted to the tests it explains, not
+   !> predicted), and its simulations and steps count in this one's
+   subroutine joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
+      procedure(diagnose_progress), optional :: progress
+      type(diagnose_journal), intent(inout), target, optional :: journal
+      type(run_config) :: jcfg
+      type(diagnose_options) :: jopts
+      type(diagnose_context) :: jctx
+      type(diagnose_result) :: jres
+      integer :: j
+      call tell(ctx, 'the held-out tests fitted too', res%nevals)
+      jcfg = cfg
+      do j = 1, size(ctx%prob%idx)
+         call jcfg%model%set_constant(ctx%prob%idx(j), res%c(j))
+      end do
+      ! The baseline's multi-start has searched the constants already
+      jcfg%fit%multistart = 0
+      jcfg%diagnose%holdout = .false.
+      jopts = opts
+      jopts%joint = .true.
+      call diagnose_baseline(jcfg, jopts, jctx, jres, error, experiments, progress, journal)
+      if (allocated(error)) return
+      jctx%clock0 = ctx%clock0
+      call diagnose_effects(jctx, jres, error)
+      if (allocated(error)) return
+      res%nevals = res%nevals + jres%nevals
+      res%steps = [res%steps, jres%steps]
+      do j = size(res%steps) - size(jres%steps) + 1, size(res%steps)
+         res%steps(j)%name = 'all tests fitted: '//res%steps(j)%name
+      end do
+      res%mark_nevals = res%nevals
+      res%mark_clock = jres%mark_clock
+      res%mark_cpu = jres%mark_cpu
+      call joint_verdict(res, jres)
+      res%joint = jres
+   end subroutine joint_stage
 
    !> How many of the screened effects to refit: the leading n_refit and those the screening
    !> cannot tell from the last of them (predicted BIC within 10 % of it, or within bic_margin,
@@ -194,7 +256,7 @@ contains
             return
          end if
       end do
-      call check_holdout(cfg%diagnose, cfg%path, error)
+      if (.not. opts%joint) call check_holdout(cfg%diagnose, cfg%path, error)
       if (allocated(error)) return
       res%held = cfg%diagnose%holdout
       ctx%ifit = pack([(i, i=1, nt)], .not. res%held)

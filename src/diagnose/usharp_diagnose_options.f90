@@ -37,6 +37,9 @@ module usharp_diagnose_options
       !> Spread the starts of each global stage over the MPI ranks (every rank runs the
       !> diagnosis); not inside a self-check repetition, which runs on one rank
       logical :: over_ranks = .false.
+      !> Every test fitted, none held out: the stage that asks which effect explains a gap
+      !> the held-out tests show and the fit tests do not (set by the diagnosis itself)
+      logical :: joint = .false.
    end type diagnose_options
 
 contains

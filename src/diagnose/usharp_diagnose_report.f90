@@ -33,6 +33,7 @@ contains
       call which_section(lines, res, opts)
       call shrink_section(lines, res, opts)
       call separate_section(lines, res)
+      if (allocated(res%joint)) call joint_section(lines, res%joint, opts)
       call add(lines, '')
       call add(lines, str(res%nevals)//' simulations of the test set.')
       call steps_list(lines, res)
@@ -127,12 +128,17 @@ contains
    end subroutine where_section
 
    !> Section 2: screening and refits
-   subroutine which_section(lines, res, opts)
+   subroutine which_section(lines, res, opts, heading)
       character(len=200), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
+      character(len=*), intent(in), optional :: heading  !< instead of section 2's
       integer :: j
-      call add(lines, '## 2. Which unmodelled effect causes it')
+      if (present(heading)) then
+         call add(lines, heading)
+      else
+         call add(lines, '## 2. Which unmodelled effect causes it')
+      end if
       call add(lines, '')
       call add(lines, 'Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
       call add(lines, 'step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
@@ -166,13 +172,21 @@ contains
             call add(lines, '| '//trim(e%name)//' | '//real_str(res%f0, 'es10.3')//' | '// &
                real_str(e%f_after, 'es10.3')//' | '//real_str(e%daic, 'f0.1')//' | '// &
                real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' | '// &
-               real_str(100.0_dp*e%shrink_held, 'f0.1')//' | '//trim(verdict_of(e, res))//' |')
+               held_share(e)//' | '//trim(verdict_of(e, res))//' |')
          end associate
       end do
       do j = 1, size(res%effects)
          if (res%effects(j)%refitted) call refit_details(lines, res, res%effects(j))
       end do
       call add(lines, '')
+   contains
+      !> The held-out gap an effect removes, %; '-' when every test is fitted
+      function held_share(e) result(text)
+         type(effect_outcome), intent(in) :: e
+         character(len=:), allocatable :: text
+         text = '-'
+         if (any(res%held)) text = real_str(100.0_dp*e%shrink_held, 'f0.1')
+      end function held_share
    end subroutine which_section
 
    !> One refit: its fitted magnitude, the objective per test and the top regions before and after
@@ -259,16 +273,49 @@ contains
       end if
    end subroutine shrink_section
 
+   !> Section 5, when the held-out tests showed a structured gap the fit tests did not and
+   !> nothing was confirmed: the diagnosis of every test fitted together (jres)
+   subroutine joint_section(lines, jres, opts)
+      character(len=200), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: jres
+      type(diagnose_options), intent(in) :: opts
+      integer :: i
+      call add(lines, '')
+      call add(lines, '## 5. Every test fitted together')
+      call add(lines, '')
+      call add(lines, 'The fit tests show no structured gap and the held-out tests do, so nothing fitted to '// &
+         'the fit tests alone can be confirmed by the prediction: the diagnosis again with every test '// &
+         'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &
+         'which is weaker evidence than a prediction; a test that shows it on its own confirms it.')
+      call add(lines, '')
+      call add(lines, 'Baseline of every test: objective '//real_str(jres%f0, 'es10.3')//', structured gap '// &
+         real_str(jres%gap_fit, 'es10.3')//' against its floor '//real_str(jres%floor_fit, 'es10.3')// &
+         '; per test:')
+      do i = 1, size(jres%names)
+         call add(lines, '- '//trim(jres%names(i))//': '//real_str(jres%per_test0(i), 'es10.3'))
+      end do
+      call add(lines, '')
+      call add(lines, '**Verdict of this stage:** '//jres%verdict)
+      call add(lines, '')
+      call which_section(lines, jres, opts, '### Which effect, every test fitted')
+      call separate_section(lines, jres, '### Which test would tell them apart, every test fitted')
+   end subroutine joint_section
+
    !> Section 4, when effects explain the gap equally well: the candidate tests that would
    !> separate them
-   subroutine separate_section(lines, res)
+   subroutine separate_section(lines, res, heading)
       character(len=200), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
+      character(len=*), intent(in), optional :: heading  !< instead of section 4's
       integer :: j, c
       if (.not. allocated(res%seps)) return
       if (size(res%seps) == 0) return
       call add(lines, '')
-      call add(lines, '## 4. Which test would tell them apart')
+      if (present(heading)) then
+         call add(lines, heading)
+      else
+         call add(lines, '## 4. Which test would tell them apart')
+      end if
       call add(lines, '')
       call add(lines, 'Each candidate simulated with each effect''s refit (a per-test parameter at the fit '// &
          'tests'' mean); D = sum of the squared difference of the two responses over the noise '// &

@@ -13,7 +13,7 @@ module usharp_diagnose_types
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
-   public :: step_cost, step_done
+   public :: step_cost, step_done, joint_wanted, named_effect
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -148,6 +148,9 @@ module usharp_diagnose_types
       integer :: mark_nevals = 0
       integer(int64) :: mark_clock = 0
       real(dp) :: mark_cpu = 0.0_dp
+      !> When the held-out tests show a structured gap that the fit tests do not and no
+      !> effect is confirmed: the diagnosis of every test fitted together
+      type(diagnose_result), allocatable :: joint
    end type diagnose_result
 
 contains
@@ -196,12 +199,14 @@ contains
       held_quiet = res%gap_held <= res%floor_held
    end function held_quiet
 
-   !> True when e leaves both sets' structured gap at the noise level (at or below the floors)
+   !> True when e leaves both sets' structured gap at the noise level (at or below the
+   !> floors) where one of them had a structured gap: without one, every effect leaves the
+   !> noise level and only BIC tells them apart
    pure logical function leaves_noise(e, res)
       type(effect_outcome), intent(in) :: e
       type(diagnose_result), intent(in) :: res
       leaves_noise = (1.0_dp - e%shrink_fit)*res%gap_fit <= res%floor_fit .and. &
-                     e%held_gap <= res%floor_held
+                     e%held_gap <= res%floor_held .and. (fit_structured(res) .or. .not. held_quiet(res))
    end function leaves_noise
 
    !> True when e removes most of the structured gap on both sets (a set without one at the
@@ -212,4 +217,28 @@ contains
       explains_most = (e%shrink_fit >= most .or. .not. fit_structured(res)) .and. &
                       (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held)
    end function explains_most
+
+   !> True when a diagnosis should go on to fit the held-out tests too: no effect is
+   !> confirmed, the held-out tests have a structured gap and the fit tests have none. Then
+   !> the fit tests carry nothing an effect could be fitted to, so their prediction cannot
+   !> confirm any; the gap is either the constants the fit tests leave loose (fitted
+   !> together, every test reaches its noise level) or an effect only the held-out tests show
+   pure logical function joint_wanted(res, joint)
+      type(diagnose_result), intent(in) :: res
+      logical, intent(in) :: joint       !< this diagnosis is already the joint one
+      joint_wanted = .not. joint .and. res%leading == 0 .and. .not. fit_structured(res) .and. &
+                     .not. held_quiet(res)
+   end function joint_wanted
+
+   !> The catalogue number of the effect a diagnosis names first (0: none): the leading
+   !> confirmed effect, else the one its joint stage confirms
+   pure integer function named_effect(res) result(k)
+      type(diagnose_result), intent(in) :: res
+      k = 0
+      if (res%leading > 0) then
+         k = res%effects(res%leading)%k
+      else if (allocated(res%joint)) then
+         if (res%joint%leading > 0) k = res%joint%effects(res%joint%leading)%k
+      end if
+   end function named_effect
 end module usharp_diagnose_types

@@ -13,7 +13,7 @@ module usharp_diagnose_verdict
    implicit none
    private
 
-   public :: conclude, verdict_of, top_regions
+   public :: conclude, verdict_of, top_regions, joint_verdict
 
 contains
 
@@ -95,7 +95,10 @@ contains
             text = trim(e%name)//' partly explains the gap'
          end if
          text = text//': BIC '//real_str(e%dbic, 'f0.1')
-         if (.not. fit_structured(res) .and. held_quiet(res)) then
+         if (.not. any(res%held)) then
+            text = text//', structured gap of every test fitted together removed '// &
+                   real_str(100.0_dp*e%shrink_fit, 'f0.1')//' %'
+         else if (.not. fit_structured(res) .and. held_quiet(res)) then
             ! Found by its own test (BIC) under the floors of the gap test, which asks of
             ! every direction of the residual at once
             text = text//'; both sets'' structured gaps lie below their floors, and the '// &
@@ -124,6 +127,31 @@ contains
       end associate
       res%verdict = text
    end subroutine effect_verdict
+
+   !> The verdict of a diagnosis whose fit tests showed no structured gap while its held-out
+   !> tests did, and which confirmed nothing, from its joint stage (jres: every test fitted):
+   !> an effect the joint stage confirms leads, said to rest on a fit to the tests it explains
+   !> and not on a prediction; a joint baseline at the noise level says the held-out gap came
+   !> from the constants the fit tests leave loose
+   subroutine joint_verdict(res, jres)
+      type(diagnose_result), intent(inout) :: res
+      type(diagnose_result), intent(in) :: jres
+      character(len=*), parameter :: basis = ' (fitted with the held-out tests: the fit tests alone '// &
+         'show no structured gap, so their prediction cannot confirm it)'
+      integer :: n
+      if (jres%leading > 0) then
+         n = len_trim(jres%effects(jres%leading)%name)
+         res%verdict = jres%verdict(:n)//basis//jres%verdict(n + 1:)
+      else if (.not. fit_structured(jres)) then
+         res%verdict = 'no significant effect: fitted together with the fit tests, the held-out '// &
+            'tests too are at the noise level (structured gap '//real_str(jres%gap_fit, 'es9.2')// &
+            ' against its floor '//real_str(jres%floor_fit, 'es9.2')//'): their predicted gap '// &
+            'comes from constants the fit tests alone leave loose, not from a missing effect'// &
+            serration_note(res)
+      else
+         res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
+      end if
+   end subroutine joint_verdict
 
    !> The verdict when no effect is confirmed
    subroutine no_effect(res)

@@ -15,7 +15,7 @@ module usharp_selfcheck
                              effect_nparams
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, diagnose_report, &
-                              held_quiet
+                              held_quiet, named_effect
    use usharp_rng, only: rng_type
    use usharp_sort, only: order_of
    use usharp_task_farm, only: task_list, task_text, run_tasks
@@ -250,8 +250,7 @@ contains
             ', repetition '//str(rep)//': '//e%message(1:min(len(e%message), 150))]
          write (head, '(a)') '1 0 0 0 0.0'
       else
-         first = 0
-         if (res%leading > 0) first = res%effects(res%leading)%k
+         first = named_effect(res)
          named_k = named(res, ki)
          if (.not. named_k) lines = [character(len=200) :: lines, '', '---', '', &
             '# miss: injected '//str(ki)//', repetition '//str(rep)//', parameters '// &
@@ -387,6 +386,14 @@ contains
    pure logical function named(res, k)
       type(diagnose_result), intent(in) :: res
       integer, intent(in) :: k
+      named = named_by(res, k)
+      if (res%leading == 0 .and. allocated(res%joint)) named = named_by(res%joint, k)
+   end function named
+
+   !> named, for one diagnosis (without its joint stage)
+   pure logical function named_by(res, k) result(named)
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: k
       integer :: j
       named = .false.
       if (res%leading > 0) named = res%effects(res%leading)%k == k
@@ -401,7 +408,7 @@ contains
             if (res%effects(res%alike(j))%k == k) named = .true.
          end if
       end do
-   end function named
+   end function named_by
 
    pure function real_list(p) result(text)
       real(dp), intent(in) :: p(:)
