@@ -96,6 +96,8 @@ contains
          npts = [(size(ctx%prob%targets(i)%exp%y), i=1, nt)]
          res%floor_fit = gap_z*gap_se(nv, res%test_of, npts, .not. res%held)
          res%floor_held = gap_z*gap_se(nv, res%test_of, npts, res%held)
+         res%gap_held_noise = res%gap_held
+         res%floor_held_noise = res%floor_held
          if (any(res%held)) then
             call prediction_spread(ctx, base_all, res, pvar)
             res%noise_held = res%noise_held + res%pred_held

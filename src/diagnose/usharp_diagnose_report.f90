@@ -283,7 +283,8 @@ contains
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      call add(lines, 'The fit tests show no structured gap and the held-out tests do, so nothing fitted to '// &
+      call add(lines, 'The fit tests show no structured gap and the held-out tests show one against '// &
+         'their noise, so nothing fitted to '// &
          'the fit tests alone can be confirmed by the prediction: the diagnosis again with every test '// &
          'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &
          'which is weaker evidence than a prediction; a test that shows it on its own confirms it.')

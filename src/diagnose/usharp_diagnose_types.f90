@@ -125,6 +125,9 @@ module usharp_diagnose_types
       real(dp) :: gap_fit = 0.0_dp, gap_held = 0.0_dp      !< structured gaps at the baseline
       !> Gaps up to these are noise: gap_z standard errors of the gap noise alone leaves
       real(dp) :: floor_fit = 0.0_dp, floor_held = 0.0_dp
+      !> The held-out tests' gap and floor against their noise alone (without the constants'
+      !> uncertainty): above it, the held-out data show something the noise does not
+      real(dp) :: gap_held_noise = 0.0_dp, floor_held_noise = 0.0_dp
       integer :: m = 0                            !< residuals of the fit tests
       type(region_stat), allocatable :: regions(:)
       type(effect_outcome), allocatable :: effects(:)  !< sorted by pred_dbic
@@ -219,15 +222,17 @@ contains
    end function explains_most
 
    !> True when a diagnosis should go on to fit the held-out tests too: no effect is
-   !> confirmed, the held-out tests have a structured gap and the fit tests have none. Then
-   !> the fit tests carry nothing an effect could be fitted to, so their prediction cannot
-   !> confirm any; the gap is either the constants the fit tests leave loose (fitted
-   !> together, every test reaches its noise level) or an effect only the held-out tests show
+   !> confirmed, the fit tests have no structured gap and the held-out tests have one against
+   !> their noise (with or without the constants' uncertainty on top). Then the fit tests
+   !> carry nothing an effect could be fitted to, so their prediction confirms none; the gap
+   !> is either the constants the fit tests leave loose (fitted together, every test reaches
+   !> its noise level) or an effect that only the held-out tests show (a softening of later
+   !> cycles that a relaxation and a ratcheting test do not reach)
    pure logical function joint_wanted(res, joint)
       type(diagnose_result), intent(in) :: res
       logical, intent(in) :: joint       !< this diagnosis is already the joint one
       joint_wanted = .not. joint .and. res%leading == 0 .and. .not. fit_structured(res) .and. &
-                     .not. held_quiet(res)
+                     res%gap_held_noise > res%floor_held_noise
    end function joint_wanted
 
    !> The catalogue number of the effect a diagnosis names first (0: none): the leading
