@@ -524,35 +524,15 @@ contains
    !> python3, numpy, scipy.
    subroutine test_independent(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
       type(diagnose_result) :: res
-      character(len=*), parameter :: dir = 'build/test-scratch/'
       character(len=16), parameter :: rows(3) = [character(len=16) :: 'clean', 'modulus', 'temperature']
       logical :: named
-      integer :: j
-      integer :: stat, cmdstat, i
-      call execute_command_line('python3 -c "import numpy, scipy" > /dev/null 2>&1', &
-                                exitstat=stat, cmdstat=cmdstat)
-      if (cmdstat /= 0 .or. stat /= 0) then
-         call skip_test(error, 'python3 with numpy and scipy not found: the independent data '// &
-                        'cannot be made (pip install scipy)')
-         return
-      end if
+      integer :: i, j
+      if (.not. have_scipy(error)) return
       do i = 1, size(rows)
-         call execute_command_line('python3 bench/independent/selfcheck.py --make thesis-hold-ratchet '// &
-            trim(rows(i))//' 0.5 3 '//dir//'indep-'//trim(rows(i))//' > /dev/null', exitstat=stat, &
-            cmdstat=cmdstat)
-         call check(error, cmdstat == 0 .and. stat == 0, 'the independent generator failed')
+         call diagnose_independent('thesis-hold-ratchet', trim(rows(i)), '0.5', '3', &
+                                   'build/test-scratch/indep-'//trim(rows(i)), res, error)
          if (allocated(error)) return
-         call read_config(dir//'indep-'//trim(rows(i))//'/diagnose.nml', cfg, e)
-         if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-         if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
-         if (allocated(e)) then
-            call test_failed(error, 'diagnosis failed: '//e%message)
-            return
-         end if
          write (*, '(4x,a)') trim(rows(i))//': '//res%verdict
          if (rows(i) == 'clean') then
             call check(error, res%leading == 0 .and. index(res%verdict, 'no significant effect') == 1, &
@@ -583,30 +563,11 @@ contains
    !> saying on what evidence
    subroutine test_joint(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
       type(diagnose_result) :: res
-      character(len=*), parameter :: dir = 'build/test-scratch/indep-lcf-softening'
-      integer :: stat, cmdstat
-      call execute_command_line('python3 -c "import numpy, scipy" > /dev/null 2>&1', &
-                                exitstat=stat, cmdstat=cmdstat)
-      if (cmdstat /= 0 .or. stat /= 0) then
-         call skip_test(error, 'python3 with numpy and scipy not found: the independent data '// &
-                        'cannot be made (pip install scipy)')
-         return
-      end if
-      call execute_command_line('python3 bench/independent/selfcheck.py --make thesis-hold-lcf '// &
-         'softening 0.3 3 '//dir//' > /dev/null', exitstat=stat, cmdstat=cmdstat)
-      call check(error, cmdstat == 0 .and. stat == 0, 'the independent generator failed')
+      if (.not. have_scipy(error)) return
+      call diagnose_independent('thesis-hold-lcf', 'softening', '0.3', '3', &
+                                'build/test-scratch/indep-lcf-softening', res, error)
       if (allocated(error)) return
-      call read_config(dir//'/diagnose.nml', cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
-      if (allocated(e)) then
-         call test_failed(error, 'diagnosis failed: '//e%message)
-         return
-      end if
       write (*, '(4x,a)') res%verdict
       call check(error, res%leading == 0 .and. allocated(res%joint), &
                  'the fit tests'' prediction confirmed an effect, or no joint stage ran')
@@ -614,6 +575,38 @@ contains
       call check(error, named_effect(res) == effect_index('softening') .and. &
                  index(res%verdict, 'softening (fitted with the held-out tests') == 1, res%verdict)
    end subroutine test_joint
+
+   !> Whether python3 with numpy and scipy is here to make independent data (else error
+   !> holds the skip, saying why)
+   logical function have_scipy(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer :: stat, cmdstat
+      call execute_command_line('python3 -c "import numpy, scipy" > /dev/null 2>&1', &
+                                exitstat=stat, cmdstat=cmdstat)
+      have_scipy = cmdstat == 0 .and. stat == 0
+      if (.not. have_scipy) call skip_test(error, 'python3 with numpy and scipy not found: the '// &
+                                           'independent data cannot be made (pip install scipy)')
+   end function have_scipy
+
+   !> One case of the independent generator (matrix, row, point u of the range, seed) made
+   !> in dir and diagnosed into res
+   subroutine diagnose_independent(matrix, row, u, seed, dir, res, error)
+      character(len=*), intent(in) :: matrix, row, u, seed, dir
+      type(diagnose_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      integer :: stat, cmdstat
+      call execute_command_line('python3 bench/independent/selfcheck.py --make '//matrix//' '//row// &
+         ' '//u//' '//seed//' '//dir//' > /dev/null', exitstat=stat, cmdstat=cmdstat)
+      call check(error, cmdstat == 0 .and. stat == 0, 'the independent generator failed')
+      if (allocated(error)) return
+      call read_config(dir//'/diagnose.nml', cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
+      if (allocated(e)) call test_failed(error, 'diagnosis failed: '//e%message)
+   end subroutine diagnose_independent
 
    subroutine decay_residuals(self, xs, rs, fs, ok, error)
       class(decay_problem), intent(inout) :: self
