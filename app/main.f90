@@ -83,7 +83,7 @@ contains
    subroutine finish(code)
       integer, intent(in) :: code
       call parallel_stop()
-      if (code == 0) stop
+      ! quiet: no note of floating-point flags on stderr, which a model's trial points raise
       stop code, quiet=.true.
    end subroutine finish
 
