@@ -33,7 +33,7 @@ module usharp_rosenbrock_driver
       integer, allocatable :: positive(:)
       type(segment_type) :: seg
       integer :: k = 1
-      !> A smooth forcing (plain model): the spline's second derivatives at the samples
+      !> A smooth forcing (plain model, or extended without a lag): the spline's second derivatives at the samples
       !> (tc, vc) and the last sample kend of the branch that begins at sample k; the spline
       !> is searched between samples lo and hi when hi > 0 (the span of the current step),
       !> else over the branch
@@ -116,7 +116,14 @@ contains
          sys%stiffness = model%youngs/(1.0_dp + effects%compliance)
          sys%tc = hist%t
          sys%vc = hist%v
-         sys%yk = lag_corners(hist%t, hist%v, effects%lag)
+         ! Without a lag the effects follow a smooth forcing as the plain model does (its
+         ! turning points the only corners); a lag acts on the samples piecewise linearly
+         sys%smooth = hist%smooth() .and. effects%lag == 0.0_dp
+         if (sys%smooth) then
+            sys%mc = hist%d2
+         else
+            sys%yk = lag_corners(hist%t, hist%v, effects%lag)
+         end if
          n = extended_size(model)
          allocate (y0(n), atol(n))
          call extended_initial(model, effects, y0)
@@ -208,7 +215,7 @@ contains
       real(dp), intent(in) :: t, y(:)
       real(dp), intent(out) :: sigma, dsig, dsig_dt
       real(dp) :: load, rate
-      if (sys%extended) then
+      if (sys%extended .and. .not. sys%smooth) then
          call lagged_value(sys%tc, sys%vc, sys%yk, sys%k, sys%eff%lag, t, load, rate)
       else if (sys%smooth) then
          if (sys%hi > 0) then
