@@ -49,7 +49,7 @@ module usharp_diagnose
    private
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
-   public :: write_report, gn_decrease, diagnose_options_of, held_quiet, named_effect
+   public :: write_report, gn_decrease, diagnose_options_of, held_quiet, named_effect, fit_structured
    public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict

@@ -9,7 +9,7 @@ module usharp_diagnose_report
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured
    use usharp_diagnose_verdict, only: verdict_of, top_regions
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
@@ -33,7 +33,7 @@ contains
       call which_section(lines, res, opts)
       call shrink_section(lines, res, opts)
       call separate_section(lines, res)
-      if (allocated(res%joint)) call joint_section(lines, res%joint, opts)
+      if (allocated(res%joint)) call joint_section(lines, res, opts)
       call add(lines, '')
       call add(lines, str(res%nevals)//' simulations of the test set.')
       call steps_list(lines, res)
@@ -275,17 +275,24 @@ contains
 
    !> Section 5, when the held-out tests showed a structured gap the fit tests did not and
    !> nothing was confirmed: the diagnosis of every test fitted together (jres)
-   subroutine joint_section(lines, jres, opts)
+   subroutine joint_section(lines, res, opts)
       character(len=200), allocatable, intent(inout) :: lines(:)
-      type(diagnose_result), intent(in) :: jres
+      !> the diagnosis of the fit tests, its joint stage in res%joint
+      type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
       integer :: i
+      associate (jres => res%joint)
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      call add(lines, 'The fit tests show no structured gap and the held-out tests show one against '// &
-         'their noise, so nothing fitted to '// &
-         'the fit tests alone can be confirmed by the prediction: the diagnosis again with every test '// &
+      if (fit_structured(res)) then
+         call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
+            'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
+      else
+         call add(lines, 'The fit tests show no structured gap and the held-out tests show one against '// &
+            'their noise, so nothing fitted to the fit tests alone can be confirmed by the prediction.')
+      end if
+      call add(lines, 'The diagnosis again with every test '// &
          'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &
          'which is weaker evidence than a prediction; a test that shows it on its own confirms it.')
       call add(lines, '')
@@ -300,6 +307,7 @@ contains
       call add(lines, '')
       call which_section(lines, jres, opts, '### Which effect, every test fitted')
       call separate_section(lines, jres, '### Which test would tell them apart, every test fitted')
+      end associate
    end subroutine joint_section
 
    !> Section 4, when effects explain the gap equally well: the candidate tests that would

@@ -222,18 +222,36 @@ contains
    end function explains_most
 
    !> True when a diagnosis should go on to fit the held-out tests too: no effect is
-   !> confirmed, the fit tests have no structured gap and the held-out tests have one against
-   !> their noise (with or without the constants' uncertainty on top). Then the fit tests
-   !> carry nothing an effect could be fitted to, so their prediction confirms none; the gap
-   !> is either the constants the fit tests leave loose (fitted together, every test reaches
-   !> its noise level) or an effect that only the held-out tests show (a softening of later
-   !> cycles that a relaxation and a ratcheting test do not reach)
+   !> confirmed and the fit tests cannot say which effect there is. Either they have no
+   !> structured gap while the held-out tests have one against their noise (with or without
+   !> the constants' uncertainty on top): the fit tests carry nothing an effect could be
+   !> fitted to, and the gap is the constants they leave loose (fitted together, every test
+   !> reaches its noise level) or an effect only the held-out tests show (a softening of
+   !> later cycles that a relaxation and a ratcheting test do not reach). Or an effect takes
+   !> their structured gap to its floor (see form_open) but does not carry to the held-out
+   !> tests: the fit tests show it and leave its form open (a softening and a slow hardening
+   !> with other constants fit them alike), and only the held-out tests can decide the form.
    pure logical function joint_wanted(res, joint)
       type(diagnose_result), intent(in) :: res
       logical, intent(in) :: joint       !< this diagnosis is already the joint one
-      joint_wanted = .not. joint .and. res%leading == 0 .and. .not. fit_structured(res) .and. &
-                     res%gap_held_noise > res%floor_held_noise
+      integer :: j
+      joint_wanted = .false.
+      if (joint .or. res%leading /= 0) return
+      if (fit_structured(res)) then
+         joint_wanted = any([(form_open(res%effects(j), res), j=1, size(res%effects))])
+      else
+         joint_wanted = res%gap_held_noise > res%floor_held_noise
+      end if
    end function joint_wanted
+
+   !> True when e, significant, of a plausible and resolved magnitude, takes the fit tests'
+   !> structured gap to its floor without being confirmed on the held-out tests
+   pure logical function form_open(e, res)
+      type(effect_outcome), intent(in) :: e
+      type(diagnose_result), intent(in) :: res
+      form_open = e%refitted .and. e%significant .and. e%plausible .and. e%resolved .and. &
+                  .not. e%confirmed .and. (1.0_dp - e%shrink_fit)*res%gap_fit <= res%floor_fit
+   end function form_open
 
    !> The catalogue number of the effect a diagnosis names first (0: none): the leading
    !> confirmed effect, else the one its joint stage confirms

@@ -136,12 +136,19 @@ contains
    subroutine joint_verdict(res, jres)
       type(diagnose_result), intent(inout) :: res
       type(diagnose_result), intent(in) :: jres
-      character(len=*), parameter :: basis = ' (fitted with the held-out tests: the fit tests alone '// &
+      character(len=*), parameter :: quiet = ' (fitted with the held-out tests: the fit tests alone '// &
          'show no structured gap, so their prediction cannot confirm it)'
+      character(len=*), parameter :: open = ' (fitted with the held-out tests: fitted to the fit '// &
+         'tests alone, the effects that explain them do not carry to the held-out tests, so ' // &
+         'their prediction cannot confirm it)'
       integer :: n
       if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
-         res%verdict = jres%verdict(:n)//basis//jres%verdict(n + 1:)
+         if (fit_structured(res)) then
+            res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
+         else
+            res%verdict = jres%verdict(:n)//quiet//jres%verdict(n + 1:)
+         end if
       else if (.not. fit_structured(jres)) then
          res%verdict = 'no significant effect: fitted together with the fit tests, the held-out '// &
             'tests too are at the noise level (structured gap '//real_str(jres%gap_fit, 'es9.2')// &
