@@ -392,18 +392,8 @@ contains
       type(solver_options) :: def, tight
       type(sim_result) :: r, ref, rr
       real(dp), allocatable :: t(:), v(:), tout(:)
-      real(dp) :: ph
-      integer :: k
       call model_setup(m, uerr)
-      allocate (t(641), v(641))
-      do k = 1, 641
-         t(k) = 0.05_dp*real(k - 1, dp)
-         ph = modulo(t(k), 16.0_dp)
-         v(k) = 0.004_dp*merge(ph/4.0_dp, merge(2.0_dp - ph/4.0_dp, ph/4.0_dp - 4.0_dp, ph <= 12.0_dp), &
-                               ph <= 4.0_dp)
-         v(k) = 1.0e-5_dp*anint(v(k)/1.0e-5_dp)
-      end do
-      v(101:103) = v(101:103) - 5.0e-5_dp
+      call measured_like(t, v)
       call measured_history(t, v, control_strain, hs, uerr)
       if (.not. allocated(uerr)) call history_from_points(t, v, control_strain, hr, uerr)
       call check(error, .not. allocated(uerr), 'histories built')
@@ -437,18 +427,9 @@ contains
       type(sim_result) :: plain, none, r, ref, rr, lag_s, lag_r
       type(test_effects) :: eff, off
       real(dp), allocatable :: t(:), v(:), tout(:)
-      real(dp) :: ph, peak
-      integer :: k
+      real(dp) :: peak
       call model_setup(m, uerr)
-      allocate (t(641), v(641))
-      do k = 1, 641
-         t(k) = 0.05_dp*real(k - 1, dp)
-         ph = modulo(t(k), 16.0_dp)
-         v(k) = 0.004_dp*merge(ph/4.0_dp, merge(2.0_dp - ph/4.0_dp, ph/4.0_dp - 4.0_dp, ph <= 12.0_dp), &
-                               ph <= 4.0_dp)
-         v(k) = 1.0e-5_dp*anint(v(k)/1.0e-5_dp)
-      end do
-      v(101:103) = v(101:103) - 5.0e-5_dp
+      call measured_like(t, v)
       call measured_history(t, v, control_strain, hs, uerr)
       if (.not. allocated(uerr)) call history_from_points(hs%t, hs%v, control_strain, hr, uerr)
       call check(error, .not. allocated(uerr), 'histories built')
@@ -488,6 +469,23 @@ contains
       call check(error, maxval(abs(lag_s%stress - lag_r%stress)) <= 1.0e-8_dp*peak, &
                  'a lag follows the samples')
    end subroutine test_smooth_effects
+
+   !> A measured-like strain: two triangular cycles of +-0.4 % at 1e-3/s sampled every 0.05 s,
+   !> rounded to 1e-5, with a 5e-5 dip in the first ramp
+   subroutine measured_like(t, v)
+      real(dp), allocatable, intent(out) :: t(:), v(:)
+      real(dp) :: ph
+      integer :: k
+      allocate (t(641), v(641))
+      do k = 1, 641
+         t(k) = 0.05_dp*real(k - 1, dp)
+         ph = modulo(t(k), 16.0_dp)
+         v(k) = 0.004_dp*merge(ph/4.0_dp, merge(2.0_dp - ph/4.0_dp, ph/4.0_dp - 4.0_dp, ph <= 12.0_dp), &
+                               ph <= 4.0_dp)
+         v(k) = 1.0e-5_dp*anint(v(k)/1.0e-5_dp)
+      end do
+      v(101:103) = v(101:103) - 5.0e-5_dp
+   end subroutine measured_like
 
    !> ARKODE (ESDIRK) and RODAS4 integrate the same equations: the thesis LCF test agrees
    !> within 1e-3 of the peak stress at ARKODE's rtol 1e-6 (its dense output limits it to
