@@ -20,7 +20,7 @@ module test_diagnose
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
-   use usharp_diagnose_types, only: effect_outcome
+   use usharp_diagnose_types, only: effect_outcome, joint_wanted
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_refit, only: judge
    use usharp_diagnose_separate, only: separate
@@ -67,6 +67,7 @@ contains
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
+         new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
          new_unittest('softening-saturates-jacobian-against-differences', test_softening), &
@@ -705,6 +706,50 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
    end subroutine separation_baseline
+
+   !> The stage with every test fitted together runs when nothing is confirmed, the held-out
+   !> tests have a structured gap and the fit tests cannot say which effect it is: no
+   !> structured gap, or one that no significant effect explains, or one an effect takes to
+   !> its floor without carrying to the held-out tests (its form left open, whatever the
+   !> held-out gap); not when a significant effect explains only part of the fit tests' gap,
+   !> nor when one is confirmed
+   subroutine test_joint_rule(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      res%gap_fit = 0.093_dp
+      res%floor_fit = 0.090_dp
+      res%gap_held_noise = 439.0_dp
+      res%floor_held_noise = 154.0_dp
+      allocate (res%effects(2))
+      res%effects%refitted = .true.
+      call check(error, joint_wanted(res, .false.), 'a structured gap that no significant effect explains')
+      if (allocated(error)) return
+      call check(error, .not. joint_wanted(res, .true.), 'the joint diagnosis does not go on')
+      if (allocated(error)) return
+      res%gap_fit = 1.0_dp
+      call check(error, joint_wanted(res, .false.), 'a larger structured gap that no significant effect explains')
+      if (allocated(error)) return
+      res%effects(2)%significant = .true.
+      res%effects(2)%shrink_fit = 0.5_dp
+      call check(error, .not. joint_wanted(res, .false.), 'a significant effect explains part of the fit gap')
+      if (allocated(error)) return
+      res%effects(2)%shrink_fit = 0.99_dp
+      call check(error, joint_wanted(res, .false.), 'an effect takes the fit gap to its floor, not confirmed')
+      if (allocated(error)) return
+      res%effects(2)%plausible = .false.
+      call check(error, .not. joint_wanted(res, .false.), 'that effect at an implausible magnitude')
+      if (allocated(error)) return
+      res%effects(2)%plausible = .true.
+      res%leading = 2
+      res%effects(2)%confirmed = .true.
+      call check(error, .not. joint_wanted(res, .false.), 'an effect is confirmed')
+      if (allocated(error)) return
+      res%leading = 0
+      res%effects(2)%confirmed = .false.
+      res%effects(2)%significant = .false.
+      res%gap_held_noise = 100.0_dp
+      call check(error, .not. joint_wanted(res, .false.), 'nothing significant, the held-out tests at their noise')
+   end subroutine test_joint_rule
 
    !> Zero-width F descriptors print a leading zero and no bare point
    subroutine test_number_format(error)

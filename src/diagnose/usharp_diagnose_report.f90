@@ -285,12 +285,13 @@ contains
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      if (fit_structured(res)) then
+      if (fit_structured(res) .and. any(res%effects%significant)) then
          call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
             'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
       else
-         call add(lines, 'The fit tests show no structured gap and the held-out tests show one against '// &
-            'their noise, so nothing fitted to the fit tests alone can be confirmed by the prediction.')
+         call add(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
+            'tests show one against their noise, so nothing fitted to the fit tests alone can be '// &
+            'confirmed by the prediction.')
       end if
       call add(lines, 'The diagnosis again with every test '// &
          'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &

@@ -223,9 +223,10 @@ contains
 
    !> True when a diagnosis should go on to fit the held-out tests too: no effect is
    !> confirmed and the fit tests cannot say which effect there is. Either they have no
-   !> structured gap while the held-out tests have one against their noise (with or without
-   !> the constants' uncertainty on top): the fit tests carry nothing an effect could be
-   !> fitted to, and the gap is the constants they leave loose (fitted together, every test
+   !> structured gap, or no effect fitted to them is significant, while the held-out tests
+   !> have one against their noise (with or without the constants' uncertainty on top): the
+   !> fit tests carry nothing an effect could be fitted to, and the gap is the constants they
+   !> leave loose (fitted together, every test
    !> reaches its noise level) or an effect only the held-out tests show (a softening of
    !> later cycles that a relaxation and a ratcheting test do not reach). Or an effect takes
    !> their structured gap to its floor (see form_open) but does not carry to the held-out
@@ -237,7 +238,7 @@ contains
       integer :: j
       joint_wanted = .false.
       if (joint .or. res%leading /= 0) return
-      if (fit_structured(res)) then
+      if (fit_structured(res) .and. any(res%effects%significant)) then
          joint_wanted = any([(form_open(res%effects(j), res), j=1, size(res%effects))])
       else
          joint_wanted = res%gap_held_noise > res%floor_held_noise

@@ -137,14 +137,14 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(diagnose_result), intent(in) :: jres
       character(len=*), parameter :: quiet = ' (fitted with the held-out tests: the fit tests alone '// &
-         'show no structured gap, so their prediction cannot confirm it)'
+         'show no structured gap that an effect explains, so their prediction cannot confirm it)'
       character(len=*), parameter :: open = ' (fitted with the held-out tests: fitted to the fit '// &
          'tests alone, the effects that explain them do not carry to the held-out tests, so ' // &
          'their prediction cannot confirm it)'
       integer :: n
       if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
-         if (fit_structured(res)) then
+         if (fit_structured(res) .and. any(res%effects%significant)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
             res%verdict = jres%verdict(:n)//quiet//jres%verdict(n + 1:)
