@@ -40,7 +40,10 @@ echo "usharp-job: $(date -u +%FT%TZ) start: ${launcher[*]} $usharp ${args[*]} ($
 "${launcher[@]}" "$usharp" "${args[@]}" &
 pid=$!
 stopped=0
-trap 'stopped=1; kill -TERM "$pid" 2>/dev/null' TERM INT
+# Through a launcher the stop goes on as USR1, which usharp takes as TERM: mpirun passes USR1
+# to every rank at once (srun too), but holds a TERM back for its kill timeout and then kills
+if [ ${#launcher[@]} -gt 0 ]; then stop_sig=USR1; else stop_sig=TERM; fi
+trap 'stopped=1; kill -"$stop_sig" "$pid" 2>/dev/null' TERM INT
 while true; do
   wait "$pid"
   rc=$?

@@ -1,6 +1,9 @@
 !> A stop request by signal: SIGTERM (what a batch scheduler sends at its wall-time limit)
 !> and SIGINT (Ctrl-C) set a flag that a fit checks between evaluations, so it stops with
-!> its logs and journal complete and can be continued with --resume.
+!> its logs and journal complete and can be continued with --resume. SIGUSR1 is taken as a
+!> SIGTERM: Open MPI's mpirun passes it on to every rank at once, while it holds a SIGTERM
+!> back for its kill timeout (1 s) and kills the ranks one timeout later, too soon for them
+!> to stop cleanly; so a job script stops MPI ranks with SIGUSR1.
 !>
 !> The flag is the one piece of global mutable state in usharp: a signal handler runs
 !> outside any call chain and can hand nothing back but through a variable it can reach;
@@ -13,7 +16,7 @@ module usharp_signal
 
    public :: catch_stop_signals, release_stop_signals, stop_signal, sigterm, sigint
 
-   integer(c_int), parameter :: sigint = 2, sigterm = 15
+   integer(c_int), parameter :: sigint = 2, sigterm = 15, sigusr1 = 10
 
    !> The number of the last stop signal received (0: none)
    integer(c_int), volatile, save :: received = 0
@@ -29,18 +32,20 @@ module usharp_signal
 
 contains
 
-   !> Catch SIGTERM and SIGINT from now on (they no longer end the process at once)
+   !> Catch SIGTERM, SIGINT and SIGUSR1 from now on (they no longer end the process at once)
    subroutine catch_stop_signals()
       type(c_funptr) :: previous
       previous = c_signal(sigterm, c_funloc(on_signal))
       previous = c_signal(sigint, c_funloc(on_signal))
+      previous = c_signal(sigusr1, c_funloc(on_signal))
    end subroutine catch_stop_signals
 
-   !> SIGTERM and SIGINT end the process again (SIG_DFL), e.g. once a fit is over
+   !> SIGTERM, SIGINT and SIGUSR1 end the process again (SIG_DFL), e.g. once a fit is over
    subroutine release_stop_signals()
       type(c_funptr) :: previous
       previous = c_signal(sigterm, c_null_funptr)
       previous = c_signal(sigint, c_null_funptr)
+      previous = c_signal(sigusr1, c_null_funptr)
    end subroutine release_stop_signals
 
    !> The stop signal received since catch_stop_signals (0: none)
@@ -50,6 +55,6 @@ contains
 
    subroutine on_signal(signum) bind(C)
       integer(c_int), value, intent(in) :: signum
-      received = signum
+      received = merge(sigterm, signum, signum == sigusr1)
    end subroutine on_signal
 end module usharp_signal
