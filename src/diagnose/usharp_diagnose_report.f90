@@ -9,7 +9,7 @@ module usharp_diagnose_report
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown
    use usharp_diagnose_verdict, only: verdict_of, top_regions
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
@@ -285,7 +285,7 @@ contains
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      if (fit_structured(res) .and. any(res%effects%significant)) then
+      if (fit_effects_shown(res)) then
          call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
             'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
       else

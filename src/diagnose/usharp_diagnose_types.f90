@@ -13,7 +13,7 @@ module usharp_diagnose_types
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
-   public :: step_cost, step_done, joint_wanted, named_effect
+   public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -226,9 +226,9 @@ contains
    !> structured gap, or no effect fitted to them is significant, while the held-out tests
    !> have one against their noise (with or without the constants' uncertainty on top): the
    !> fit tests carry nothing an effect could be fitted to, and the gap is the constants they
-   !> leave loose (fitted together, every test
-   !> reaches its noise level) or an effect only the held-out tests show (a softening of
-   !> later cycles that a relaxation and a ratcheting test do not reach). Or an effect takes
+   !> leave loose (fitted together, every test reaches its noise level) or an effect only
+   !> the held-out tests show (a softening of later cycles that a relaxation and a
+   !> ratcheting test do not reach). Or an effect takes
    !> their structured gap to its floor (see form_open) but does not carry to the held-out
    !> tests: the fit tests show it and leave its form open (a softening and a slow hardening
    !> with other constants fit them alike), and only the held-out tests can decide the form.
@@ -238,12 +238,18 @@ contains
       integer :: j
       joint_wanted = .false.
       if (joint .or. res%leading /= 0) return
-      if (fit_structured(res) .and. any(res%effects%significant)) then
+      if (fit_effects_shown(res)) then
          joint_wanted = any([(form_open(res%effects(j), res), j=1, size(res%effects))])
       else
          joint_wanted = res%gap_held_noise > res%floor_held_noise
       end if
    end function joint_wanted
+
+   !> True when the fit tests have a structured gap and an effect fitted to them is significant
+   pure logical function fit_effects_shown(res)
+      type(diagnose_result), intent(in) :: res
+      fit_effects_shown = fit_structured(res) .and. any(res%effects%significant)
+   end function fit_effects_shown
 
    !> True when e, significant, of a plausible and resolved magnitude, takes the fit tests'
    !> structured gap to its floor without being confirmed on the held-out tests

@@ -9,7 +9,7 @@ module usharp_diagnose_verdict
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
-                                    leaves_noise, explains_most
+                                    leaves_noise, explains_most, fit_effects_shown
    implicit none
    private
 
@@ -144,7 +144,7 @@ contains
       integer :: n
       if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
-         if (fit_structured(res) .and. any(res%effects%significant)) then
+         if (fit_effects_shown(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
             res%verdict = jres%verdict(:n)//quiet//jres%verdict(n + 1:)

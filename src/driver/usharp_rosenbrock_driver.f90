@@ -33,8 +33,9 @@ module usharp_rosenbrock_driver
       integer, allocatable :: positive(:)
       type(segment_type) :: seg
       integer :: k = 1
-      !> A smooth forcing (plain model, or extended without a lag): the spline's second derivatives at the samples
-      !> (tc, vc) and the last sample kend of the branch that begins at sample k; the spline
+      !> A smooth forcing (plain model, or extended without a lag): the spline's second
+      !> derivatives at the samples (tc, vc) and the last sample kend of the branch that
+      !> begins at sample k; the spline
       !> is searched between samples lo and hi when hi > 0 (the span of the current step),
       !> else over the branch
       logical :: smooth = .false.
