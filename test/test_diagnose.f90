@@ -20,7 +20,7 @@ module test_diagnose
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
-   use usharp_diagnose_types, only: effect_outcome, joint_wanted
+   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_refit, only: judge
    use usharp_diagnose_separate, only: separate
@@ -743,6 +743,37 @@ contains
       res%leading = 2
       res%effects(2)%confirmed = .true.
       call check(error, .not. joint_wanted(res, .false.), 'an effect is confirmed')
+      if (allocated(error)) return
+      ! Confirmed by its BIC alone, both sets below their floors: every test fitted decides
+      res%held = [.true., .false., .false.]
+      res%gap_fit = 0.0_dp
+      res%gap_held = 0.0_dp
+      res%floor_held = 2645.0_dp
+      call check(error, joint_wanted(res, .false.), 'an effect leads by BIC alone, both sets below their floors')
+      if (allocated(error)) return
+      res%effects(2)%k = 5
+      call check(error, named_effect(res) == 5, 'no joint stage yet: the leading effect is named')
+      if (allocated(error)) return
+      allocate (res%joint)
+      res%joint%gap_fit = 3.0_dp
+      res%joint%floor_fit = 0.1_dp
+      call check(error, .not. joint_decides(res) .and. named_effect(res) == 5, &
+                 'a joint stage that confirms nothing in a structured gap leaves the leading effect named')
+      if (allocated(error)) return
+      res%joint%effects = res%effects
+      res%joint%effects(1)%k = 7
+      res%joint%leading = 1
+      call check(error, joint_decides(res) .and. named_effect(res) == 7, 'the joint stage''s effect is named')
+      if (allocated(error)) return
+      res%joint%leading = 0
+      res%joint%gap_fit = 0.05_dp
+      call check(error, joint_decides(res) .and. named_effect(res) == 0, &
+                 'every test fitted together at the noise level: no effect is named')
+      if (allocated(error)) return
+      deallocate (res%joint)
+      res%gap_held = 10.0_dp
+      res%floor_held = 1.0_dp
+      call check(error, .not. joint_wanted(res, .false.), 'the held-out tests confirm it')
       if (allocated(error)) return
       res%leading = 0
       res%effects(2)%confirmed = .false.

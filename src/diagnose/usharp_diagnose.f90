@@ -35,7 +35,7 @@ module usharp_diagnose
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     fit_structured, diagnose_progress, tell, step_done, joint_wanted, &
-                                    named_effect
+                                    named_effect, joint_decides
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
@@ -50,6 +50,7 @@ module usharp_diagnose
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
    public :: write_report, gn_decrease, diagnose_options_of, held_quiet, named_effect, fit_structured
+   public :: joint_decides
    public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict

@@ -9,7 +9,7 @@ module usharp_diagnose_report
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only
    use usharp_diagnose_verdict, only: verdict_of, top_regions
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
@@ -273,8 +273,8 @@ contains
       end if
    end subroutine shrink_section
 
-   !> Section 5, when the held-out tests showed a structured gap the fit tests did not and
-   !> nothing was confirmed: the diagnosis of every test fitted together (jres)
+   !> Section 5, when the prediction could not confirm an effect (see joint_wanted): the
+   !> diagnosis of every test fitted together (jres)
    subroutine joint_section(lines, res, opts)
       character(len=200), allocatable, intent(inout) :: lines(:)
       !> the diagnosis of the fit tests, its joint stage in res%joint
@@ -285,7 +285,10 @@ contains
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      if (fit_effects_shown(res)) then
+      if (bic_only(res)) then
+         call add(lines, 'An effect leads on the fit tests by BIC alone while both sets'' structured gaps '// &
+            'lie below their floors: the held-out floor is too wide for the prediction to confirm it.')
+      else if (fit_effects_shown(res)) then
          call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
             'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
       else

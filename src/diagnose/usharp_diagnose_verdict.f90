@@ -9,7 +9,7 @@ module usharp_diagnose_verdict
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
-                                    leaves_noise, explains_most, fit_effects_shown
+                                    leaves_noise, explains_most, fit_effects_shown, bic_only
    implicit none
    private
 
@@ -128,11 +128,11 @@ contains
       res%verdict = text
    end subroutine effect_verdict
 
-   !> The verdict of a diagnosis whose fit tests showed no structured gap while its held-out
-   !> tests did, and which confirmed nothing, from its joint stage (jres: every test fitted):
-   !> an effect the joint stage confirms leads, said to rest on a fit to the tests it explains
-   !> and not on a prediction; a joint baseline at the noise level says the held-out gap came
-   !> from the constants the fit tests leave loose
+   !> The verdict of a diagnosis whose prediction could not confirm an effect (see
+   !> joint_wanted), from its joint stage (jres: every test fitted): an effect the joint stage
+   !> confirms leads, said to rest on a fit to the tests it explains and not on a prediction;
+   !> a joint baseline at the noise level says the held-out gap came from the constants the
+   !> fit tests leave loose
    subroutine joint_verdict(res, jres)
       type(diagnose_result), intent(inout) :: res
       type(diagnose_result), intent(in) :: jres
@@ -144,7 +144,12 @@ contains
       integer :: n
       if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
-         if (fit_effects_shown(res)) then
+         if (bic_only(res)) then
+            res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests '// &
+               'alone '//trim(res%effects(res%leading)%name)//' led by BIC '// &
+               real_str(res%effects(res%leading)%dbic, 'f0.1')//' with both sets'' structured gaps '// &
+               'below their floors, which the prediction cannot confirm)'//jres%verdict(n + 1:)
+         else if (fit_effects_shown(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
             res%verdict = jres%verdict(:n)//quiet//jres%verdict(n + 1:)
@@ -155,6 +160,8 @@ contains
             ' against its floor '//real_str(jres%floor_fit, 'es9.2')//'): their predicted gap '// &
             'comes from constants the fit tests alone leave loose, not from a missing effect'// &
             serration_note(res)
+         if (bic_only(res)) res%verdict = res%verdict//'; '//trim(res%effects(res%leading)%name)// &
+            ' led by BIC on the fit tests alone, which every test fitted together does not bear out'
       else
          res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
       end if

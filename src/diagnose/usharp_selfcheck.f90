@@ -15,7 +15,7 @@ module usharp_selfcheck
                              effect_nparams
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, diagnose_report, &
-                              held_quiet, named_effect
+                              held_quiet, named_effect, joint_decides
    use usharp_rng, only: rng_type
    use usharp_sort, only: order_of
    use usharp_task_farm, only: task_list, task_text, run_tasks
@@ -386,8 +386,11 @@ contains
    pure logical function named(res, k)
       type(diagnose_result), intent(in) :: res
       integer, intent(in) :: k
-      named = named_by(res, k)
-      if (res%leading == 0 .and. allocated(res%joint)) named = named_by(res%joint, k)
+      if (joint_decides(res)) then
+         named = named_by(res%joint, k)
+      else
+         named = named_by(res, k)
+      end if
    end function named
 
    !> named, for one diagnosis (without its joint stage)
