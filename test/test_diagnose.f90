@@ -20,6 +20,7 @@ module test_diagnose
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
+   use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_refit, only: judge
@@ -68,6 +69,7 @@ contains
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
+         new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
          new_unittest('softening-saturates-jacobian-against-differences', test_softening), &
@@ -781,6 +783,27 @@ contains
       res%gap_held_noise = 100.0_dp
       call check(error, .not. joint_wanted(res, .false.), 'nothing significant, the held-out tests at their noise')
    end subroutine test_joint_rule
+
+   !> The chi-square tails the power statement uses, against closed forms and scipy 1.x
+   !> (scipy.special.gammaincc, scipy.stats.chi2.sf and ncx2.sf, printed to 17 digits)
+   subroutine test_chi2_tails(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: got(9), want(9)
+      got = [gamma_q(1.0_dp, 3.7_dp), chi2_sf(5.0_dp, 2.0_dp), gamma_q(2.5_dp, 0.7_dp), &
+             gamma_q(2.5_dp, 9.0_dp), chi2_sf(16.0_dp, 3.0_dp), ncx2_sf(20.0_dp, 2.0_dp, 15.0_dp), &
+             ncx2_sf(16.0_dp, 1.0_dp, 4.0_dp), ncx2_sf(30.0_dp, 7.0_dp, 40.0_dp), &
+             ncx2_sf(50.0_dp, 3.0_dp, 2000.0_dp)]
+      ! k = 1: P(|z + sqrt(lambda)| > sqrt(x)) = Phi(-sqrt(x) - sqrt(lambda)) + Phi(sqrt(lambda) - sqrt(x))
+      want = [exp(-3.7_dp), exp(-2.5_dp), 0.924313272801667_dp, 0.0029464045878802923_dp, &
+              0.0011339842897853216_dp, 0.31634469213011623_dp, &
+              0.5_dp*erfc(6.0_dp/sqrt(2.0_dp)) + 0.5_dp*erfc(2.0_dp/sqrt(2.0_dp)), &
+              0.9129580078094358_dp, 1.0_dp]
+      call check(error, all(abs(got - want) <= 1.0e-12_dp + 1.0e-10_dp*abs(want)), 'chi-square tails: '// &
+                 real_str(maxval(abs(got - want)), 'es9.2')//' off')
+      if (allocated(error)) return
+      ! The noncentral tail with no signal is the central one
+      call check(error, abs(ncx2_sf(16.0_dp, 3.0_dp, 0.0_dp) - want(5)) < 1.0e-15_dp, 'lambda = 0')
+   end subroutine test_chi2_tails
 
    !> Zero-width F descriptors print a leading zero and no bare point
    subroutine test_number_format(error)

@@ -28,6 +28,7 @@ module test_diagnose_data
    use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context, &
                               named_effect, fit_structured
    use usharp_diagnose_verdict, only: conclude
+   use usharp_diagnose_numerics, only: bic_power
    use test_util, only: write_text
    implicit none
    private
@@ -54,6 +55,7 @@ contains
          new_unittest('serration-signature-in-the-residual', test_serration), &
          new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
          new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift), &
+         new_unittest('power-against-monte-carlo', test_power_monte_carlo), &
          new_unittest('independent-data-clean-modulus-temperature', test_independent), &
          new_unittest('lcf-held-out-softening-found-with-every-test-fitted', test_joint), &
          new_unittest('form-left-open-by-fit-tests-decided-with-every-test', test_joint_open), &
@@ -299,58 +301,14 @@ contains
       type(uerror), allocatable :: e
       type(run_config) :: cfg
       type(diagnose_options) :: opts
-      type(fit_problem) :: prob
-      type(effect_problem) :: ep
       type(test_effects) :: base
       type(experiment_type), allocatable :: exps(:)
       type(specimen_result) :: sr
-      type(rng_type) :: rng
-      real(dp), allocatable :: r(:), y(:)
       real(dp), parameter :: d_true = 8.0e-6_dp
-      integer :: i, k0, n, j
+      integer :: i, j
       logical :: ok
-      call read_config(write_text('diag-specimen.nml', [character(len=100) :: &
-         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
-         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
-         "  n = 5.8, q = 91000.0 /", &
-         "&fit fitted = 'B', 'H1', 'n', method = 'lm' /", &
-         "&diagnose specimen = 'c3', effects = 'scatter', 'lag', 'drift' /", &
-         "&test name = 'c1', history = 'cyclic', dt_out = 0.2, strain_range = 0.01,", &
-         "  strain_rate = 1.0e-3, cycles = 3 /", &
-         "&test name = 'c2', history = 'cyclic', dt_out = 0.2, strain_range = 0.006,", &
-         "  strain_rate = 1.0e-3, cycles = 3 /", &
-         "&test name = 'c3', history = 'cyclic', dt_out = 0.2, strain_range = 0.008,", &
-         "  strain_rate = 1.0e-3, cycles = 3 /"]), &
-         cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
+      call drift_case("'scatter', 'lag', 'drift'", d_true, 23, cfg, opts, exps, error)
       if (allocated(error)) return
-      if (allocated(error)) return
-      allocate (exps(3))
-      do i = 1, 3
-         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
-         exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
-      end do
-      call setup_problem(cfg, prob, e, exps)
-      call check(error, .not. allocated(e), 'setup failed')
-      if (allocated(error)) return
-      call new_effect_problem(prob, [1, 2, 3], 9, base, 1.0_dp, ep, free_constants=.false., &
-                              p0=[0.0_dp, 0.0_dp, d_true])
-      ep%pfree = .false.
-      allocate (r(ep%nres()), y(ep%nres()))
-      call ep%residual_at(ep%start(), r, ok, y)
-      call check(error, ok, 'simulation with drift failed')
-      if (allocated(error)) return
-      call rng%seed(23)
-      k0 = 0
-      do i = 1, 3
-         n = size(exps(i)%t)
-         exps(i)%y = y(k0 + 1:k0 + n)
-         do j = 1, n
-            exps(i)%y(j) = exps(i)%y(j) + 0.005_dp*maxval(abs(y(k0 + 1:k0 + n)))*rng%normal()
-         end do
-         k0 = k0 + n
-      end do
       call specimen_run(cfg, 3, opts, .true., sr, e, exps)
       call check(error, .not. allocated(e), 'per-specimen diagnosis failed')
       if (allocated(error)) return
@@ -367,7 +325,151 @@ contains
       call check(error, sr%effects(1)%p_lo(1) <= d_true .and. d_true <= sr%effects(1)%p_hi(1), &
                  'drift '//real_str(sr%effects(1)%p(1), 'es10.3')//' ['//real_str(sr%effects(1)%p_lo(1), &
                  'es10.3')//', '//real_str(sr%effects(1)%p_hi(1), 'es10.3')//'] misses 8e-6')
+      if (allocated(error)) return
+      ! The power statement: the drift's chi-square at the low end of its range (2e-5 strain
+      ! over the test), scaled to the injected drift (the signal is linear in it), is the fall
+      ! of the specimen's chi-square that fitting the drift gives (expected: lambda + 1)
+      ! of the specimen's chi-square that fitting the drift gives (expected: lambda + 1, within
+      ! 3 sd of a noncentral chi-square), and the signal simulated at the injected drift
+      block
+         type(fit_problem) :: prob3
+         type(effect_problem) :: e3
+         real(dp), allocatable :: r1(:), r0(:)
+         real(dp) :: duration, scaled, observed, direct
+         duration = maxval(exps(3)%t) - minval(exps(3)%t)
+         scaled = sr%effects(1)%lambda_low*(d_true*duration/2.0e-5_dp)**2
+         observed = (sr%f0 - sr%effects(1)%f_after)/(sr%f0/sr%m)
+         call check(error, abs(observed - scaled - 1.0_dp) < 3.0_dp*sqrt(2.0_dp*(1.0_dp + 2.0_dp*scaled)), &
+                    'drift chi-square at the injected drift: '//real_str(scaled, 'es10.3')// &
+                    ' from the low end, '//real_str(observed, 'es10.3')//' fitted')
+         if (allocated(error)) return
+         call setup_problem(cfg, prob3, e, exps)
+         call new_effect_problem(prob3, [3], 9, base, 1.0_dp, e3, free_constants=.false., &
+                                 p0=[0.0_dp, 0.0_dp, d_true])
+         e3%pfree = .false.
+         allocate (r1(e3%nres()), r0(e3%nres()))
+         call e3%residual_at(e3%start(), r1, ok)
+         e3%p0 = 0.0_dp
+         if (ok) call e3%residual_at(e3%start(), r0, ok)
+         call check(error, ok, 'simulations of the specimen failed')
+         if (allocated(error)) return
+         direct = sum((r1 - r0)**2)/(sr%f0/sr%m)
+         call check(error, abs(scaled/direct - 1.0_dp) < 0.02_dp, 'drift chi-square at the injected drift: '// &
+                    real_str(scaled, 'es10.3')//' from the low end, '//real_str(direct, 'es10.3')//' simulated')
+         if (allocated(error)) return
+      end block
+      call check(error, all(sr%effects%power_low >= 0.0_dp), 'power not computed for every effect')
+      if (allocated(error)) return
+      ! 2e-5 strain over a 48 s test is below what it carries (at 0.5 % noise); a lag of
+      ! 0.1 s is not
+      do i = 1, size(sr%effects)
+         if (sr%effects(i)%name == 'drift') call check(error, sr%effects(i)%power_low < 0.5_dp, &
+            'drift power at the low end '//real_str(sr%effects(i)%power_low, 'f0.2'))
+         if (sr%effects(i)%name == 'lag') call check(error, sr%effects(i)%power_low > 0.9_dp, &
+            'lag power at the low end '//real_str(sr%effects(i)%power_low, 'f0.2'))
+         if (allocated(error)) return
+      end do
    end subroutine test_specimen_drift
+
+   !> Three cyclic tests (1, 0.6, 0.8 % at 1e-3/s, 3 cycles; the model's own constants) of
+   !> which the third, c3, carries an extensometer drift d (1/s), 0.5 % noise (seed), and the
+   !> deck that diagnoses c3 against the other two with the effects `effects`
+   subroutine drift_case(effects, d, seed, cfg, opts, exps, error)
+      character(len=*), intent(in) :: effects
+      real(dp), intent(in) :: d
+      integer, intent(in) :: seed
+      type(run_config), intent(out) :: cfg
+      type(diagnose_options), intent(out) :: opts
+      type(experiment_type), allocatable, intent(out) :: exps(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(test_effects) :: base
+      type(rng_type) :: rng
+      real(dp), allocatable :: r(:), y(:)
+      integer :: i, k0, n, j
+      logical :: ok
+      call read_config(write_text('diag-specimen.nml', [character(len=100) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0,", &
+         "  n = 5.8, q = 91000.0 /", &
+         "&fit fitted = 'B', 'H1', 'n', method = 'lm' /", &
+         "&diagnose specimen = 'c3', effects = "//effects//" /", &
+         "&test name = 'c1', history = 'cyclic', dt_out = 0.2, strain_range = 0.01,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /", &
+         "&test name = 'c2', history = 'cyclic', dt_out = 0.2, strain_range = 0.006,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /", &
+         "&test name = 'c3', history = 'cyclic', dt_out = 0.2, strain_range = 0.008,", &
+         "  strain_rate = 1.0e-3, cycles = 3 /"]), &
+         cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
+      if (allocated(error)) return
+      allocate (exps(3))
+      do i = 1, 3
+         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
+      end do
+      call setup_problem(cfg, prob, e, exps)
+      call check(error, .not. allocated(e), 'setup failed')
+      if (allocated(error)) return
+      call new_effect_problem(prob, [1, 2, 3], 9, base, 1.0_dp, ep, free_constants=.false., &
+                              p0=[0.0_dp, 0.0_dp, d])
+      ep%pfree = .false.
+      allocate (r(ep%nres()), y(ep%nres()))
+      call ep%residual_at(ep%start(), r, ok, y)
+      call check(error, ok, 'simulation with drift failed')
+      if (allocated(error)) return
+      call rng%seed(seed)
+      k0 = 0
+      do i = 1, 3
+         n = size(exps(i)%t)
+         exps(i)%y = y(k0 + 1:k0 + n)
+         do j = 1, n
+            exps(i)%y(j) = exps(i)%y(j) + 0.005_dp*maxval(abs(y(k0 + 1:k0 + n)))*rng%normal()
+         end do
+         k0 = k0 + n
+      end do
+   end subroutine drift_case
+
+   !> The power the per-specimen table states, against Monte Carlo: a drift of 2e-6/s on
+   !> the drift case's c3 (an expected chi-square near the significance threshold, so that
+   !> the power lies away from 0 and 1), 60 noise seeds, the constants as given; the share
+   !> of repetitions in which the drift's fit is significant is the stated power (the low
+   !> end's chi-square scaled to the injected drift) within 3 binomial standard errors
+   subroutine test_power_monte_carlo(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(experiment_type), allocatable :: exps(:)
+      type(specimen_result) :: sr
+      real(dp), parameter :: d = 2.0e-6_dp
+      integer, parameter :: reps = 60
+      real(dp) :: stated, duration, se
+      integer :: rep, found
+      found = 0
+      stated = 0.0_dp
+      do rep = 1, reps
+         call drift_case("'drift'", d, 100 + rep, cfg, opts, exps, error)
+         if (allocated(error)) return
+         call specimen_run(cfg, 3, opts, .false., sr, e, exps)
+         call check(error, .not. allocated(e), 'per-specimen diagnosis failed')
+         if (allocated(error)) return
+         if (sr%effects(1)%significant) found = found + 1
+         duration = maxval(exps(3)%t) - minval(exps(3)%t)
+         stated = stated + bic_power(sr%effects(1)%lambda_low*(d*duration/2.0e-5_dp)**2, &
+                                     sr%effects(1)%q, sr%m)/reps
+      end do
+      se = sqrt(max(stated*(1.0_dp - stated), 0.01_dp)/reps)
+      write (*, '(4x,a)') 'power stated '//real_str(stated, 'f0.3')//', found in '//str(found)//' of '//str(reps)
+      call check(error, stated > 0.2_dp .and. stated < 0.8_dp, 'the case is not near the threshold: power '// &
+                 real_str(stated, 'f0.2'))
+      if (allocated(error)) return
+      call check(error, abs(real(found, dp)/reps - stated) <= 3.0_dp*se, 'power stated '// &
+                 real_str(stated, 'f0.3')//', found in '//str(found)//' of '//str(reps))
+   end subroutine test_power_monte_carlo
 
    !> An oscillation of 1.5 % of the peak stress and a period of 5 samples added to one cyclic
    !> test's data (model plus 0.5 % noise) is named in the verdict as serrated flow in that
@@ -538,6 +640,19 @@ contains
          if (rows(i) == 'clean') then
             call check(error, res%leading == 0 .and. index(res%verdict, 'no significant effect') == 1, &
                        'clean data: '//res%verdict)
+            if (allocated(error)) return
+            ! The power statement: computed for every effect; the LCF and relaxation tests
+            ! find a compliance, a lag and a temperature offset at the low end of their
+            ! ranges (as the independent table's low-end repetitions do, 6 of 6 each)
+            call check(error, all(res%effects%power_low >= 0.0_dp .and. res%effects%power_low <= 1.0_dp), &
+                       'power not computed for every effect')
+            if (allocated(error)) return
+            do j = 1, size(res%effects)
+               if (any(res%effects(j)%name == ['compliance ', 'lag        ', 'temperature'])) &
+                  call check(error, res%effects(j)%power_low > 0.9_dp, 'power against '// &
+                             trim(res%effects(j)%name)//' at its low end: '//real_str(res%effects(j)%power_low, 'f0.2'))
+               if (allocated(error)) return
+            end do
          else if (rows(i) == 'modulus') then
             call check(error, res%leading > 0, 'modulus drop: no effect confirmed')
             if (allocated(error)) return

@@ -16,12 +16,15 @@ module usharp_diagnose_numerics
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
    use usharp_diagnose_types, only: diagnose_context
+   use usharp_diagnose_options, only: bic_margin
+   use usharp_distributions, only: ncx2_sf
    use usharp_mpi, only: n_ranks, this_rank, share, sum_over_ranks, task_deal, ranks_that_ran
    implicit none
    private
 
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
    public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
+   public :: low_end_deltas, bic_power
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -189,6 +192,48 @@ contains
          free = free .and. cat(ep%k)%screened(1:size(free))
       end if
    end function free_params
+
+   !> The effect's parameters at the low end of its realistic range (info%low), as changes
+   !> of ep%p0 (physical units; columns: one per parameter group with a low end, the other
+   !> group at p0): a per-test parameter at the low end in every test of `tests` (drift: the
+   !> low end's strain over each test's duration), the second back stress's H3 at the low
+   !> end of its saturation H3/gamma3 at p0's gamma3
+   pure function low_end_deltas(ep, info, tests) result(d)
+      type(effect_problem), intent(in) :: ep
+      type(effect_info), intent(in) :: info
+      integer, intent(in) :: tests(:)
+      real(dp), allocatable :: d(:, :)
+      integer :: g, i, j, nt
+      nt = size(ep%prob%targets)
+      allocate (d(size(ep%p0), 0))
+      do g = 1, min(2, info%nparam)
+         if (info%low(g) <= 0.0_dp) cycle
+         d = reshape([d, spread(0.0_dp, 1, size(ep%p0))], [size(ep%p0), size(d, 2) + 1])
+         if (info%sharing == param_per_test) then
+            do i = 1, size(tests)
+               j = (g - 1)*nt + tests(i)
+               d(j, size(d, 2)) = info%low(g)
+               if (ep%k == 9) then
+                  associate (t => ep%prob%targets(tests(i))%t)
+                     d(j, size(d, 2)) = info%low(g)/max(maxval(t) - minval(t), tiny(1.0_dp))
+                  end associate
+               end if
+            end do
+         else
+            d(g, size(d, 2)) = info%low(g)
+            if (ep%k == 8) d(g, size(d, 2)) = info%low(g)*ep%p0(2)
+         end if
+      end do
+   end function low_end_deltas
+
+   !> Power of the significance rule (BIC falls by more than bic_margin on nres residuals
+   !> with df parameters more) against a signal of expected chi-square lambda: the tail of
+   !> the noncentral chi-square beyond df ln(nres) + bic_margin
+   elemental real(dp) function bic_power(lambda, df, nres) result(p)
+      real(dp), intent(in) :: lambda
+      integer, intent(in) :: df, nres
+      p = ncx2_sf(df*log(real(max(nres, 2), dp)) + bic_margin, real(max(df, 1), dp), lambda)
+   end function bic_power
 
    !> Starts (a, b: columns) of a fit of the saturating softening: zero at the rate
    !> soften_rate0, then a tenth of the physical limit of a with either sign (softening,

@@ -10,7 +10,7 @@ module usharp_diagnose_report
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only
-   use usharp_diagnose_verdict, only: verdict_of, top_regions
+   use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
    private
@@ -134,6 +134,8 @@ contains
       type(diagnose_options), intent(in) :: opts
       character(len=*), intent(in), optional :: heading  !< instead of section 2's
       integer :: j
+      type(effect_info) :: cat(n_effects)
+      cat = effect_catalogue(1.0_dp)
       if (present(heading)) then
          call add(lines, heading)
       else
@@ -142,16 +144,23 @@ contains
       call add(lines, '')
       call add(lines, 'Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
       call add(lines, 'step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
+      call add(lines, 'Power: of the significance rule (dBIC < -'//real_str(bic_margin, 'f0.0')//') against the '// &
+         'effect at the low end of its realistic range on the fit tests, from the expected chi-square of '// &
+         'its signal there beyond what the constants take up, at the baseline''s residual (linear in the '// &
+         'effect; a per-test effect at that magnitude in every fit test; of two parameters the weaker).')
       call add(lines, '')
-      call add(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC |')
-      call add(lines, '|---|---|---|---|---|---|')
+      call add(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC | '// &
+         'low end | chi-square there | power |')
+      call add(lines, '|---|---|---|---|---|---|---|---|---|')
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
             call add(lines, '| '//str(j)//' | '//trim(e%name)//' | '//str(e%q)//' | '// &
                real_str(e%pred_drop, 'es10.3')//' | '//real_str(100.0_dp*e%pred_drop/res%f0, 'f0.1')// &
-               ' | '//real_str(e%pred_dbic, 'f0.1')//' |')
+               ' | '//real_str(e%pred_dbic, 'f0.1')//' | '//trim(cat(e%k)%low_what)//' | '// &
+               power_cells(e%lambda_low, e%power_low)//' |')
          end associate
       end do
+
       call add(lines, '')
       call add(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
                'effect''s parameters; dAIC, dBIC < 0: better; significant: dBIC < -'// &
@@ -460,7 +469,8 @@ contains
       deallocate (rows)
       allocate (rows(0))
       rows = [character(len=200) :: rows, 'rank,effect,parameters,predicted_fall,predicted_dbic,refitted,'// &
-              'objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed']
+              'objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed,'// &
+              'chi_square_low_end,power_low_end']
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
             rows = [character(len=200) :: rows, str(j)//','//trim(e%name)//','//str(e%q)//','// &
@@ -468,7 +478,8 @@ contains
                trim(merge('yes', 'no ', e%refitted))//','//real_str(e%f_after, 'es12.5')//','// &
                real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
                real_str(e%shrink_fit, 'f0.4')//','//real_str(e%shrink_held, 'f0.4')//','// &
-               trim(merge('yes', 'no ', e%confirmed))]
+               trim(merge('yes', 'no ', e%confirmed))//','//real_str(e%lambda_low, 'es12.5')//','// &
+               real_str(e%power_low, 'f0.4')]
          end associate
       end do
       call write_lines(join_path(dir, 'effects.csv'), rows, error)

@@ -13,7 +13,7 @@ module usharp_diagnose_screen
    use usharp_diagnose_units, only: lm_unit
    use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
-                                       softening_starts, soften_rate0
+                                       softening_starts, soften_rate0, low_end_deltas, bic_power
    implicit none
    private
 
@@ -96,6 +96,7 @@ contains
       q = count(ep%pfree)
       e%q = q
       if (.not. ok) return
+      call low_end_power(ctx, ep, r0, jc, je(:, nc + 1:), e)
       allocate (step(nc + q))
       call gn_decrease(reshape([jc, je(:, nc + 1:)], [size(r0), nc + q]), r0, d1, step)
       deallocate (step)
@@ -148,6 +149,31 @@ contains
       e%pred_drop = max(d1 - d0, s - fe(idx(1)), 0.0_dp)
       e%pred_dbic = size(r0)*log(max(s - e%pred_drop, 1.0e-3_dp*s)/s) + q*log(real(size(r0), dp))
    end subroutine screen_one
+
+   !> The power of the BIC rule against effect ep%k at the low end of its realistic range on
+   !> the fit tests (see low_end_deltas, bic_power): the effect's signal there from the
+   !> screening's Jacobian (jp: its columns, linear in the parameters), less what the
+   !> constants take up (its projection on jc), over the residual variance that BIC sees (the
+   !> baseline's mean square); the refit's parameters are the degrees of freedom
+   subroutine low_end_power(ctx, ep, r0, jc, jp, e)
+      type(diagnose_context), intent(in) :: ctx
+      type(effect_problem), intent(in) :: ep
+      real(dp), intent(in) :: r0(:), jc(:, :), jp(:, :)
+      type(effect_outcome), intent(inout) :: e
+      real(dp), allocatable :: d(:, :), sig(:)
+      real(dp) :: proj, var
+      integer :: g
+      var = sum(r0**2)/max(size(r0), 1)
+      d = low_end_deltas(ep, ctx%cat(ep%k), ctx%ifit)
+      if (var <= 0.0_dp .or. size(d, 2) == 0) return
+      e%lambda_low = huge(1.0_dp)
+      do g = 1, size(d, 2)
+         sig = matmul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
+         call gn_decrease(jc, sig, proj)
+         e%lambda_low = min(e%lambda_low, max(sum(sig**2) - proj, 0.0_dp)/var)
+      end do
+      e%power_low = bic_power(e%lambda_low, count(free_params(ep, ctx%ifit, .false.)), size(r0))
+   end subroutine low_end_power
 
    !> Starts of the screening runs of a global effect with a physical limit: zero, then every
    !> sign combination of a tenth of the limit (non-negative parameters only positive); other

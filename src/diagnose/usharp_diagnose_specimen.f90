@@ -23,7 +23,8 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, &
-                                       soften_rate0, softening_reached
+                                       soften_rate0, softening_reached, low_end_deltas, bic_power
+   use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_profile, only: profile_interval, profile_result
    implicit none
    private
@@ -43,6 +44,10 @@ module usharp_diagnose_specimen
       logical, allocatable :: lo_open(:), hi_open(:)     !< interval open at that end
       logical :: plausible = .true.                      !< within the effect's physical limit
       logical :: significant = .false.                   !< BIC falls by more than bic_margin
+      !> Expected chi-square of the effect at the low end of its range on the specimen, and
+      !> the power of the significance rule against it (negative: not computed)
+      real(dp) :: lambda_low = 0.0_dp, power_low = -1.0_dp
+      character(len=40) :: low_what = ''
       integer :: nevals = 0
    end type specimen_effect
 
@@ -205,6 +210,7 @@ contains
          ! The saturating softening of either sign at three rates (the first is the zero start)
          if (k == 7) starts = softening_starts(cat(k))
          se_out%nevals = 0
+         call low_end_power(ek, se_out)
          do jj = 1, size(starts, 2)
             ek%p0 = starts(:, jj)
             x0 = min(max(ek%start(), lo), hi)
@@ -257,6 +263,32 @@ contains
             se_out%hi_open(g) = pr%hi_open
          end do
       end subroutine fit_effect
+
+      !> The power of the significance rule against effect ek%k at the low end of its range
+      !> on the specimen (low_end_deltas, bic_power): its signal simulated there against the
+      !> prediction r0, over the prediction's mean square (what BIC sees)
+      subroutine low_end_power(ek, se_out)
+         type(effect_problem), intent(inout) :: ek
+         type(specimen_effect), intent(inout) :: se_out
+         real(dp), allocatable :: d(:, :), pz(:), r(:)
+         integer :: g
+         logical :: okr
+         se_out%low_what = cat(ek%k)%low_what
+         ! The effect off: a held rate (softening, second back stress) stays at its start
+         pz = merge(ek%p0, 0.0_dp, .not. ek%pfree .or. [(g > 1 .and. (ek%k == 7 .or. ek%k == 8), &
+                                                          g=1, size(ek%p0))])
+         d = low_end_deltas(ek, cat(ek%k), [ispec])
+         if (sr%f0 <= 0.0_dp .or. size(d, 2) == 0) return
+         allocate (r(sr%m))
+         se_out%lambda_low = huge(1.0_dp)
+         do g = 1, size(d, 2)
+            call ek%residual_at(pack((pz + d(:, g))/ek%pscale, ek%pfree), r, okr)
+            se_out%nevals = se_out%nevals + 1
+            if (.not. okr) return
+            se_out%lambda_low = min(se_out%lambda_low, sum((r - r0)**2)/(sr%f0/sr%m))
+         end do
+         se_out%power_low = bic_power(se_out%lambda_low, se_out%q, sr%m)
+      end subroutine low_end_power
    end subroutine specimen_run
 
    !> The per-specimen report (Markdown)
@@ -265,6 +297,8 @@ contains
       character(len=200), allocatable :: lines(:)
       integer :: j, g, lead
       character(len=:), allocatable :: ln, verdict
+      character(len=16), allocatable :: names(:)
+      real(dp), allocatable :: power(:)
       allocate (lines(0))
       call add('# Per-specimen diagnosis: '//trim(sr%name))
       call add('')
@@ -289,8 +323,12 @@ contains
          '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'); intervals 95 % '// &
          'profile likelihood ("open": the data do not bound that end):')
       call add('')
-      call add('| rank | effect | magnitude [95 % interval] | objective | BIC change | gap removed | verdict |')
-      call add('|---|---|---|---|---|---|---|')
+      call add('Power: of that rule against the effect at the low end of its realistic range, from the '// &
+         'chi-square of its signal there (simulated) at the prediction''s residual.')
+      call add('')
+      call add('| rank | effect | magnitude [95 % interval] | objective | BIC change | gap removed | verdict | '// &
+               'low end | chi-square there | power |')
+      call add('|---|---|---|---|---|---|---|---|---|---|')
       do j = 1, size(sr%effects)
          associate (e => sr%effects(j))
             ln = ''
@@ -309,7 +347,7 @@ contains
             end if
             call add('| '//str(j)//' | '//trim(e%name)//' | '//ln//' | '//real_str(e%f_after, 'es10.3')// &
                ' | '//real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%removed, 'f0.0')//' % | '// &
-               verdict//' |')
+               verdict//' | '//trim(e%low_what)//' | '//power_cells(e%lambda_low, e%power_low)//' |')
          end associate
       end do
       call add('')
@@ -339,6 +377,12 @@ contains
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
       end if
       if (sr%gap <= 0.0_dp .and. lead == 0) verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
+      if (lead == 0) then
+         ! (copied: a component of an array of derived type is not contiguous)
+         names = sr%effects%name
+         power = sr%effects%power_low
+         verdict = verdict//missed_note(names, power, 'this test alone')
+      end if
       call add('**Verdict:** '//verdict)
       call add('')
       call add(str(sr%nevals_rep)//' simulations of the test set (the replicates'' fit), '// &

@@ -76,6 +76,10 @@ module usharp_diagnose_types
       integer :: q = 0                       !< free parameters in the fit
       real(dp) :: pred_drop = 0.0_dp         !< screening: predicted fall of the objective
       real(dp) :: pred_dbic = 0.0_dp         !< screening: predicted BIC change (negative: better)
+      !> Expected chi-square of the effect at the low end of its range on the fit tests,
+      !> beyond what the constants take up, and the power of the BIC rule against it
+      !> (negative: not computed)
+      real(dp) :: lambda_low = 0.0_dp, power_low = -1.0_dp
       logical :: refitted = .false.
       real(dp) :: f_after = 0.0_dp
       real(dp), allocatable :: per_test_after(:)

@@ -13,7 +13,7 @@ module usharp_diagnose_verdict
    implicit none
    private
 
-   public :: conclude, verdict_of, top_regions, joint_verdict
+   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note
 
 contains
 
@@ -167,10 +167,43 @@ contains
       end if
    end subroutine joint_verdict
 
+   !> An effect's chi-square at the low end of its range and the power against it, as two
+   !> table cells ('-' where not computed)
+   function power_cells(lambda, power) result(text)
+      real(dp), intent(in) :: lambda, power
+      character(len=:), allocatable :: text
+      if (power < 0.0_dp) then
+         text = '- | -'
+      else
+         text = real_str(lambda, 'es9.2')//' | '//real_str(power, 'f0.2')
+      end if
+   end function power_cells
+
+   !> The effects the tests would more often miss than find at the low end of their ranges
+   !> (power below one half), as a clause of a verdict ('' when there are none)
+   function missed_note(names, power, subject) result(text)
+      character(len=*), intent(in) :: names(:)
+      real(dp), intent(in) :: power(:)
+      !> the tests the power is of ('the fit tests alone', 'this test alone')
+      character(len=*), intent(in) :: subject
+      character(len=:), allocatable :: text
+      integer :: j
+      text = ''
+      do j = 1, size(names)
+         if (power(j) < 0.0_dp .or. power(j) >= 0.5_dp) cycle
+         if (len(text) > 0) text = text//', '
+         text = text//trim(names(j))
+      end do
+      if (len(text) > 0) text = '; at the low end of their ranges '//subject//' would more often miss '// &
+         'than find: '//text//' (power below 0.5)'
+   end function missed_note
+
    !> The verdict when no effect is confirmed
    subroutine no_effect(res)
       type(diagnose_result), intent(inout) :: res
       integer :: j
+      character(len=16), allocatable :: names(:)
+      real(dp), allocatable :: power(:)
       integer, allocatable :: top(:)
       character(len=:), allocatable :: where
       if (.not. any(res%regions%structured) .or. (.not. fit_structured(res) .and. held_quiet(res))) then
@@ -184,6 +217,10 @@ contains
             if (res%effects(j)%significant) res%verdict = res%verdict//'; '// &
                trim(res%effects(j)%name)//' lowers BIC, but '//why_not(res%effects(j), res)
          end do
+         ! (copied: a component of an array of derived type is not contiguous)
+         names = res%effects%name
+         power = res%effects%power_low
+         res%verdict = res%verdict//missed_note(names, power, 'the fit tests alone')
          return
       end if
       where = ''

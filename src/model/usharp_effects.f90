@@ -39,6 +39,11 @@ module usharp_effects
       !> Largest magnitude the effect can physically have; a fit beyond it stands for
       !> something else (huge: no limit)
       real(dp) :: plausible(2) = huge(1.0_dp)
+      !> Low end of the magnitude a rig or specimen realistically shows (0: a rate held at its
+      !> default, not varied); for backstress2 of the saturation H3/gamma3, for drift of the
+      !> strain it adds over a test
+      real(dp) :: low(2) = 0.0_dp
+      character(len=40) :: low_what = ''     !< the low end in words
    end type effect_info
 
 contains
@@ -84,6 +89,28 @@ contains
          'specimen strain + d*(t - t0)', 1, param_per_test, ['d           ', '            '], &
          ['1/s         ', '            '], [1.0e-6_dp, 1.0_dp], [.false., .false.], [.true., .true.], &
          [1.0e-5_dp, 0.0_dp])
+      ! The low ends of the ranges the diagnosis is validated over (docs/validation.md): a
+      ! modulus 3 % off, a lag or delay of 0.1 s, 5 K, a modulus 2 % and a drag 3 % off per
+      ! specimen, an initial back stress or drag 2 % of the peak, a softening of 5 %, a second
+      ! back stress saturating at 4 % of the peak, a drift of 2e-5 strain over a test
+      cat(1)%low = [0.03_dp, 0.0_dp]
+      cat(1)%low_what = 'kappa 0.03'
+      cat(2)%low = [0.1_dp, 0.0_dp]
+      cat(2)%low_what = 'tau 0.1 s'
+      cat(3)%low = [5.0_dp, 0.0_dp]
+      cat(3)%low_what = 'dT 5 K per test'
+      cat(4)%low = [0.02_dp, 0.03_dp]
+      cat(4)%low_what = 'dE/E 0.02 or dD0/D0 0.03 per test'
+      cat(5)%low = [0.02_dp*peak, 0.02_dp*peak]
+      cat(5)%low_what = 'R0 or dD0 2 % of the peak'
+      cat(6)%low = [0.1_dp, 0.0_dp]
+      cat(6)%low_what = 'delta 0.1 s'
+      cat(7)%low = [0.05_dp, 0.0_dp]
+      cat(7)%low_what = 'a 0.05 at b 100'
+      cat(8)%low = [0.04_dp*peak, 0.0_dp]
+      cat(8)%low_what = 'H3/gamma3 4 % of the peak'
+      cat(9)%low = [2.0e-5_dp, 0.0_dp]
+      cat(9)%low_what = '2e-5 strain over a test'
    end function effect_catalogue
 
    !> Catalogue index of an effect by name, 0 when there is none
