@@ -21,6 +21,7 @@ contains
          new_unittest('fixed-format', test_fixed), &
          new_unittest('bad-tables-rejected', test_bad), &
          new_unittest('repeated-times-merged', test_merge), &
+         new_unittest('long-line-and-no-final-newline', test_long_line), &
          new_unittest('real-a617-files-load', test_realdata)]
    end subroutine collect_table
 
@@ -45,6 +46,33 @@ contains
       if (allocated(error)) return
       call check(error, v(3, 2), -3.0_dp, 'stress picked by name')
    end subroutine test_csv
+
+   !> A comment longer than the line buffer (its rest passed over, the next record read whole)
+   !> and a last data row without a new line
+   subroutine test_long_line(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      integer :: unit
+      ! (the scratch folder made, then the file written whole here: a line too long for text lines)
+      path = write_text('long.csv', [character(len=1) :: ''])
+      open (newunit=unit, file=path, status='replace', action='write', access='stream', form='formatted')
+      write (unit, '(a)') '# '//repeat('x', 5000)//' 9,9'
+      write (unit, '(a)') 'time,stress'
+      write (unit, '(a)') '0,1.5'
+      write (unit, '(a)') '1,2.5'
+      write (unit, '(a)', advance='no') '2,3.5'
+      close (unit)
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, size(v, 1), 3, 'rows read')
+      if (allocated(error)) return
+      call check(error, v(3, 2), 3.5_dp, 'the last row, without a new line')
+   end subroutine test_long_line
 
    subroutine test_whitespace(error)
       type(error_type), allocatable, intent(out) :: error

@@ -36,7 +36,7 @@ contains
       character(len=field_len) :: fields(max_fields), header(max_fields)
       character(len=line_len) :: last_comment
       character(len=256) :: msg
-      integer :: unit, ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter
+      integer :: unit, ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter, n, first
       logical :: have_header, filtering, fixed
       real(dp), allocatable :: buf(:, :)
       real(dp) :: row(max_fields)
@@ -59,13 +59,23 @@ contains
       last_comment = ''
       allocate (buf(size(columns), 1024))
       do
-         read (unit, '(a)', iostat=ios) line
+         ! Non-advancing, for the record's own length: a search of the whole 4096-character
+         ! buffer per line took most of the time of reading a long file
+         read (unit, '(a)', advance='no', size=n, iostat=ios) line
+         if (ios == 0) then
+            ! A record longer than the buffer: the rest of it is passed over, as before
+            read (unit, '(a)', iostat=ios)
+            n = len(line)
+         else if (is_iostat_eor(ios)) then
+            ios = 0
+         end if
          if (ios /= 0) exit
          lineno = lineno + 1
-         if (len_trim(line) == 0) cycle
-         if (index(adjustl(line), '#') == 1) then
-            last_comment = adjustl(line)
-            last_comment = last_comment(2:)
+         n = len_trim(line(:n))
+         if (n == 0) cycle
+         first = verify(line(:n), ' ')
+         if (line(first:first) == '#') then
+            last_comment = line(first + 1:n)
             cycle
          end if
          if (fixed) then
@@ -79,7 +89,7 @@ contains
             call append([(row(icol(j)), j=1, size(columns))])
             cycle
          end if
-         call split_fields(line, fields, nfield)
+         call split_fields(line(:n), fields, nfield)
          if (nfield > max_fields) then
             call fatal_error(error, file//':'//str(lineno)//': more than '//str(max_fields)//' columns')
             exit
