@@ -355,12 +355,12 @@ contains
             end if
          end associate
       end do
+      ! (two lines: one was cut at the lines' length, the simulations' count with it)
       lines = [character(len=200) :: lines, '', 'correct (the injected effect ranked first, or '// &
                'named as explaining the gap equally well with a separating test proposed; '// &
                'clean data: no effect confirmed): '//str(correct())//' of '// &
-               str(size(sc%injected)*sc%reps)//' ('//str(sc%failed)//' failed, not in the table); '// &
-               str(sc%nevals)//' simulations of the test set in '// &
-               real_str(sc%seconds, 'f0.1')//' s']
+               str(size(sc%injected)*sc%reps)//' ('//str(sc%failed)//' failed, not in the table);', &
+               str(sc%nevals)//' simulations of the test set in '//real_str(sc%seconds, 'f0.1')//' s']
       if (size(sc%misses) > 0) lines = [character(len=200) :: lines, '', &
          'The reports of the wrong answers (and of right ones that remove less than '// &
          str(nint(100.0_dp*target_shrink))//' % of the '// &
