@@ -753,6 +753,15 @@ contains
       res%floor_held = 2645.0_dp
       call check(error, joint_wanted(res, .false.), 'an effect leads by BIC alone, both sets below their floors')
       if (allocated(error)) return
+      ! The fit tests with a structured gap that the leader mostly leaves, the held-out quiet
+      res%gap_fit = 1.0_dp
+      res%effects(2)%shrink_fit = 0.11_dp
+      call check(error, joint_wanted(res, .false.), 'an effect leads by BIC alone, most of the fit gap left')
+      if (allocated(error)) return
+      res%effects(2)%shrink_fit = 0.95_dp
+      call check(error, .not. joint_wanted(res, .false.), 'the leader takes most of the fit tests'' gap')
+      if (allocated(error)) return
+      res%gap_fit = 0.0_dp
       res%effects(2)%k = 5
       call check(error, named_effect(res) == 5, 'no joint stage yet: the leading effect is named')
       if (allocated(error)) return

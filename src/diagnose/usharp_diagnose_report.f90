@@ -295,8 +295,9 @@ contains
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
       if (bic_only(res)) then
-         call add(lines, 'An effect leads on the fit tests by BIC alone while both sets'' structured gaps '// &
-            'lie below their floors: the held-out floor is too wide for the prediction to confirm it.')
+         call add(lines, 'An effect leads on the fit tests by BIC alone (the held-out tests below their '// &
+            'floor, and the fit tests'' structured gap below its floor too or mostly left): the held-out '// &
+            'floor is too wide for the prediction to confirm it.')
       else if (fit_effects_shown(res)) then
          call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
             'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')

@@ -145,10 +145,18 @@ contains
       if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
          if (bic_only(res)) then
-            res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests '// &
-               'alone '//trim(res%effects(res%leading)%name)//' led by BIC '// &
-               real_str(res%effects(res%leading)%dbic, 'f0.1')//' with both sets'' structured gaps '// &
-               'below their floors, which the prediction cannot confirm)'//jres%verdict(n + 1:)
+            associate (e => res%effects(res%leading))
+               if (fit_structured(res)) then
+                  res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests '// &
+                     'alone '//trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//', removing '// &
+                     real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap, with the '// &
+                     'held-out tests below their floor, which the prediction cannot confirm)'//jres%verdict(n + 1:)
+               else
+                  res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests '// &
+                     'alone '//trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//' with both sets'' '// &
+                     'structured gaps below their floors, which the prediction cannot confirm)'//jres%verdict(n + 1:)
+               end if
+            end associate
          else if (fit_effects_shown(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
