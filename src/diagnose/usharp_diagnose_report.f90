@@ -160,7 +160,6 @@ contains
                power_cells(e%lambda_low, e%power_low)//' |')
          end associate
       end do
-
       call add(lines, '')
       call add(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
                'effect''s parameters; dAIC, dBIC < 0: better; significant: dBIC < -'// &

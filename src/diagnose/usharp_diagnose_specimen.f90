@@ -274,9 +274,12 @@ contains
          integer :: g
          logical :: okr
          se_out%low_what = cat(ek%k)%low_what
-         ! The effect off: a held rate (softening, second back stress) stays at its start
-         pz = merge(ek%p0, 0.0_dp, .not. ek%pfree .or. [(g > 1 .and. (ek%k == 7 .or. ek%k == 8), &
-                                                          g=1, size(ek%p0))])
+         ! The effect off: every parameter with a low end at zero; a held rate (softening,
+         ! second back stress: a global parameter without one) stays at its start
+         pz = 0.0_dp*ek%p0
+         if (cat(ek%k)%sharing /= param_per_test) then
+            where (cat(ek%k)%low(:size(pz)) <= 0.0_dp) pz = ek%p0
+         end if
          d = low_end_deltas(ek, cat(ek%k), [ispec])
          if (sr%f0 <= 0.0_dp .or. size(d, 2) == 0) return
          allocate (r(sr%m))

@@ -141,21 +141,21 @@ contains
       character(len=*), parameter :: open = ' (fitted with the held-out tests: fitted to the fit '// &
          'tests alone, the effects that explain them do not carry to the held-out tests, so ' // &
          'their prediction cannot confirm it)'
+      character(len=:), allocatable :: gaps
       integer :: n
       if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
          if (bic_only(res)) then
             associate (e => res%effects(res%leading))
                if (fit_structured(res)) then
-                  res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests '// &
-                     'alone '//trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//', removing '// &
-                     real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap, with the '// &
-                     'held-out tests below their floor, which the prediction cannot confirm)'//jres%verdict(n + 1:)
+                  gaps = ', removing '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured '// &
+                         'gap, with the held-out tests below their floor'
                else
-                  res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests '// &
-                     'alone '//trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//' with both sets'' '// &
-                     'structured gaps below their floors, which the prediction cannot confirm)'//jres%verdict(n + 1:)
+                  gaps = ' with both sets'' structured gaps below their floors'
                end if
+               res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests alone '// &
+                  trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//gaps// &
+                  ', which the prediction cannot confirm)'//jres%verdict(n + 1:)
             end associate
          else if (fit_effects_shown(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
