@@ -21,7 +21,7 @@ module test_diagnose
                              n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
-   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides
+   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_refit, only: judge
    use usharp_diagnose_separate, only: separate
@@ -69,6 +69,7 @@ contains
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
+         new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -792,6 +793,37 @@ contains
       res%gap_held_noise = 100.0_dp
       call check(error, .not. joint_wanted(res, .false.), 'nothing significant, the held-out tests at their noise')
    end subroutine test_joint_rule
+
+   !> The candidates the screening ranked lower are refitted (and the global starts run) while
+   !> the fit tests have a structured gap that no significant refit takes to its floor: also
+   !> when a confirmed effect leads but leaves part of it (a 24.5 K temperature offset,
+   !> screened 7th, had lost to a scatter that removed half of the fit tests' gap)
+   subroutine test_gap_left_rule(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      res%gap_fit = 0.172_dp
+      res%floor_fit = 0.080_dp
+      allocate (res%effects(3))
+      res%effects%refitted = [.true., .true., .false.]
+      res%effects%significant = [.true., .true., .false.]
+      res%effects%shrink_fit = [0.36_dp, 0.505_dp, 0.0_dp]
+      res%effects(2)%confirmed = .true.
+      res%leading = 2
+      call check(error, fit_gap_left(res), 'the leader removes half of the fit tests'' gap')
+      if (allocated(error)) return
+      res%effects(3)%shrink_fit = 0.9_dp
+      call check(error, fit_gap_left(res), 'an effect not refitted does not count')
+      if (allocated(error)) return
+      res%effects(3)%refitted = .true.
+      call check(error, fit_gap_left(res), 'nor one that is not significant')
+      if (allocated(error)) return
+      res%effects(3)%significant = .true.
+      call check(error, .not. fit_gap_left(res), 'a significant refit takes the gap to its floor')
+      if (allocated(error)) return
+      res%effects(3)%significant = .false.
+      res%gap_fit = 0.07_dp
+      call check(error, .not. fit_gap_left(res), 'no structured gap on the fit tests')
+   end subroutine test_gap_left_rule
 
    !> The chi-square tails the power statement uses, against closed forms and scipy 1.x
    !> (scipy.special.gammaincc, scipy.stats.chi2.sf and ncx2.sf, printed to 17 digits)

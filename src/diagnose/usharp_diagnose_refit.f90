@@ -29,18 +29,23 @@ contains
    !> Refit the screening's candidates j1..j2 (those with a predicted fall), then every refit
    !> that ended above another again from the constants of those lower ones (a basin of the
    !> constants can be shared: per-test strength factors and a common drag offset, say)
-   subroutine refit_candidates(ctx, res, j1, j2, error)
+   subroutine refit_candidates(ctx, res, j1, j2, error, only)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
       !> Range of candidates (indices into res%effects)
       integer, intent(in) :: j1, j2
       type(error_type), allocatable, intent(out) :: error
+      !> Of that range only these (one flag per effect)
+      logical, intent(in), optional :: only(:)
       integer :: j, o, counted
       real(dp), allocatable :: xc(:, :)
       integer, allocatable :: lower(:)
       counted = sum(res%effects%nevals)
       do j = j1, j2
          if (res%effects(j)%pred_drop <= 0.0_dp) cycle
+         if (present(only)) then
+            if (.not. only(j)) cycle
+         end if
          call tell_refit(ctx, res, j, counted)
          call refit(ctx, res, res%effects(j), error)
          if (allocated(error)) return

@@ -166,7 +166,9 @@ contains
                real_str(bic_margin, 'f0.0')//'; those that lower BIC ran again from the baseline''s '// &
                'constants, the best other refit''s and Latin-hypercube points, the lowest end kept):')
       if (count(res%effects%refitted) > opts%n_refit) call add(lines, '(beyond the leading '// &
-         str(opts%n_refit)//': none of those was confirmed while a structured gap remained)')
+         str(opts%n_refit)//': those the screening could not tell from the last of them; the lower-ranked '// &
+         'where none of the leading was confirmed or took the fit tests'' structured gap to its floor; '// &
+         'those simpler than a leader with parameters per test that the screening found significant)')
       if (res%global) call add(lines, '(no significant local refit brought the fit tests'' structured gap '// &
          'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
          str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them '// &

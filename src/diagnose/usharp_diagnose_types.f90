@@ -14,7 +14,7 @@ module usharp_diagnose_types
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
-             joint_decides
+             joint_decides, fit_gap_left
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -199,6 +199,16 @@ contains
       type(diagnose_result), intent(in) :: res
       fit_structured = res%gap_fit > res%floor_fit
    end function fit_structured
+
+   !> True when the fit tests had a structured gap and no significant refit so far takes it
+   !> to their floor: the refits may have missed the effect (a score test ranks by a local
+   !> step, and a fit may first have to leave the baseline's basin of the constants)
+   pure logical function fit_gap_left(res)
+      type(diagnose_result), intent(in) :: res
+      fit_gap_left = fit_structured(res) .and. &
+                     .not. any(res%effects%refitted .and. res%effects%significant .and. &
+                               (1.0_dp - res%effects%shrink_fit)*res%gap_fit <= res%floor_fit)
+   end function fit_gap_left
 
    !> True when the held-out tests had no structured gap at the baseline: there is nothing
    !> for an effect to shrink there, only a gap it must not open
