@@ -21,7 +21,7 @@ module test_diagnose
                              n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
-   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left
+   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_refit, only: judge
    use usharp_diagnose_separate, only: separate
@@ -797,7 +797,8 @@ contains
    !> The candidates the screening ranked lower are refitted (and the global starts run) while
    !> the fit tests have a structured gap that no significant refit takes to its floor: also
    !> when a confirmed effect leads but leaves part of it (a 24.5 K temperature offset,
-   !> screened 7th, had lost to a scatter that removed half of the fit tests' gap)
+   !> screened 7th, had lost to a scatter that removed half of the fit tests' gap); and when
+   !> only the held-out tests show a gap
    subroutine test_gap_left_rule(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
@@ -820,9 +821,23 @@ contains
       res%effects(3)%significant = .true.
       call check(error, .not. fit_gap_left(res), 'a significant refit takes the gap to its floor')
       if (allocated(error)) return
+      call check(error, .not. rest_wanted(res), 'the leader is confirmed and another takes the gap')
+      if (allocated(error)) return
       res%effects(3)%significant = .false.
+      call check(error, rest_wanted(res), 'the lower-ranked are refitted while the gap is left')
+      if (allocated(error)) return
       res%gap_fit = 0.07_dp
       call check(error, .not. fit_gap_left(res), 'no structured gap on the fit tests')
+      if (allocated(error)) return
+      ! The fit tests at their noise: the held-out tests decide whether all are refitted
+      allocate (res%held(3))
+      res%held = [.true., .false., .false.]
+      res%gap_held = 441.0_dp
+      res%floor_held = 150.0_dp
+      call check(error, rest_wanted(res), 'only the held-out tests show a gap')
+      if (allocated(error)) return
+      res%gap_held = 100.0_dp
+      call check(error, .not. rest_wanted(res), 'neither set shows a gap')
    end subroutine test_gap_left_rule
 
    !> The chi-square tails the power statement uses, against closed forms and scipy 1.x

@@ -35,7 +35,7 @@ module usharp_diagnose
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     fit_structured, diagnose_progress, tell, step_done, joint_wanted, &
-                                    named_effect, joint_decides, fit_gap_left
+                                    named_effect, joint_decides, fit_gap_left, rest_wanted
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
@@ -101,8 +101,9 @@ contains
       ! names an effect that leaves part of it, the candidates the screening ranked lower are
       ! refitted too: the score test can miss an effect whose fit first has to leave the
       ! baseline's basin of the constants (a temperature offset of 24.5 K screened 7th of 9
-      ! at a predicted dBIC of -42; refitted, -133, ahead of the scatter that had led at -118)
-      if (fit_structured(res) .and. (res%leading == 0 .or. fit_gap_left(res))) then
+      ! at a predicted dBIC of -42; refitted, -133, ahead of the scatter that had led at -118).
+      ! So too when only the held-out tests show a gap (see rest_wanted).
+      if (rest_wanted(res)) then
          call refit_candidates(ctx, res, n_leading(res, opts%n_refit) + 1, size(res%effects), error)
          if (allocated(error)) return
          call step_done(res, 'refits of the lower-ranked candidates')
