@@ -88,7 +88,6 @@ contains
       type(diagnose_context), intent(inout) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
-      logical, allocatable :: simpler(:)
       associate (opts => ctx%opts)
       call screen(ctx, res, error)
       if (allocated(error)) return
@@ -109,23 +108,8 @@ contains
          call step_done(res, 'refits of the lower-ranked candidates')
          call conclude(res)
       end if
-      ! The simplest of the effects that explain the gap alike leads, but only refitted ones
-      ! can be compared. A leader with parameters per test is checked against every simpler
-      ! effect the screening found significant: its parameters grow with the tests, and on a
-      ! held-out test they are fitted to it, not predicted, so it can lead by flexibility (a
-      ! scatter of 4 parameters had led for a temperature offset of -21.1 K that screened
-      ! 4th, an effect of 2)
-      if (res%leading /= 0) then
-         simpler = .not. res%effects%refitted .and. res%effects%pred_dbic < -bic_margin .and. &
-                   res%effects%q < res%effects(res%leading)%q .and. &
-                   ctx%cat(res%effects(res%leading)%k)%sharing == param_per_test
-         if (any(simpler)) then
-            call refit_candidates(ctx, res, 1, size(res%effects), error, only=simpler)
-            if (allocated(error)) return
-            call step_done(res, 'refits of simpler candidates')
-            call conclude(res)
-         end if
-      end if
+      call refit_simpler(ctx, res, error)
+      if (allocated(error)) return
       ! When no significant refit brings the fit tests' structured gap down to the noise
       ! level, the refits may all sit in the baseline's basin of the constants (data made
       ! with an initial state other than the virgin one: refits end at 83-97 % of the gap,
@@ -149,6 +133,9 @@ contains
          call step_done(res, 'deciding refits from further starts')
          call conclude(res)
       end if
+      ! Again for a leader that only the further starts made
+      call refit_simpler(ctx, res, error)
+      if (allocated(error)) return
       ! The leading effect's intervals where the curvature says little: profile likelihood
       call tell(ctx, 'profile', res%nevals)
       call profile_leading(ctx, res, error)
@@ -159,6 +146,28 @@ contains
       call step_done(res, 'separating test')
       end associate
    end subroutine diagnose_effects
+
+   !> The simplest of the effects that explain the gap alike leads, but only refitted ones
+   !> can be compared. A leader with parameters per test is checked against every simpler
+   !> effect the screening found significant: its parameters grow with the tests, and on a
+   !> held-out test they are fitted to it, not predicted, so it can lead by its freedom alone
+   !> (a scatter of 4 parameters had led for a temperature offset of -21.1 K that screened
+   !> 4th, an effect of 2)
+   subroutine refit_simpler(ctx, res, error)
+      type(diagnose_context), intent(inout) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      logical, allocatable :: simpler(:)
+      if (res%leading == 0) return
+      if (ctx%cat(res%effects(res%leading)%k)%sharing /= param_per_test) return
+      simpler = .not. res%effects%refitted .and. res%effects%pred_dbic < -bic_margin .and. &
+                res%effects%q < res%effects(res%leading)%q
+      if (.not. any(simpler)) return
+      call refit_candidates(ctx, res, 1, size(res%effects), error, only=simpler)
+      if (allocated(error)) return
+      call step_done(res, 'refits of simpler candidates')
+      call conclude(res)
+   end subroutine refit_simpler
 
    !> The held-out tests fitted too (see joint_wanted): the whole diagnosis again with every
    !> test fitted, from the baseline's constants; its verdict becomes this one's, worded for
