@@ -15,6 +15,7 @@ module test_diagnose
    use usharp_effects, only: test_effects, lagged_value, effect_model, extended_rates, n_extended
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
+   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
    use usharp_strings, only: real_str
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
@@ -23,7 +24,7 @@ module test_diagnose
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
    use usharp_diagnose_verdict, only: conclude
-   use usharp_diagnose_refit, only: judge
+   use usharp_diagnose_refit, only: judge, ratio_beyond_doubt
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use test_util, only: write_text, check_message
@@ -70,6 +71,7 @@ contains
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
+         new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -839,6 +841,26 @@ contains
       res%gap_held = 100.0_dp
       call check(error, .not. rest_wanted(res), 'neither set shows a gap')
    end subroutine test_gap_left_rule
+
+   !> A fitted magnitude is implausible only when its interval lies beyond the limit: a
+   !> temperature offset fitted at 25.1 K [24.6, 25.6] against a limit of 25 K is at the
+   !> limit; 177 K [150, 204] is beyond it; an interval across zero or not finite leaves the
+   !> fitted ratio
+   subroutine test_beyond_doubt(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: r
+      r = ratio_beyond_doubt(25.1_dp/25.0_dp, -25.1_dp, -25.6_dp, -24.6_dp)
+      call check(error, abs(r - 24.6_dp/25.0_dp) < 1.0e-12_dp .and. r < 1.0_dp, 'at the limit: '//real_str(r, 'f0.4'))
+      if (allocated(error)) return
+      r = ratio_beyond_doubt(177.0_dp/25.0_dp, 177.0_dp, 150.0_dp, 204.0_dp)
+      call check(error, abs(r - 6.0_dp) < 1.0e-12_dp, 'well beyond the limit: '//real_str(r, 'f0.4'))
+      if (allocated(error)) return
+      r = ratio_beyond_doubt(177.0_dp/25.0_dp, 177.0_dp, -300.0_dp, 654.0_dp)
+      call check(error, abs(r - 177.0_dp/25.0_dp) < 1.0e-12_dp, 'undetermined: the fitted ratio')
+      if (allocated(error)) return
+      r = ratio_beyond_doubt(1.2_dp, 30.0_dp, ieee_value(1.0_dp, ieee_quiet_nan), 31.0_dp)
+      call check(error, abs(r - 1.2_dp) < 1.0e-12_dp, 'no interval: the fitted ratio')
+   end subroutine test_beyond_doubt
 
    !> The chi-square tails the power statement uses, against closed forms and scipy 1.x
    !> (scipy.special.gammaincc, scipy.stats.chi2.sf and ncx2.sf, printed to 17 digits)

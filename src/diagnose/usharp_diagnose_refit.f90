@@ -4,6 +4,7 @@
 !> held-out tests (global parameters carried over, per-test ones fitted to them with the
 !> constants fixed), AIC and BIC against the baseline, and whether the effect is confirmed
 module usharp_diagnose_refit
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type
@@ -22,7 +23,7 @@ module usharp_diagnose_refit
    implicit none
    private
 
-   public :: refit, refit_candidates, refit_global, refit_deciding, judge
+   public :: refit, refit_candidates, refit_global, refit_deciding, judge, ratio_beyond_doubt
 
 contains
 
@@ -307,24 +308,30 @@ contains
    !> value (each test's value of a per-test parameter); the second back stress by its
    !> saturation H3/gamma3 against the peak stress (a back stress beyond the stress it is
    !> part of is no back stress); the softening by the share of the drag it takes away within
-   !> the fit tests (softening_reached). A delay (shift, lag) below the sampling interval of
-   !> the data is not resolved by them.
+   !> the fit tests (softening_reached). A fitted parameter is implausible only when its 95 %
+   !> interval lies beyond the limit (a temperature offset of 24.7 K, fitted as 25.1 K, is at
+   !> the limit, not beyond it); e%worst reports the fitted value. A delay (shift, lag) below
+   !> the sampling interval of the data is not resolved by them.
    subroutine judge_magnitude(ctx, res, ep, x, p, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_problem), intent(in) :: ep
       real(dp), intent(in) :: x(:), p(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp) :: v
-      integer :: j, g, nt
+      real(dp) :: sure
+      integer :: j, g, nt, free
       nt = size(ctx%prob%targets)
       e%worst = 0.0_dp
       e%worst_what = ''
+      sure = 0.0_dp
+      free = 0
       associate (info => ctx%cat(e%k))
          if (info%sharing == param_per_test) then
             do g = 1, info%nparam
                do j = 1, nt
-                  if (ep%pfree((g - 1)*nt + j)) call worse_of(abs(p((g - 1)*nt + j))/info%plausible(g), info%pname(g))
+                  if (.not. ep%pfree((g - 1)*nt + j)) cycle
+                  free = free + 1
+                  call worse_of(abs(p((g - 1)*nt + j))/info%plausible(g), info%pname(g), free)
                end do
             end do
          else
@@ -332,8 +339,10 @@ contains
                call worse_of(softening_reached(ep, x, p(1), p(2))/info%plausible(1), 'a(1 - exp(-b p))')
             else
                do j = 1, size(ep%p0)
-                  if (ep%pfree(j) .and. info%plausible(j) < huge(1.0_dp)) &
-                     call worse_of(abs(p(j))/info%plausible(j), info%pname(j))
+                  if (.not. ep%pfree(j)) cycle
+                  free = free + 1
+                  if (info%plausible(j) < huge(1.0_dp)) &
+                     call worse_of(abs(p(j))/info%plausible(j), info%pname(j), free)
                end do
             end if
             if (info%name == 'backstress2' .and. size(p) >= 2) then
@@ -343,18 +352,36 @@ contains
          e%resolved = .true.
          if (info%name == 'shift' .or. info%name == 'lag') e%resolved = abs(p(1)) >= res%dt_sample
       end associate
-      e%plausible = e%worst <= 1.0_dp
+      e%plausible = sure <= 1.0_dp
    contains
-      subroutine worse_of(ratio, what)
+      !> ratio: |value|/limit; i: the parameter's place among e%p (its interval), if it has one
+      subroutine worse_of(ratio, what, i)
          real(dp), intent(in) :: ratio
          character(len=*), intent(in) :: what
-         v = ratio
-         if (v > e%worst .or. len_trim(e%worst_what) == 0) then
-            e%worst = v
+         integer, intent(in), optional :: i
+         real(dp) :: least
+         if (ratio > e%worst .or. len_trim(e%worst_what) == 0) then
+            e%worst = ratio
             e%worst_what = what
          end if
+         least = ratio
+         if (present(i)) then
+            if (i <= size(e%p_lo)) least = ratio_beyond_doubt(ratio, e%p(i), e%p_lo(i), e%p_hi(i))
+         end if
+         sure = max(sure, least)
       end subroutine worse_of
    end subroutine judge_magnitude
+
+   !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the
+   !> end of the value's 95 % interval nearest zero where the interval is finite and of one
+   !> sign, else (a value the data leave undetermined) the fitted ratio itself
+   pure real(dp) function ratio_beyond_doubt(ratio, p, p_lo, p_hi) result(r)
+      real(dp), intent(in) :: ratio        !< |p|/limit
+      real(dp), intent(in) :: p, p_lo, p_hi  !< fitted value and its interval
+      r = ratio
+      if (p_lo*p_hi > 0.0_dp .and. ieee_is_finite(p_lo) .and. ieee_is_finite(p_hi)) &
+         r = ratio*min(abs(p_lo), abs(p_hi))/abs(p)
+   end function ratio_beyond_doubt
 
    !> Held-out tests: constants and global parameters carried over; per-test parameters of
    !> a held-out test fitted to it with the constants fixed (p updated)
