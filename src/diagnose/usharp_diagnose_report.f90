@@ -167,7 +167,8 @@ contains
                'constants, the best other refit''s and Latin-hypercube points, the lowest end kept):')
       if (count(res%effects%refitted) > opts%n_refit) call add(lines, '(beyond the leading '// &
          str(opts%n_refit)//': those the screening could not tell from the last of them; the lower-ranked '// &
-         'where none of the leading was confirmed or took the fit tests'' structured gap to its floor; '// &
+         'where none of the leading was confirmed or took the fit tests'' structured gap to its floor, '// &
+         'or where only the held-out tests had one; '// &
          'those simpler than a leader with parameters per test that the screening found significant)')
       if (res%global) call add(lines, '(no significant local refit brought the fit tests'' structured gap '// &
          'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
