@@ -22,7 +22,8 @@ module test_diagnose
                              n_leading
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
-   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
+   use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
+                                    held_fit_only
    use usharp_diagnose_verdict, only: conclude
    use usharp_diagnose_refit, only: judge, ratio_beyond_doubt
    use usharp_diagnose_separate, only: separate
@@ -71,6 +72,7 @@ contains
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
+         new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
@@ -841,6 +843,46 @@ contains
       res%gap_held = 100.0_dp
       call check(error, .not. rest_wanted(res), 'neither set shows a gap')
    end subroutine test_gap_left_rule
+
+   !> A leader confirmed on the held-out tests only by its own parameters fitted to them, while
+   !> it explains little of the fit tests (a drift at 12.6 % of their gap, or with the fit tests
+   !> at their noise level), sends the diagnosis on to fit every test; a leader predicted, or
+   !> one that explains most of the fit tests' gap, does not
+   subroutine test_held_fit_rule(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      allocate (res%effects(2), res%held(3))
+      res%held = [.false., .true., .false.]
+      res%gap_fit = 0.109_dp
+      res%floor_fit = 0.172_dp
+      res%gap_held = 0.410_dp
+      res%floor_held = 0.070_dp
+      res%effects%refitted = .true.
+      res%effects%significant = .true.
+      res%effects%confirmed = [.false., .true.]
+      res%effects%shrink_fit = [1.0_dp, 0.126_dp]
+      res%effects(2)%held_fitted = .true.
+      res%leading = 2
+      call check(error, held_fit_only(res) .and. joint_wanted(res, .false.), &
+                 'fit tests quiet, the leader fitted to the held-out test')
+      if (allocated(error)) return
+      call check(error, .not. joint_wanted(res, .true.), 'the joint stage is not run twice')
+      if (allocated(error)) return
+      res%gap_fit = 0.323_dp
+      res%floor_fit = 0.160_dp
+      call check(error, held_fit_only(res), 'it removes 12.6 % of the fit tests'' gap')
+      if (allocated(error)) return
+      res%effects(2)%shrink_fit = 0.95_dp
+      call check(error, .not. held_fit_only(res), 'it removes most of the fit tests'' gap')
+      if (allocated(error)) return
+      res%effects(2)%shrink_fit = 0.126_dp
+      res%effects(2)%held_fitted = .false.
+      call check(error, .not. held_fit_only(res), 'a predicted leader stands')
+      if (allocated(error)) return
+      res%effects(2)%held_fitted = .true.
+      res%gap_held = 0.05_dp
+      call check(error, .not. held_fit_only(res), 'the held-out tests show no gap')
+   end subroutine test_held_fit_rule
 
    !> A fitted magnitude is implausible only when its interval lies beyond the limit: a
    !> temperature offset fitted at 25.1 K [24.6, 25.6] against a limit of 25 K is at the

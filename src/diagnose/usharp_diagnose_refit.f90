@@ -402,6 +402,7 @@ contains
       eh%pfree = .false.
       if (ctx%cat(e%k)%sharing == param_per_test) eh%pfree = free_params(eh, ctx%ihold, .false.)
       x0 = eh%start()
+      e%held_fitted = size(x0) > 0
       if (size(x0) > 0) then
          call eh%bounds(lo, hi)
          call lm_unit(ctx%journal, eh, x0, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)

@@ -9,7 +9,8 @@ module usharp_diagnose_verdict
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
-                                    leaves_noise, explains_most, fit_effects_shown, bic_only
+                                    leaves_noise, explains_most, fit_effects_shown, bic_only, &
+                                    held_fit_only
    implicit none
    private
 
@@ -157,6 +158,9 @@ contains
                   trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//gaps// &
                   ', which the prediction cannot confirm)'//jres%verdict(n + 1:)
             end associate
+         else if (held_fit_only(res)) then
+            res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//held_fit_note(res)// &
+               ')'//jres%verdict(n + 1:)
          else if (fit_effects_shown(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
@@ -170,10 +174,28 @@ contains
             serration_note(res)
          if (bic_only(res)) res%verdict = res%verdict//'; '//trim(res%effects(res%leading)%name)// &
             ' led by BIC on the fit tests alone, which every test fitted together does not bear out'
+         if (held_fit_only(res)) res%verdict = res%verdict//'; '//held_fit_note(res)// &
+            ', which every test fitted together does not bear out'
       else
          res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
       end if
    end subroutine joint_verdict
+
+   !> Why a leader that rests on a fit of the held-out tests (see held_fit_only) gave way to
+   !> the diagnosis with every test fitted, as a clause
+   function held_fit_note(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      associate (e => res%effects(res%leading))
+         text = 'on the fit tests alone '//trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')
+         if (fit_structured(res)) then
+            text = text//', removing '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap'
+         else
+            text = text//' with their structured gap below its floor'
+         end if
+         text = text//', and met the held-out tests only by its parameters fitted to them, not predicted'
+      end associate
+   end function held_fit_note
 
    !> An effect's chi-square at the low end of its range and the power against it, as two
    !> table cells ('-' where not computed)
