@@ -8,6 +8,7 @@
 !> and R2; its analytic Jacobian), as CVODE does.
 module usharp_rosenbrock_driver
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
@@ -80,6 +81,9 @@ module usharp_rosenbrock_driver
 
    !> Step-size control: safety factor, bounds of the change, and the order of the estimate
    real(dp), parameter :: safety = 0.9_dp, fac_min = 0.2_dp, fac_max = 6.0_dp, elo = 4.0_dp
+   !> Step attempts a simulation may take in all, per branch of the history and per output
+   !> time (see usharp_rodas4.inc)
+   integer(int64), parameter :: steps_per_branch = 1000, steps_per_output = 20
 
 contains
 
