@@ -88,6 +88,7 @@ contains
       type(diagnose_context), intent(inout) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
+      logical, allocatable :: fresh(:)
       associate (opts => ctx%opts)
       call screen(ctx, res, error)
       if (allocated(error)) return
@@ -132,6 +133,23 @@ contains
          if (allocated(error)) return
          call step_done(res, 'deciding refits from further starts')
          call conclude(res)
+      end if
+      ! The further starts can take a leader's confirmation away (a shift fell from 80.7 to
+      ! 72.6 % of the held-out gap): the candidates the screening ranked lower are then
+      ! refitted as they would have been before (a lag of 0.12 s, screened 4th, was never
+      ! refitted and nothing was named)
+      if (rest_wanted(res)) then
+         fresh = .not. res%effects%refitted .and. res%effects%pred_drop > 0.0_dp
+         if (any(fresh)) then
+            call refit_candidates(ctx, res, 1, size(res%effects), error, only=fresh)
+            if (allocated(error)) return
+            call step_done(res, 'refits of the lower-ranked candidates')
+            call conclude(res)
+            call refit_deciding(ctx, res, deciding_lhs, error, only=fresh)
+            if (allocated(error)) return
+            call step_done(res, 'deciding refits from further starts')
+            call conclude(res)
+         end if
       end if
       ! Again for a leader that only the further starts made
       call refit_simpler(ctx, res, error)

@@ -106,11 +106,13 @@ contains
    !> starts already ran, n_lhs Latin-hypercube points of the &fit box; the lowest end point
    !> is kept and the spread is reported (two baselines 0.1 % apart once led a refit to
    !> objectives 85 or 142, which alone decided a verdict)
-   subroutine refit_deciding(ctx, res, n_lhs, error)
+   subroutine refit_deciding(ctx, res, n_lhs, error, only)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
       integer, intent(in) :: n_lhs
       type(error_type), allocatable, intent(out) :: error
+      !> Only these (one flag per effect)
+      logical, intent(in), optional :: only(:)
       real(dp), allocatable :: xc(:, :), lhs(:, :)
       integer :: j, o, other, counted
       counted = sum(res%effects%nevals)
@@ -119,6 +121,9 @@ contains
          associate (e => res%effects(j))
             if (.not. e%refitted) cycle
             if (.not. (e%confirmed .or. e%dbic < 0.0_dp)) cycle
+            if (present(only)) then
+               if (.not. only(j)) cycle
+            end if
             other = 0
             do o = 1, size(res%effects)
                if (o == j .or. .not. res%effects(o)%refitted) cycle
