@@ -73,6 +73,7 @@ contains
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
          new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
+         new_unittest('form-left-open-below-the-floor-fits-every-test', test_open_below_floor), &
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
@@ -883,6 +884,36 @@ contains
       res%gap_held = 0.05_dp
       call check(error, .not. held_fit_only(res), 'the held-out tests show no gap')
    end subroutine test_held_fit_rule
+
+   !> Nothing confirmed, both sets' gaps below their floors, but an effect lowers the fit
+   !> tests' BIC by 587 and does not carry to the held-out tests (a softening of 0.11 fitted
+   !> as a hardening with the relaxation test held out): every test is fitted together; an
+   !> effect that is not significant, or implausible, does not ask for it
+   subroutine test_open_below_floor(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      allocate (res%effects(2), res%held(3))
+      res%held = [.false., .true., .false.]
+      res%gap_fit = 0.05_dp
+      res%floor_fit = 0.16_dp
+      res%gap_held = 0.0_dp
+      res%floor_held = 0.20_dp
+      res%gap_held_noise = 0.0_dp
+      res%floor_held_noise = 0.07_dp
+      res%effects%refitted = .true.
+      res%effects%significant = [.true., .false.]
+      res%effects%dbic = [-587.0_dp, -3.0_dp]
+      res%effects%shrink_fit = [1.0_dp, 0.1_dp]
+      res%leading = 0
+      call check(error, joint_wanted(res, .false.), 'a significant effect that does not carry')
+      if (allocated(error)) return
+      res%effects(1)%plausible = .false.
+      call check(error, .not. joint_wanted(res, .false.), 'an implausible one does not count')
+      if (allocated(error)) return
+      res%effects(1)%plausible = .true.
+      res%effects(1)%significant = .false.
+      call check(error, .not. joint_wanted(res, .false.), 'nothing significant, both sets quiet')
+   end subroutine test_open_below_floor
 
    !> A fitted magnitude is implausible only when its interval lies beyond the limit: a
    !> temperature offset fitted at 25.1 K [24.6, 25.6] against a limit of 25 K is at the

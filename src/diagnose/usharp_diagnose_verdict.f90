@@ -10,7 +10,7 @@ module usharp_diagnose_verdict
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
                                     leaves_noise, explains_most, fit_effects_shown, bic_only, &
-                                    held_fit_only
+                                    held_fit_only, form_left_open
    implicit none
    private
 
@@ -161,7 +161,7 @@ contains
          else if (held_fit_only(res)) then
             res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//held_fit_note(res)// &
                ')'//jres%verdict(n + 1:)
-         else if (fit_effects_shown(res)) then
+         else if (fit_effects_shown(res) .or. form_left_open(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
             res%verdict = jres%verdict(:n)//quiet//jres%verdict(n + 1:)
