@@ -10,7 +10,7 @@ module usharp_diagnose_verdict
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
                                     leaves_noise, explains_most, fit_effects_shown, bic_only, &
-                                    held_fit_only, form_left_open
+                                    held_fit_only, form_left_open, form_beats_leader
    implicit none
    private
 
@@ -161,6 +161,9 @@ contains
          else if (held_fit_only(res)) then
             res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//held_fit_note(res)// &
                ')'//jres%verdict(n + 1:)
+         else if (form_beats_leader(res) > 0) then
+            res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//beaten_note(res)// &
+               ')'//jres%verdict(n + 1:)
          else if (fit_effects_shown(res) .or. form_left_open(res)) then
             res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
          else
@@ -176,6 +179,7 @@ contains
             ' led by BIC on the fit tests alone, which every test fitted together does not bear out'
          if (held_fit_only(res)) res%verdict = res%verdict//'; '//held_fit_note(res)// &
             ', which every test fitted together does not bear out'
+         if (form_beats_leader(res) > 0) res%verdict = res%verdict//'; '//beaten_note(res)
       else
          res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
       end if
@@ -196,6 +200,19 @@ contains
          text = text//', and met the held-out tests only by its parameters fitted to them, not predicted'
       end associate
    end function held_fit_note
+
+   !> Why a leader that an effect of open form beat on the fit tests (see form_beats_leader)
+   !> gave way to the diagnosis with every test fitted, as a clause
+   function beaten_note(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      associate (e => res%effects(res%leading), o => res%effects(form_beats_leader(res)))
+         text = 'on the fit tests alone '//trim(e%name)//' led, removing '// &
+                real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap, while '// &
+                trim(o%name)//' fitted them better by BIC '//real_str(o%dbic - e%dbic, 'f0.1')// &
+                ' but did not carry to the held-out tests'
+      end associate
+   end function beaten_note
 
    !> An effect's chi-square at the low end of its range and the power against it, as two
    !> table cells ('-' where not computed)
