@@ -13,9 +13,8 @@ module usharp_diagnose_types
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
-   public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, held_fit_only, form_left_open, &
-             form_beats_leader, &
-             joint_decides, fit_gap_left, rest_wanted
+   public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
+             joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
