@@ -267,7 +267,8 @@ contains
    !> with other constants fit them alike), and only the held-out tests can decide the form.
    !> Or the leading effect rests on BIC alone (see bic_only): the prediction confirmed
    !> nothing, and fitted to the held-out tests too every effect meets their data. Or it
-   !> rests on a fit of the held-out tests (see held_fit_only).
+   !> rests on a fit of the held-out tests (see held_fit_only), or an effect of open form
+   !> fitted the fit tests better (see form_beats_leader).
    pure logical function joint_wanted(res, joint)
       type(diagnose_result), intent(in) :: res
       logical, intent(in) :: joint       !< this diagnosis is already the joint one
