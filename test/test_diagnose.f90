@@ -845,6 +845,20 @@ contains
       call check(error, .not. rest_wanted(res), 'neither set shows a gap')
    end subroutine test_gap_left_rule
 
+   !> Constructed results of two refitted effects on three tests, the middle one held out,
+   !> with the structured gaps and floors of the fit and held-out tests
+   subroutine held_out_middle(res, gap_fit, floor_fit, gap_held, floor_held)
+      type(diagnose_result), intent(out) :: res
+      real(dp), intent(in) :: gap_fit, floor_fit, gap_held, floor_held
+      allocate (res%effects(2))
+      res%held = [.false., .true., .false.]
+      res%gap_fit = gap_fit
+      res%floor_fit = floor_fit
+      res%gap_held = gap_held
+      res%floor_held = floor_held
+      res%effects%refitted = .true.
+   end subroutine held_out_middle
+
    !> A leader confirmed on the held-out tests only by its own parameters fitted to them, while
    !> it explains little of the fit tests (a drift at 12.6 % of their gap, or with the fit tests
    !> at their noise level), sends the diagnosis on to fit every test; a leader predicted, or
@@ -852,13 +866,7 @@ contains
    subroutine test_held_fit_rule(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      allocate (res%effects(2), res%held(3))
-      res%held = [.false., .true., .false.]
-      res%gap_fit = 0.109_dp
-      res%floor_fit = 0.172_dp
-      res%gap_held = 0.410_dp
-      res%floor_held = 0.070_dp
-      res%effects%refitted = .true.
+      call held_out_middle(res, 0.109_dp, 0.172_dp, 0.410_dp, 0.070_dp)
       res%effects%significant = .true.
       res%effects%confirmed = [.false., .true.]
       res%effects%shrink_fit = [1.0_dp, 0.126_dp]
@@ -892,15 +900,9 @@ contains
    subroutine test_open_below_floor(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      allocate (res%effects(2), res%held(3))
-      res%held = [.false., .true., .false.]
-      res%gap_fit = 0.05_dp
-      res%floor_fit = 0.16_dp
-      res%gap_held = 0.0_dp
-      res%floor_held = 0.20_dp
+      call held_out_middle(res, 0.05_dp, 0.16_dp, 0.0_dp, 0.20_dp)
       res%gap_held_noise = 0.0_dp
       res%floor_held_noise = 0.07_dp
-      res%effects%refitted = .true.
       res%effects%significant = [.true., .false.]
       res%effects%dbic = [-587.0_dp, -3.0_dp]
       res%effects%shrink_fit = [1.0_dp, 0.1_dp]
