@@ -20,8 +20,8 @@ module usharp_fit
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
-   use usharp_mpi, only: n_ranks, this_rank, is_root, share, parallel_sync, tasks_per_share, task_deal, &
-                         ranks_that_ran, any_rank
+   use usharp_mpi, only: n_ranks, this_rank, is_root, share, to_root, parallel_sync, tasks_per_share, &
+                         task_deal, ranks_that_ran, any_rank
    implicit none
    private
 
@@ -621,8 +621,8 @@ contains
    !> The starts of a multi-start fit spread over the MPI ranks in chunks (see tasks_per_share),
    !> each start to the next rank that is free (OpenMP threads inside each start), each
    !> searched on its own with its
-   !> evaluations kept; after a chunk every rank receives every start's evaluations, and rank
-   !> 0 runs the search again over all starts in their order, replaying them, so that the
+   !> evaluations kept; after a chunk rank 0 receives every start's evaluations and runs
+   !> the search again over all starts in their order, replaying them, so that the
    !> logs, the journal and the result are those of one process. Starts a journal holds
    !> (resume) are taken from it, whatever number of ranks wrote it; a start it holds in part
    !> goes on from there.
@@ -774,8 +774,9 @@ contains
       w%clock0 = obj%clock0
    end function worker
 
-   !> One start's evaluations from the rank that made them to every rank (ntest tests, nx
-   !> fitted constants, m residuals)
+   !> One start's evaluations from the rank that made them to rank 0, which alone replays
+   !> them, and its status to every rank, which decides whether the next chunk runs (ntest
+   !> tests, nx fitted constants, m residuals)
    subroutine share_start(sl, from, ntest, nx, m)
       type(start_log), intent(inout) :: sl
       integer, intent(in) :: from, ntest, nx, m
@@ -787,12 +788,9 @@ contains
       if (this_rank() == from) then
          nrec = size(sl%recs)
          njac = size(sl%jacs)
-         ! Sizes first: a start may hold thousands of residual vectors
-         n = njac*(nx + m*nx)
+         n = nrec*(1 + ntest + nx) + njac*(nx + m*nx)
          nmsg = 0
          do k = 1, nrec
-            n = n + 1 + ntest + nx
-            if (allocated(sl%recs(k)%r)) n = n + m
             nmsg = nmsg + len(sl%recs(k)%message)
          end do
          allocate (ints(4 + 3*nrec), reals(n))
@@ -806,10 +804,6 @@ contains
                                                   len(rec%message)]
                reals(pos + 1:pos + 1 + ntest + nx) = [rec%f, rec%per_test, rec%x]
                pos = pos + 1 + ntest + nx
-               if (allocated(rec%r)) then
-                  reals(pos + 1:pos + m) = rec%r
-                  pos = pos + m
-               end if
                text(at + 1:at + len(rec%message)) = rec%message
                at = at + len(rec%message)
             end associate
@@ -820,38 +814,45 @@ contains
          end do
       end if
       call share(ints, from)
-      call share(reals, from)
-      call share(text, from)
-      if (this_rank() == from) return
+      call to_root(reals, from)
+      call to_root(text, from)
       nrec = ints(1)
       njac = ints(2)
-      sl%stat = ints(3)
-      sl%nsimulated = ints(4)
-      if (allocated(sl%recs)) deallocate (sl%recs)
-      if (allocated(sl%jacs)) deallocate (sl%jacs)
-      allocate (sl%recs(nrec), sl%jacs(njac))
-      pos = 0
-      at = 0
-      do k = 1, nrec
-         associate (rec => sl%recs(k), meta => ints(4 + 3*(k - 1) + 1:4 + 3*k))
-            rec%status = meta(1)
-            rec%f = reals(pos + 1)
-            rec%per_test = reals(pos + 2:pos + 1 + ntest)
-            rec%x = reals(pos + 2 + ntest:pos + 1 + ntest + nx)
-            pos = pos + 1 + ntest + nx
-            if (meta(2) == 1) then
-               rec%r = reals(pos + 1:pos + m)
-               pos = pos + m
-            end if
-            nmsg = meta(3)
-            rec%message = text(at + 1:at + nmsg)
-            at = at + nmsg
-         end associate
-      end do
-      do k = 1, njac
-         sl%jacs(k)%x = reals(pos + 1:pos + nx)
-         sl%jacs(k)%jac = reshape(reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
-         pos = pos + nx + m*nx
-      end do
+      if (this_rank() /= from) then
+         sl%stat = ints(3)
+         sl%nsimulated = ints(4)
+      end if
+      ! Rank 0 rebuilds the records of a start another rank made
+      if (is_root() .and. this_rank() /= from) then
+         if (allocated(sl%recs)) deallocate (sl%recs)
+         if (allocated(sl%jacs)) deallocate (sl%jacs)
+         allocate (sl%recs(nrec), sl%jacs(njac))
+         pos = 0
+         at = 0
+         do k = 1, nrec
+            associate (rec => sl%recs(k), meta => ints(4 + 3*(k - 1) + 1:4 + 3*k))
+               rec%status = meta(1)
+               rec%f = reals(pos + 1)
+               rec%per_test = reals(pos + 2:pos + 1 + ntest)
+               rec%x = reals(pos + 2 + ntest:pos + 1 + ntest + nx)
+               pos = pos + 1 + ntest + nx
+               nmsg = meta(3)
+               rec%message = text(at + 1:at + nmsg)
+               at = at + nmsg
+            end associate
+         end do
+         do k = 1, njac
+            sl%jacs(k)%x = reals(pos + 1:pos + nx)
+            sl%jacs(k)%jac = reshape(reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
+            pos = pos + nx + m*nx
+         end do
+      end if
+      ! The residual vectors, tens of megabytes for a start, go one by one straight into
+      ! their records: no copy into and out of one buffer
+      if (this_rank() == from .or. is_root()) then
+         do k = 1, nrec
+            if (ints(4 + 3*(k - 1) + 2) == 1) call to_root(sl%recs(k)%r, from)
+         end do
+      end if
    end subroutine share_start
 end module usharp_fit

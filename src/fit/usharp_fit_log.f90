@@ -9,7 +9,7 @@ module usharp_fit_log
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_input
    use usharp_strings, only: str
-   use usharp_filesys, only: join_path, file_exists, raw_file, read_line
+   use usharp_filesys, only: join_path, file_exists, raw_file, read_line, remove_file
    implicit none
    private
 
@@ -62,15 +62,26 @@ contains
       integer, intent(in) :: m, n
       type(error_type), allocatable, intent(out) :: error
       self%dir = dir
-      call self%guess%create(join_path(dir, 'GUESS.TXT'), error)
-      if (.not. allocated(error)) call self%fom%create(join_path(dir, 'FOM.TXT'), error)
-      if (.not. allocated(error)) call self%sums%create(join_path(dir, 'SUMS.TXT'), error)
-      if (.not. allocated(error)) call self%events%create(join_path(dir, 'fit.log'), error)
-      if (.not. allocated(error)) call self%journal%create(join_path(dir, journal_name), error)
-      if (.not. allocated(error)) call self%cache%create(join_path(dir, cache_name), error)
+      call replace(self%guess, 'GUESS.TXT')
+      if (.not. allocated(error)) call replace(self%fom, 'FOM.TXT')
+      if (.not. allocated(error)) call replace(self%sums, 'SUMS.TXT')
+      if (.not. allocated(error)) call replace(self%events, 'fit.log')
+      if (.not. allocated(error)) call replace(self%journal, journal_name)
+      if (.not. allocated(error)) call replace(self%cache, cache_name)
       if (.not. allocated(error)) call self%journal%put(fingerprint_tag//' '//fingerprint// &
                                                         new_line('a'), error)
       if (.not. allocated(error)) call self%cache%put(cache_magic//bytes_i([m, n]), error)
+   contains
+      !> The old file is removed, not truncated: ext4 writes out a truncated and rewritten
+      !> file when it is closed (to keep it across a crash), which for fit.cache's hundreds
+      !> of megabytes costs more than writing them
+      subroutine replace(file, name)
+         type(raw_file), intent(inout) :: file
+         character(len=*), intent(in) :: name
+         logical :: gone
+         gone = remove_file(join_path(dir, name))
+         call file%create(join_path(dir, name), error)
+      end subroutine replace
    end subroutine log_open
 
    !> Log evaluation k: x (search space) goes to the journal, constants (physical) to GUESS,
@@ -98,7 +109,9 @@ contains
       call self%sums%put(trim(buf)//new_line('a'), error)
       if (allocated(error)) return
       if (present(r)) then
-         call self%cache%put(bytes_i([cache_residuals, k])//bytes_r(x)//bytes_r(r), error)
+         call self%cache%put(bytes_i([cache_residuals, k]), error)
+         if (.not. allocated(error)) call self%cache%put_reals(x, error)
+         if (.not. allocated(error)) call self%cache%put_reals(r, error)
          if (allocated(error)) return
       end if
       ! The journal line goes last: a record in it means the evaluation is logged everywhere
@@ -112,22 +125,18 @@ contains
       integer, intent(in) :: i
       real(dp), intent(in) :: x(:), jac(:, :)
       type(error_type), allocatable, intent(out) :: error
-      call self%cache%put(bytes_i([cache_jacobian, i])//bytes_r(x)//bytes_r(reshape(jac, [size(jac)])), &
-                          error)
+      call self%cache%put(bytes_i([cache_jacobian, i]), error)
+      if (.not. allocated(error)) call self%cache%put_reals(x, error)
+      if (.not. allocated(error)) call self%cache%put_reals(reshape(jac, [size(jac)]), error)
    end subroutine log_record_jacobian
 
-   !> The bytes of 32-bit integers and of doubles, as fit.cache keeps them
+   !> The bytes of 32-bit integers, as fit.cache keeps them
    pure function bytes_i(v) result(b)
       integer, intent(in) :: v(:)
       character(len=4*size(v)) :: b
       b = transfer(int(v, int32), b)
    end function bytes_i
 
-   pure function bytes_r(v) result(b)
-      real(dp), intent(in) :: v(:)
-      character(len=8*size(v)) :: b
-      b = transfer(v, b)
-   end function bytes_r
 
    !> A line in fit.log (warnings, penalties, the summary). A failed write here is not an
    !> error of its own: the journal's next write to the same disk reports it.

@@ -9,6 +9,7 @@ module usharp_mpi
    use mpi_f08, only: MPI_Init_thread, MPI_Initialized, MPI_Finalized, MPI_Finalize, MPI_Comm_rank, &
                       MPI_Comm_size, MPI_Bcast, MPI_Allreduce, MPI_Abort, MPI_Barrier, &
                       MPI_Get_library_version, MPI_MAX_LIBRARY_VERSION_STRING, MPI_COMM_WORLD, MPI_INTEGER, &
+                      MPI_Send, MPI_Recv, MPI_STATUS_IGNORE, &
                       MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, MPI_SUM, &
                       MPI_THREAD_FUNNELED, MPI_MAX, MPI_Win, MPI_Win_allocate, MPI_Win_free, &
                       MPI_Win_lock_all, MPI_Win_unlock_all, MPI_Win_lock, MPI_Win_unlock, MPI_Put, &
@@ -21,7 +22,7 @@ module usharp_mpi
 
    public :: parallel_start, parallel_stop, parallel_abort, this_rank, n_ranks, is_root, owner_of
    public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share, sum_over_ranks
-   public :: task_deal, ranks_that_ran, block_of, share_blocks
+   public :: task_deal, ranks_that_ran, block_of, share_blocks, to_root
 
    !> Tasks first to last handed out one at a time to whichever rank asks first (a rank asks
    !> when it is free, so unequal tasks even out): a counter on rank 0 that every rank
@@ -47,6 +48,13 @@ module usharp_mpi
    interface share
       module procedure share_ints, share_reals, share_text
    end interface share
+
+   !> From one rank to rank 0 alone (every rank may call it; only the two take part): rank
+   !> 0's array takes the sender's size. For results only rank 0 writes, half the traffic of
+   !> a broadcast on two ranks and a fraction of it on more
+   interface to_root
+      module procedure to_root_reals, to_root_text
+   end interface to_root
 
 contains
 
@@ -323,6 +331,40 @@ contains
       end if
       if (n > 0) call MPI_Bcast(s, n, MPI_CHARACTER, from, MPI_COMM_WORLD)
    end subroutine share_text
+
+   subroutine to_root_reals(a, from)
+      real(dp), allocatable, intent(inout) :: a(:)
+      integer, intent(in) :: from
+      integer :: n
+      if (.not. running() .or. from == 0) return
+      if (this_rank() == from) then
+         n = size(a)
+         call MPI_Send(n, 1, MPI_INTEGER, 0, 0, MPI_COMM_WORLD)
+         if (n > 0) call MPI_Send(a, n, MPI_DOUBLE_PRECISION, 0, 1, MPI_COMM_WORLD)
+      else if (is_root()) then
+         call MPI_Recv(n, 1, MPI_INTEGER, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+         if (allocated(a)) deallocate (a)
+         allocate (a(n))
+         if (n > 0) call MPI_Recv(a, n, MPI_DOUBLE_PRECISION, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      end if
+   end subroutine to_root_reals
+
+   subroutine to_root_text(s, from)
+      character(len=:), allocatable, intent(inout) :: s
+      integer, intent(in) :: from
+      integer :: n
+      if (.not. running() .or. from == 0) return
+      if (this_rank() == from) then
+         n = len(s)
+         call MPI_Send(n, 1, MPI_INTEGER, 0, 0, MPI_COMM_WORLD)
+         if (n > 0) call MPI_Send(s, n, MPI_CHARACTER, 0, 1, MPI_COMM_WORLD)
+      else if (is_root()) then
+         call MPI_Recv(n, 1, MPI_INTEGER, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+         if (allocated(s)) deallocate (s)
+         allocate (character(len=n) :: s)
+         if (n > 0) call MPI_Recv(s, n, MPI_CHARACTER, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      end if
+   end subroutine to_root_text
 
    !> Broadcast a size n from rank from; whether this rank is a receiver (which then makes
    !> room for the data that follow)
