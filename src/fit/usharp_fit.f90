@@ -20,8 +20,9 @@ module usharp_fit
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
-   use usharp_mpi, only: n_ranks, this_rank, is_root, share, to_root, parallel_sync, tasks_per_share, &
-                         task_deal, ranks_that_ran, any_rank
+   use usharp_mpi, only: n_ranks, this_rank, is_root, share, parallel_sync, tasks_per_share, &
+                         task_deal, ranks_that_ran, any_rank, transfer_set, post_send, post_receive, &
+                         header_waiting, receive_header
    implicit none
    private
 
@@ -36,7 +37,15 @@ module usharp_fit
       type(cached_jacobian), allocatable :: jacs(:)
       integer :: stat = 0        !< the stat of the error that ended it (0: none)
       integer :: nsimulated = 0
+      !> On its way between its rank and rank 0: the packed fields and the transfers
+      integer, allocatable :: ints(:)
+      real(dp), allocatable :: reals(:)
+      character(len=:), allocatable :: text
+      type(transfer_set) :: moving
    end type start_log
+
+   !> MPI tags of a start's evaluations sent to rank 0: the header (sizes), then the data
+   integer, parameter :: tag_head = 71, tag_data = 72
 
 
    abstract interface
@@ -620,30 +629,35 @@ contains
 
    !> The starts of a multi-start fit spread over the MPI ranks in chunks (see tasks_per_share),
    !> each start to the next rank that is free (OpenMP threads inside each start), each
-   !> searched on its own with its
-   !> evaluations kept; after a chunk rank 0 receives every start's evaluations and runs
-   !> the search again over all starts in their order, replaying them, so that the
-   !> logs, the journal and the result are those of one process. Starts a journal holds
-   !> (resume) are taken from it, whatever number of ranks wrote it; a start it holds in part
-   !> goes on from there.
+   !> searched on its own with its evaluations kept. A rank sends each start it finishes to
+   !> rank 0 at once, and rank 0, between its own starts, runs the search again over the
+   !> starts in their order as far as they are complete, replaying them into the logs, so
+   !> that the logs, the journal and the result are those of one process while the other
+   !> ranks work on. Starts a journal holds (resume) are taken from it, whatever number of
+   !> ranks wrote it; a start it holds in part goes on from there. After a stop (a signal,
+   !> too many failures) rank 0 replays every start again, as far as they go.
    subroutine parallel_search(obj, opt, nstarts, error)
       type(fit_objective), intent(inout) :: obj
       type(optimum_type), intent(out) :: opt
       integer, intent(out) :: nstarts
       type(error_type), allocatable, intent(out) :: error
-      type(start_log), allocatable :: logs(:)
-      type(fit_objective) :: dry, w
-      type(optimum_type) :: one
-      type(error_type), allocatable :: e
+      type(start_log), allocatable, asynchronous :: logs(:)
+      type(fit_objective) :: dry, w, live
+      type(optimum_type) :: one, best
+      type(error_type), allocatable :: e, live_error
       type(task_deal) :: deal
       integer, allocatable :: owner(:)
-      integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk
+      logical, allocatable :: ready(:), headed(:)
+      integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk, next
+      logical :: streaming, stopped
       np = n_ranks()
       nstarts = max(1, obj%prob%cfg%fit%multistart)
-      allocate (logs(nstarts), owner(nstarts))
+      allocate (logs(nstarts), owner(nstarts), ready(nstarts), headed(nstarts))
       do s = 1, nstarts
          allocate (logs(s)%recs(0), logs(s)%jacs(0))
       end do
+      ready = .false.
+      headed = .false.
       first_open = 1
       if (size(obj%replay) > 0) then
          ! Replay the journal alone to find where each start's evaluations lie in it
@@ -663,6 +677,22 @@ contains
             logs(s)%jacs = dry%kept_jac(dry%start_sens(s):last)
          end do
          obj%nresumed = dry%nkept
+         ready(:first_open - 1) = .true.
+      end if
+      ! Rank 0 replays the starts into the logs on a copy of the objective (the journal's
+      ! records are in logs now); it takes each start's records as the start is replayed
+      streaming = is_root()
+      next = 1
+      if (streaming) then
+         deallocate (obj%replay, obj%replay_jac)
+         allocate (obj%replay(0), obj%replay_jac(0))
+         live = obj
+         live%replay_only = .true.
+         ! Progress is heard from the starts as rank 0 searches them, not from their replay
+         live%progress => null()
+         if (obj%nresumed > 0) call live%log%event('resumed: replaying '//str(obj%nresumed)// &
+                                                   ' evaluations from '//journal_name)
+         call replay_ready()
       end if
       chunk = np*tasks_per_share(nstarts - first_open + 1, np)
       do s0 = first_open, nstarts, chunk
@@ -685,51 +715,237 @@ contains
             logs(s)%jacs = w%kept_jac
             logs(s)%nsimulated = w%nsimulated
             logs(s)%stat = 0
-            if (allocated(e)) then
-               logs(s)%stat = e%stat
-               exit
+            if (allocated(e)) logs(s)%stat = e%stat
+            if (is_root()) then
+               ready(s) = .true.
+               call take_arrived(.false.)
+               call replay_ready()
+            else
+               call send_start(s)
             end if
+            if (allocated(e)) exit
          end do
          call deal%close()
          owner(s0:s1) = ranks_that_ran(logs(s0:s1)%stat /= stat_not_run)
-         do t = s0, s1
-            if (owner(t) >= 0) call share_start(logs(t), owner(t), size(obj%prob%targets), &
-                                                size(obj%prob%idx), obj%prob%nres())
-         end do
-         ! A start stopped (a signal, too many failures): the rest is left to the replay
-         if (any(logs(s0:s1)%stat /= 0)) exit
-         ! The logs of the starts so far, so that a job killed outright keeps them
-         if (is_root() .and. s1 < nstarts) then
-            call obj%log%close()
-            dry = worker(obj)
-            call in_order(logs, dry%replay, dry%replay_jac, .false.)
-            dry%replay_only = .true.
-            dry%capture = .false.
-            call dry%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), e)
-            if (.not. allocated(e)) call search(dry, one, n, e)
-            call dry%log%close()
+         stopped = any(owner(s0:s1) < 0)
+         stopped = any_rank(stopped .or. any(logs(s0:s1)%stat /= 0 .and. owner(s0:s1) == this_rank()))
+         if (is_root()) then
+            ! Every start another rank ran in this chunk, as it arrives
+            do while (any(owner(s0:s1) > 0 .and. .not. headed(s0:s1)))
+               call take_arrived(.true.)
+            end do
+            do t = s0, s1
+               if (owner(t) > 0 .and. .not. ready(t)) then
+                  call logs(t)%moving%wait()
+                  call unpack_start(t)
+               end if
+            end do
+            call replay_ready()
+         else
+            do t = s0, s1
+               if (owner(t) == this_rank()) call logs(t)%moving%wait()
+            end do
          end if
+         if (stopped) exit
       end do
       if (.not. is_root()) return
       nsim = sum(logs%nsimulated)
-      call obj%log%close()
-      call obj%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), error)
-      if (allocated(error)) return
-      if (obj%nresumed > 0) call obj%log%event('resumed: replaying '//str(obj%nresumed)// &
-                                               ' evaluations from '//journal_name)
-      call in_order(logs, obj%replay, obj%replay_jac, .true.)
-      call search(obj, opt, nstarts, error)
+      if (allocated(live_error)) then
+         call move_alloc(live_error, error)
+         obj%nsimulated = obj%nsimulated + nsim
+         return
+      end if
+      if (next > nstarts) then
+         ! Every start was replayed into the logs as it came
+         deallocate (live%replay, live%replay_jac)
+         allocate (live%replay(0), live%replay_jac(0))
+         obj = live
+         obj%replay_only = .false.
+         opt = best
+      else
+         ! A start stopped: every start replayed again into fresh logs, as far as they go
+         call obj%log%close()
+         call obj%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), error)
+         if (allocated(error)) return
+         if (obj%nresumed > 0) call obj%log%event('resumed: replaying '//str(obj%nresumed)// &
+                                                  ' evaluations from '//journal_name)
+         call move_alloc(live%replay, obj%replay)
+         call move_alloc(live%replay_jac, obj%replay_jac)
+         call in_order(logs(next:), obj%replay, obj%replay_jac, .true., append=.true.)
+         call search(obj, opt, nstarts, error)
+      end if
       obj%nsimulated = obj%nsimulated + nsim
+
+   contains
+
+      !> Rank 0: replay the starts from next on while they are complete (not after a stop or
+      !> a failed write, which leave the rest to the replay of every start)
+      subroutine replay_ready()
+         type(error_type), allocatable :: err
+         type(optimum_type) :: got
+         integer :: nn
+         do while (streaming .and. next <= nstarts)
+            if (.not. ready(next)) exit
+            if (logs(next)%stat /= 0) then
+               streaming = .false.
+               exit
+            end if
+            call in_order(logs(next:next), live%replay, live%replay_jac, .true., append=.true.)
+            call search(live, got, nn, err, next, next)
+            if (allocated(err)) then
+               streaming = .false.
+               call move_alloc(err, live_error)
+               exit
+            end if
+            if (next == 1 .or. got%f < best%f) best = got
+            next = next + 1
+         end do
+      end subroutine replay_ready
+
+      !> Another rank: start sending start s to rank 0 (its header, then its fields and
+      !> residual vectors in order)
+      subroutine send_start(s)
+         integer, intent(in) :: s
+         integer :: k, nrec, njac, pos, at, nmsg, nx, ntest, m, n_r
+         nx = size(obj%prob%idx)
+         ntest = size(obj%prob%targets)
+         m = obj%prob%nres()
+         associate (sl => logs(s))
+            nrec = size(sl%recs)
+            njac = size(sl%jacs)
+            nmsg = 0
+            do k = 1, nrec
+               nmsg = nmsg + len(sl%recs(k)%message)
+            end do
+            n_r = 0
+            do k = 1, nrec
+               if (allocated(sl%recs(k)%r)) n_r = n_r + 1
+            end do
+            allocate (sl%ints(5 + 3*nrec), sl%reals(nrec*(1 + ntest + nx) + njac*(nx + m*nx) + n_r*m))
+            allocate (character(len=nmsg) :: sl%text)
+            sl%ints(1:5) = [s, nrec, njac, sl%stat, sl%nsimulated]
+            pos = 0
+            at = 0
+            do k = 1, nrec
+               associate (rec => sl%recs(k))
+                  sl%ints(5 + 3*(k - 1) + 1:5 + 3*k) = [rec%status, merge(1, 0, allocated(rec%r)), &
+                                                        len(rec%message)]
+                  sl%reals(pos + 1:pos + 1 + ntest + nx) = [rec%f, rec%per_test, rec%x]
+                  pos = pos + 1 + ntest + nx
+                  sl%text(at + 1:at + len(rec%message)) = rec%message
+                  at = at + len(rec%message)
+               end associate
+            end do
+            do k = 1, njac
+               sl%reals(pos + 1:pos + nx + m*nx) = [sl%jacs(k)%x, reshape(sl%jacs(k)%jac, [m*nx])]
+               pos = pos + nx + m*nx
+            end do
+            do k = 1, nrec
+               if (allocated(sl%recs(k)%r)) then
+                  sl%reals(pos + 1:pos + m) = sl%recs(k)%r
+                  pos = pos + m
+               end if
+            end do
+            call post_send(sl%ints, tag_head, sl%moving)
+            call post_send(sl%reals, tag_data, sl%moving)
+            call post_send(sl%text, tag_data, sl%moving)
+         end associate
+      end subroutine send_start
+
+      !> Rank 0: the headers of starts that have arrived (wait: at least one), each start's
+      !> data received into its records as they come; the starts whose data are complete
+      subroutine take_arrived(wait)
+         logical, intent(in) :: wait
+         integer :: from, nints, s, k, nrec, nmsg, n_r
+         integer, allocatable :: head(:)
+         logical :: block
+         block = wait
+         do while (header_waiting(tag_head, block, from, nints))
+            block = .false.
+            allocate (head(nints))
+            call receive_header(head, from, tag_head)
+            s = head(1)
+            nrec = head(2)
+            associate (sl => logs(s))
+               call move_alloc(head, sl%ints)
+               sl%stat = sl%ints(4)
+               sl%nsimulated = sl%ints(5)
+               nmsg = 0
+               do k = 1, nrec
+                  nmsg = nmsg + sl%ints(5 + 3*k)
+               end do
+               deallocate (sl%recs, sl%jacs)
+               allocate (sl%recs(nrec), sl%jacs(sl%ints(3)))
+               n_r = 0
+               do k = 1, nrec
+                  n_r = n_r + sl%ints(5 + 3*(k - 1) + 2)
+               end do
+               allocate (sl%reals(nrec*(1 + size(obj%prob%targets) + size(obj%prob%idx)) + &
+                                  sl%ints(3)*(size(obj%prob%idx)*(1 + obj%prob%nres())) + n_r*obj%prob%nres()))
+               allocate (character(len=nmsg) :: sl%text)
+               call post_receive(sl%reals, from, tag_data, sl%moving)
+               call post_receive(sl%text, from, tag_data, sl%moving)
+            end associate
+            headed(s) = .true.
+         end do
+         do s = 1, nstarts
+            if (headed(s) .and. .not. ready(s)) then
+               if (logs(s)%moving%done()) call unpack_start(s)
+            end if
+         end do
+      end subroutine take_arrived
+
+      !> Rank 0: the fields of start s, received, into its records
+      subroutine unpack_start(s)
+         integer, intent(in) :: s
+         integer :: k, pos, at, nmsg, nx, ntest, m
+         nx = size(obj%prob%idx)
+         ntest = size(obj%prob%targets)
+         m = obj%prob%nres()
+         associate (sl => logs(s))
+            pos = 0
+            at = 0
+            do k = 1, size(sl%recs)
+               associate (rec => sl%recs(k), meta => sl%ints(5 + 3*(k - 1) + 1:5 + 3*k))
+                  rec%status = meta(1)
+                  rec%f = sl%reals(pos + 1)
+                  rec%per_test = sl%reals(pos + 2:pos + 1 + ntest)
+                  rec%x = sl%reals(pos + 2 + ntest:pos + 1 + ntest + nx)
+                  pos = pos + 1 + ntest + nx
+                  nmsg = meta(3)
+                  rec%message = sl%text(at + 1:at + nmsg)
+                  at = at + nmsg
+               end associate
+            end do
+            do k = 1, size(sl%jacs)
+               sl%jacs(k)%x = sl%reals(pos + 1:pos + nx)
+               sl%jacs(k)%jac = reshape(sl%reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
+               pos = pos + nx + m*nx
+            end do
+            do k = 1, size(sl%recs)
+               if (sl%ints(5 + 3*(k - 1) + 2) == 1) then
+                  sl%recs(k)%r = sl%reals(pos + 1:pos + m)
+                  pos = pos + m
+               end if
+            end do
+            deallocate (sl%ints, sl%reals, sl%text)
+         end associate
+         ready(s) = .true.
+      end subroutine unpack_start
    end subroutine parallel_search
 
    !> The starts' evaluations in the order of the starts, up to the first start that stopped
    !> (in one pass: a start's residual vectors may take hundreds of megabytes). take: move the
-   !> residuals out of logs instead of copying them (logs are not needed again)
-   subroutine in_order(logs, recs, jacs, take)
+   !> residuals out of logs instead of copying them (logs are not needed again); append: after
+   !> the records already in recs and jacs (moved, not copied)
+   subroutine in_order(logs, recs, jacs, take, append)
       type(start_log), intent(inout) :: logs(:)
       type(journal_record), allocatable, intent(inout) :: recs(:)
       type(cached_jacobian), allocatable, intent(inout) :: jacs(:)
       logical, intent(in) :: take
+      logical, intent(in), optional :: append
+      type(journal_record), allocatable :: old(:)
+      type(cached_jacobian), allocatable :: old_jacs(:)
       integer :: s, j, k, kj, last
       last = size(logs)
       do s = 1, size(logs)
@@ -738,30 +954,45 @@ contains
             exit
          end if
       end do
+      allocate (old(0), old_jacs(0))
+      if (present(append)) then
+         if (append .and. allocated(recs)) call move_alloc(recs, old)
+         if (append .and. allocated(jacs)) call move_alloc(jacs, old_jacs)
+      end if
       if (allocated(recs)) deallocate (recs)
       if (allocated(jacs)) deallocate (jacs)
-      allocate (recs(sum([(size(logs(s)%recs), s=1, last)])), jacs(sum([(size(logs(s)%jacs), s=1, last)])))
-      k = 0
-      kj = 0
+      allocate (recs(size(old) + sum([(size(logs(s)%recs), s=1, last)])), &
+                jacs(size(old_jacs) + sum([(size(logs(s)%jacs), s=1, last)])))
+      do k = 1, size(old)
+         call move_record(old(k), recs(k), .true.)
+      end do
+      jacs(:size(old_jacs)) = old_jacs
+      k = size(old)
+      kj = size(old_jacs)
       do s = 1, last
          do j = 1, size(logs(s)%recs)
             k = k + 1
-            associate (from => logs(s)%recs(j))
-               recs(k)%status = from%status
-               recs(k)%f = from%f
-               recs(k)%per_test = from%per_test
-               recs(k)%x = from%x
-               if (allocated(from%message)) recs(k)%message = from%message
-               if (take) then
-                  if (allocated(from%r)) call move_alloc(from%r, recs(k)%r)
-               else
-                  if (allocated(from%r)) recs(k)%r = from%r
-               end if
-            end associate
+            call move_record(logs(s)%recs(j), recs(k), take)
          end do
          jacs(kj + 1:kj + size(logs(s)%jacs)) = logs(s)%jacs
          kj = kj + size(logs(s)%jacs)
       end do
+   contains
+      subroutine move_record(from, to, take)
+         type(journal_record), intent(inout) :: from
+         type(journal_record), intent(out) :: to
+         logical, intent(in) :: take
+         to%status = from%status
+         to%f = from%f
+         to%per_test = from%per_test
+         to%x = from%x
+         if (allocated(from%message)) to%message = from%message
+         if (take) then
+            if (allocated(from%r)) call move_alloc(from%r, to%r)
+         else
+            if (allocated(from%r)) to%r = from%r
+         end if
+      end subroutine move_record
    end subroutine in_order
 
    !> An objective for one start on its own: the fit's problem, nothing replayed, nothing logged
@@ -773,86 +1004,4 @@ contains
       allocate (w%replay(0), w%replay_jac(0), w%kept_jac(0))
       w%clock0 = obj%clock0
    end function worker
-
-   !> One start's evaluations from the rank that made them to rank 0, which alone replays
-   !> them, and its status to every rank, which decides whether the next chunk runs (ntest
-   !> tests, nx fitted constants, m residuals)
-   subroutine share_start(sl, from, ntest, nx, m)
-      type(start_log), intent(inout) :: sl
-      integer, intent(in) :: from, ntest, nx, m
-      integer, allocatable :: ints(:)
-      real(dp), allocatable :: reals(:)
-      character(len=:), allocatable :: text
-      integer :: k, nrec, njac, pos, at, nmsg, n
-      if (n_ranks() == 1) return
-      if (this_rank() == from) then
-         nrec = size(sl%recs)
-         njac = size(sl%jacs)
-         n = nrec*(1 + ntest + nx) + njac*(nx + m*nx)
-         nmsg = 0
-         do k = 1, nrec
-            nmsg = nmsg + len(sl%recs(k)%message)
-         end do
-         allocate (ints(4 + 3*nrec), reals(n))
-         allocate (character(len=nmsg) :: text)
-         ints(1:4) = [nrec, njac, sl%stat, sl%nsimulated]
-         pos = 0
-         at = 0
-         do k = 1, nrec
-            associate (rec => sl%recs(k))
-               ints(4 + 3*(k - 1) + 1:4 + 3*k) = [rec%status, merge(1, 0, allocated(rec%r)), &
-                                                  len(rec%message)]
-               reals(pos + 1:pos + 1 + ntest + nx) = [rec%f, rec%per_test, rec%x]
-               pos = pos + 1 + ntest + nx
-               text(at + 1:at + len(rec%message)) = rec%message
-               at = at + len(rec%message)
-            end associate
-         end do
-         do k = 1, njac
-            reals(pos + 1:pos + nx + m*nx) = [sl%jacs(k)%x, reshape(sl%jacs(k)%jac, [m*nx])]
-            pos = pos + nx + m*nx
-         end do
-      end if
-      call share(ints, from)
-      call to_root(reals, from)
-      call to_root(text, from)
-      nrec = ints(1)
-      njac = ints(2)
-      if (this_rank() /= from) then
-         sl%stat = ints(3)
-         sl%nsimulated = ints(4)
-      end if
-      ! Rank 0 rebuilds the records of a start another rank made
-      if (is_root() .and. this_rank() /= from) then
-         if (allocated(sl%recs)) deallocate (sl%recs)
-         if (allocated(sl%jacs)) deallocate (sl%jacs)
-         allocate (sl%recs(nrec), sl%jacs(njac))
-         pos = 0
-         at = 0
-         do k = 1, nrec
-            associate (rec => sl%recs(k), meta => ints(4 + 3*(k - 1) + 1:4 + 3*k))
-               rec%status = meta(1)
-               rec%f = reals(pos + 1)
-               rec%per_test = reals(pos + 2:pos + 1 + ntest)
-               rec%x = reals(pos + 2 + ntest:pos + 1 + ntest + nx)
-               pos = pos + 1 + ntest + nx
-               nmsg = meta(3)
-               rec%message = text(at + 1:at + nmsg)
-               at = at + nmsg
-            end associate
-         end do
-         do k = 1, njac
-            sl%jacs(k)%x = reals(pos + 1:pos + nx)
-            sl%jacs(k)%jac = reshape(reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
-            pos = pos + nx + m*nx
-         end do
-      end if
-      ! The residual vectors, tens of megabytes for a start, go one by one straight into
-      ! their records: no copy into and out of one buffer
-      if (this_rank() == from .or. is_root()) then
-         do k = 1, nrec
-            if (ints(4 + 3*(k - 1) + 2) == 1) call to_root(sl%recs(k)%r, from)
-         end do
-      end if
-   end subroutine share_start
 end module usharp_fit

@@ -9,7 +9,9 @@ module usharp_mpi
    use mpi_f08, only: MPI_Init_thread, MPI_Initialized, MPI_Finalized, MPI_Finalize, MPI_Comm_rank, &
                       MPI_Comm_size, MPI_Bcast, MPI_Allreduce, MPI_Abort, MPI_Barrier, &
                       MPI_Get_library_version, MPI_MAX_LIBRARY_VERSION_STRING, MPI_COMM_WORLD, MPI_INTEGER, &
-                      MPI_Send, MPI_Recv, MPI_STATUS_IGNORE, &
+                      MPI_Isend, MPI_Irecv, MPI_Recv, MPI_Iprobe, MPI_Probe, MPI_Get_count, MPI_Testall, &
+                      MPI_Waitall, MPI_Request, MPI_Status, MPI_ANY_SOURCE, MPI_STATUS_IGNORE, &
+                      MPI_STATUSES_IGNORE, &
                       MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, MPI_SUM, &
                       MPI_THREAD_FUNNELED, MPI_MAX, MPI_Win, MPI_Win_allocate, MPI_Win_free, &
                       MPI_Win_lock_all, MPI_Win_unlock_all, MPI_Win_lock, MPI_Win_unlock, MPI_Put, &
@@ -22,7 +24,8 @@ module usharp_mpi
 
    public :: parallel_start, parallel_stop, parallel_abort, this_rank, n_ranks, is_root, owner_of
    public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share, sum_over_ranks
-   public :: task_deal, ranks_that_ran, block_of, share_blocks, to_root
+   public :: task_deal, ranks_that_ran, block_of, share_blocks
+   public :: transfer_set, post_send, post_receive, header_waiting, receive_header
 
    !> Tasks first to last handed out one at a time to whichever rank asks first (a rank asks
    !> when it is free, so unequal tasks even out): a counter on rank 0 that every rank
@@ -39,6 +42,27 @@ module usharp_mpi
       procedure :: close => deal_close
    end type task_deal
 
+   !> Non-blocking transfers in flight between a rank and rank 0 (a stream of results that
+   !> rank 0 takes as they come while the ranks work on): their buffers must stay in place,
+   !> unchanged, until done or wait says they are complete
+   type :: transfer_set
+      private
+      type(MPI_Request), allocatable :: req(:)
+   contains
+      procedure :: done => transfers_done
+      procedure :: wait => transfers_wait
+   end type transfer_set
+
+   !> Start sending an array to rank 0 with a tag (see transfer_set)
+   interface post_send
+      module procedure post_send_ints, post_send_reals, post_send_text
+   end interface post_send
+
+   !> Start receiving an array of known size from a rank with a tag (see transfer_set)
+   interface post_receive
+      module procedure post_receive_reals, post_receive_text
+   end interface post_receive
+
    !> Every rank sends its block of a batch's columns to all (see block_of)
    interface share_blocks
       module procedure share_blocks_reals, share_blocks_matrix, share_blocks_ints, share_blocks_text
@@ -48,13 +72,6 @@ module usharp_mpi
    interface share
       module procedure share_ints, share_reals, share_text
    end interface share
-
-   !> From one rank to rank 0 alone (every rank may call it; only the two take part): rank
-   !> 0's array takes the sender's size. For results only rank 0 writes, half the traffic of
-   !> a broadcast on two ranks and a fraction of it on more
-   interface to_root
-      module procedure to_root_reals, to_root_text
-   end interface to_root
 
 contains
 
@@ -332,39 +349,108 @@ contains
       if (n > 0) call MPI_Bcast(s, n, MPI_CHARACTER, from, MPI_COMM_WORLD)
    end subroutine share_text
 
-   subroutine to_root_reals(a, from)
-      real(dp), allocatable, intent(inout) :: a(:)
-      integer, intent(in) :: from
-      integer :: n
-      if (.not. running() .or. from == 0) return
-      if (this_rank() == from) then
-         n = size(a)
-         call MPI_Send(n, 1, MPI_INTEGER, 0, 0, MPI_COMM_WORLD)
-         if (n > 0) call MPI_Send(a, n, MPI_DOUBLE_PRECISION, 0, 1, MPI_COMM_WORLD)
-      else if (is_root()) then
-         call MPI_Recv(n, 1, MPI_INTEGER, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
-         if (allocated(a)) deallocate (a)
-         allocate (a(n))
-         if (n > 0) call MPI_Recv(a, n, MPI_DOUBLE_PRECISION, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
-      end if
-   end subroutine to_root_reals
+   subroutine post_send_ints(buf, tag, set)
+      integer, intent(in), asynchronous :: buf(:)
+      integer, intent(in) :: tag
+      type(transfer_set), intent(inout) :: set
+      type(MPI_Request) :: req
+      call MPI_Isend(buf, size(buf), MPI_INTEGER, 0, tag, MPI_COMM_WORLD, req)
+      call add_request(set, req)
+   end subroutine post_send_ints
 
-   subroutine to_root_text(s, from)
-      character(len=:), allocatable, intent(inout) :: s
-      integer, intent(in) :: from
-      integer :: n
-      if (.not. running() .or. from == 0) return
-      if (this_rank() == from) then
-         n = len(s)
-         call MPI_Send(n, 1, MPI_INTEGER, 0, 0, MPI_COMM_WORLD)
-         if (n > 0) call MPI_Send(s, n, MPI_CHARACTER, 0, 1, MPI_COMM_WORLD)
-      else if (is_root()) then
-         call MPI_Recv(n, 1, MPI_INTEGER, from, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
-         if (allocated(s)) deallocate (s)
-         allocate (character(len=n) :: s)
-         if (n > 0) call MPI_Recv(s, n, MPI_CHARACTER, from, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+   subroutine post_send_reals(buf, tag, set)
+      real(dp), intent(in), asynchronous :: buf(:)
+      integer, intent(in) :: tag
+      type(transfer_set), intent(inout) :: set
+      type(MPI_Request) :: req
+      call MPI_Isend(buf, size(buf), MPI_DOUBLE_PRECISION, 0, tag, MPI_COMM_WORLD, req)
+      call add_request(set, req)
+   end subroutine post_send_reals
+
+   subroutine post_send_text(buf, tag, set)
+      character(len=*), intent(in), asynchronous :: buf
+      integer, intent(in) :: tag
+      type(transfer_set), intent(inout) :: set
+      type(MPI_Request) :: req
+      call MPI_Isend(buf, len(buf), MPI_CHARACTER, 0, tag, MPI_COMM_WORLD, req)
+      call add_request(set, req)
+   end subroutine post_send_text
+
+   subroutine post_receive_reals(buf, from, tag, set)
+      real(dp), intent(inout), asynchronous :: buf(:)
+      integer, intent(in) :: from, tag
+      type(transfer_set), intent(inout) :: set
+      type(MPI_Request) :: req
+      call MPI_Irecv(buf, size(buf), MPI_DOUBLE_PRECISION, from, tag, MPI_COMM_WORLD, req)
+      call add_request(set, req)
+   end subroutine post_receive_reals
+
+   subroutine post_receive_text(buf, from, tag, set)
+      character(len=*), intent(inout), asynchronous :: buf
+      integer, intent(in) :: from, tag
+      type(transfer_set), intent(inout) :: set
+      type(MPI_Request) :: req
+      call MPI_Irecv(buf, len(buf), MPI_CHARACTER, from, tag, MPI_COMM_WORLD, req)
+      call add_request(set, req)
+   end subroutine post_receive_text
+
+   subroutine add_request(set, req)
+      type(transfer_set), intent(inout) :: set
+      type(MPI_Request), intent(in) :: req
+      if (.not. allocated(set%req)) allocate (set%req(0))
+      set%req = [set%req, req]
+   end subroutine add_request
+
+   !> Whether every transfer of the set is complete (then the set is empty again)
+   logical function transfers_done(self) result(done)
+      class(transfer_set), intent(inout) :: self
+      done = .true.
+      if (.not. allocated(self%req)) return
+      if (size(self%req) == 0) return
+      call MPI_Testall(size(self%req), self%req, done, MPI_STATUSES_IGNORE)
+      if (done) deallocate (self%req)
+   end function transfers_done
+
+   !> Wait until every transfer of the set is complete
+   subroutine transfers_wait(self)
+      class(transfer_set), intent(inout) :: self
+      if (.not. allocated(self%req)) return
+      if (size(self%req) > 0) call MPI_Waitall(size(self%req), self%req, MPI_STATUSES_IGNORE)
+      deallocate (self%req)
+   end subroutine transfers_wait
+
+   !> Whether a message of integers with the tag waits from any rank (wait: until one does);
+   !> its sender and length
+   logical function header_waiting(tag, wait, from, n) result(found)
+      integer, intent(in) :: tag
+      logical, intent(in) :: wait
+      integer, intent(out) :: from, n
+      type(MPI_Status) :: status
+      integer :: k
+      found = .true.
+      if (wait) then
+         call MPI_Probe(MPI_ANY_SOURCE, tag, MPI_COMM_WORLD, status)
+      else
+         ! A probe moves the library's progress on: a message that has come may be seen only
+         ! by the next one
+         do k = 1, 4
+            call MPI_Iprobe(MPI_ANY_SOURCE, tag, MPI_COMM_WORLD, found, status)
+            if (found) exit
+         end do
       end if
-   end subroutine to_root_text
+      from = -1
+      n = 0
+      if (.not. found) return
+      from = status%MPI_SOURCE
+      call MPI_Get_count(status, MPI_INTEGER, n)
+   end function header_waiting
+
+   !> Receive the n integers header_waiting found
+   subroutine receive_header(buf, from, tag)
+      integer, intent(out) :: buf(:)
+      integer, intent(in) :: from, tag
+      call MPI_Recv(buf, size(buf), MPI_INTEGER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+   end subroutine receive_header
 
    !> Broadcast a size n from rank from; whether this rank is a receiver (which then makes
    !> room for the data that follow)
