@@ -635,7 +635,8 @@ contains
    !> that the logs, the journal and the result are those of one process while the other
    !> ranks work on. Starts a journal holds (resume) are taken from it, whatever number of
    !> ranks wrote it; a start it holds in part goes on from there. After a stop (a signal,
-   !> too many failures) rank 0 replays every start again, as far as they go.
+   !> too many failures) rank 0 goes on from the first start that stopped, as one process
+   !> would, after the starts it has logged.
    subroutine parallel_search(obj, opt, nstarts, error)
       type(fit_objective), intent(inout) :: obj
       type(optimum_type), intent(out) :: opt
@@ -755,31 +756,30 @@ contains
          obj%nsimulated = obj%nsimulated + nsim
          return
       end if
-      if (next > nstarts) then
-         ! Every start was replayed into the logs as it came
-         deallocate (live%replay, live%replay_jac)
-         allocate (live%replay(0), live%replay_jac(0))
-         obj = live
-         obj%replay_only = .false.
-         opt = best
-      else
-         ! A start stopped: every start replayed again into fresh logs, as far as they go
-         call obj%log%close()
-         call obj%log%open(obj%log%dir, obj%fingerprint, obj%prob%nres(), size(obj%prob%idx), error)
-         if (allocated(error)) return
-         if (obj%nresumed > 0) call obj%log%event('resumed: replaying '//str(obj%nresumed)// &
-                                                  ' evaluations from '//journal_name)
-         call move_alloc(live%replay, obj%replay)
-         call move_alloc(live%replay_jac, obj%replay_jac)
-         call in_order(logs(next:), obj%replay, obj%replay_jac, .true., append=.true.)
-         call search(obj, opt, nstarts, error)
+      if (next <= nstarts) then
+         ! A start stopped: the search goes on from it as one process would, replaying what
+         ! the ranks made of it and simulating the rest here (unless the stop is this rank's
+         ! too, which ends it there). The logs written so far stay as they are: rewriting
+         ! them would leave a window in which a kill (a scheduler's, after its grace time)
+         ! takes the journal with it
+         call in_order(logs(next:), live%replay, live%replay_jac, .true., append=.true.)
+         live%replay_only = .false.
+         call search(live, one, n, error, next, nstarts)
+         if (.not. allocated(error)) then
+            if (next == 1 .or. one%f < best%f) best = one
+         end if
       end if
+      deallocate (live%replay, live%replay_jac)
+      allocate (live%replay(0), live%replay_jac(0))
+      obj = live
+      obj%replay_only = .false.
+      opt = best
       obj%nsimulated = obj%nsimulated + nsim
 
    contains
 
-      !> Rank 0: replay the starts from next on while they are complete (not after a stop or
-      !> a failed write, which leave the rest to the replay of every start)
+      !> Rank 0: replay the starts from next on while they are complete (not past a start
+      !> that stopped, or after a failed write)
       subroutine replay_ready()
          type(error_type), allocatable :: err
          type(optimum_type) :: got
