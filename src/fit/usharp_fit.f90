@@ -762,7 +762,7 @@ contains
          ! too, which ends it there). The logs written so far stay as they are: rewriting
          ! them would leave a window in which a kill (a scheduler's, after its grace time)
          ! takes the journal with it
-         call in_order(logs(next:), live%replay, live%replay_jac, .true., append=.true.)
+         call append_starts(logs(next:), live%replay, live%replay_jac)
          live%replay_only = .false.
          call search(live, one, n, error, next, nstarts)
          if (.not. allocated(error)) then
@@ -790,7 +790,7 @@ contains
                streaming = .false.
                exit
             end if
-            call in_order(logs(next:next), live%replay, live%replay_jac, .true., append=.true.)
+            call append_starts(logs(next:next), live%replay, live%replay_jac)
             call search(live, got, nn, err, next, next)
             if (allocated(err)) then
                streaming = .false.
@@ -934,16 +934,14 @@ contains
       end subroutine unpack_start
    end subroutine parallel_search
 
-   !> The starts' evaluations in the order of the starts, up to the first start that stopped
-   !> (in one pass: a start's residual vectors may take hundreds of megabytes). take: move the
-   !> residuals out of logs instead of copying them (logs are not needed again); append: after
-   !> the records already in recs and jacs (moved, not copied)
-   subroutine in_order(logs, recs, jacs, take, append)
+   !> Append the starts' evaluations to recs and jacs in the order of the starts, up to the
+   !> first start that stopped. Everything is moved, not copied (a start's residual vectors
+   !> may take hundreds of megabytes, and rank 0 appends start after start): the logs are
+   !> not needed again, and the records already in recs stay where they are
+   subroutine append_starts(logs, recs, jacs)
       type(start_log), intent(inout) :: logs(:)
       type(journal_record), allocatable, intent(inout) :: recs(:)
       type(cached_jacobian), allocatable, intent(inout) :: jacs(:)
-      logical, intent(in) :: take
-      logical, intent(in), optional :: append
       type(journal_record), allocatable :: old(:)
       type(cached_jacobian), allocatable :: old_jacs(:)
       integer :: s, j, k, kj, last
@@ -954,46 +952,48 @@ contains
             exit
          end if
       end do
-      allocate (old(0), old_jacs(0))
-      if (present(append)) then
-         if (append .and. allocated(recs)) call move_alloc(recs, old)
-         if (append .and. allocated(jacs)) call move_alloc(jacs, old_jacs)
-      end if
-      if (allocated(recs)) deallocate (recs)
-      if (allocated(jacs)) deallocate (jacs)
+      if (.not. allocated(recs)) allocate (recs(0))
+      if (.not. allocated(jacs)) allocate (jacs(0))
+      call move_alloc(recs, old)
+      call move_alloc(jacs, old_jacs)
       allocate (recs(size(old) + sum([(size(logs(s)%recs), s=1, last)])), &
                 jacs(size(old_jacs) + sum([(size(logs(s)%jacs), s=1, last)])))
       do k = 1, size(old)
-         call move_record(old(k), recs(k), .true.)
+         call move_record(old(k), recs(k))
       end do
-      jacs(:size(old_jacs)) = old_jacs
+      do k = 1, size(old_jacs)
+         call move_jacobian(old_jacs(k), jacs(k))
+      end do
       k = size(old)
       kj = size(old_jacs)
       do s = 1, last
          do j = 1, size(logs(s)%recs)
             k = k + 1
-            call move_record(logs(s)%recs(j), recs(k), take)
+            call move_record(logs(s)%recs(j), recs(k))
          end do
-         jacs(kj + 1:kj + size(logs(s)%jacs)) = logs(s)%jacs
-         kj = kj + size(logs(s)%jacs)
+         do j = 1, size(logs(s)%jacs)
+            kj = kj + 1
+            call move_jacobian(logs(s)%jacs(j), jacs(kj))
+         end do
       end do
    contains
-      subroutine move_record(from, to, take)
+      subroutine move_record(from, to)
          type(journal_record), intent(inout) :: from
          type(journal_record), intent(out) :: to
-         logical, intent(in) :: take
          to%status = from%status
          to%f = from%f
-         to%per_test = from%per_test
-         to%x = from%x
-         if (allocated(from%message)) to%message = from%message
-         if (take) then
-            if (allocated(from%r)) call move_alloc(from%r, to%r)
-         else
-            if (allocated(from%r)) to%r = from%r
-         end if
+         if (allocated(from%per_test)) call move_alloc(from%per_test, to%per_test)
+         if (allocated(from%x)) call move_alloc(from%x, to%x)
+         if (allocated(from%r)) call move_alloc(from%r, to%r)
+         if (allocated(from%message)) call move_alloc(from%message, to%message)
       end subroutine move_record
-   end subroutine in_order
+      subroutine move_jacobian(from, to)
+         type(cached_jacobian), intent(inout) :: from
+         type(cached_jacobian), intent(out) :: to
+         if (allocated(from%x)) call move_alloc(from%x, to%x)
+         if (allocated(from%jac)) call move_alloc(from%jac, to%jac)
+      end subroutine move_jacobian
+   end subroutine append_starts
 
    !> An objective for one start on its own: the fit's problem, nothing replayed, nothing logged
    function worker(obj) result(w)
