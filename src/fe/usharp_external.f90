@@ -133,7 +133,22 @@ contains
       call make_dir(join_path(work_root, test//'.'//tag), error)
       if (allocated(error)) return
       work = absolute_path(join_path(work_root, test//'.'//tag))
-      in_dir = absolute_path(input_dir)
+      if (len_trim(input_dir) > 0) then
+         in_dir = absolute_path(input_dir)
+      else
+         in_dir = absolute_path('.')
+      end if
+      ! Never fall back on the current folder: the constants, script and output would be
+      ! written there, and the clean-up would remove files of those names
+      if (len(work) == 0) then
+         call fatal_error(error, join_path(work_root, test//'.'//tag)//': the work folder vanished '// &
+                          'as it was made (cannot resolve its path)')
+         return
+      end if
+      if (len(in_dir) == 0) then
+         call fatal_error(error, input_dir//': cannot resolve the input folder''s path')
+         return
+      end if
       output = join_path(work, ext%output_file)
       constants = join_path(work, ext%constants_file)
       names(1) = ext%output_file
