@@ -70,6 +70,7 @@ contains
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
+         new_unittest('bic-in-each-tests-own-variance', test_bic_per_test), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
          new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
@@ -539,8 +540,12 @@ contains
       res%floor_fit = 0.2_dp
       res%gap_held = 0.05_dp
       res%floor_held = 0.1_dp
+      ctx%ifit = [1]
+      res%npts = [1000]
+      res%per_test0 = [1.0_dp]
       e%q = 2
       e%f_after = exp(-(30.0_dp + 2.0_dp*log(1000.0_dp))/1000.0_dp)
+      e%per_test_after = [e%f_after]
       e%held_gap = 0.01_dp
       call judge(ctx, res, e)
       call check(error, e%significant .and. e%confirmed, 'BIC -30 below the floors not confirmed')
@@ -556,9 +561,47 @@ contains
       if (allocated(error)) return
       e%resolved = .true.
       e%f_after = exp(-(5.0_dp + 2.0_dp*log(1000.0_dp))/1000.0_dp)
+      e%per_test_after = [e%f_after]
       call judge(ctx, res, e)
       call check(error, .not. e%significant .and. .not. e%confirmed, 'BIC -5 confirmed')
    end subroutine test_below_floors
+
+   !> BIC counts each fit test's residuals in a variance of their own: a fall of 15 % in a
+   !> test of 100 points whose points carry 12 times the variance of the other test's 900
+   !> is not significant (100 ln 0.85 + ln 1000 = -9.3), where one pooled variance would
+   !> have made it -139
+   subroutine test_bic_per_test(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_outcome) :: e
+      ctx%opts%confirm_shrink = 0.5_dp
+      ctx%ifit = [1, 2]
+      res%npts = [100, 900]
+      res%per_test0 = [1.0_dp, 0.1_dp]
+      res%m = 1000
+      res%f0 = 1.1_dp
+      res%gap_fit = 0.1_dp
+      res%floor_fit = 0.2_dp
+      res%gap_held = 0.05_dp
+      res%floor_held = 0.1_dp
+      e%q = 1
+      e%per_test_after = [0.85_dp, 0.1_dp]
+      e%f_after = sum(e%per_test_after)
+      e%held_gap = 0.01_dp
+      call judge(ctx, res, e)
+      call check(error, abs(e%dbic - (100.0_dp*log(0.85_dp) + log(1000.0_dp))) < 1.0e-10_dp, &
+                 'dBIC '//real_str(e%dbic, 'es12.5')//' is not that of each test''s own variance')
+      if (allocated(error)) return
+      call check(error, .not. e%significant, 'a fall within the noisy test found significant')
+      if (allocated(error)) return
+      ! The same share of the quiet test's sum is
+      e%per_test_after = [1.0_dp, 0.085_dp]
+      e%f_after = sum(e%per_test_after)
+      call judge(ctx, res, e)
+      call check(error, e%significant .and. abs(e%dbic - (900.0_dp*log(0.85_dp) + log(1000.0_dp))) < 1.0e-9_dp, &
+                 'a 15 % fall in the quiet test: dBIC '//real_str(e%dbic, 'es12.5'))
+   end subroutine test_bic_per_test
 
    !> The leading n_refit effects are refitted and those the screening cannot tell from the
    !> last of them (predicted BIC within 10 % or bic_margin), not one more

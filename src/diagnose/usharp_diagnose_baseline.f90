@@ -15,7 +15,7 @@ module usharp_diagnose_baseline
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, &
-                                       jacobian, pseudo_inverse
+                                       jacobian, pseudo_inverse, test_sizes, block_sums
    implicit none
    private
 
@@ -33,6 +33,7 @@ contains
       type(effect_problem) :: base
       type(optimum_type) :: opt
       real(dp), allocatable :: lo(:), hi(:)
+      integer :: i
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
       call base%bounds(lo, hi)
       call lm_unit(ctx%journal, base, min(max(base%start(), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, 100, &
@@ -54,6 +55,7 @@ contains
       call set_constants_at(ctx%prob, opt%x)
       res%f0 = opt%f
       res%m = base%nres()
+      res%npts = test_sizes(ctx%prob, [(i, i=1, size(ctx%prob%targets))])
       res%c_bound = at_bound(opt%x, lo, hi)
       if (ctx%prob%cfg%fit%multistart > 0) then
          call step_done(res, 'baseline multi-start')
@@ -196,13 +198,8 @@ contains
       type(fit_problem), intent(in) :: prob
       real(dp), intent(in) :: r(:)
       real(dp) :: pt(size(prob%targets))
-      integer :: i, k0, n
-      k0 = 0
-      do i = 1, size(prob%targets)
-         n = size(prob%targets(i)%t)
-         pt(i) = sum(r(k0 + 1:k0 + n)**2)
-         k0 = k0 + n
-      end do
+      integer :: i
+      pt = block_sums(test_sizes(prob, [(i, i=1, size(prob%targets))]), r)
    end function per_test
 
    !> Regions of every test: the whole test, each history class, each cycle, elastic and

@@ -24,7 +24,7 @@ module usharp_diagnose_numerics
 
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
    public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
-   public :: low_end_deltas, bic_power
+   public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -225,6 +225,43 @@ contains
          end if
       end do
    end function low_end_deltas
+
+   !> Number of residuals (points) of each of the tests, in the problem's order of residuals
+   pure function test_sizes(prob, tests) result(n)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: tests(:)
+      integer :: n(size(tests))
+      integer :: i
+      do i = 1, size(tests)
+         n(i) = size(prob%targets(tests(i))%t)
+      end do
+   end function test_sizes
+
+   !> Sums of squares of r over its consecutive blocks of n(1), n(2), ... residuals
+   pure function block_sums(n, r) result(s)
+      integer, intent(in) :: n(:)
+      real(dp), intent(in) :: r(:)
+      real(dp) :: s(size(n))
+      integer :: i, k0
+      k0 = 0
+      do i = 1, size(n)
+         s(i) = sum(r(k0 + 1:k0 + n(i))**2)
+         k0 = k0 + n(i)
+      end do
+   end function block_sums
+
+   !> Change of -2 ln(likelihood) when the tests' residual sums of squares go from before to
+   !> after, each test's residuals of a variance of their own (profiled per test: n_i points,
+   !> sum_i n_i ln(after_i/before_i)). The weighted residuals of Eq. 7 do not share one
+   !> variance (a test's points carry 1/n of its weight), and one pooled variance overrates a
+   !> change concentrated in a test of few points by the ratio of that test's variance to
+   !> the mean (2.3 for the LCF test of a clean thesis case, which pooled gave a false alarm)
+   pure real(dp) function deviance_change(n, before, after) result(d)
+      integer, intent(in) :: n(:)
+      !> Sums of squares per test (weighted residuals of Eq. 7), before and after
+      real(dp), intent(in) :: before(:), after(:)
+      d = sum(n*log(max(after, tiny(1.0_dp))/max(before, tiny(1.0_dp))))
+   end function deviance_change
 
    !> Power of the significance rule (BIC falls by more than bic_margin on nres residuals
    !> with df parameters more) against a signal of expected chi-square lambda: the tail of

@@ -17,7 +17,8 @@ module usharp_diagnose_refit
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, &
-                                       free_params, effect_fit, at_bound, copy_constants, softening_reached
+                                       free_params, effect_fit, at_bound, copy_constants, softening_reached, &
+                                       block_sums, deviance_change
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -79,8 +80,9 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: base
       type(optimum_type) :: opt
-      real(dp), allocatable :: lo(:), hi(:)
+      real(dp), allocatable :: lo(:), hi(:), r(:)
       integer :: j, counted
+      logical :: ok
       res%x_global = global_points(ctx%prob%cfg, ctx%prob, ctx%opts%global_starts)
       res%global = .true.
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
@@ -91,6 +93,13 @@ contains
                        error, over_ranks=ctx%opts%over_ranks)
       if (allocated(error)) return
       res%f0_global = opt%f
+      ! Its sums per test, the reference of the tests' own variances in BIC
+      res%per_test_global = res%per_test0
+      if (opt%f < res%f0) then
+         allocate (r(base%nres()))
+         call base%residual_at(opt%x, r, ok)
+         if (ok) res%per_test_global(ctx%ifit) = block_sums(res%npts(ctx%ifit), r)
+      end if
       counted = sum(res%effects%nevals)
       do j = 1, size(res%effects)
          if (.not. res%effects(j)%refitted) cycle
@@ -462,18 +471,23 @@ contains
       end do
    end function worse_tests
 
-   !> AIC, BIC against the baseline's (lowest) objective, and the verdict
+   !> AIC, BIC against the baseline's (lowest) objective, each fit test's residuals of a
+   !> variance of their own (deviance_change), and the verdict
    subroutine judge(ctx, res, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(inout) :: e
-      integer :: m
-      real(dp) :: f0
-      m = res%m
-      f0 = res%f0
-      if (res%global) f0 = min(res%f0, res%f0_global)
-      e%daic = m*log(e%f_after/f0) + 2.0_dp*e%q
-      e%dbic = m*log(e%f_after/f0) + e%q*log(real(m, dp))
+      real(dp) :: dev
+      logical :: from_global
+      from_global = .false.
+      if (res%global) from_global = res%f0_global < res%f0
+      if (from_global) then
+         dev = deviance_change(res%npts(ctx%ifit), res%per_test_global(ctx%ifit), e%per_test_after(ctx%ifit))
+      else
+         dev = deviance_change(res%npts(ctx%ifit), res%per_test0(ctx%ifit), e%per_test_after(ctx%ifit))
+      end if
+      e%daic = dev + 2.0_dp*e%q
+      e%dbic = dev + e%q*log(real(res%m, dp))
       e%significant = e%dbic < -bic_margin
       ! No structured gap above the floors is asked for: the floors test every direction of
       ! the residual at once against a noise estimate (which a curved response lifts), BIC

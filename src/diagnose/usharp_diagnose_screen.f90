@@ -13,7 +13,8 @@ module usharp_diagnose_screen
    use usharp_diagnose_units, only: lm_unit
    use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
-                                       softening_starts, soften_rate0, low_end_deltas, bic_power
+                                       softening_starts, soften_rate0, low_end_deltas, bic_power, &
+                                       test_sizes, block_sums, deviance_change
    implicit none
    private
 
@@ -28,8 +29,9 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: base
-      real(dp), allocatable :: r0(:), jc(:, :), keys(:)
+      real(dp), allocatable :: r0(:), jc(:, :), keys(:), step0(:), lin0(:)
       real(dp) :: d0
+      integer, allocatable :: npts(:)
       integer :: i
       logical :: ok, complete
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
@@ -41,11 +43,17 @@ contains
          return
       end if
       res%nevals = res%nevals + base%nevals
-      call gn_decrease(jc, r0, d0)
+      allocate (step0(size(jc, 2)))
+      call gn_decrease(jc, r0, d0, step0)
+      ! Each test's sum of squares after the constants' own Gauss-Newton step: the reference
+      ! of an effect's linear prediction
+      npts = test_sizes(ctx%prob, ctx%ifit)
+      lin0 = block_sums(npts, r0 + matmul(jc, step0))
       allocate (res%effects(size(ctx%opts%effects)))
       do i = 1, size(ctx%opts%effects)
          call tell(ctx, 'screening '//trim(ctx%cat(ctx%opts%effects(i))%name), res%nevals)
-         call screen_one(ctx, ctx%opts%effects(i), r0, jc, complete, d0, res%effects(i), res%nevals, error)
+         call screen_one(ctx, ctx%opts%effects(i), r0, jc, complete, d0, npts, lin0, res%effects(i), &
+                         res%nevals, error)
          if (allocated(error)) return
       end do
       ! By predicted BIC change, best first (the keys copied: a component of an array of
@@ -55,7 +63,7 @@ contains
    end subroutine screen
 
    !> Screening of effect k: the linear score test and short nonlinear runs
-   subroutine screen_one(ctx, k, r0, jc, jc_complete, d0, e, nevals, error)
+   subroutine screen_one(ctx, k, r0, jc, jc_complete, d0, npts, lin0, e, nevals, error)
       type(diagnose_context), intent(in) :: ctx
       !> Catalogue effect
       integer, intent(in) :: k
@@ -65,6 +73,9 @@ contains
       logical, intent(in) :: jc_complete
       !> Gauss-Newton decrease the constants alone give
       real(dp), intent(in) :: d0
+      !> Points of each fit test; each test's sum of squares after the constants' own step
+      integer, intent(in) :: npts(:)
+      real(dp), intent(in) :: lin0(:)
       type(effect_outcome), intent(inout) :: e
       integer, intent(inout) :: nevals
       type(error_type), allocatable, intent(out) :: error
@@ -73,7 +84,8 @@ contains
       real(dp), allocatable :: je(:, :), rr(:), x(:), step(:), lo(:), hi(:)
       real(dp), allocatable :: xs(:, :), xe(:, :), fe(:)
       integer, allocatable :: idx(:)
-      real(dp) :: d1, s
+      real(dp) :: d1, s, dev_lin, dev_end
+      real(dp), allocatable :: r_end(:), sum0(:)
       integer :: j, nc, q
       logical :: ok, complete
       s = sum(r0**2)
@@ -96,9 +108,12 @@ contains
       q = count(ep%pfree)
       e%q = q
       if (.not. ok) return
-      call low_end_power(ctx, ep, r0, jc, je(:, nc + 1:), e)
+      call low_end_power(ctx, ep, r0, jc, je(:, nc + 1:), npts, e)
       allocate (step(nc + q))
       call gn_decrease(reshape([jc, je(:, nc + 1:)], [size(r0), nc + q]), r0, d1, step)
+      ! The linear prediction per test (each test's residuals of a variance of their own)
+      sum0 = block_sums(npts, r0 + matmul(jc, step(:nc)) + matmul(je(:, nc + 1:), step(nc + 1:)))
+      dev_lin = deviance_change(npts, lin0, max(sum0, 1.0e-3_dp*lin0))
       deallocate (step)
       ! The score test is linear: an effect whose first steps leave the valley of the
       ! constants shows only after a few nonlinear steps, so a short Levenberg-Marquardt
@@ -147,30 +162,42 @@ contains
       e%q = count(ep%pfree)
       q = e%q
       e%pred_drop = max(d1 - d0, s - fe(idx(1)), 0.0_dp)
-      e%pred_dbic = size(r0)*log(max(s - e%pred_drop, 1.0e-3_dp*s)/s) + q*log(real(size(r0), dp))
+      ! The predicted BIC change from the better of the linear prediction and the short runs'
+      ! lowest end point, each test's residuals of a variance of their own (as the refit's)
+      sum0 = block_sums(npts, r0)
+      allocate (r_end(size(r0)))
+      call ep%residual_at(e%x, r_end, ok)
+      dev_end = 0.0_dp
+      if (ok) dev_end = deviance_change(npts, sum0, max(block_sums(npts, r_end), 1.0e-3_dp*sum0))
+      e%pred_dbic = min(dev_lin, dev_end, 0.0_dp) + q*log(real(size(r0), dp))
    end subroutine screen_one
 
    !> The power of the BIC rule against effect ep%k at the low end of its realistic range on
    !> the fit tests (see low_end_deltas, bic_power): the effect's signal there from the
    !> screening's Jacobian (jp: its columns, linear in the parameters), less what the
-   !> constants take up (its projection on jc), over the residual variance that BIC sees (the
-   !> baseline's mean square); the refit's parameters are the degrees of freedom
-   subroutine low_end_power(ctx, ep, r0, jc, jp, e)
+   !> constants take up (its projection on jc), each test's rows over the residual variance
+   !> that BIC sees there (that test's baseline mean square); the refit's parameters are the
+   !> degrees of freedom
+   subroutine low_end_power(ctx, ep, r0, jc, jp, npts, e)
       type(diagnose_context), intent(in) :: ctx
       type(effect_problem), intent(in) :: ep
       real(dp), intent(in) :: r0(:), jc(:, :), jp(:, :)
+      !> Points of each fit test (consecutive blocks of r0)
+      integer, intent(in) :: npts(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp), allocatable :: d(:, :), sig(:)
-      real(dp) :: proj, var
-      integer :: g
-      var = sum(r0**2)/max(size(r0), 1)
+      real(dp), allocatable :: d(:, :), sig(:), w(:), var(:)
+      real(dp) :: proj
+      integer :: g, i
+      ! Each test's residual variance, its baseline mean square
+      var = block_sums(npts, r0)/max(npts, 1)
       d = low_end_deltas(ep, ctx%cat(ep%k), ctx%ifit)
-      if (var <= 0.0_dp .or. size(d, 2) == 0) return
+      if (any(var <= 0.0_dp) .or. size(d, 2) == 0) return
+      w = [(spread(1.0_dp/sqrt(var(i)), 1, npts(i)), i=1, size(npts))]
       e%lambda_low = huge(1.0_dp)
       do g = 1, size(d, 2)
-         sig = matmul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
-         call gn_decrease(jc, sig, proj)
-         e%lambda_low = min(e%lambda_low, max(sum(sig**2) - proj, 0.0_dp)/var)
+         sig = w*matmul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
+         call gn_decrease(jc*spread(w, 2, size(jc, 2)), sig, proj)
+         e%lambda_low = min(e%lambda_low, max(sum(sig**2) - proj, 0.0_dp))
       end do
       e%power_low = bic_power(e%lambda_low, count(free_params(ep, ctx%ifit, .false.)), size(r0))
    end subroutine low_end_power

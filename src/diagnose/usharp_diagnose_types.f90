@@ -137,6 +137,7 @@ module usharp_diagnose_types
       !> uncertainty): above it, the held-out data show something the noise does not
       real(dp) :: gap_held_noise = 0.0_dp, floor_held_noise = 0.0_dp
       integer :: m = 0                            !< residuals of the fit tests
+      integer, allocatable :: npts(:)             !< residuals of each test (all tests)
       type(region_stat), allocatable :: regions(:)
       type(effect_outcome), allocatable :: effects(:)  !< sorted by pred_dbic
       integer :: leading = 0                      !< index into effects, 0: none confirmed
@@ -154,6 +155,7 @@ module usharp_diagnose_types
       real(dp), allocatable :: x_global(:, :)
       logical :: global = .false.                 !< the refits ran from the global starts
       real(dp) :: f0_global = 0.0_dp              !< the baseline's objective from them too
+      real(dp), allocatable :: per_test_global(:) !< that baseline per test (fit tests)
       !> Each step's cost, in the order they ran; the marks: where the step under way began
       type(step_cost), allocatable :: steps(:)
       integer :: mark_nevals = 0
