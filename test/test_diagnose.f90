@@ -533,16 +533,7 @@ contains
       type(diagnose_context) :: ctx
       type(diagnose_result) :: res
       type(effect_outcome) :: e
-      ctx%opts%confirm_shrink = 0.5_dp
-      res%m = 1000
-      res%f0 = 1.0_dp
-      res%gap_fit = 0.1_dp
-      res%floor_fit = 0.2_dp
-      res%gap_held = 0.05_dp
-      res%floor_held = 0.1_dp
-      ctx%ifit = [1]
-      res%npts = [1000]
-      res%per_test0 = [1.0_dp]
+      call below_floors_case([1000], [1.0_dp], ctx, res)
       e%q = 2
       e%f_after = exp(-(30.0_dp + 2.0_dp*log(1000.0_dp))/1000.0_dp)
       e%per_test_after = [e%f_after]
@@ -575,16 +566,7 @@ contains
       type(diagnose_context) :: ctx
       type(diagnose_result) :: res
       type(effect_outcome) :: e
-      ctx%opts%confirm_shrink = 0.5_dp
-      ctx%ifit = [1, 2]
-      res%npts = [100, 900]
-      res%per_test0 = [1.0_dp, 0.1_dp]
-      res%m = 1000
-      res%f0 = 1.1_dp
-      res%gap_fit = 0.1_dp
-      res%floor_fit = 0.2_dp
-      res%gap_held = 0.05_dp
-      res%floor_held = 0.1_dp
+      call below_floors_case([100, 900], [1.0_dp, 0.1_dp], ctx, res)
       e%q = 1
       e%per_test_after = [0.85_dp, 0.1_dp]
       e%f_after = sum(e%per_test_after)
@@ -602,6 +584,26 @@ contains
       call check(error, e%significant .and. abs(e%dbic - (900.0_dp*log(0.85_dp) + log(1000.0_dp))) < 1.0e-9_dp, &
                  'a 15 % fall in the quiet test: dBIC '//real_str(e%dbic, 'es12.5'))
    end subroutine test_bic_per_test
+
+   !> A diagnosis whose fit tests (npts points, baseline sums of squares f0) and held-out
+   !> tests both lie below their floors
+   subroutine below_floors_case(npts, f0, ctx, res)
+      integer, intent(in) :: npts(:)
+      real(dp), intent(in) :: f0(:)
+      type(diagnose_context), intent(out) :: ctx
+      type(diagnose_result), intent(out) :: res
+      integer :: i
+      ctx%opts%confirm_shrink = 0.5_dp
+      ctx%ifit = [(i, i=1, size(npts))]
+      res%npts = npts
+      res%per_test0 = f0
+      res%m = sum(npts)
+      res%f0 = sum(f0)
+      res%gap_fit = 0.1_dp
+      res%floor_fit = 0.2_dp
+      res%gap_held = 0.05_dp
+      res%floor_held = 0.1_dp
+   end subroutine below_floors_case
 
    !> The leading n_refit effects are refitted and those the screening cannot tell from the
    !> last of them (predicted BIC within 10 % or bic_margin), not one more
