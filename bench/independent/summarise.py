@@ -22,48 +22,67 @@ def data_key(case):
     return h.hexdigest()
 
 
-# The cases, each once: a later folder's diagnosis of the same data replaces an earlier one's
-cases = collections.OrderedDict()
-for d in sys.argv[1:]:
-    lowall = d.rstrip('/').endswith('low')
-    for case in sorted(glob.glob(os.path.join(d, '*'))):
-        if os.path.exists(os.path.join(case, 'truth.txt')):
-            key = data_key(case)
-            cases.pop(key, None)
-            cases[key] = (case, lowall)
-rows = collections.OrderedDict()
-low = collections.defaultdict(list)
-for case, lowall in cases.values():
-    t = os.path.join(case, 'truth.txt')
-    txt = open(t).read()
-    m = re.match(r'(\w+): (.*)\nverdict: (.*)', txt, re.S)
-    row, label = m.group(1), m.group(2)
-    name = os.path.basename(case)
-    mname = name[:name.index('-' + row + '-')]
-    rep = int(name.rsplit('-', 1)[1])
-    rpt = os.path.join(case, 'report.md')
+def unique_cases(dirs):
+    """The cases of the folders, each once: a later folder's diagnosis of the same data
+    replaces an earlier one's. A list of (case folder, whether its folder is all low end)"""
+    cases = collections.OrderedDict()
+    for d in dirs:
+        lowall = d.rstrip('/').endswith('low')
+        for case in sorted(glob.glob(os.path.join(d, '*'))):
+            if os.path.exists(os.path.join(case, 'truth.txt')):
+                key = data_key(case)
+                cases.pop(key, None)
+                cases[key] = (case, lowall)
+    return list(cases.values())
+
+
+def verdict(case):
+    """selfcheck.verdict_of of the case's report (per specimen: the specimen's report)"""
     spec = glob.glob(os.path.join(case, 'out', 'diagnose', 'specimen-*.md'))
-    rtxt = open(spec[0]).read() if spec else open(rpt).read()
-    lead, rem, v, alike = sc.verdict_of(rtxt)
-    ok = lead in sc.ACCEPT[row] or any(x in sc.ACCEPT[row] for x in alike)
-    key = (mname, row)
-    r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[]))
-    r['n'] += 1
-    r['ok'] += ok
-    if ok and rem == rem:
-        r['rem'].append(rem)
-    r['ans'].append(lead + ('' if lead in sc.ACCEPT[row] or not ok else '~' + next(x for x in alike if x in sc.ACCEPT[row])))
-    if rep == 0 or lowall:
-        low[row].append((mname, label, ok, lead))
-print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s}  answers')
-tot = ok = 0
-order = lambda k: (list(sc.MATRICES).index(k[0]), sc.ROWS.index(k[1]))
-for (mname, row), r in sorted(rows.items(), key=lambda kr: order(kr[0])):
-    rem = sorted(r['rem'])
-    rs = f'{rem[0]:.0f} / {rem[len(rem)//2]:.0f}' if rem else '-'
-    print(f'{mname:20s} {row:12s} {r["ok"]:>4d} / {r["n"]:<3d} {rs:>34s}  {" ".join(r["ans"])}')
-    tot += r['n']; ok += r['ok']
-print(f'right {ok} of {tot}')
-print('\nlow end (first repetition of each row, or --u 0):')
-for row, L in low.items():
-    print(f'{row:12s} {sum(x[2] for x in L)} of {len(L)}: ' + '; '.join(f'{m} {l} -> {a}' for m, l, o, a in L))
+    return sc.verdict_of(open(spec[0]).read() if spec else open(os.path.join(case, 'report.md')).read())
+
+
+def right(row, v):
+    """An accepted effect first, or named as explaining the gap equally well with a
+    separating test proposed"""
+    lead, rem, text, alike = v
+    return lead in sc.ACCEPT[row] or any(x in sc.ACCEPT[row] for x in alike)
+
+
+def main(dirs):
+    rows = collections.OrderedDict()
+    low = collections.defaultdict(list)
+    for case, lowall in unique_cases(dirs):
+        txt = open(os.path.join(case, 'truth.txt')).read()
+        m = re.match(r'(\w+): (.*)\nverdict: (.*)', txt, re.S)
+        row, label = m.group(1), m.group(2)
+        name = os.path.basename(case)
+        mname = name[:name.index('-' + row + '-')]
+        rep = int(name.rsplit('-', 1)[1])
+        lead, rem, v, alike = verdict(case)
+        ok = right(row, (lead, rem, v, alike))
+        key = (mname, row)
+        r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[]))
+        r['n'] += 1
+        r['ok'] += ok
+        if ok and rem == rem:
+            r['rem'].append(rem)
+        r['ans'].append(lead + ('' if lead in sc.ACCEPT[row] or not ok else '~' + next(x for x in alike if x in sc.ACCEPT[row])))
+        if rep == 0 or lowall:
+            low[row].append((mname, label, ok, lead))
+    print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s}  answers')
+    tot = ok = 0
+    order = lambda k: (list(sc.MATRICES).index(k[0]), sc.ROWS.index(k[1]))
+    for (mname, row), r in sorted(rows.items(), key=lambda kr: order(kr[0])):
+        rem = sorted(r['rem'])
+        rs = f'{rem[0]:.0f} / {rem[len(rem)//2]:.0f}' if rem else '-'
+        print(f'{mname:20s} {row:12s} {r["ok"]:>4d} / {r["n"]:<3d} {rs:>34s}  {" ".join(r["ans"])}')
+        tot += r['n']; ok += r['ok']
+    print(f'right {ok} of {tot}')
+    print('\nlow end (first repetition of each row, or --u 0):')
+    for row, L in low.items():
+        print(f'{row:12s} {sum(x[2] for x in L)} of {len(L)}: ' + '; '.join(f'{m} {l} -> {a}' for m, l, o, a in L))
+
+
+if __name__ == '__main__':
+    main(sys.argv[1:])
