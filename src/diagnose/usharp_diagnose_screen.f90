@@ -167,6 +167,7 @@ contains
       sum0 = block_sums(npts, r0)
       allocate (r_end(size(r0)))
       call ep%residual_at(e%x, r_end, ok)
+      nevals = nevals + 1
       dev_end = 0.0_dp
       if (ok) dev_end = deviance_change(npts, sum0, max(block_sums(npts, r_end), 1.0e-3_dp*sum0))
       e%pred_dbic = min(dev_lin, dev_end, 0.0_dp) + q*log(real(size(r0), dp))
