@@ -28,6 +28,10 @@ module test_diagnose
    use usharp_diagnose_refit, only: judge, ratio_beyond_doubt
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
+   use usharp_diagnose_numerics, only: best_of_starts, global_points
+   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_optimiser, only: optimum_type
+   use omp_lib, only: omp_set_num_threads, omp_get_max_threads
    use test_util, only: write_text, check_message
    implicit none
    private
@@ -67,6 +71,7 @@ contains
          new_unittest('diagnose-bad-inputs', test_bad_inputs), &
          new_unittest('baseline-ignores-held-out-data', test_held_out_unused), &
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
+         new_unittest('starts-on-threads-as-one-after-the-other', test_starts_threads), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
@@ -444,6 +449,50 @@ contains
                  r1%floor_fit == r2%floor_fit .and. r1%noise(1) == r2%noise(1), &
                  'a baseline figure changed with the held-out data')
    end subroutine test_held_out_unused
+
+   !> The starts of a refit side by side on two threads (tasks) end where they end one after
+   !> the other on one thread, bit for bit, with the same simulations counted
+   subroutine test_starts_threads(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_problem) :: ep(2)
+      type(optimum_type) :: opt(2)
+      real(dp), allocatable :: xs(:, :), lo(:), hi(:), fs(:, :)
+      integer :: nevals(2), k, nthreads
+      call write_relaxation_data('fit.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text('diag-starts.nml', [character(len=100) :: &
+         model_groups, "&fit fitted = 'B', 'n', 'A1', method = 'lm' /", "&diagnose holdout = 'held' /", &
+         "&test name = 'fit', history = 'relaxation', data_file = 'fit.txt' /", &
+         "&test name = 'held', history = 'relaxation', data_file = 'fit.txt' /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call check(error, .not. allocated(e), 'baseline failed')
+      if (allocated(error)) return
+      xs = global_points(cfg, ctx%prob, 4)
+      allocate (fs(size(xs, 2), 2))
+      nthreads = omp_get_max_threads()
+      do k = 1, 2
+         call omp_set_num_threads(k)
+         call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep(k))
+         call ep(k)%bounds(lo, hi)
+         opt(k)%f = huge(1.0_dp)
+         nevals(k) = 0
+         call best_of_starts(ep(k), xs, lo, hi, ctx%h, 400, opt(k), nevals(k), fs(:, k))
+      end do
+      call omp_set_num_threads(nthreads)
+      call check(error, allocated(opt(1)%x) .and. allocated(opt(2)%x), 'no start ended')
+      if (allocated(error)) return
+      call check(error, all(fs(:, 1) == fs(:, 2)) .and. all(opt(1)%x == opt(2)%x) .and. &
+                 opt(1)%f == opt(2)%f, 'the starts ended elsewhere on two threads: '// &
+                 real_str(opt(1)%f, 'es23.16')//' against '//real_str(opt(2)%f, 'es23.16'))
+      if (allocated(error)) return
+      call check(error, nevals(1) == nevals(2) .and. ep(1)%nevals == ep(2)%nevals .and. nevals(1) > 0, &
+                 'simulations counted differently on two threads')
+   end subroutine test_starts_threads
 
    !> The constants given are only a start: from B three times too high (an unconverged fit)
    !> the baseline comes back to the B the data were made with

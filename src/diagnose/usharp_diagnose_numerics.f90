@@ -19,6 +19,7 @@ module usharp_diagnose_numerics
    use usharp_diagnose_options, only: bic_margin
    use usharp_distributions, only: ncx2_sf
    use usharp_mpi, only: n_ranks, this_rank, share, sum_over_ranks, task_deal, ranks_that_ran
+   use omp_lib, only: omp_get_max_threads
    implicit none
    private
 
@@ -365,6 +366,7 @@ contains
       !> the outcome is that of one process
       logical, intent(in), optional :: over_ranks
       type(optimum_type), allocatable :: alts(:)
+      type(effect_problem), allocatable :: eps(:)
       type(error_type), allocatable :: error
       logical, allocatable :: ok(:), ran(:)
       integer, allocatable :: owner(:)
@@ -378,21 +380,40 @@ contains
       ok = .false.
       n0 = ep%nevals
       ran = .false.
-      ! Spread: each start to the next rank that is free
-      call deal%open(1, size(xs, 2), alone=.not. spread)
-      do
-         j = deal%take()
-         if (j == 0) exit
-         ran(j) = .true.
-         call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
-                                  max_evals, alts(j), error)
-         if (allocated(error)) then
-            deallocate (error)
-            cycle
-         end if
-         ok(j) = .true.
-      end do
-      call deal%close()
+      if (.not. spread .and. size(xs, 2) > 1 .and. omp_get_max_threads() > 1) then
+         ! The starts side by side on this process's threads, each on a problem of its own:
+         ! tasks, whose difference Jacobians are tasks too (see ep_residuals), so that no
+         ! thread idles while one start's line search runs alone. Each start's numbers are
+         ! those of the starts one after the other.
+         allocate (eps(size(xs, 2)))
+         !$omp parallel
+         !$omp single
+         do j = 1, size(xs, 2)
+            !$omp task firstprivate(j)
+            call one_start(j)
+            !$omp end task
+         end do
+         !$omp end single
+         !$omp end parallel
+         ep%nevals = n0 + sum(eps%nevals - n0)
+         ran = .true.
+      else
+         ! Spread: each start to the next rank that is free
+         call deal%open(1, size(xs, 2), alone=.not. spread)
+         do
+            j = deal%take()
+            if (j == 0) exit
+            ran(j) = .true.
+            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
+                                     max_evals, alts(j), error)
+            if (allocated(error)) then
+               deallocate (error)
+               cycle
+            end if
+            ok(j) = .true.
+         end do
+         call deal%close()
+      end if
       if (spread) then
          owner = ranks_that_ran(ran)
          do j = 1, size(xs, 2)
@@ -407,6 +428,18 @@ contains
          if (present(fs)) fs(j) = alts(j)%f
          if (alts(j)%f < opt%f) opt = alts(j)
       end do
+
+   contains
+
+      !> Start j on a copy of the problem (a start that fails is passed over)
+      subroutine one_start(j)
+         integer, intent(in) :: j
+         type(error_type), allocatable :: err
+         eps(j) = ep
+         call levenberg_marquardt(eps(j), min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
+                                  max_evals, alts(j), err)
+         ok(j) = .not. allocated(err)
+      end subroutine one_start
    end subroutine best_of_starts
 
    !> A start's outcome from the rank that ran it to every rank

@@ -14,6 +14,7 @@ module usharp_effect_problem
    use usharp_history, only: history_type, control_strain
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
+   use omp_lib, only: omp_in_parallel
    implicit none
    private
 
@@ -256,23 +257,32 @@ contains
             if (only(j) > 0) ref(j) = b
          end do
       end do
-      !$omp parallel do schedule(dynamic)
-      do j = 1, n
-         if (ref(j) == -1) call self%residual_at(xs(:, j), rs(:, j), ok(j))
-      end do
-      !$omp end parallel do
-      !$omp parallel do schedule(dynamic)
-      do j = 1, n
-         if (ref(j) == -1) cycle
-         if (ref(j) == 0) then
-            rs(:, j) = self%r_last
-         else
-            rs(:, j) = rs(:, ref(j))
-         end if
-         call self%residual_at(xs(:, j), rs(:, j), ok(j), only=only(j))
-         ok(j) = ok(j) .and. all(abs(rs(:, j)) < huge(1.0_dp))
-      end do
-      !$omp end parallel do
+      ! Inside a team already (the starts of best_of_starts run as its tasks) the points are
+      ! tasks too, which a thread whose own start waits or has ended takes up; otherwise a
+      ! team of their own. Each point is simulated alone either way: the same numbers.
+      if (omp_in_parallel()) then
+         !$omp taskloop grainsize(1)
+         do j = 1, n
+            call whole(j)
+         end do
+         !$omp end taskloop
+         !$omp taskloop grainsize(1)
+         do j = 1, n
+            call one_test(j)
+         end do
+         !$omp end taskloop
+      else
+         !$omp parallel do schedule(dynamic)
+         do j = 1, n
+            call whole(j)
+         end do
+         !$omp end parallel do
+         !$omp parallel do schedule(dynamic)
+         do j = 1, n
+            call one_test(j)
+         end do
+         !$omp end parallel do
+      end if
       do j = 1, n
          fs(j) = merge(sum(rs(:, j)**2), 2.0e10_dp, ok(j))
       end do
@@ -281,6 +291,27 @@ contains
          self%x_last = xs(:, 1)
          self%r_last = rs(:, 1)
       end if
+
+   contains
+
+      !> Point j with every test simulated (unless it is one test's own)
+      subroutine whole(j)
+         integer, intent(in) :: j
+         if (ref(j) == -1) call self%residual_at(xs(:, j), rs(:, j), ok(j))
+      end subroutine whole
+
+      !> Point j with its one test simulated, the other rows those of its reference
+      subroutine one_test(j)
+         integer, intent(in) :: j
+         if (ref(j) == -1) return
+         if (ref(j) == 0) then
+            rs(:, j) = self%r_last
+         else
+            rs(:, j) = rs(:, ref(j))
+         end if
+         call self%residual_at(xs(:, j), rs(:, j), ok(j), only=only(j))
+         ok(j) = ok(j) .and. all(abs(rs(:, j)) < huge(1.0_dp))
+      end subroutine one_test
    end subroutine ep_residuals
 
    !> For each component of x: the index (into the problem's tests) of the one test whose
