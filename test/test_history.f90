@@ -30,6 +30,7 @@ contains
          new_unittest('monotone-pools-violators', test_monotone), &
          new_unittest('measured-forcing-noisy-triangle', test_measured), &
          new_unittest('measured-forcing-noise-zero-is-linear', test_measured_raw), &
+         new_unittest('measured-forcing-step-test', test_measured_steps), &
          new_unittest('gap-filled-cycle-10-as-continuous', test_gap_fill), &
          new_unittest('gap-fill-smooth-pieces-and-peaks', test_gap_fill_smooth)]
    end subroutine collect_history
@@ -171,6 +172,61 @@ contains
       call check(error, signal_resolution([0.0_dp, 3.0e-5_dp, 4.0e-5_dp, 4.0e-5_dp]), 1.0e-5_dp, &
                  'smallest non-zero step', thr=1.0e-18_dp)
    end subroutine test_monotone
+
+   !> A step test: triangles of amplitude 5e-4, 1e-3, 2e-3 and 5e-3 at 1e-3/s (0.1 s samples);
+   !> its first cycle is a tenth of the range. Recorded to 1e-5 with dips of 7 quanta, the
+   !> forcing turns at every peak and nowhere else; unrounded (a simulation's values), it
+   !> passes through the samples within 1e-6 of the range
+   subroutine test_measured_steps(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      real(dp), parameter :: amp(4) = [5.0e-4_dp, 1.0e-3_dp, 2.0e-3_dp, 5.0e-3_dp]
+      real(dp), allocatable :: t(:), v(:), truth(:)
+      real(dp) :: val
+      integer :: k, j, round, npeak
+      t = [0.0_dp]
+      truth = [0.0_dp]
+      ! each cycle: up to +amp, down to -amp, back to 0
+      do j = 1, size(amp)
+         do k = 1, nint(4.0_dp*amp(j)/1.0e-4_dp)
+            t = [t, t(size(t)) + 0.1_dp]
+            val = 1.0e-4_dp*real(k, dp)
+            if (val <= amp(j)) then
+               truth = [truth, val]
+            else if (val <= 3.0_dp*amp(j)) then
+               truth = [truth, 2.0_dp*amp(j) - val]
+            else
+               truth = [truth, val - 4.0_dp*amp(j)]
+            end if
+         end do
+      end do
+      npeak = 2*size(amp)
+      do round = 1, 2
+         if (round == 1) then
+            v = 1.0e-5_dp*anint(truth/1.0e-5_dp)
+            ! a dip of 7 quanta inside the last ramp up
+            k = size(v) - 20
+            v(k:k + 1) = v(k:k + 1) - 7.0e-5_dp
+         else
+            v = truth
+         end if
+         call measured_history(t, v, control_strain, h, uerr)
+         call check(error, .not. allocated(uerr), 'forcing failed')
+         if (allocated(error)) return
+         call check(error, size(h%stops), npeak + 2, 'turning points: the start, the '// &
+                    'peaks and the end')
+         if (allocated(error)) return
+         if (round == 2) then
+            do k = 1, size(t)
+               val = h%value_at(t(k))
+               call check(error, abs(val - v(k)) <= 1.0e-6_dp*1.0e-2_dp, 'unrounded samples '// &
+                          'not followed')
+               if (allocated(error)) return
+            end do
+         end if
+      end do
+   end subroutine test_measured_steps
 
    !> A triangle of strain (amplitude 0.005, 0.1 s samples) rounded to 1e-5 with a dip of
    !> 5e-5 in a ramp: the forcing stops at the two turning points only, stays within two

@@ -28,6 +28,7 @@ contains
          new_unittest('writer-reports-a-full-device', test_dev_full), &
          new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
          new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
+         new_unittest('inputs-never-overwritten', test_inputs_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
@@ -172,6 +173,46 @@ contains
       if (allocated(error)) return
       call check(error, e%stat, stat_usage, 'exit code 2')
    end subroutine test_journal_kept
+
+   !> No run writes over its own inputs, --force or not: the constants given with -c that are
+   !> the output folder's best.nml, and a test 'lcf' whose data are lcf.sim.txt in the output
+   !> folder, are refused with an input error that names them, and stay as they were
+   subroutine test_inputs_kept(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, best, data
+      input = deck('kept.nml', 'max_evals=12', '')
+      dir = scratch_dir//'/kept-out'
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'first run: '//e%message)
+         return
+      end if
+      best = read_text(dir//'/best.nml')
+      call run_command(input, dir, dir//'/best.nml', .false., summary, e, force=.true.)
+      call check_message(error, e, 'an input of this run, and '//dir//'/best.nml is a file it writes')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_input, 'exit code 1')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/best.nml') == best, 'the constants file is untouched')
+      if (allocated(error)) return
+      ! The data in the output folder under the name of the test's simulation
+      call make_dir(scratch_dir//'/kept-data', e)
+      call check(error, shell('cp '//thesis(7:)//'lcf.sim.txt '//scratch_dir//'/kept-data/') == 0, &
+                 'copy of the data')
+      if (allocated(error)) return
+      data = read_text(scratch_dir//'/kept-data/lcf.sim.txt')
+      input = write_text('kept-data/kept.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', max_evals=12 /", &
+         "&test name='lcf', history='thesis_lcf', data_file='lcf.sim.txt', weighting='threshold', sig=14 /"])
+      call run_command(input, scratch_dir//'/kept-data', '', .false., summary, e, force=.true.)
+      call check_message(error, e, 'lcf.sim.txt: an input of this run')
+      if (allocated(error)) return
+      call check(error, read_text(scratch_dir//'/kept-data/lcf.sim.txt') == data, 'the data are untouched')
+   end subroutine test_inputs_kept
 
    !> While another process holds the folder's lock a run exits 6; the lock file left behind
    !> by a run is no lock

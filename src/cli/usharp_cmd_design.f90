@@ -3,7 +3,7 @@
 module usharp_cmd_design
    use usharp_error, only: error_type
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as
+   use usharp_input, only: read_config_as, check_inputs_kept
    use usharp_design, only: design_result, design_run, design_report
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
@@ -24,6 +24,9 @@ contains
       type(run_config) :: cfg
       type(design_result) :: res
       call read_config_as(path, constants_file, out_dir, cfg, error)
+      if (allocated(error)) return
+      call check_inputs_kept(cfg, path, constants_file, [character(len=14) :: 'design.txt', &
+                             'design.journal'], [character(len=1) ::], error)
       if (allocated(error)) return
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return

@@ -5,7 +5,7 @@ module usharp_cmd_predict
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: real_str
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as
+   use usharp_input, only: read_config_as, check_inputs_kept
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_lines
@@ -41,6 +41,9 @@ contains
          return
       end if
       call read_config_as(path, constants_file, out_dir, cfg, error)
+      if (allocated(error)) return
+      call check_inputs_kept(cfg, path, constants_file, ['summary.txt'], &
+                             [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
       if (allocated(error)) return
       ! Nothing is fitted; the problem's set-up asks for one fitted constant, unused here
       if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.

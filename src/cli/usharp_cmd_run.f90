@@ -6,7 +6,7 @@ module usharp_cmd_run
    use usharp_strings, only: str, real_str
    use usharp_model, only: model_type
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as
+   use usharp_input, only: read_config_as, check_inputs_kept
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_experiment, only: fits_strain, response_name
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
@@ -65,6 +65,10 @@ contains
          logical :: spread
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
+         if (allocated(error)) return
+         call check_inputs_kept(cfg, path, constants_file, [character(len=11) :: 'best.nml', &
+            'summary.txt', 'identify.txt', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'fit.log', &
+            'fit.journal', 'fit.cache'], [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
          if (allocated(error)) return
          dir = cfg%out_dir
          if (len_trim(constants_file) > 0 .and. cfg%fit%multistart > 0) then

@@ -4,7 +4,7 @@ module usharp_cmd_simulate
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
-   use usharp_input, only: read_config, override_constants
+   use usharp_input, only: read_config, override_constants, check_inputs_kept
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test, add_stress_noise
    use usharp_history, only: control_strain
@@ -50,6 +50,13 @@ contains
          dir = trim(out_dir)
          command = command//' --out-dir '//trim(out_dir)
       end if
+      cfg%out_dir = dir
+      if (present(constants_file)) then
+         call check_inputs_kept(cfg, path, constants_file, [character(len=1) ::], ['.sim.txt'], error)
+      else
+         call check_inputs_kept(cfg, path, '', [character(len=1) ::], ['.sim.txt'], error)
+      end if
+      if (allocated(error)) return
       if (present(only_test)) then
          if (len(only_test) > 0) then
             if (.not. any([(cfg%tests(i)%name == only_test, i=1, size(cfg%tests))])) then

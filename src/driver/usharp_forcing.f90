@@ -9,17 +9,25 @@ module usharp_forcing
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_history, only: history_type, history_from_points
+   use usharp_sort, only: median
    implicit none
    private
 
-   public :: measured_history, turning_points, signal_resolution, smooth_branch, monotone
+   public :: measured_history, turning_points, turn_hysteresis, signal_resolution, smooth_branch, monotone
 
-   !> A turning point is confirmed once the signal has come back from its extreme by this
-   !> fraction of the signal's whole range (hysteresis against noise and local dips)
-   real(dp), parameter :: turn_fraction = 0.1_dp
+   !> A turning point is confirmed once the signal has come back from its extreme by more
+   !> than turn_noise times its noise scale (see turn_hysteresis), and at least turn_fraction
+   !> of its whole range. The noise sets it, not the range: a step test's first cycles are a
+   !> tenth of its range or less. Inside the Alloy 617 strains' branches (cycles 1-2) the
+   !> signal comes back by 7 quanta (7e-5) at most, at extensometer dips and serrations.
+   real(dp), parameter :: turn_noise = 12.0_dp
+   real(dp), parameter :: turn_fraction = 0.01_dp
    !> Default noise: the residual RMS left by the smoother, in units of the resolution of
    !> the recorded values (their smallest non-zero step); rounding to it alone leaves 0.29
    real(dp), parameter :: noise_in_steps = 1.0_dp
+   !> Noise of unrounded values without scatter (a simulation's), as a share of their range:
+   !> the smoother then passes through the samples to well within the accuracy of a fit
+   real(dp), parameter :: unrounded_floor = 1.0e-7_dp
    !> Samples over which the smoother's residual RMS is bounded by the noise
    integer, parameter :: window = 10
 
@@ -29,8 +37,10 @@ contains
    !> Inside a branch the command moves one way: the samples are first made monotone (a dip,
    !> an extensometer's slip or noise, would load the model elastically back and forth) and
    !> then smoothed. noise: the residual RMS the smoother leaves in each branch (the unit of
-   !> v); absent or negative: the RMS of rounding to the resolution of the recorded values; 0: no smoothing, the samples are
-   !> the corners of a piecewise-linear history (the integrators then stop at each of them).
+   !> v); absent or negative: for values rounded to a resolution, that resolution (their
+   !> smallest non-zero step), for unrounded values their own scatter (see scatter); 0: no
+   !> smoothing, the samples are the corners of a piecewise-linear history (the integrators
+   !> then stop at each of them).
    pure subroutine measured_history(t, v, control, hist, error, noise)
       real(dp), intent(in) :: t(:), v(:)
       integer, intent(in) :: control
@@ -45,9 +55,17 @@ contains
       if (allocated(error)) return
       sigma = -1.0_dp
       if (present(noise)) sigma = noise
-      if (sigma < 0.0_dp) sigma = noise_in_steps*signal_resolution(v)
+      if (sigma < 0.0_dp) then
+         if (quantum(v) > 0.0_dp) then
+            sigma = noise_in_steps*signal_resolution(v)
+         else
+            ! Unrounded values (a simulation's, or noise without rounding): their smallest
+            ! step is a sample's increment, not a resolution; their own scatter is the noise
+            sigma = max(scatter(v), unrounded_floor*(maxval(v) - minval(v)))
+         end if
+      end if
       if (sigma <= 0.0_dp .or. size(t) < 3) return
-      stops = turning_points(v, turn_fraction*(maxval(v) - minval(v)))
+      stops = turning_points(v, turn_hysteresis(v))
       allocate (z(size(v)), m(size(v)), ends(2, size(stops) - 1), mid(size(stops)))
       do j = 1, size(stops) - 1
          a = stops(j)
@@ -151,6 +169,53 @@ contains
          k = k + cnt(i)
       end do
    end function monotone
+
+   !> The hysteresis of the turning points of v (its unit): turn_noise times its noise scale,
+   !> the larger of its quantum (see quantum) and the scatter of its second differences
+   !> (their median absolute deviation, as a standard deviation of the values); at least
+   !> turn_fraction of its range
+   pure real(dp) function turn_hysteresis(v) result(delta)
+      real(dp), intent(in) :: v(:)
+      delta = max(turn_noise*max(quantum(v), scatter(v)), turn_fraction*(maxval(v) - minval(v)))
+   end function turn_hysteresis
+
+   !> The scatter of v as a standard deviation of its values, from its second differences
+   !> (their median absolute deviation; those of white noise have 6 times its variance): a
+   !> smooth signal's own curvature hardly counts
+   pure real(dp) function scatter(v) result(sd)
+      real(dp), intent(in) :: v(:)
+      real(dp), allocatable :: d2(:)
+      sd = 0.0_dp
+      if (size(v) < 3) return
+      d2 = v(3:) - 2.0_dp*v(2:size(v) - 1) + v(:size(v) - 2)
+      sd = median(abs(d2 - median(d2)))/(0.6745_dp*sqrt(6.0_dp))
+   end function scatter
+
+   !> The rounding of recorded values: the largest q = s/k (s the smallest non-zero step
+   !> between neighbours, k = 1 to 4) of which nearly every value (95 %) is a whole multiple,
+   !> with steps of typically 1.5 quanta or more; 0 when there is none (a simulation's
+   !> values, or noise without rounding). A logger's
+   !> step can be several quanta (an Alloy 617 strain recorded to 1e-5 moves by 2e-5 at
+   !> least), and samples of a repeated time, averaged, fall between the quanta.
+   pure real(dp) function quantum(v) result(q)
+      real(dp), intent(in) :: v(:)
+      real(dp), allocatable :: steps(:)
+      integer :: k
+      q = signal_resolution(v)
+      if (q == 0.0_dp) return
+      steps = abs(v(2:) - v(:size(v) - 1))
+      steps = pack(steps, steps > 0.0_dp)
+      do k = 1, 4
+         if (count(abs(v/(q/k) - anint(v/(q/k))) <= 1.0e-3_dp) >= 0.95_dp*size(v)) then
+            q = q/k
+            ! Rounding shows in steps of different numbers of quanta; steps all alike are a
+            ! regular sampling of a steady ramp, whose values fall on its own grid
+            if (median(steps) < 1.5_dp*q) q = 0.0_dp
+            return
+         end if
+      end do
+      q = 0.0_dp
+   end function quantum
 
    !> Resolution of recorded values: their smallest non-zero step between neighbours
    !> (0 when all are equal)

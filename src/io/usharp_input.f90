@@ -6,6 +6,7 @@ module usharp_input
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, prefix_error, fatal_error
    use usharp_strings, only: str
+   use usharp_filesys, only: absolute_path, join_path
    use usharp_model, only: model_type, model_at
    use usharp_config, only: run_config
    use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path
@@ -20,6 +21,7 @@ module usharp_input
    private
 
    public :: read_config, read_config_as, override_constants, resolve_path, known_groups
+   public :: check_inputs_kept
    public :: read_data_columns
 
    !> The groups of an input file; all but &test at most once
@@ -113,6 +115,58 @@ contains
       end if
       if (len_trim(out_dir) > 0) cfg%out_dir = trim(out_dir)
    end subroutine read_config_as
+
+   !> No input of a command is a file it writes: an output folder that holds the deck, the
+   !> constants given with -c or a test's data under a name the command writes there (a test
+   !> 'lcf' with its data in lcf.sim.txt) would have them overwritten, even with --force
+   subroutine check_inputs_kept(cfg, path, constants_file, fixed, per_test, error)
+      type(run_config), intent(in) :: cfg
+      !> the deck and the constants file given with -c ('' for none)
+      character(len=*), intent(in) :: path, constants_file
+      !> the names of the files the command writes in cfg%out_dir, and the endings of those
+      !> it writes for each test (after the test's name)
+      character(len=*), intent(in) :: fixed(:), per_test(:)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: inputs(:), outputs(:), here
+      integer :: i, j, n
+      if (len_trim(cfg%out_dir) == 0) return
+      if (len(absolute_path(cfg%out_dir)) == 0) return
+      n = max(len(path), len(constants_file), 1)
+      do i = 1, size(cfg%tests)
+         if (allocated(cfg%tests(i)%data%file)) n = max(n, len(cfg%tests(i)%data%file))
+         if (allocated(cfg%tests(i)%peak_file)) n = max(n, len(cfg%tests(i)%peak_file))
+      end do
+      allocate (character(len=n) :: inputs(0))
+      inputs = [character(len=n) :: path, constants_file]
+      do i = 1, size(cfg%tests)
+         if (allocated(cfg%tests(i)%data%file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%data%file]
+         if (allocated(cfg%tests(i)%peak_file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%peak_file]
+      end do
+      n = len(fixed)
+      do i = 1, size(cfg%tests)
+         n = max(n, len(cfg%tests(i)%name) + len(per_test))
+      end do
+      allocate (character(len=n) :: outputs(0))
+      outputs = [character(len=n) :: fixed]
+      do i = 1, size(cfg%tests)
+         do j = 1, size(per_test)
+            outputs = [character(len=n) :: outputs, cfg%tests(i)%name//trim(per_test(j))]
+         end do
+      end do
+      do i = 1, size(inputs)
+         if (len_trim(inputs(i)) == 0) cycle
+         here = absolute_path(trim(inputs(i)))
+         if (len(here) == 0) cycle
+         do j = 1, size(outputs)
+            if (absolute_path(join_path(cfg%out_dir, trim(outputs(j)))) == here) then
+               call fatal_error(error, trim(inputs(i))//': an input of this run, and '// &
+                  join_path(cfg%out_dir, trim(outputs(j)))//' is a file it writes; give '// &
+                  'another output folder (-o or &output out_dir)')
+               return
+            end if
+         end do
+      end do
+   end subroutine check_inputs_kept
 
    !> Replace the constants of cfg by the &constants group of another file (a best.nml)
    subroutine override_constants(cfg, path, error)
