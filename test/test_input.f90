@@ -27,6 +27,8 @@ contains
          new_unittest('misspelled-variable', test_misspelled), &
          new_unittest('unknown-group-line-and-column', test_unknown_group), &
          new_unittest('unknown-history', test_unknown_history), &
+         new_unittest('not-a-number-refused', test_not_finite), &
+         new_unittest('sizes-beyond-memory-refused', test_too_many_points), &
          new_unittest('unknown-jacobian', test_unknown_jacobian), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
@@ -100,6 +102,37 @@ contains
       call expect_config_error(error, 'history.nml', [character(len=80) :: &
          "&test name='x', history='sawtooth' /"], "&test #1 'x': history = 'sawtooth' is not known")
    end subroutine test_unknown_history
+
+   !> NaN and infinite values are refused where they are written, whatever the variable (a
+   !> NaN passes x < 0 checks: a hold of NaN s was taken as none); text that merely holds
+   !> 'nan' is a name, not a value
+   subroutine test_not_finite(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'nan-hold.nml', [character(len=80) :: &
+         "&test name='x', history='cyclic', strain_range=0.01,", "  hold_max = NaN /"], &
+         ": &test: hold_max = NaN is not a number usharp can use")
+      if (allocated(error)) return
+      call expect_config_error(error, 'inf-sig.nml', [character(len=80) :: &
+         "&test name='nan', history='thesis_lcf', sig=-Infinity /"], &
+         ": &test: sig = -Infinity is not a number usharp can use")
+      if (allocated(error)) return
+      call expect_config_error(error, 'nan-list.nml', [character(len=80) :: &
+         "&test name='x', history='relaxation', levels = 0.001, nan /"], &
+         "&test: levels = nan is not a number usharp can use")
+   end subroutine test_not_finite
+
+   !> Counts beyond what a simulation can hold are input errors, not crashes: cycles of two
+   !> thousand million, and an output interval of 1e-9 s over a 240 s test
+   subroutine test_too_many_points(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'cycles.nml', [character(len=80) :: &
+         "&test name='x', history='cyclic', strain_range=0.01, cycles=2000000000 /"], &
+         "cyclic: cycles = 2000000000 is more than the 1250000 a history may have")
+      if (allocated(error)) return
+      call expect_config_error(error, 'dtout.nml', [character(len=80) :: &
+         "&test name='x', history='thesis_lcf', dt_out=1e-9 /"], &
+         "output times over the")
+   end subroutine test_too_many_points
 
    subroutine test_unknown_jacobian(error)
       type(error_type), allocatable, intent(out) :: error

@@ -16,6 +16,7 @@ module usharp_cmd_run
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
+   use usharp_signal, only: release_stop_signals
    implicit none
    private
 
@@ -46,6 +47,9 @@ contains
       if (present(force)) overwrite = force
       lock = -1
       call locked_run()
+      ! A stop signal during the writing of the results waited for them to be whole (the fit
+      ! itself was done); from here on it ends the process at once again
+      call release_stop_signals()
       call unlock_file(lock)
 
    contains
@@ -98,7 +102,8 @@ contains
                '(it holds '//join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
             return
          end if
-         call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume)
+         call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume, &
+                      hold_signals=.true.)
          if (spread) call identify_over_ranks(prob, out, allocated(error), ident, report_error)
          if (allocated(error)) return
 

@@ -15,6 +15,10 @@ module usharp_history
 
    !> Control modes
    integer, parameter :: control_strain = 1, control_stress = 2
+   !> The most corners a history, or output times a test, may have: a simulation keeps six
+   !> arrays of its outputs, 480 MB at this size (far beyond hundreds of thousands of points
+   !> of a whole test programme), and counts beyond it overflow before memory runs out
+   integer, parameter, public :: max_points = 10000000
 
    !> Piecewise-linear history: value v(k) at time t(k); t strictly increasing. A smooth
    !> history (a measured signal as forcing, usharp_forcing) is instead the cubic spline
@@ -233,8 +237,13 @@ contains
       real(dp), allocatable :: t(:), v(:)
       real(dp) :: m
       integer :: k
-      if (npeaks < 2 .or. a_first <= 0.0_dp .or. a_last <= 0.0_dp .or. quarter_time <= 0.0_dp) then
+      if (npeaks < 2 .or. .not. (a_first > 0.0_dp .and. a_last > 0.0_dp .and. quarter_time > 0.0_dp)) then
          call fatal_error(error, 'thesis_lcf needs npeaks >= 2 and positive amplitudes and quarter_time')
+         return
+      end if
+      if (npeaks > max_points/2) then
+         call fatal_error(error, 'thesis_lcf: npeaks = '//str(npeaks)//' is more than the '// &
+                          str(max_points/2)//' a history may have')
          return
       end if
       m = (a_last/a_first)**(1.0_dp/real(npeaks - 1, dp))
@@ -287,8 +296,13 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: t(:), v(:)
       integer :: k
-      if (repeats < 1 .or. seg_time <= 0.0_dp) then
+      if (repeats < 1 .or. .not. seg_time > 0.0_dp) then
          call fatal_error(error, 'ratchet needs repeats >= 1 and seg_time > 0')
+         return
+      end if
+      if (repeats > max_points/2) then
+         call fatal_error(error, 'ratchet: repeats = '//str(repeats)//' is more than the '// &
+                          str(max_points/2)//' a history may have')
          return
       end if
       allocate (t(2*repeats + 1), v(2*repeats + 1))
@@ -315,11 +329,16 @@ contains
       real(dp), allocatable :: t(:), v(:)
       real(dp) :: amp, quarter, tt
       integer :: k, np
-      if (strain_range <= 0.0_dp .or. cycles < 1) then
+      if (.not. strain_range > 0.0_dp .or. cycles < 1) then
          call fatal_error(error, 'cyclic needs strain_range > 0 and cycles >= 1')
          return
       end if
-      if (hold_max < 0.0_dp .or. hold_min < 0.0_dp) then
+      if (cycles > max_points/8) then
+         call fatal_error(error, 'cyclic: cycles = '//str(cycles)//' is more than the '// &
+                          str(max_points/8)//' a history may have')
+         return
+      end if
+      if (.not. (hold_max >= 0.0_dp .and. hold_min >= 0.0_dp)) then
          call fatal_error(error, 'cyclic holds must be >= 0')
          return
       end if

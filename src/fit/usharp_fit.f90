@@ -400,7 +400,8 @@ contains
    !> without resume, an existing journal is an error unless force. constants_file: the
    !> --constants file, part of the fingerprint. progress, when given, hears of every
    !> evaluation. SIGTERM and SIGINT stop the fit between evaluations (see check_stop).
-   subroutine run_fit(prob, dir, resume, outcome, error, progress, force, constants_file, auto_resume)
+   subroutine run_fit(prob, dir, resume, outcome, error, progress, force, constants_file, auto_resume, &
+                      hold_signals)
       type(fit_problem), intent(in) :: prob
       character(len=*), intent(in) :: dir
       logical, intent(in) :: resume
@@ -411,6 +412,9 @@ contains
       !> resume when dir holds a journal with records, else start (for job scripts)
       logical, intent(in), optional :: auto_resume
       character(len=*), intent(in), optional :: constants_file
+      !> stop signals stay caught past the search: the caller writes the results whole and
+      !> then calls release_stop_signals
+      logical, intent(in), optional :: hold_signals
       type(fit_objective) :: obj
       type(error_type), allocatable :: close_error
       integer(int64) :: now, rate
@@ -484,8 +488,13 @@ contains
          call release_stop_signals()
          return
       end if
-      ! Past the search a signal ends the process at once (the results are written whole)
-      call release_stop_signals()
+      ! Past the search a signal ends the process at once, unless the caller holds it off
+      ! while it writes the results
+      if (.not. present(hold_signals)) then
+         call release_stop_signals()
+      else if (.not. hold_signals) then
+         call release_stop_signals()
+      end if
       call system_clock(now)
       outcome%seconds = real(now - obj%clock0, dp)/real(rate, dp)
       outcome%f_start = obj%first

@@ -59,7 +59,15 @@ contains
       else
          exp%y = vals(:, 2)*stress_factor(test%data%unit, model_units)
       end if
-      if (test%weighting == 'column') exp%weight = vals(:, 3)
+      if (test%weighting == 'column') then
+         if (any(vals(:, 3) < 0.0_dp)) then
+            call fatal_error(error, test%data%file//': weight_column '//test%data%weight_col// &
+               ' has a negative weight at row '//str(findloc(vals(:, 3) < 0.0_dp, .true., 1))// &
+               ' of the data read; weights must be >= 0')
+            return
+         end if
+         exp%weight = vals(:, 3)
+      end if
    end subroutine load_experiment
 
    !> A stress-controlled test (creep) is fitted on its strain, the response it measures; an

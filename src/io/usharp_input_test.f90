@@ -3,8 +3,8 @@
 module usharp_input_test
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, prefix_error
-   use usharp_strings, only: lower_text => lower, str
-   use usharp_history, only: history_type, control_strain, control_stress, history_from_points, &
+   use usharp_strings, only: lower_text => lower, str, real_str
+   use usharp_history, only: history_type, control_strain, control_stress, history_from_points, max_points, &
                              thesis_lcf_history, relaxation_history, ratchet_history, &
                              cyclic_history, tensile_history, creep_history, rate_jump_history, &
                              add_tmf_temperature, output_times
@@ -235,6 +235,11 @@ contains
          return
       end if
       t%temperature = v%temperature
+      if (.not. v%sig >= 0.0_dp) then
+         call fatal_error(error, 'sig = '//str(v%sig)//': the threshold stress of '// &
+                          "weighting = 'threshold' must be >= 0 (the model's stress unit)")
+         return
+      end if
       t%sig = v%sig
       t%weighting = lower_text(trim(v%weighting))
       select case (t%weighting)
@@ -364,6 +369,17 @@ contains
             'relaxation, ratchet, cyclic, tensile, rate_jump, creep, file, data)')
       end select
       if (allocated(error)) return
+      ! Output times beyond what a simulation can hold overflow their count (a crash, not a
+      ! message): dt_out = 1e-9 s over a 240 s test
+      if (t%dt_out > 0.0_dp) then
+         if ((t%hist%end_time() - t%hist%t(1))/t%dt_out > real(max_points, dp)) then
+            call fatal_error(error, 'dt_out = '//real_str(t%dt_out, 'es10.3')//' s gives '// &
+               real_str((t%hist%end_time() - t%hist%t(1))/t%dt_out, 'es10.3')//' output times over the '// &
+               real_str(t%hist%end_time() - t%hist%t(1), 'es10.3')//' s of the test; at most '// &
+               str(max_points))
+            return
+         end if
+      end if
       if (any(v%tmf_temperatures /= 0.0_dp)) call add_tmf(v, t, error)
       if (allocated(error) .or. t%target == 'data') return
       if (t%hist%control /= control_strain .or. t%ext%enabled) then

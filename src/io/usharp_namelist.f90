@@ -163,6 +163,10 @@ contains
       end associate
       file%groups = file%groups(:ngroup)
       file%work = file%work + ngroup
+      do k = 1, ngroup
+         call check_finite(file, k, error)
+         if (allocated(error)) return
+      end do
 
    contains
 
@@ -300,6 +304,77 @@ contains
          i = i + 1
       end do
    end subroutine group_end
+
+   !> No value of group k is NaN or infinite: Fortran's namelist read takes them as numbers,
+   !> and a NaN passes every check of the form x < 0 (a hold of NaN s was taken as none). The
+   !> error names the file, line, column, group and variable.
+   pure subroutine check_finite(file, k, error)
+      type(nml_file), intent(in) :: file
+      integer, intent(in) :: k
+      type(error_type), allocatable, intent(out) :: error
+      character(len=1) :: quote
+      character(len=:), allocatable :: variable, word
+      integer :: l, a, b, i, j
+      quote = ' '
+      variable = '?'
+      do l = file%groups(k)%line, file%groups(k)%last
+         a = file%starts(l)
+         b = file%starts(l + 1) - 2
+         i = a
+         if (l == file%groups(k)%line) i = index(file%text(a:max(a, b)), '&') + a + len_trim(file%groups(k)%name)
+         do while (i <= b)
+            if (quote /= ' ') then
+               if (file%text(i:i) == quote) quote = ' '
+               i = i + 1
+               cycle
+            end if
+            select case (file%text(i:i))
+            case ("'", '"')
+               quote = file%text(i:i)
+               i = i + 1
+            case ('!')
+               exit
+            case (' ', ',', '=', '/', achar(9), achar(13), '(', ')', ':')
+               i = i + 1
+            case default
+               ! A word: the variable's name when '=' follows it, else a value
+               j = i
+               do while (j < b)
+                  if (scan(file%text(j + 1:j + 1), " ,=/!'()"//'"'//achar(9)//achar(13)) > 0) exit
+                  j = j + 1
+               end do
+               word = lower(file%text(i:j))
+               if (next_is_equals(j + 1, b)) then
+                  variable = file%text(i:j)
+               else
+                  if (word(1:1) == '+' .or. word(1:1) == '-') word = word(2:)
+                  if (index(word, '*') > 0) word = word(index(word, '*') + 1:)
+                  if (word == 'nan' .or. word == 'inf' .or. word == 'infinity') then
+                     call fatal_error(error, file%path//':'//str(l)//':'//str(i - a + 1)//': &'// &
+                        trim(file%groups(k)%name)//': '//variable//' = '//file%text(i:j)// &
+                        ' is not a number usharp can use')
+                     return
+                  end if
+               end if
+               i = j + 1
+            end select
+         end do
+      end do
+
+   contains
+
+      !> Whether the next character after blanks from position p is '='
+      pure logical function next_is_equals(p, last)
+         integer, intent(in) :: p, last
+         integer :: q
+         next_is_equals = .false.
+         do q = p, last
+            if (file%text(q:q) == ' ' .or. file%text(q:q) == achar(9)) cycle
+            next_is_equals = file%text(q:q) == '='
+            return
+         end do
+      end function next_is_equals
+   end subroutine check_finite
 
    !> The lines of group k, from its '&' to its '/', as an internal file for the namelist read
    pure subroutine group_text(file, k, lines)
