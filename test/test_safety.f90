@@ -29,6 +29,7 @@ contains
          new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
          new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
+         new_unittest('user-files-and-fits-kept', test_strangers_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
@@ -173,6 +174,39 @@ contains
       if (allocated(error)) return
       call check(error, e%stat, stat_usage, 'exit code 2')
    end subroutine test_journal_kept
+
+   !> A run into a folder that holds a summary.txt no run made (no journal) is refused, the
+   !> file kept, unless --force; a prediction into a fit's folder is refused, its summary kept
+   subroutine test_strangers_kept(error)
+      use usharp_cmd_predict, only: predict_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, fit_summary
+      input = deck('strangers.nml', 'max_evals=12', '')
+      dir = scratch_dir//'/strangers-out'
+      ! A folder of its own, as a user's: no journal from an earlier run of this test
+      call check(error, shell('rm -rf '//dir) == 0, 'clean folder')
+      if (allocated(error)) return
+      call make_dir(dir, e)
+      call write_lines(dir//'/summary.txt', [character(len=20) :: 'my notes'], e)
+      call run_command(input, dir, '', .false., summary, e)
+      call check_message(error, e, 'summary.txt: a file of this name is there, and no '// &
+                         'fit.journal says a run made it')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'exit code 2')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/summary.txt') == 'my notes'//new_line('a'), 'the notes are kept')
+      if (allocated(error)) return
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check(error, .not. allocated(e), '--force overwrites them')
+      if (allocated(error)) return
+      fit_summary = read_text(dir//'/summary.txt')
+      call predict_command(input, dir, dir//'/best.nml', summary, e)
+      call check_message(error, e, 'holds a fit (fit.journal)')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/summary.txt') == fit_summary, "the fit's summary is kept")
+   end subroutine test_strangers_kept
 
    !> No run writes over its own inputs, --force or not: the constants given with -c that are
    !> the output folder's best.nml, and a test 'lcf' whose data are lcf.sim.txt in the output

@@ -71,7 +71,7 @@ contains
       type(design_tasks) :: tasks
       type(task_text), allocatable :: results(:)
       integer :: i, j, ncur, p, nevals
-      integer, allocatable :: cur(:), cand(:)
+      integer, allocatable :: cur(:), cand(:), fitted_idx(:)
       if (count(cfg%tests%candidate) == 0) then
          call fatal_error(error, cfg%path//': &test: design needs at least one test with '// &
                           'candidate = .true.')
@@ -101,7 +101,10 @@ contains
          read (results(i)%s, *) nevals, p, res%info(:, :, i)
          res%nevals = res%nevals + nevals
       end do
-      res%names = constant_names(cfg%model, pack([(j, j=1, size(cfg%fit%fitted))], cfg%fit%fitted))
+      ! The indices in a variable of their own: given as the expression pack([(j, ...)], ...),
+      ! gfortran 12 made constant_names blank (the report's columns had no names)
+      fitted_idx = pack([(j, j=1, size(cfg%fit%fitted))], cfg%fit%fitted)
+      res%names = constant_names(cfg%model, fitted_idx)
       allocate (res%test_names(size(cfg%tests)))
       do i = 1, size(cfg%tests)
          res%test_names(i) = cfg%tests(i)%name
@@ -328,7 +331,8 @@ contains
       lines = [character(len=200) :: lines, header(res, 'gain'), &
          row(res, res%current, 0.0_dp, 'current')]
       lines = [character(len=200) :: lines, '', '  each candidate added to the current tests, '// &
-         'ranked by the gain in ln det of the information:', header(res, 'gain')]
+         'ranked by constants determined, then the widest interval, then the gain in ln det:', &
+         header(res, 'gain')]
       do j = 1, size(res%single)
          lines = [character(len=200) :: lines, row(res, res%single(j), &
             res%single(j)%logdet - res%current%logdet, &
@@ -353,10 +357,15 @@ contains
       character(len=:), allocatable :: line
       integer :: j
       character(len=9) :: col
+      character(len=6) :: name
       col = what
-      line = '    '//col//' det'
+      col = adjustr(col)
+      line = '    '//col//'  det'
       do j = 1, size(res%names)
-         line = line//'  '//adjustr(res%names(j)//'    ')
+         ! Right-aligned over its column of half-widths (pct's 6 characters)
+         name = trim(adjustl(res%names(j)))
+         name = adjustr(name)
+         line = line//'  '//name
       end do
       line = line//'  tests'
    end function header
@@ -368,8 +377,12 @@ contains
       character(len=*), intent(in) :: label
       character(len=:), allocatable :: line
       integer :: j
-      line = '    '//real_str(value, 'f9.2')//' '//str(count(comb%determined))//'/'// &
-             str(size(comb%determined))
+      character(len=9) :: val
+      character(len=4) :: det
+      ! Fixed widths under the header's columns
+      write (val, '(f9.2)') value
+      det = adjustr(str(count(comb%determined))//'/'//str(size(comb%determined)))
+      line = '    '//val//' '//det
       do j = 1, size(comb%half95)
          line = line//'  '//pct(comb%half95(j))
       end do
@@ -383,9 +396,10 @@ contains
       if (100.0_dp*h >= 999.5_dp) then
          text = '  >999'
       else if (100.0_dp*h >= 9.95_dp) then
-         text = real_str(100.0_dp*h, 'f6.0')
+         ! Whole per cent, without Fortran's trailing point ('14.')
+         write (text, '(i6)') nint(100.0_dp*h)
       else
-         text = real_str(100.0_dp*h, 'f6.2')
+         write (text, '(f6.2)') 100.0_dp*h
       end if
    end function pct
 

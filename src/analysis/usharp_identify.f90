@@ -18,6 +18,10 @@ module usharp_identify
    !> A direction is poorly determined when its singular value is below this fraction of the
    !> largest (a relative change of 1e-3 in the residuals for a unit step in log10)
    real(dp), parameter :: weak_ratio = 1.0e-3_dp
+   !> A determined constant is determined loosely when its 95 % interval spans more than this
+   !> many decades: the direction is not weak, yet the tests bound the constant only to a
+   !> factor of ten or worse (C2 within [1e-6, 1e4] was reported as determined)
+   real(dp), parameter :: loose_decades = 1.0_dp
 
    type :: identify_result
       character(len=:), allocatable :: names(:)
@@ -32,6 +36,8 @@ module usharp_identify
       integer :: rank = 0                    !< directions that carry information
       real(dp), allocatable :: corr(:, :)
       logical, allocatable :: at_bound(:), determined(:)
+      !> determined, but its 95 % interval spans more than loose_decades (a factor of 10)
+      logical, allocatable :: loose(:)
       character(len=200), allocatable :: words(:)
       real(dp) :: s2 = 0.0_dp, ssr = 0.0_dp
       integer :: m = 0, nevals = 0
@@ -244,6 +250,16 @@ contains
          res%words = [character(len=200) :: res%words, line//' (singular value '// &
             real_str(res%sv(i)/res%sv(1), 'es8.1')//' of the largest)']
       end do
+      allocate (res%loose(n))
+      res%loose = .false.
+      do j = 1, n
+         if (.not. res%determined(j)) cycle
+         if (.not. (res%lo95(j) > 0.0_dp .and. res%hi95(j) > 0.0_dp)) cycle
+         res%loose(j) = log10(res%hi95(j)/res%lo95(j)) > loose_decades
+         if (res%loose(j)) res%words = [character(len=200) :: res%words, trim(res%names(j))// &
+            ': its 95 % interval spans '//real_str(log10(res%hi95(j)/res%lo95(j)), 'f0.1')// &
+            ' decades; these tests bound it only loosely']
+      end do
       if (size(res%words) == 0 .and. all(res%determined)) res%words = [character(len=200) :: &
          'every fitted constant is determined by these tests']
    end subroutine describe
@@ -278,6 +294,8 @@ contains
          end if
          if (res%at_bound(j)) then
             line = line//'at a bound'
+         else if (res%loose(j)) then
+            line = line//'loosely determined'
          else if (res%determined(j)) then
             line = line//'determined'
          else

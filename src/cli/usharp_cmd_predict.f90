@@ -2,14 +2,14 @@
 !> it: each test's error figures, the same curves as a fit writes and a summary
 module usharp_cmd_predict
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
    use usharp_strings, only: real_str
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_lines
-   use usharp_filesys, only: make_dir, join_path
+   use usharp_filesys, only: make_dir, join_path, file_exists
    use usharp_cmd_run, only: write_curves
    implicit none
    private
@@ -45,6 +45,13 @@ contains
       call check_inputs_kept(cfg, path, constants_file, ['summary.txt'], &
                              [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
       if (allocated(error)) return
+      ! A fit's folder: its summary and curves have the names of a prediction's
+      if (file_exists(join_path(cfg%out_dir, 'fit.journal'))) then
+         call fatal_error(error, cfg%out_dir//': holds a fit (fit.journal), whose summary.txt '// &
+            'and <test>.fit.txt a prediction would replace; give predict another output '// &
+            'folder (-o)', stat_usage)
+         return
+      end if
       ! Nothing is fitted; the problem's set-up asks for one fitted constant, unused here
       if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.
       call setup_problem(cfg, prob, error)

@@ -2,7 +2,7 @@
 !> best.nml, the best fit's curves beside the data, and a summary
 module usharp_cmd_run
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input
+   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
    use usharp_strings, only: str, real_str
    use usharp_model, only: model_type
    use usharp_config, only: run_config
@@ -12,7 +12,7 @@ module usharp_cmd_run
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines, result_file
-   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file
+   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
@@ -21,6 +21,13 @@ module usharp_cmd_run
    private
 
    public :: run_command, write_curves
+
+   !> The files a run writes in its output folder, and those it writes for each test (after
+   !> the test's name)
+   character(len=*), parameter :: run_files(9) = [character(len=11) :: 'best.nml', 'summary.txt', &
+      'identify.txt', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'fit.log', 'fit.journal', 'fit.cache']
+   character(len=*), parameter :: test_files(3) = [character(len=10) :: '.sim.txt', '.fit.txt', &
+      '.peaks.txt']
 
 contains
 
@@ -70,11 +77,11 @@ contains
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
          if (allocated(error)) return
-         call check_inputs_kept(cfg, path, constants_file, [character(len=11) :: 'best.nml', &
-            'summary.txt', 'identify.txt', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'fit.log', &
-            'fit.journal', 'fit.cache'], [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
+         call check_inputs_kept(cfg, path, constants_file, run_files, test_files, error)
          if (allocated(error)) return
          dir = cfg%out_dir
+         call check_no_strangers(cfg, dir, resume .or. overwrite, auto_resume, error)
+         if (allocated(error)) return
          if (len_trim(constants_file) > 0 .and. cfg%fit%multistart > 0) then
             ! The starts are drawn over the box: constants to start from would not be used
             call fatal_error(error, path//': &fit: multistart = '//str(cfg%fit%multistart)// &
@@ -290,4 +297,42 @@ contains
       character(len=max(w, len(name))) :: padded
       padded = name
    end function pad
+   !> A run starts in a folder only where it overwrites nothing a user made: files of the
+   !> names it writes, with no journal that says a run made them (a journal's own case, an
+   !> earlier run, is run_fit's), are refused unless allowed (--force, or --resume)
+   subroutine check_no_strangers(cfg, dir, allowed, auto_resume, error)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: dir
+      logical, intent(in) :: allowed
+      logical, intent(in), optional :: auto_resume
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: names(:)
+      integer :: i, j, k, n
+      if (allowed .or. file_exists(join_path(dir, 'fit.journal'))) return
+      if (present(auto_resume)) then
+         if (auto_resume) return
+      end if
+      n = len(run_files)
+      do i = 1, size(cfg%tests)
+         n = max(n, len(cfg%tests(i)%name) + len(test_files))
+      end do
+      allocate (character(len=n) :: names(size(run_files) + size(test_files)*size(cfg%tests)))
+      names(:size(run_files)) = run_files
+      k = size(run_files)
+      do i = 1, size(cfg%tests)
+         do j = 1, size(test_files)
+            k = k + 1
+            names(k) = cfg%tests(i)%name//trim(test_files(j))
+         end do
+      end do
+      do i = 1, size(names)
+         if (file_exists(join_path(dir, trim(names(i))))) then
+            call fatal_error(error, join_path(dir, trim(names(i)))//': a file of this name '// &
+               'is there, and no fit.journal says a run made it; overwrite it with --force, '// &
+               'or give another output folder (-o)', stat_usage)
+            return
+         end if
+      end do
+   end subroutine check_no_strangers
+
 end module usharp_cmd_run
