@@ -168,6 +168,15 @@ contains
       call check(error, opt%reason, 'step length <= eps', 'stopped by eps')
       if (allocated(error)) return
       call check(error, opt%nevals < opt2%nevals .and. opt%f > opt2%f, 'larger eps stops earlier')
+      if (allocated(error)) return
+      ! max_evals is a budget the pattern moves do not overshoot, each end of it
+      call hooke_jeeves(obj, [-1.2_dp, 1.0_dp], 0.5_dp, 1.0e-8_dp, 5000, 50, opt, uerr)
+      call check(error, opt%nevals <= 50 .and. opt%nevals >= 45, 'max_evals = 50 stops at 45-50 '// &
+                 'evaluations, not past them')
+      if (allocated(error)) return
+      call check(error, opt%reason, 'max_evals reached', 'reason')
+      if (allocated(error)) return
+      call check(error, opt%f < 24.2_dp, 'the best point found, not the start (f = 24.2)')
    end subroutine test_hj_limits
 
    !> A fit deck in the scratch folder against data/thesis (relative to the scratch folder)

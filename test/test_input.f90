@@ -6,7 +6,7 @@ module test_input
    use usharp_config, only: run_config
    use usharp_namelist, only: nml_file, scan_namelist_file
    use usharp_input, only: known_groups
-   use usharp_input, only: read_config
+   use usharp_input, only: read_config, read_config_as
    use usharp_cmd_simulate, only: simulate_command
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message
    implicit none
@@ -28,6 +28,7 @@ contains
          new_unittest('unknown-group-line-and-column', test_unknown_group), &
          new_unittest('unknown-history', test_unknown_history), &
          new_unittest('not-a-number-refused', test_not_finite), &
+         new_unittest('constants-of-another-unit-refused', test_constants_units), &
          new_unittest('sizes-beyond-memory-refused', test_too_many_points), &
          new_unittest('unknown-jacobian', test_unknown_jacobian), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
@@ -133,6 +134,29 @@ contains
          "&test name='x', history='thesis_lcf', dt_out=1e-9 /"], &
          "output times over the")
    end subroutine test_too_many_points
+
+   !> A constants file that says its model and unit (a best.nml's &model line) is refused
+   !> for a deck in another unit or of another model, and taken for its own
+   subroutine test_constants_units(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: deck, best
+      deck = write_text('units-deck.nml', deck_lines([character(len=80) :: &
+         "&test name='x', history='thesis_lcf' /"]))
+      best = write_text('units-best.nml', [character(len=120) :: &
+         "&model name = 'miller', units = 'MPa' /", &
+         '&constants a1 = 0.116, a2 = 2.26e-7, b = 1e15, c2 = 0.69, h1 = 1930, h2 = 100, n = 5.8, q = 91000 /'])
+      call read_config_as(deck, best, '', cfg, uerr)
+      call check_message(error, uerr, "units-best.nml: &model: units = 'MPa', but the constants "// &
+                         "are wanted in the deck's 'ksi'")
+      if (allocated(error)) return
+      best = write_text('units-best.nml', [character(len=120) :: &
+         "&model name = 'miller', units = 'ksi' /", &
+         '&constants a1 = 0.8, a2 = 7.42e-5, b = 1e15, c2 = 0.1, h1 = 280, h2 = 100, n = 5.8, q = 91000 /'])
+      call read_config_as(deck, best, '', cfg, uerr)
+      call check(error, .not. allocated(uerr), 'constants of the same unit taken')
+   end subroutine test_constants_units
 
    subroutine test_unknown_jacobian(error)
       type(error_type), allocatable, intent(out) :: error

@@ -18,6 +18,7 @@ contains
       testsuite = [ &
          new_unittest('csv-quoted-header-by-name-and-filter', test_csv), &
          new_unittest('whitespace-comment-header', test_whitespace), &
+         new_unittest('byte-order-mark-of-a-spreadsheet', test_bom), &
          new_unittest('fixed-format', test_fixed), &
          new_unittest('bad-tables-rejected', test_bad), &
          new_unittest('repeated-times-merged', test_merge), &
@@ -90,6 +91,23 @@ contains
       if (allocated(error)) return
       call check(error, v(2, 2), 1.0_dp, 'time by position')
    end subroutine test_whitespace
+
+   !> A spreadsheet's 'CSV UTF-8' (a byte order mark before the header): the first column
+   !> found by its name
+   subroutine test_bom(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      path = write_text('bom.csv', [character(len=80) :: &
+         achar(239)//achar(187)//achar(191)//'time,strain,stress', '0,0,0', '1,1e-4,2.25', '2,2e-4,4.5'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, v(3, 1), 2.0_dp, 'time by name after the mark')
+   end subroutine test_bom
 
    subroutine test_fixed(error)
       type(error_type), allocatable, intent(out) :: error

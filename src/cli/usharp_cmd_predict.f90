@@ -31,7 +31,8 @@ contains
       type(sim_result), allocatable :: res(:)
       real(dp) :: rms, rel, worst
       character(len=200) :: row
-      character(len=32) :: name
+      character(len=:), allocatable :: name
+      integer :: w
       real(dp), allocatable :: y(:)
       integer, allocatable :: kind(:)
       integer :: i, part
@@ -61,8 +62,13 @@ contains
       allocate (res(size(cfg%tests)))
       call prob%simulate_all(cfg%model, res, error)
       if (allocated(error)) return
+      ! The name column as wide as the longest name (with ' peaks'), at least 32
+      w = 32
+      do i = 1, size(cfg%tests)
+         w = max(w, len(cfg%tests(i)%name) + 6)
+      end do
       summary = [character(len=200) :: 'usharp predict '//path//' with the constants of '// &
-         constants_file, '  test                              RMS error    RMS/peak   max error']
+         constants_file, '  '//pad('test', w)//'   RMS error    RMS/peak   max error']
       do i = 1, size(cfg%tests)
          y = simulated(cfg%tests(i), res(i))
          kind = spread(0, 1, size(y))
@@ -74,8 +80,8 @@ contains
                                    pack(y, (kind /= 0) .eqv. (part == 1)), rms, rel, worst)
             name = cfg%tests(i)%name
             if (part == 1) name = cfg%tests(i)%name//' peaks'
-            write (row, '(2x,a32,es12.4,f10.2,a,es12.4)') name, rms, 100.0_dp*rel, ' %', worst
-            summary = [character(len=200) :: summary, row]
+            write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+            summary = [character(len=200) :: summary, '  '//pad(name, w)//trim(row)]
          end do
       end do
       summary = [character(len=200) :: summary, '  (errors in '//cfg%units// &
@@ -86,6 +92,16 @@ contains
       call write_curves(prob, cfg%model, cfg%out_dir, error)
       if (allocated(error)) return
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
+
+   contains
+
+      !> text left-aligned in n characters (longer text whole)
+      pure function pad(text, n) result(out)
+         character(len=*), intent(in) :: text
+         integer, intent(in) :: n
+         character(len=max(n, len(text))) :: out
+         out = text
+      end function pad
    end subroutine predict_command
 
    !> RMS error, RMS error over the peak |measured| and the largest |error| of a prediction

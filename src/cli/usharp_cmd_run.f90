@@ -121,7 +121,7 @@ contains
          start = [(cfg%model%get_constant(j), j=1, cfg%model%n_constants())]
          call prob%model_of(out%opt%x, best, error)
          if (allocated(error)) return
-         call write_best(join_path(dir, 'best.nml'), path, best, out, error)
+         call write_best(join_path(dir, 'best.nml'), path, best, cfg%units, out, error)
          if (allocated(error)) return
          call write_curves(prob, best, dir, error)
          if (allocated(error)) return
@@ -187,9 +187,11 @@ contains
       call identify_at(prob, c, prob%cfg%fit%fd_step, ident, report_error, spread=.true.)
    end subroutine identify_over_ranks
 
-   subroutine write_best(file, path, best, out, error)
+   subroutine write_best(file, path, best, units, out, error)
       character(len=*), intent(in) :: file, path
       class(model_type), intent(in) :: best
+      !> the stress unit of the constants (ksi or MPa)
+      character(len=*), intent(in) :: units
       type(fit_outcome), intent(in) :: out
       type(error_type), allocatable, intent(out) :: error
       character(len=200), allocatable :: lines(:)
@@ -197,7 +199,9 @@ contains
       lines = [character(len=200) :: &
          '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
          real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
-         '! simulate with it: usharp simulate '//path//' --constants '//file, '&constants']
+         '! simulate with it: usharp simulate '//path//' --constants '//file, &
+         ! The model and unit the constants are for: -c checks them against the deck's
+         "&model name = '"//best%name()//"', units = '"//units//"' /", '&constants']
       do j = 1, best%n_constants()
          lines = [character(len=200) :: lines, '  '//lower_name(best%constant_name(j))//' = '// &
             real_str(best%get_constant(j), 'es23.15e3')]

@@ -5,11 +5,11 @@
 module usharp_input
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, prefix_error, fatal_error
-   use usharp_strings, only: str
+   use usharp_strings, only: str, lower
    use usharp_filesys, only: absolute_path, join_path
    use usharp_model, only: model_type, model_at
    use usharp_config, only: run_config
-   use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path
+   use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path, string_value
    use usharp_input_model, only: read_model_group, read_constants_group
    use usharp_input_solver, only: read_solver_group
    use usharp_input_output, only: read_output_group
@@ -174,8 +174,22 @@ contains
       character(len=*), intent(in) :: path
       type(error_type), allocatable, intent(out) :: error
       type(nml_file) :: file
+      character(len=:), allocatable :: units, name
       call scan_namelist_file(path, known_groups, repeatable, file, error)
       if (allocated(error)) return
+      ! A best.nml says which model and units its constants are in: others are refused
+      units = string_value(file, 'model', 'units')
+      if (len(units) > 0 .and. lower(units) /= lower(cfg%units)) then
+         call fatal_error(error, path//": &model: units = '"//units//"', but the constants "// &
+            "are wanted in the deck's '"//cfg%units//"'")
+         return
+      end if
+      name = string_value(file, 'model', 'name')
+      if (len(name) > 0 .and. lower(name) /= lower(cfg%model%name())) then
+         call fatal_error(error, path//": &model: name = '"//name//"', but the deck's model is '"// &
+            cfg%model%name()//"'")
+         return
+      end if
       call read_constants_group(file, cfg%model, error)
       if (allocated(error)) return
       call cfg%model%setup(error)

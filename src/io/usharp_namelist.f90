@@ -11,7 +11,7 @@ module usharp_namelist
    private
 
    public :: nml_file, nml_group, scan_namelist_file, find_group, group_text, group_error, read_error
-   public :: check_length, dirname, resolve_path
+   public :: check_length, dirname, resolve_path, string_value
 
    !> Longest character value a namelist variable holds; a longer value is an error, never cut
    integer, parameter, public :: value_len = 4096
@@ -375,6 +375,49 @@ contains
          end do
       end function next_is_equals
    end subroutine check_finite
+
+   !> The text value of variable (a quoted string) in the first group of that name, '' when
+   !> the file has no such group or the group no such variable: for a look at a group this
+   !> reader does not read whole (a constants file's &model name and units)
+   pure function string_value(file, group, variable) result(value)
+      type(nml_file), intent(in) :: file
+      character(len=*), intent(in) :: group, variable
+      character(len=:), allocatable :: value
+      character(len=:), allocatable :: lines(:), low
+      integer :: k, l, i, q
+      character(len=1) :: mark
+      value = ''
+      k = find_group(file, lower(group))
+      if (k == 0) return
+      call group_text(file, k, lines)
+      do l = 1, size(lines)
+         low = lower(lines(l))
+         i = index(low, lower(variable))
+         do while (i > 0)
+            ! The name alone (not the end of a longer one), then '=' and a quoted value
+            if (i == 1) then
+               q = i + len(variable)
+            else if (scan(low(i - 1:i - 1), ' ,&') > 0) then
+               q = i + len(variable)
+            else
+               q = 0
+            end if
+            if (q > 0) then
+               q = q + verify(low(q:), ' ') - 1
+               if (low(q:q) == '=') then
+                  q = q + verify(low(q + 1:), ' ')
+                  mark = lines(l)(q:q)
+                  if (mark == "'" .or. mark == '"') then
+                     value = lines(l)(q + 1:q + index(lines(l)(q + 1:), mark) - 1)
+                     return
+                  end if
+               end if
+            end if
+            if (index(low(i + 1:), lower(variable)) == 0) exit
+            i = i + index(low(i + 1:), lower(variable))
+         end do
+      end do
+   end function string_value
 
    !> The lines of group k, from its '&' to its '/', as an internal file for the namelist read
    pure subroutine group_text(file, k, lines)

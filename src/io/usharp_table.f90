@@ -71,6 +71,13 @@ contains
          end if
          if (ios /= 0) exit
          lineno = lineno + 1
+         ! A spreadsheet's 'CSV UTF-8' starts with a byte order mark, not part of the first name
+         if (lineno == 1 .and. n >= 3) then
+            if (line(1:3) == achar(239)//achar(187)//achar(191)) then
+               line = line(4:n)
+               n = n - 3
+            end if
+         end if
          n = len_trim(line(:n))
          if (n == 0) cycle
          first = verify(line(:n), ' ')

@@ -46,6 +46,12 @@ contains
          ! While the exploration improves, keep making pattern moves
          keep = .true.
          do while (newf < fbefore .and. keep)
+            ! max_evals is a budget: none past it (a pattern run could overshoot it by 80 %)
+            if (nevals >= max_evals) then
+               fbefore = newf
+               xbefore = newx
+               exit
+            end if
             do i = 1, size(x0)
                ! Point the step in the direction that worked
                if (newx(i) <= xbefore(i)) then
@@ -106,6 +112,7 @@ contains
             ! Try +delta; if that is no better, flip the step and try again; else restore
             improved = .false.
             do attempt = 1, 2
+               if (nevals >= max_evals) exit
                if (attempt == 2) delta(j) = -delta(j)
                z(j) = point(j) + delta(j)
                call evaluate(z, ftmp)
