@@ -89,7 +89,8 @@ contains
          '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
       if (any([(cfg%tests(i)%has_peaks(), i=1, size(cfg%tests))])) summary(size(summary)) = &
          trim(summary(size(summary)))//' (and <test>.peaks.txt)'
-      call write_curves(prob, cfg%model, cfg%out_dir, error)
+      call write_curves(prob, cfg%model, cfg%out_dir, error, 'prediction with the constants of '// &
+                        constants_file)
       if (allocated(error)) return
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
 

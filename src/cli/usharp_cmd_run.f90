@@ -222,29 +222,33 @@ contains
 
    !> The best fit's curves: <test>.sim.txt (full response) and <test>.fit.txt (data beside
    !> simulation at the simulation's times, with residual and weight)
-   subroutine write_curves(prob, best, dir, error)
+   subroutine write_curves(prob, best, dir, error, what)
       type(fit_problem), intent(in) :: prob
       class(model_type), intent(in) :: best
       character(len=*), intent(in) :: dir
       type(error_type), allocatable, intent(out) :: error
+      !> what the constants are, for the files' first lines ('best fit' when absent)
+      character(len=*), intent(in), optional :: what
       type(sim_result), allocatable :: res(:)
       integer :: i, k
       type(result_file) :: out
       character(len=160) :: row
-      character(len=120) :: header(1)
-      character(len=:), allocatable :: resp
+      character(len=400) :: header(1)
+      character(len=:), allocatable :: resp, label
       real(dp), allocatable :: y(:)
       allocate (res(size(prob%targets)))
       call prob%simulate_all(best, res, error)
       if (allocated(error)) return
+      label = 'best fit'
+      if (present(what)) label = what
       do i = 1, size(prob%targets)
-         header(1) = "best fit, test '"//prob%cfg%tests(i)%name//"'"
+         header(1) = label//", test '"//prob%cfg%tests(i)%name//"'"
          call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), res(i), &
                              header, prob%cfg%units, error)
          if (allocated(error)) return
          call out%open(join_path(dir, prob%cfg%tests(i)%name//'.fit.txt'), error)
          if (allocated(error)) return
-         call out%line("# best fit of test '"//prob%cfg%tests(i)%name//"' against "//prob%cfg%tests(i)%data%file)
+         call out%line('# '//label//" of test '"//prob%cfg%tests(i)%name//"' against "//prob%cfg%tests(i)%data%file)
          resp = response_name(prob%cfg%tests(i), prob%cfg%units)
          call out%line('# columns: time (s), strain (-), measured '//resp//', simulated '// &
             resp//', residual, weight (-); stress ('//prob%cfg%units//') of the simulation')

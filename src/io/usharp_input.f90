@@ -52,7 +52,7 @@ contains
       if (allocated(error)) return
       call cfg%model%setup(error)
       if (allocated(error)) then
-         call prefix_error(error, path//': &constants: ')
+         call setup_error(error, path)
          return
       end if
       call check_test_temperatures(path, cfg, error)
@@ -193,7 +193,19 @@ contains
       call read_constants_group(file, cfg%model, error)
       if (allocated(error)) return
       call cfg%model%setup(error)
-      if (allocated(error)) call prefix_error(error, path//': &constants: ')
+      if (allocated(error)) call setup_error(error, path)
    end subroutine override_constants
+
+   !> A model's set-up error as a user error of file path: in the group its message names
+   !> ('&model: ...'), else in &constants
+   pure subroutine setup_error(error, path)
+      type(error_type), intent(inout) :: error
+      character(len=*), intent(in) :: path
+      if (error%message(1:1) == '&') then
+         call prefix_error(error, path//': ')
+      else
+         call prefix_error(error, path//': &constants: ')
+      end if
+   end subroutine setup_error
 
 end module usharp_input
