@@ -34,12 +34,13 @@ program usharp_main
       if (length > 0) call get_command_argument(i, args(i)%s)
    end do
    call parse_arguments(args, cmd, error)
+   ! A usage error is one line, with where the usage is
    if (allocated(error) .and. is_root()) then
-      write (error_unit, '(a)') 'usharp: '//error%message
       if (len(cmd%name) > 0) then
-         write (error_unit, '(a)') command_help(cmd%name)
+         write (error_unit, '(a)') 'usharp: error: '//error%message//' (usharp '//cmd%name// &
+            ' --help for its usage)'
       else
-         write (error_unit, '(a)') main_help()
+         write (error_unit, '(a)') 'usharp: error: '//error%message//' (usharp --help for the commands)'
       end if
    end if
    if (allocated(error)) call finish(stat_usage)

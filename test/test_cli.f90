@@ -99,6 +99,11 @@ contains
                     trim(lines(k))//': '//e%message)
          if (allocated(error)) return
       end do
+      ! An empty value, which the shell passes as its own argument
+      call parse_arguments([arg_string('run'), arg_string('-o'), arg_string(''), arg_string('x.nml')], cmd, e)
+      call check(error, allocated(e), "run -o '' x.nml: no usage error")
+      if (allocated(error)) return
+      call check(error, e%message, "-o has an empty value ('')", "run -o '' x.nml")
    end subroutine test_usage_errors
 
    subroutine test_help(error)

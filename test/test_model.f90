@@ -161,12 +161,12 @@ contains
       m = miller_model()
       m%temperature = 1800.0_dp
       call model_setup(m, uerr)
-      call check_message(error, uerr, 'K is at or above tm')
+      call check_message(error, uerr, 'at or above Tm')
       if (allocated(error)) return
       m = miller_model()
       m%youngs = 0.0_dp
       call model_setup(m, uerr)
-      call check_message(error, uerr, "&model: youngs (Young's modulus E) must be > 0")
+      call check_message(error, uerr, "Young's modulus E must be > 0")
       if (allocated(error)) return
       ! H1 so large that YS - 0.002*H1 < 0: D0 cannot be computed
       m = miller_model()

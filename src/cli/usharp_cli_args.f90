@@ -148,6 +148,11 @@ contains
                return
             end if
             i = i + 1
+            ! An empty value (-o '') was passed over, and the deck's own folder used
+            if (len_trim(args(i)%s) == 0) then
+               call fatal_error(error, arg//" has an empty value ('')", stat_usage)
+               return
+            end if
             select case (long)
             case ('--out-dir')
                cmd%out_dir = args(i)%s

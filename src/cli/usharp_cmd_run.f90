@@ -199,7 +199,7 @@ contains
       lines = [character(len=200) :: &
          '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
          real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
-         '! simulate with it: usharp simulate '//path//' --constants '//file, &
+         '! simulate with it: usharp simulate '//shell_word(path)//' --constants '//shell_word(file), &
          ! The model and unit the constants are for: -c checks them against the deck's
          "&model name = '"//best%name()//"', units = '"//units//"' /", '&constants']
       do j = 1, best%n_constants()
@@ -209,6 +209,17 @@ contains
       lines = [character(len=200) :: lines, '/']
       call write_lines(file, lines, error)
    contains
+      !> A path as one word of a shell command line: quoted when it holds more than letters,
+      !> digits and / . _ - + (a folder name with a blank)
+      pure function shell_word(text) result(word)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: word
+         if (verify(text, 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-+') == 0) then
+            word = text
+         else
+            word = "'"//text//"'"
+         end if
+      end function shell_word
       pure function lower_name(name) result(low)
          character(len=*), intent(in) :: name
          character(len=len(name)) :: low

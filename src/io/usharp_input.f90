@@ -196,13 +196,24 @@ contains
       if (allocated(error)) call setup_error(error, path)
    end subroutine override_constants
 
-   !> A model's set-up error as a user error of file path: in the group its message names
-   !> ('&model: ...'), else in &constants
+   !> A model's set-up error as a user error of file path, in the group of the quantity its
+   !> message starts with: the models name their &model quantities (Tm, temperature, E,
+   !> Poisson's ratio, d0) in words an FE user of their material routines reads too
    pure subroutine setup_error(error, path)
       type(error_type), intent(inout) :: error
       character(len=*), intent(in) :: path
-      if (error%message(1:1) == '&') then
-         call prefix_error(error, path//': ')
+      character(len=*), parameter :: model_words(7) = [character(len=24) :: "Poisson's ratio", &
+         'temperature', 'Tm ', "Young's modulus", 'fixed initial drag', 'the Arrhenius factor', &
+         'an activation energy']
+      integer :: k
+      do k = 1, size(model_words)
+         if (index(error%message, trim(model_words(k))) == 1) then
+            call prefix_error(error, path//': &model: ')
+            return
+         end if
+      end do
+      if (index(error%message, 'initial drag stress D0') == 1) then
+         call prefix_error(error, path//': &model and &constants: ')
       else
          call prefix_error(error, path//': &constants: ')
       end if

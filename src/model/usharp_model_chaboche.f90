@@ -154,11 +154,10 @@ contains
          if (allocated(error)) return
       end do
       if (.not. ieee_is_finite(self%youngs) .or. self%youngs <= 0.0_dp) then
-         call fatal_error(error, "&model: youngs (Young's modulus E) must be > 0, got "//str(self%youngs))
+         call fatal_error(error, "Young's modulus E must be > 0, got "//str(self%youngs))
       else if (.not. ieee_is_finite(self%poisson) .or. self%poisson <= -1.0_dp &
                .or. self%poisson >= 0.5_dp) then
-         call fatal_error(error, "&model: poisson (Poisson's ratio) must lie in (-1, 0.5), got "// &
-                          str(self%poisson))
+         call fatal_error(error, "Poisson's ratio must lie in (-1, 0.5), got "//str(self%poisson))
       end if
       if (allocated(error)) return
       self%eta_factor = 1.0_dp

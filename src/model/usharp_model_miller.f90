@@ -159,26 +159,25 @@ contains
          msg = positive(get_constant(model%c, i), 'constant '//trim(constant_names(i)))
          if (len(msg) > 0) exit
       end do
-      if (len(msg) == 0) msg = positive(model%tm, '&model: tm')
-      if (len(msg) == 0) msg = positive(model%temperature, '&model: temperature')
-      if (len(msg) == 0) msg = positive(model%youngs, "&model: youngs (Young's modulus E)")
+      if (len(msg) == 0) msg = positive(model%tm, 'Tm')
+      if (len(msg) == 0) msg = positive(model%temperature, 'temperature')
+      if (len(msg) == 0) msg = positive(model%youngs, "Young's modulus E")
       if (len(msg) > 0) then
          call fatal_error(error, msg)
          return
       end if
       if (.not. ieee_is_finite(model%poisson) .or. model%poisson <= -1.0_dp &
           .or. model%poisson >= 0.5_dp) then
-         call fatal_error(error, "&model: poisson (Poisson's ratio) must lie in (-1, 0.5), got "// &
-                          str(model%poisson))
+         call fatal_error(error, "Poisson's ratio must lie in (-1, 0.5), got "//str(model%poisson))
          return
       end if
       if (model%temperature >= model%tm) then
-         call fatal_error(error, '&model: temperature '//str(model%temperature)// &
-            ' K is at or above tm = '//str(model%tm)//' K')
+         call fatal_error(error, 'temperature '//str(model%temperature)// &
+            ' K is at or above Tm = '//str(model%tm)//' K')
          return
       end if
       if (model%d0_fixed < 0.0_dp .or. .not. ieee_is_finite(model%d0_fixed)) then
-         call fatal_error(error, '&model: d0 (a fixed initial drag stress) must be >= 0 (0: computed)')
+         call fatal_error(error, 'fixed initial drag stress d0 must be >= 0 (0: computed)')
          return
       end if
    end subroutine check_constants
@@ -207,9 +206,8 @@ contains
       den = asinh((model%d0_rate/model%btheta)**(1.0_dp/model%c%n))**(2.0_dp/3.0_dp)
       d0 = num/den
       if (.not. ieee_is_finite(d0) .or. d0 <= 0.0_dp) then
-         call fatal_error(error, '&model and &constants: the initial drag stress D0 = (d0_yield - '// &
-            '0.002*H1)/asinh(...)**(2/3) = '//str(d0)//' is not positive; set &model d0, or a '// &
-            'd0_yield above 0.002*H1')
+         call fatal_error(error, 'initial drag stress D0 = (d0_yield - 0.002*H1)/asinh(...)**(2/3) = '// &
+            str(d0)//' is not positive; fix d0, or a d0_yield above 0.002*H1')
       end if
    end subroutine initial_drag
 
