@@ -3,7 +3,7 @@
 module usharp_cmd_predict
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
-   use usharp_strings, only: real_str
+   use usharp_strings, only: real_str, pad
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept
    use usharp_objective, only: fit_problem, setup_problem, simulated
@@ -93,16 +93,6 @@ contains
                         constants_file)
       if (allocated(error)) return
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
-
-   contains
-
-      !> text left-aligned in n characters (longer text whole)
-      pure function pad(text, n) result(out)
-         character(len=*), intent(in) :: text
-         integer, intent(in) :: n
-         character(len=max(n, len(text))) :: out
-         out = text
-      end function pad
    end subroutine predict_command
 
    !> RMS error, RMS error over the peak |measured| and the largest |error| of a prediction

@@ -3,10 +3,10 @@
 module usharp_cmd_run
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, pad, shell_quote
    use usharp_model, only: model_type
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as, check_inputs_kept
+   use usharp_input, only: read_config_as, check_inputs_kept, output_names
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_experiment, only: fits_strain, response_name
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
@@ -217,7 +217,7 @@ contains
          if (verify(text, 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-+') == 0) then
             word = text
          else
-            word = "'"//text//"'"
+            word = shell_quote(text)
          end if
       end function shell_word
       pure function lower_name(name) result(low)
@@ -309,13 +309,6 @@ contains
       end associate
    end subroutine write_peaks
 
-   !> name blank-padded to width w
-   pure function pad(name, w) result(padded)
-      character(len=*), intent(in) :: name
-      integer, intent(in) :: w
-      character(len=max(w, len(name))) :: padded
-      padded = name
-   end function pad
    !> A run starts in a folder only where it overwrites nothing a user made: files of the
    !> names it writes, with no journal that says a run made them (a journal's own case, an
    !> earlier run, is run_fit's), are refused unless allowed (--force, or --resume)
@@ -326,24 +319,12 @@ contains
       logical, intent(in), optional :: auto_resume
       type(error_type), allocatable, intent(out) :: error
       character(len=:), allocatable :: names(:)
-      integer :: i, j, k, n
+      integer :: i
       if (allowed .or. file_exists(join_path(dir, 'fit.journal'))) return
       if (present(auto_resume)) then
          if (auto_resume) return
       end if
-      n = len(run_files)
-      do i = 1, size(cfg%tests)
-         n = max(n, len(cfg%tests(i)%name) + len(test_files))
-      end do
-      allocate (character(len=n) :: names(size(run_files) + size(test_files)*size(cfg%tests)))
-      names(:size(run_files)) = run_files
-      k = size(run_files)
-      do i = 1, size(cfg%tests)
-         do j = 1, size(test_files)
-            k = k + 1
-            names(k) = cfg%tests(i)%name//trim(test_files(j))
-         end do
-      end do
+      names = output_names(cfg, run_files, test_files)
       do i = 1, size(names)
          if (file_exists(join_path(dir, trim(names(i))))) then
             call fatal_error(error, join_path(dir, trim(names(i)))//': a file of this name '// &

@@ -21,7 +21,7 @@ module usharp_input
    private
 
    public :: read_config, read_config_as, override_constants, resolve_path, known_groups
-   public :: check_inputs_kept
+   public :: check_inputs_kept, output_names
    public :: read_data_columns
 
    !> The groups of an input file; all but &test at most once
@@ -142,17 +142,7 @@ contains
          if (allocated(cfg%tests(i)%data%file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%data%file]
          if (allocated(cfg%tests(i)%peak_file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%peak_file]
       end do
-      n = len(fixed)
-      do i = 1, size(cfg%tests)
-         n = max(n, len(cfg%tests(i)%name) + len(per_test))
-      end do
-      allocate (character(len=n) :: outputs(0))
-      outputs = [character(len=n) :: fixed]
-      do i = 1, size(cfg%tests)
-         do j = 1, size(per_test)
-            outputs = [character(len=n) :: outputs, cfg%tests(i)%name//trim(per_test(j))]
-         end do
-      end do
+      outputs = output_names(cfg, fixed, per_test)
       do i = 1, size(inputs)
          if (len_trim(inputs(i)) == 0) cycle
          here = absolute_path(trim(inputs(i)))
@@ -167,6 +157,28 @@ contains
          end do
       end do
    end subroutine check_inputs_kept
+
+   !> The names of the files a command writes in its output folder: fixed, then for each test
+   !> of cfg its name followed by each of per_test ('.sim.txt', ...)
+   pure function output_names(cfg, fixed, per_test) result(names)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: fixed(:), per_test(:)
+      character(len=:), allocatable :: names(:)
+      integer :: i, j, k, n
+      n = len(fixed)
+      do i = 1, size(cfg%tests)
+         n = max(n, len(cfg%tests(i)%name) + len(per_test))
+      end do
+      allocate (character(len=n) :: names(size(fixed) + size(per_test)*size(cfg%tests)))
+      names(:size(fixed)) = fixed
+      k = size(fixed)
+      do i = 1, size(cfg%tests)
+         do j = 1, size(per_test)
+            k = k + 1
+            names(k) = cfg%tests(i)%name//trim(per_test(j))
+         end do
+      end do
+   end function output_names
 
    !> Replace the constants of cfg by the &constants group of another file (a best.nml)
    subroutine override_constants(cfg, path, error)

@@ -4,7 +4,7 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string
+   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad
 
    !> Text form of a number
    interface str
@@ -136,6 +136,14 @@ contains
       character(len=:), allocatable :: quoted
       quoted = single_quoted(text, "''")
    end function gnuplot_string
+
+   !> name blank-padded to width w (a longer name whole): a table's left-aligned column
+   pure function pad(name, w) result(padded)
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: w
+      character(len=max(w, len(name))) :: padded
+      padded = name
+   end function pad
 
    !> A text quoted for the POSIX shell: in single quotes, each ' written as '\''
    pure function shell_quote(text) result(quoted)
