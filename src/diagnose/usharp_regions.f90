@@ -8,7 +8,7 @@
 module usharp_regions
    use usharp_kinds, only: dp
    use usharp_history, only: history_type
-   use usharp_sort, only: median
+   use usharp_forcing, only: noise_sd
    implicit none
    private
 
@@ -308,20 +308,6 @@ contains
       if (var <= 0.0_dp) return
       z = min(z, (real(runs, dp) - mu)/sqrt(var))
    end function runs_z
-
-   !> Noise standard deviation of a sampled signal from its second differences, robustly
-   !> (median absolute deviation): a smooth signal's second difference is far below the noise
-   !> at the sampling rate, white noise gives var(d2) = 6 sd**2
-   pure real(dp) function noise_sd(y) result(sd)
-      real(dp), intent(in) :: y(:)
-      real(dp), allocatable :: d(:)
-      integer :: n
-      n = size(y)
-      sd = 0.0_dp
-      if (n < 5) return
-      d = abs(y(3:n) - 2.0_dp*y(2:n - 1) + y(1:n - 2))
-      sd = 1.4826_dp*median(d)/sqrt(6.0_dp)
-   end function noise_sd
 
    !> Standard error of a set's structured gap (objective - noise part) when its residual is
    !> noise alone: the chi-square scatter of the objective, the scatter of each test's noise

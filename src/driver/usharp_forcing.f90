@@ -14,6 +14,7 @@ module usharp_forcing
    private
 
    public :: measured_history, turning_points, turn_hysteresis, signal_resolution, smooth_branch, monotone
+   public :: noise_sd
 
    !> A turning point is confirmed once the signal has come back from its extreme by more
    !> than turn_noise times its noise scale (see turn_hysteresis), and at least turn_fraction
@@ -38,7 +39,7 @@ contains
    !> an extensometer's slip or noise, would load the model elastically back and forth) and
    !> then smoothed. noise: the residual RMS the smoother leaves in each branch (the unit of
    !> v); absent or negative: for values rounded to a resolution, that resolution (their
-   !> smallest non-zero step), for unrounded values their own scatter (see scatter); 0: no
+   !> smallest non-zero step), for unrounded values their own scatter (see noise_sd); 0: no
    !> smoothing, the samples are the corners of a piecewise-linear history (the integrators
    !> then stop at each of them).
    pure subroutine measured_history(t, v, control, hist, error, noise)
@@ -61,7 +62,7 @@ contains
          else
             ! Unrounded values (a simulation's, or noise without rounding): their smallest
             ! step is a sample's increment, not a resolution; their own scatter is the noise
-            sigma = max(scatter(v), unrounded_floor*(maxval(v) - minval(v)))
+            sigma = max(noise_sd(v), unrounded_floor*(maxval(v) - minval(v)))
          end if
       end if
       if (sigma <= 0.0_dp .or. size(t) < 3) return
@@ -171,25 +172,26 @@ contains
    end function monotone
 
    !> The hysteresis of the turning points of v (its unit): turn_noise times its noise scale,
-   !> the larger of its quantum (see quantum) and the scatter of its second differences
-   !> (their median absolute deviation, as a standard deviation of the values); at least
+   !> the larger of its quantum (see quantum) and its noise (see noise_sd); at least
    !> turn_fraction of its range
    pure real(dp) function turn_hysteresis(v) result(delta)
       real(dp), intent(in) :: v(:)
-      delta = max(turn_noise*max(quantum(v), scatter(v)), turn_fraction*(maxval(v) - minval(v)))
+      delta = max(turn_noise*max(quantum(v), noise_sd(v)), turn_fraction*(maxval(v) - minval(v)))
    end function turn_hysteresis
 
-   !> The scatter of v as a standard deviation of its values, from its second differences
-   !> (their median absolute deviation; those of white noise have 6 times its variance): a
-   !> smooth signal's own curvature hardly counts
-   pure real(dp) function scatter(v) result(sd)
-      real(dp), intent(in) :: v(:)
-      real(dp), allocatable :: d2(:)
+   !> Noise standard deviation of a sampled signal from its second differences, robustly
+   !> (median absolute deviation): a smooth signal's second difference is far below the noise
+   !> at the sampling rate, white noise gives var(d2) = 6 sd**2
+   pure real(dp) function noise_sd(y) result(sd)
+      real(dp), intent(in) :: y(:)
+      real(dp), allocatable :: d(:)
+      integer :: n
+      n = size(y)
       sd = 0.0_dp
-      if (size(v) < 3) return
-      d2 = v(3:) - 2.0_dp*v(2:size(v) - 1) + v(:size(v) - 2)
-      sd = median(abs(d2 - median(d2)))/(0.6745_dp*sqrt(6.0_dp))
-   end function scatter
+      if (n < 5) return
+      d = abs(y(3:n) - 2.0_dp*y(2:n - 1) + y(1:n - 2))
+      sd = 1.4826_dp*median(d)/sqrt(6.0_dp)
+   end function noise_sd
 
    !> The rounding of recorded values: the largest q = s/k (s the smallest non-zero step
    !> between neighbours, k = 1 to 4) of which nearly every value (95 %) is a whole multiple,
