@@ -91,6 +91,8 @@ row 'unknown group `&tset`' - u simulate tset.nml
 row 'misspelt variable in `&model`' - u simulate misspelt.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs='abc' /"; echo "$consts"; echo "$lcf"; } > text.nml
 row 'text where a number belongs' - u simulate text.nml
+{ echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3, tm=1700.0 /"; echo "$consts"; echo "$lcf"; } > twice.nml
+row 'a variable given twice' - u simulate twice.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=-22.5e3 /"; echo "$consts"; echo "$lcf"; } > negE.nml
 row 'negative Young'"'"'s modulus' - u simulate negE.nml
 { echo "&model name='miller', units='psi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > psi.nml

@@ -17,7 +17,7 @@ module test_fit
    use usharp_config, only: run_config
    use usharp_input, only: read_config
    use usharp_cmd_run, only: run_command
-   use test_util, only: write_text, usharp_exe, read_text, scratch_dir
+   use test_util, only: write_text, usharp_exe, read_text, scratch_dir, fit_deck
    implicit none
    private
    public :: collect_fit, rosenbrock
@@ -178,18 +178,6 @@ contains
       if (allocated(error)) return
       call check(error, opt%f < 24.2_dp, 'the best point found, not the start (f = 24.2)')
    end subroutine test_hj_limits
-
-   !> A fit deck in the scratch folder against data/thesis (relative to the scratch folder)
-   function fit_deck(name, extra_fit, test_lines) result(path)
-      character(len=*), intent(in) :: name, extra_fit
-      character(len=*), intent(in) :: test_lines(:)
-      character(len=:), allocatable :: path
-      path = write_text(name, [character(len=200) :: &
-         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
-         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
-         "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200 "//extra_fit//' /', &
-         test_lines])
-   end function fit_deck
 
    subroutine test_coverage(error)
       type(error_type), allocatable, intent(out) :: error

@@ -77,11 +77,22 @@ contains
       call check(error, uerr%stat, stat_input, 'input error category')
    end subroutine test_missing_file
 
+   !> A misspelt name, a value of the wrong type and a variable given twice: each named with
+   !> its line and column (the namelist read's own words named the value as a misspelt name,
+   !> and took the last of two values without a word)
    subroutine test_misspelled(error)
       type(error_type), allocatable, intent(out) :: error
       call expect_config_error(error, 'misspelled.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', ampfirst=0.001 /"], &
-         "misspelled.nml: &test #1 'lcf': Cannot match namelist object name ampfirst")
+         "misspelled.nml:3:41: &test #1 'lcf': no variable ampfirst in this group")
+      if (allocated(error)) return
+      call expect_config_error(error, 'bad-value.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf',", "  dt_out = abc, sig = 14.0 /"], &
+         "bad-value.nml:4:3: &test #1 'lcf': dt_out = abc is not a value dt_out can take")
+      if (allocated(error)) return
+      call expect_config_error(error, 'twice.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1.0,", "  sig = 14.0, DT_OUT=2.0 /"], &
+         "twice.nml:4:15: &test: DT_OUT is given twice (also at line:column 3:41)")
    end subroutine test_misspelled
 
    subroutine test_unknown_group(error)

@@ -12,7 +12,7 @@ module test_safety
    use usharp_cmd_run, only: run_command
    use usharp_strings, only: str
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments
-   use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message
+   use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message, fit_deck
    implicit none
    private
    public :: collect_safety
@@ -44,13 +44,10 @@ contains
    !> A fit deck in the scratch folder: H1 and n of the thesis's LCF test by Hooke-Jeeves
    function deck(name, extra_fit, extra_test) result(path)
       character(len=*), intent(in) :: name, extra_fit, extra_test
-      character(len=:), allocatable :: path
-      path = write_text(name, [character(len=4000) :: &
-         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
-         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
-         "&fit fitted='H1','n', rho=0.5, eps=1e-4, itermax=200 "//extra_fit//' /', &
-         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', "// &
-         "weighting='threshold', sig=14 "//extra_test//" /"])
+      character(len=:), allocatable :: path, test
+      test = "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', "// &
+             "weighting='threshold', sig=14 "//extra_test//" /"
+      path = fit_deck(name, extra_fit, [test])
    end function deck
 
    !> Run a shell command line (the tests' own: fixed text and scratch paths), its exit status

@@ -48,8 +48,8 @@ contains
       call check(error, v(3, 2), -3.0_dp, 'stress picked by name')
    end subroutine test_csv
 
-   !> A comment longer than the line buffer (its rest passed over, the next record read whole)
-   !> and a last data row without a new line
+   !> A comment longer than the line buffer (its rest passed over, the next record read whole),
+   !> lines ended as on Windows (CR LF) and a last data row without a new line
    subroutine test_long_line(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: v(:, :)
@@ -60,9 +60,9 @@ contains
       path = write_text('long.csv', [character(len=1) :: ''])
       open (newunit=unit, file=path, status='replace', action='write', access='stream', form='formatted')
       write (unit, '(a)') '# '//repeat('x', 5000)//' 9,9'
-      write (unit, '(a)') 'time,stress'
+      write (unit, '(a)') 'time,stress'//achar(13)
       write (unit, '(a)') '0,1.5'
-      write (unit, '(a)') '1,2.5'
+      write (unit, '(a)') '1,2.5'//achar(13)
       write (unit, '(a)', advance='no') '2,3.5'
       close (unit)
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
@@ -71,6 +71,8 @@ contains
          return
       end if
       call check(error, size(v, 1), 3, 'rows read')
+      if (allocated(error)) return
+      call check(error, v(2, 2), 2.5_dp, 'a row ended by CR LF')
       if (allocated(error)) return
       call check(error, v(3, 2), 3.5_dp, 'the last row, without a new line')
    end subroutine test_long_line

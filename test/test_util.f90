@@ -5,7 +5,7 @@ module test_util
    use usharp_filesys, only: make_dir
    implicit none
    private
-   public :: scratch_dir, write_text, usharp_exe, require_exe, read_text, check_message
+   public :: scratch_dir, write_text, usharp_exe, require_exe, read_text, check_message, fit_deck
 
    !> Scratch folder for test files (inside the build tree, never in the sources)
    character(len=*), parameter :: scratch_dir = 'build/test-scratch'
@@ -39,6 +39,27 @@ contains
       end do
       close (unit)
    end function write_text
+
+   !> A thesis-units fit deck in scratch_dir/name fitting H1 and n from Table 4's constants
+   !> with Hooke-Jeeves, then test_lines; extra_fit: further &fit settings (rho and eps given
+   !> there replace the deck's, since a variable given twice is an input error)
+   function fit_deck(name, extra_fit, test_lines) result(path)
+      character(len=*), intent(in) :: name, extra_fit
+      character(len=*), intent(in) :: test_lines(:)
+      character(len=:), allocatable :: path, fit
+      character(len=:), allocatable :: lines(:)
+      fit = "&fit fitted='H1','n'"
+      if (len_trim(extra_fit) > 0) fit = fit//', '//extra_fit
+      if (index(extra_fit, 'rho=') == 0) fit = fit//', rho=0.5'
+      if (index(extra_fit, 'eps=') == 0) fit = fit//', eps=1e-4'
+      fit = fit//', itermax=200 /'
+      allocate (character(len=max(100, len(fit), len(test_lines))) :: lines(3 + size(test_lines)))
+      lines(1) = "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"
+      lines(2) = '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /'
+      lines(3) = fit
+      lines(4:) = test_lines
+      path = write_text(name, lines)
+   end function fit_deck
 
    !> Whole text of a file (lines joined by new lines), '' if missing
    function read_text(path) result(text)

@@ -32,7 +32,7 @@ contains
       call group_text(file, k, lines)
       call design_namelist(design, ios, msg, text=lines)
       if (ios /= 0) then
-         call read_error(error, file%path, 'design', ios, msg)
+         call read_error(error, file, k, 'design', ios, msg, reread)
       else if (.not. (design%noise > 0.0_dp)) then
          call group_error(error, file%path, 'design', 'noise must be > 0 (a fraction of the '// &
             'peak response, 0.01 for 1 %)')
@@ -41,6 +41,14 @@ contains
       else if (.not. (design%ci_target > 0.0_dp) .or. .not. (design%prior_decades > 0.0_dp)) then
          call group_error(error, file%path, 'design', 'ci_target and prior_decades must be > 0')
       end if
+   contains
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(design_config) :: scratch
+         call design_namelist(scratch, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_design_group
 
    !> Write &design with its defaults to unit

@@ -57,7 +57,7 @@ contains
       call group_text(file, k, lines)
       call diagnose_namelist(diagnose, holdout, effects, rows, specimen, ios, msg, text=lines)
       if (ios /= 0) then
-         call read_error(error, file%path, 'diagnose', ios, msg)
+         call read_error(error, file, k, 'diagnose', ios, msg, reread)
          return
       end if
       where = file%path//': &diagnose: '
@@ -97,6 +97,15 @@ contains
          character(len=*), intent(in) :: text
          call group_error(error, file%path, 'diagnose', text)
       end subroutine fail
+
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(diagnose_config) :: scratch
+         character(len=value_len) :: h(max_list), e(max_list), r(max_list), s
+         call diagnose_namelist(scratch, h, e, r, s, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_diagnose_group
 
    !> A diagnosis predicts held-out tests from a fit of the others: both sets must be non-empty

@@ -80,7 +80,7 @@ contains
          call fit_namelist(fit, given, ios, msg)
       end if
       if (ios /= 0) then
-         call read_error(error, file%path, 'fit', ios, msg)
+         call read_error(error, file, k, 'fit', ios, msg, reread)
          return
       end if
       where = file%path//': &fit: '
@@ -148,6 +148,15 @@ contains
          character(len=*), intent(in) :: text
          call group_error(error, file%path, 'fit', text)
       end subroutine fail
+
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(fit_config) :: scratch
+         type(fit_lists) :: lists
+         call fit_namelist(scratch, lists, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_fit_group
 
    !> Write &fit with its defaults to unit (bounds unset: -huge)

@@ -53,7 +53,7 @@ contains
       call group_text(file, k, lines)
       call model_namelist(v, ios, msg, text=lines)
       if (ios /= 0) then
-         call read_error(error, file%path, 'model', ios, msg)
+         call read_error(error, file, k, 'model', ios, msg, reread)
          return
       end if
       where = file%path//': &model: '
@@ -98,6 +98,14 @@ contains
          call fatal_error(error, where//trim(msg))
       end if
    contains
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(model_values) :: scratch
+         call model_namelist(scratch, ios, msg, text=lines)
+      end subroutine reread
+
       logical function required(val, var) result(missing)
          real(dp), intent(in) :: val
          character(len=*), intent(in) :: var
@@ -191,7 +199,7 @@ contains
       call group_text(file, k, lines)
       call model%constants_namelist(unset, ios, msg, text=lines)
       if (ios /= 0) then
-         call read_error(error, file%path, 'constants', ios, msg)
+         call read_error(error, file, k, 'constants', ios, msg, reread)
          return
       end if
       missing = ''
@@ -203,6 +211,15 @@ contains
             '(missing: '//adjustl(missing)//')')
          return
       end if
+   contains
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         class(model_type), allocatable :: scratch
+         allocate (scratch, source=model)
+         call scratch%constants_namelist(unset, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_constants_group
 
    !> Write &constants of the model (no defaults: every constant is unset, -huge) to unit

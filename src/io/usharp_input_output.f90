@@ -30,7 +30,7 @@ contains
          call group_text(file, k, lines)
          call output_namelist(settings, ios, msg, text=lines)
          if (ios /= 0) then
-            call read_error(error, file%path, 'output', ios, msg)
+            call read_error(error, file, k, 'output', ios, msg, reread)
             return
          end if
       end if
@@ -41,6 +41,14 @@ contains
          return
       end if
       out_dir = resolve_path(file%base_dir, trim(settings%out_dir))
+   contains
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(output_config) :: scratch
+         call output_namelist(scratch, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_output_group
 
    !> Write &output with its defaults to unit

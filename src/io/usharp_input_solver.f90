@@ -30,7 +30,7 @@ contains
          call solver_namelist(solver, integrator, ios, msg)
       end if
       if (ios /= 0) then
-         call read_error(error, file%path, 'solver', ios, msg)
+         call read_error(error, file, k, 'solver', ios, msg, reread)
          return
       end if
       call check_length(error, file%path//': &solver: ', 'integrator', integrator)
@@ -55,6 +55,15 @@ contains
          character(len=*), intent(in) :: text
          call group_error(error, file%path, 'solver', text)
       end subroutine fail
+
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(solver_options) :: scratch
+         character(len=value_len) :: given
+         call solver_namelist(scratch, given, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_solver_group
 
    !> Write &solver with its defaults to unit

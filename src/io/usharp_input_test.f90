@@ -12,7 +12,7 @@ module usharp_input_test
    use usharp_cycles, only: gap_filled_history, match_peaks
    use usharp_sort, only: order_of
    use usharp_table, only: read_columns, merge_repeated_times
-   use usharp_namelist, only: nml_file, group_text, check_length, value_len, max_list, unset, &
+   use usharp_namelist, only: nml_file, group_text, check_length, read_error, value_len, max_list, unset, &
                               resolve_path
    implicit none
    private
@@ -133,7 +133,7 @@ contains
          where = file%path//': &test #'//str(n)
          if (len_trim(v%name) > 0) where = where//" '"//trim(v%name(:min(len_trim(v%name), 64)))//"'"
          if (ios /= 0) then
-            call fatal_error(error, where//': '//trim(msg)//' (iostat '//str(ios)//')')
+            call read_error(error, file, k, where(len(file%path) + 4:), ios, msg, reread)
             return
          end if
          call build_test(v, file%base_dir, units, tests(n), error)
@@ -144,6 +144,14 @@ contains
          tests(n)%line = file%groups(k)%line
       end do
       call check_unique_names(file%path, tests, error)
+   contains
+      subroutine reread(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+         type(test_values) :: scratch
+         call test_namelist(scratch, ios, msg, text=lines)
+      end subroutine reread
    end subroutine read_test_groups
 
    !> Each test writes files named after it: two tests of one name are an error naming both

@@ -7,11 +7,12 @@ module usharp_namelist
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower, str
+   use usharp_filesys, only: file_exists, read_whole_file
    implicit none
    private
 
    public :: nml_file, nml_group, scan_namelist_file, find_group, group_text, group_error, read_error
-   public :: check_length, dirname, resolve_path, string_value
+   public :: check_length, dirname, resolve_path, string_value, group_reader
 
    !> Longest character value a namelist variable holds; a longer value is an error, never cut
    integer, parameter, public :: value_len = 4096
@@ -27,6 +28,26 @@ module usharp_namelist
       integer :: last = 0                          !< line of its end, '/'
       integer :: number = 0                        !< 1 for the first group of its name, 2 ...
    end type nml_group
+
+   abstract interface
+      !> A group's namelist read from lines (an internal file) into values of its own
+      subroutine group_reader(lines, ios, msg)
+         character(len=*), intent(in) :: lines(:)
+         integer, intent(out) :: ios
+         character(len=*), intent(out) :: msg
+      end subroutine group_reader
+   end interface
+
+   !> One assignment of a group (see group_items)
+   type :: nml_item
+      character(len=:), allocatable :: name        !< as written, with its subscript
+      character(len=:), allocatable :: text        !< 'name = values', comments left out
+      integer, allocatable :: at(:)                !< each character's place in the file
+   end type nml_item
+
+   !> The characters of a variable's name
+   character(len=*), parameter :: word_chars = &
+      'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_%'
 
    !> The file: its path, its folder (relative paths in it are relative to that) and groups
    type :: nml_file
@@ -56,6 +77,10 @@ contains
       type(nml_group), allocatable :: tmp(:)
       logical :: inside
 
+      if (.not. file_exists(path)) then
+         call fatal_error(error, path//': no such input file')
+         return
+      end if
       call read_whole_file(path, file%text, error)
       if (allocated(error)) return
       file%path = path
@@ -164,7 +189,7 @@ contains
       file%groups = file%groups(:ngroup)
       file%work = file%work + ngroup
       do k = 1, ngroup
-         call check_finite(file, k, error)
+         call check_values(file, k, error)
          if (allocated(error)) return
       end do
 
@@ -191,35 +216,6 @@ contains
             str(open_line)//why//')')
       end subroutine unterminated
    end subroutine scan_namelist_file
-
-   !> The whole file as one string
-   subroutine read_whole_file(path, text, error)
-      character(len=*), intent(in) :: path
-      character(len=:), allocatable, intent(out) :: text
-      type(error_type), allocatable, intent(out) :: error
-      integer :: unit, ios, nbytes
-      logical :: exists
-      character(len=512) :: msg
-      inquire (file=path, exist=exists)
-      if (.not. exists) then
-         call fatal_error(error, path//': no such input file')
-         return
-      end if
-      open (newunit=unit, file=path, status='old', action='read', access='stream', &
-            form='unformatted', iostat=ios, iomsg=msg)
-      if (ios /= 0) then
-         call fatal_error(error, path//': cannot open ('//trim(msg)//')')
-         return
-      end if
-      inquire (unit=unit, size=nbytes)
-      allocate (character(len=max(nbytes, 0)) :: text)
-      if (nbytes > 0) read (unit, iostat=ios, iomsg=msg) text
-      close (unit)
-      if (ios /= 0 .or. nbytes < 0) then
-         call fatal_error(error, path//': cannot read ('//trim(msg)//')')
-         return
-      end if
-   end subroutine read_whole_file
 
    !> Positions where each line starts, and one past the end (as if a newline ended the text)
    pure subroutine line_starts(text, starts)
@@ -305,76 +301,218 @@ contains
       end do
    end subroutine group_end
 
-   !> No value of group k is NaN or infinite: Fortran's namelist read takes them as numbers,
-   !> and a NaN passes every check of the form x < 0 (a hold of NaN s was taken as none). The
-   !> error names the file, line, column, group and variable.
-   pure subroutine check_finite(file, k, error)
+   !> The assignments of group k in the order written: each variable's name (with its
+   !> subscript, as written) and its text 'name = values' without comments, every character
+   !> with its place in the file (0 for the blank that stands for a line break)
+   pure subroutine group_items(file, k, items)
       type(nml_file), intent(in) :: file
       integer, intent(in) :: k
-      type(error_type), allocatable, intent(out) :: error
-      character(len=1) :: quote
-      character(len=:), allocatable :: variable, word
-      integer :: l, a, b, i, j
+      type(nml_item), allocatable, intent(out) :: items(:)
+      character(len=1) :: quote, c
+      integer :: l, a, b, i, j, q, n
+      type(nml_item), allocatable :: tmp(:)
+      allocate (items(8))
+      n = 0
       quote = ' '
-      variable = '?'
-      do l = file%groups(k)%line, file%groups(k)%last
+      lines: do l = file%groups(k)%line, file%groups(k)%last
          a = file%starts(l)
          b = file%starts(l + 1) - 2
          i = a
          if (l == file%groups(k)%line) i = index(file%text(a:max(a, b)), '&') + a + len_trim(file%groups(k)%name)
          do while (i <= b)
+            c = file%text(i:i)
             if (quote /= ' ') then
-               if (file%text(i:i) == quote) quote = ' '
+               if (c == quote) quote = ' '
+               if (n > 0) call add(items(n), i, i)
                i = i + 1
                cycle
             end if
-            select case (file%text(i:i))
+            select case (c)
             case ("'", '"')
-               quote = file%text(i:i)
+               quote = c
+               if (n > 0) call add(items(n), i, i)
                i = i + 1
             case ('!')
                exit
-            case (' ', ',', '=', '/', achar(9), achar(13), '(', ')', ':')
-               i = i + 1
-            case default
-               ! A word: the variable's name when '=' follows it, else a value
+            case ('/')
+               exit lines
+            case ('a':'z', 'A':'Z')
                j = i
                do while (j < b)
-                  if (scan(file%text(j + 1:j + 1), " ,=/!'()"//'"'//achar(9)//achar(13)) > 0) exit
+                  if (verify(file%text(j + 1:j + 1), word_chars) /= 0) exit
                   j = j + 1
                end do
-               word = lower(file%text(i:j))
-               if (next_is_equals(j + 1, b)) then
-                  variable = file%text(i:j)
-               else
-                  if (word(1:1) == '+' .or. word(1:1) == '-') word = word(2:)
-                  if (index(word, '*') > 0) word = word(index(word, '*') + 1:)
-                  if (word == 'nan' .or. word == 'inf' .or. word == 'infinity') then
-                     call fatal_error(error, file%path//':'//str(l)//':'//str(i - a + 1)//': &'// &
-                        trim(file%groups(k)%name)//': '//variable//' = '//file%text(i:j)// &
-                        ' is not a number usharp can use')
-                     return
+               q = assigned_at(j + 1, b)
+               if (q > 0) then
+                  ! A variable's name (and subscript) followed by '=': a new assignment
+                  n = n + 1
+                  if (n > size(items)) then
+                     allocate (tmp(2*size(items)))
+                     tmp(:n - 1) = items(:n - 1)
+                     call move_alloc(tmp, items)
                   end if
+                  items(n)%name = file%text(i:j)//compact(file%text(j + 1:q - 1))
+                  items(n)%text = ''
+                  allocate (items(n)%at(0))
+                  if (n > 0) call add(items(n), i, q)
+                  i = q + 1
+               else
+                  if (n > 0) call add(items(n), i, j)
+                  i = j + 1
                end if
-               i = j + 1
+            case default
+               if (n > 0) call add(items(n), i, i)
+               i = i + 1
             end select
          end do
-      end do
+         if (n > 0) call add(items(n), 0, 0)
+      end do lines
+      items = items(:n)
 
    contains
 
-      !> Whether the next character after blanks from position p is '='
-      pure logical function next_is_equals(p, last)
-         integer, intent(in) :: p, last
-         integer :: q
-         next_is_equals = .false.
-         do q = p, last
-            if (file%text(q:q) == ' ' .or. file%text(q:q) == achar(9)) cycle
-            next_is_equals = file%text(q:q) == '='
+      !> Characters a to b of the file to an assignment (0, 0: a blank for a line end)
+      pure subroutine add(item, a, b)
+         type(nml_item), intent(inout) :: item
+         integer, intent(in) :: a, b
+         integer :: p
+         if (a == 0) then
+            item%text = item%text//' '
+            item%at = [item%at, 0]
             return
+         end if
+         do p = a, b
+            ! Tabs and carriage returns read as blanks
+            if (file%text(p:p) == achar(9) .or. file%text(p:p) == achar(13)) then
+               item%text = item%text//' '
+            else
+               item%text = item%text//file%text(p:p)
+            end if
          end do
-      end function next_is_equals
-   end subroutine check_finite
+         item%at = [item%at, [(p, p=a, b)]]
+      end subroutine add
+
+      !> Where the '=' is when a subscript (in parentheses) and blanks from p on lead to one
+      !> on this line, else 0
+      pure integer function assigned_at(p, last) result(q)
+         integer, intent(in) :: p, last
+         integer :: depth
+         depth = 0
+         do q = p, last
+            select case (file%text(q:q))
+            case (' ', achar(9))
+            case ('(')
+               depth = depth + 1
+            case (')')
+               depth = depth - 1
+               if (depth < 0) exit
+            case ('=')
+               if (depth == 0) return
+            case default
+               if (depth == 0) exit
+            end select
+         end do
+         q = 0
+      end function assigned_at
+
+      pure function compact(text) result(out)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: out
+         integer :: p
+         out = ''
+         do p = 1, len(text)
+            if (text(p:p) /= ' ' .and. text(p:p) /= achar(9)) out = out//text(p:p)
+         end do
+      end function compact
+   end subroutine group_items
+
+   !> 'path:line:column' of position p of the file's text ('line:column' when with_path is false)
+   pure function place(file, p, with_path) result(text)
+      type(nml_file), intent(in) :: file
+      integer, intent(in) :: p
+      logical, intent(in), optional :: with_path
+      character(len=:), allocatable :: text
+      integer :: l
+      l = 1
+      do while (l < size(file%starts) - 1)
+         if (file%starts(l + 1) > p) exit
+         l = l + 1
+      end do
+      text = str(l)//':'//str(p - file%starts(l) + 1)
+      if (present(with_path)) then
+         if (.not. with_path) return
+      end if
+      text = file%path//':'//text
+   end function place
+
+   !> The label of group k in messages: '&fit', '&test #2'
+   pure function group_label(file, k) result(label)
+      type(nml_file), intent(in) :: file
+      integer, intent(in) :: k
+      character(len=:), allocatable :: label
+      label = '&'//trim(file%groups(k)%name)
+      if (count(file%groups%name == file%groups(k)%name) > 1) label = label//' #'//str(file%groups(k)%number)
+   end function group_label
+
+   !> No value of group k is NaN or infinite (Fortran's namelist read takes them as numbers,
+   !> and a NaN passes every check of the form x < 0: a hold of NaN s was taken as none), and
+   !> no variable is given twice (the read keeps the last without a word). The error names the
+   !> file, line, column, group and variable.
+   pure subroutine check_values(file, k, error)
+      type(nml_file), intent(in) :: file
+      integer, intent(in) :: k
+      type(error_type), allocatable, intent(out) :: error
+      type(nml_item), allocatable :: items(:)
+      character(len=1) :: quote
+      character(len=:), allocatable :: word
+      integer :: m, e, i, j
+      call group_items(file, k, items)
+      do m = 1, size(items)
+         do e = 1, m - 1
+            if (lower(items(e)%name) == lower(items(m)%name)) then
+               call fatal_error(error, place(file, items(m)%at(1))//': '//group_label(file, k)// &
+                  ': '//items(m)%name//' is given twice (also at line:column '// &
+                  place(file, items(e)%at(1), .false.)//'); give it once')
+               return
+            end if
+         end do
+         associate (text => items(m)%text)
+            quote = ' '
+            i = index(text, '=') + 1
+            do while (i <= len(text))
+               if (quote /= ' ') then
+                  if (text(i:i) == quote) quote = ' '
+                  i = i + 1
+                  cycle
+               end if
+               if (text(i:i) == "'" .or. text(i:i) == '"') then
+                  quote = text(i:i)
+                  i = i + 1
+               else if (scan(text(i:i), ' ,()') > 0) then
+                  i = i + 1
+               else
+                  ! A value: a number, a logical, or 'r*value'
+                  j = i
+                  do while (j < len(text))
+                     if (scan(text(j + 1:j + 1), " ,()'"//'"') > 0) exit
+                     j = j + 1
+                  end do
+                  word = lower(text(i:j))
+                  if (index(word, '*') > 0) word = word(index(word, '*') + 1:)
+                  if (len(word) > 0) then
+                     if (word(1:1) == '+' .or. word(1:1) == '-') word = word(2:)
+                  end if
+                  if (word == 'nan' .or. word == 'inf' .or. word == 'infinity') then
+                     call fatal_error(error, place(file, items(m)%at(i))//': '//group_label(file, k)// &
+                        ': '//items(m)%name//' = '//text(i:j)//' is not a number usharp can use')
+                     return
+                  end if
+                  i = j + 1
+               end if
+            end do
+         end associate
+      end do
+   end subroutine check_values
 
    !> The text value of variable (a quoted string) in the first group of that name, '' when
    !> the file has no such group or the group no such variable: for a look at a group this
@@ -484,12 +622,46 @@ contains
       call fatal_error(error, path//': &'//group//': '//text)
    end subroutine group_error
 
-   !> An error of the namelist read itself (an unknown variable, a value of the wrong type)
-   pure subroutine read_error(error, path, group, ios, msg)
+   !> An error of the namelist read of group k (an unknown variable, a value of the wrong
+   !> type), placed: the group's assignments are read again one at a time by reader, and the
+   !> first that fails alone is named with its line and column. label: the group as messages
+   !> name it, without its '&' (test #1 'lcf')
+   subroutine read_error(error, file, k, label, ios, msg, reader)
       type(error_type), allocatable, intent(out) :: error
-      character(len=*), intent(in) :: path, group, msg
-      integer, intent(in) :: ios
-      call fatal_error(error, path//': &'//group//': '//trim(msg)//' (iostat '//str(ios)//')')
+      type(nml_file), intent(in) :: file
+      integer, intent(in) :: k, ios
+      character(len=*), intent(in) :: label, msg
+      procedure(group_reader) :: reader
+      type(nml_item), allocatable :: items(:)
+      character(len=512) :: why
+      character(len=:), allocatable :: value, unknown
+      integer :: m, stat
+      allocate (items(0))
+      if (k > 0) call group_items(file, k, items)
+      do m = 1, size(items)
+         call reader(['&'//trim(file%groups(k)%name)//' '//items(m)%text//' /'], stat, why)
+         if (stat == 0) cycle
+         value = trim(adjustl(items(m)%text(index(items(m)%text, '=') + 1:)))
+         ! (the comma that ends it is not part of the value)
+         if (len(value) > 1) then
+            if (value(len(value):) == ',') value = trim(value(:len(value) - 1))
+         end if
+         ! The read's words for a name it does not know (its words for a value it cannot read
+         ! are often the same, naming the value: 'dt_out = abc' gives 'name abc')
+         unknown = 'cannot match namelist object name '//lower(items(m)%name)
+         if (lower(trim(why)) == unknown) then
+            call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': no variable '// &
+               items(m)%name//' in this group (see the input reference)')
+         else if (index(lower(why), 'cannot match namelist object name') > 0) then
+            call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '//items(m)%name// &
+               ' = '//value//' is not a value '//items(m)%name//' can take')
+         else
+            call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '//items(m)%name// &
+               ' = '//value//' is not a value '//items(m)%name//' can take ('//trim(why)//')')
+         end if
+         return
+      end do
+      call fatal_error(error, file%path//': &'//label//': '//trim(msg)//' (iostat '//str(ios)//')')
    end subroutine read_error
 
    !> A value that fills its whole buffer may have been cut: an error naming the variable

@@ -6,6 +6,7 @@ module usharp_table
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower, str, split_fields
+   use usharp_filesys, only: read_whole_file
    implicit none
    private
 
@@ -32,11 +33,11 @@ contains
       !> drop the rows where a requested field is empty or '.' (a missing value)
       logical, intent(in), optional :: skip_missing
 
-      character(len=line_len) :: line
+      character(len=:), allocatable :: text
       character(len=field_len) :: fields(max_fields), header(max_fields)
       character(len=line_len) :: last_comment
-      character(len=256) :: msg
-      integer :: unit, ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter, n, first
+      integer :: ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter, first
+      integer :: a, b, next
       logical :: have_header, filtering, fixed
       real(dp), allocatable :: buf(:, :)
       real(dp) :: row(max_fields)
@@ -45,11 +46,10 @@ contains
       if (present(filter_column)) filtering = len_trim(filter_column) > 0
       fixed = .false.
       if (present(fmt)) fixed = len_trim(fmt) > 0
-      open (newunit=unit, file=file, status='old', action='read', iostat=ios, iomsg=msg)
-      if (ios /= 0) then
-         call fatal_error(error, file//': cannot open ('//trim(msg)//')')
-         return
-      end if
+      ! The file in one read, then its lines as slices of it: a formatted read per line took
+      ! most of the time of reading a long file
+      call read_whole_file(file, text, error)
+      if (allocated(error)) return
       have_header = .false.
       nheader = 0
       icol = 0
@@ -58,35 +58,30 @@ contains
       lineno = 0
       last_comment = ''
       allocate (buf(size(columns), 1024))
-      do
-         ! Non-advancing, for the record's own length: a search of the whole 4096-character
-         ! buffer per line took most of the time of reading a long file
-         read (unit, '(a)', advance='no', size=n, iostat=ios) line
-         if (ios == 0) then
-            ! A record longer than the buffer: the rest of it is passed over, as before
-            read (unit, '(a)', iostat=ios)
-            n = len(line)
-         else if (is_iostat_eor(ios)) then
-            ios = 0
+      next = 1
+      do while (next <= len(text))
+         ! The line is text(a:b), without its end (LF, or CR LF)
+         a = next
+         b = index(text(a:), new_line('a')) + a - 2
+         if (b < a - 1) b = len(text)
+         next = b + 2
+         if (b >= a) then
+            if (text(b:b) == achar(13)) b = b - 1
          end if
-         if (ios /= 0) exit
          lineno = lineno + 1
          ! A spreadsheet's 'CSV UTF-8' starts with a byte order mark, not part of the first name
-         if (lineno == 1 .and. n >= 3) then
-            if (line(1:3) == achar(239)//achar(187)//achar(191)) then
-               line = line(4:n)
-               n = n - 3
-            end if
+         if (lineno == 1 .and. b - a + 1 >= 3) then
+            if (text(a:a + 2) == achar(239)//achar(187)//achar(191)) a = a + 3
          end if
-         n = len_trim(line(:n))
-         if (n == 0) cycle
-         first = verify(line(:n), ' ')
-         if (line(first:first) == '#') then
-            last_comment = line(first + 1:n)
+         b = a - 1 + len_trim(text(a:b))
+         if (b < a) cycle
+         first = a - 1 + verify(text(a:b), ' ')
+         if (text(first:first) == '#') then
+            last_comment = text(first + 1:b)
             cycle
          end if
          if (fixed) then
-            call read_fixed(line, fmt, row, nfield, ios)
+            call read_fixed(text(a:b), fmt, row, nfield, ios)
             if (ios /= 0) then
                call fatal_error(error, file//':'//str(lineno)//': does not match format '//trim(fmt))
                exit
@@ -96,7 +91,7 @@ contains
             call append([(row(icol(j)), j=1, size(columns))])
             cycle
          end if
-         call split_fields(line(:n), fields, nfield)
+         call split_fields(text(a:b), fields, nfield)
          if (nfield > max_fields) then
             call fatal_error(error, file//':'//str(lineno)//': more than '//str(max_fields)//' columns')
             exit
@@ -151,7 +146,6 @@ contains
          if (allocated(error)) exit
          call append(row(:size(columns)))
       end do
-      close (unit)
       if (allocated(error)) return
       if (npt < 3) then
          call fatal_error(error, file//': needs at least 3 data rows, found '//str(npt))

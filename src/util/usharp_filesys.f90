@@ -11,7 +11,7 @@ module usharp_filesys
 
    public :: make_dir, join_path, file_exists, absolute_path, remove_file, remove_dir
    public :: rename_file, lock_file, unlock_file, file_hash, hash_text, hash_hex
-   public :: raw_file, read_line
+   public :: raw_file, read_line, read_whole_file
 
    !> A file written through the C library, every write and the close checked. (gfortran's
    !> formatted and stream writes do not report a full disk: the bytes are lost and iostat
@@ -235,25 +235,41 @@ contains
       fd = -1
    end subroutine unlock_file
 
+   !> A file's bytes as one string (stream access: one read, not a formatted read per line)
+   subroutine read_whole_file(path, text, error)
+      !> the file
+      character(len=*), intent(in) :: path
+      !> its contents, line ends included
+      character(len=:), allocatable, intent(out) :: text
+      !> 'cannot open' or 'cannot read', naming the file
+      type(error_type), allocatable, intent(out) :: error
+      integer :: unit, ios
+      integer(int64) :: nbytes
+      character(len=512) :: msg
+      open (newunit=unit, file=path, status='old', action='read', access='stream', &
+            form='unformatted', iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+         call fatal_error(error, path//': cannot open ('//trim(msg)//')')
+         return
+      end if
+      inquire (unit=unit, size=nbytes)
+      allocate (character(len=max(nbytes, 0_int64)) :: text)
+      if (nbytes > 0) read (unit, iostat=ios, iomsg=msg) text
+      close (unit)
+      if (ios /= 0 .or. nbytes < 0) call fatal_error(error, path//': cannot read ('//trim(msg)//')')
+   end subroutine read_whole_file
+
    !> FNV-1a 64-bit hash of a file's bytes; ok false if it cannot be read
    subroutine file_hash(path, hash, ok)
       character(len=*), intent(in) :: path
       integer(int64), intent(out) :: hash
       logical, intent(out) :: ok
-      integer :: unit, ios
-      integer(int64) :: size_bytes
       character(len=:), allocatable :: bytes
+      type(error_type), allocatable :: error
       hash = 0
-      open (newunit=unit, file=path, status='old', action='read', access='stream', &
-            form='unformatted', iostat=ios)
-      ok = ios == 0
-      if (.not. ok) return
-      inquire (unit=unit, size=size_bytes)
-      allocate (character(len=max(0_int64, size_bytes)) :: bytes)
-      if (size_bytes > 0) read (unit, iostat=ios) bytes
-      close (unit)
-      ok = ios == 0
-      hash = hash_text(bytes)
+      call read_whole_file(path, bytes, error)
+      ok = .not. allocated(error)
+      if (ok) hash = hash_text(bytes)
    end subroutine file_hash
 
    !> FNV-1a 64-bit hash of a text. The product modulo 2**64 is formed on 32-bit halves, so
