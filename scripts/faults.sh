@@ -15,7 +15,7 @@ else
   exe=$(cd "$root" && realpath "$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)")
 fi
 tmp=$(mktemp -d)
-cleanup() { umount "$tmp/tiny" 2>/dev/null; rm -rf "$tmp"; }
+cleanup() { umount "$tmp/tiny" "$tmp/rofs" 2>/dev/null; rm -rf "$tmp"; }
 trap cleanup EXIT
 cd "$tmp"
 cp "$root/data/thesis/lcf.sim.txt" lcf.txt
@@ -162,6 +162,10 @@ if mkdir -p tiny && mount -t tmpfs -o size=64k tmpfs tiny 2>/dev/null; then
   put '... temporary or half-written files left' 0 "$(ls tiny/sim | grep -c '\.part$') *.part files"
 
   umount tiny
+  if mkdir -p rofs && mount -t tmpfs -o ro,size=64k tmpfs rofs 2>/dev/null; then
+    row 'output folder on a read-only file system' - u simulate fit.nml -o rofs/out
+    umount rofs
+  fi
 else
   row 'disk full (64 KiB tmpfs): not run, cannot mount here' - true
 fi
@@ -171,6 +175,8 @@ u run -q fit.nml -o r1 > /dev/null 2>&1
 row 'second run into a folder with a journal' - u run -q fit.nml -o r1
 row '... with `--force`' r1/best.nml u run -q --force fit.nml -o r1
 row '`--resume` of a finished run' r1/best.nml u run -q --resume fit.nml -o r1
+row '`simulate` into a fit'"'"'s folder' - u simulate fit.nml -o r1
+row '`predict` into a fit'"'"'s folder' - u predict fit.nml -c r1/best.nml -o r1
 row '`--resume` without a journal' - u run -q --resume fit.nml -o r-none
 cp lcf.txt lcf.orig; echo '# changed' >> lcf.txt
 row '`--resume` after a data file changed' - u run -q --resume fit.nml -o r1

@@ -50,6 +50,7 @@ contains
          new_unittest('data-not-covering-span-rejected', test_coverage), &
          new_unittest('data-unit-converted', test_units), &
          new_unittest('fit-aborts-after-failures-in-a-row', test_abort), &
+         new_unittest('repeated-times-told-in-summary', test_merged_told), &
          new_unittest('kill-9-then-resume-same-result', test_resume), &
          new_unittest('peaks-target-read-and-compared', test_peaks), &
          new_unittest('peaks-and-data-share-the-objective', test_peak_share), &
@@ -226,6 +227,30 @@ contains
       if (allocated(error)) return
       call check(error, index(uerr%message, 'fit aborted: 1 failed evaluations in a row') == 1, uerr%message)
    end subroutine test_abort
+
+   !> Data rows that repeat a time stamp are averaged as the data are read, and the summary
+   !> says how many (a logger's double rows change the data the fit sees)
+   subroutine test_merged_told(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      character(len=200), allocatable :: summary(:)
+      character(len=:), allocatable :: deck
+      integer :: stat
+      ! The thesis LCF data with its 10th and 20th lines written twice
+      call execute_command_line("mkdir -p "//scratch_dir//" && awk 'NR==10||NR==20{print} {print}' "// &
+         "data/thesis/lcf.sim.txt > "//scratch_dir//"/lcf-twice.txt", exitstat=stat)
+      call check(error, stat, 0, 'data with repeated rows written')
+      if (allocated(error)) return
+      deck = fit_deck('twice-rows.nml', 'max_evals=2', [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='lcf-twice.txt' /"])
+      call run_command(deck, scratch_dir//'/twice-rows-out', '', .false., summary, uerr, force=.true.)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call check(error, any(index(summary, 'test lcf: ') > 0 .and. &
+                 index(summary, 'rows repeating a time stamp of the data: 2,') > 0), 'the summary tells')
+   end subroutine test_merged_told
 
    !> kill -9 during a run, then --resume: the same logs and result as an uninterrupted run
    subroutine test_resume(error)

@@ -173,13 +173,17 @@ contains
    end subroutine test_journal_kept
 
    !> A run into a folder that holds a summary.txt no run made (no journal) is refused, the
-   !> file kept, unless --force; a prediction into a fit's folder is refused, its summary kept
+   !> file kept, unless --force; a prediction, a simulation or an identification into a fit's
+   !> folder is refused, the fit's files kept
    subroutine test_strangers_kept(error)
       use usharp_cmd_predict, only: predict_command
+      use usharp_cmd_simulate, only: simulate_command
+      use usharp_cmd_identify, only: identify_command
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=200), allocatable :: summary(:)
-      character(len=:), allocatable :: input, dir, fit_summary
+      character(len=4096), allocatable :: written(:)
+      character(len=:), allocatable :: input, dir, fit_summary, fit_curve
       input = deck('strangers.nml', 'max_evals=12', '')
       dir = scratch_dir//'/strangers-out'
       ! A folder of its own, as a user's: no journal from an earlier run of this test
@@ -203,6 +207,18 @@ contains
       call check_message(error, e, 'holds a fit (fit.journal)')
       if (allocated(error)) return
       call check(error, read_text(dir//'/summary.txt') == fit_summary, "the fit's summary is kept")
+      if (allocated(error)) return
+      ! Nor do simulate and identify write over the fit's curves and report
+      fit_curve = read_text(dir//'/lcf.sim.txt')
+      call simulate_command(input, dir, written, e)
+      call check_message(error, e, 'whose lcf.sim.txt simulate would replace')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'simulate: exit code 2')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/lcf.sim.txt') == fit_curve, "the fit's curve is kept")
+      if (allocated(error)) return
+      call identify_command(input, dir, '', summary, e)
+      call check_message(error, e, 'whose identify.txt identify would replace')
    end subroutine test_strangers_kept
 
    !> No run writes over its own inputs, --force or not: the constants given with -c that are

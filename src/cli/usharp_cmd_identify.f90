@@ -4,7 +4,7 @@ module usharp_cmd_identify
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as, check_inputs_kept
+   use usharp_input, only: read_config_as, check_inputs_kept, check_not_a_fit
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_filesys, only: make_dir, join_path
@@ -28,6 +28,8 @@ contains
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
       call check_inputs_kept(cfg, path, constants_file, ['identify.txt'], [character(len=1) ::], error)
+      if (.not. allocated(error)) call check_not_a_fit(cfg, 'identify', ['identify.txt'], &
+                                                       [character(len=1) ::], error)
       if (allocated(error)) return
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return

@@ -5,7 +5,7 @@ module usharp_cmd_predict
    use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
    use usharp_strings, only: real_str, pad
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as, check_inputs_kept
+   use usharp_input, only: read_config_as, check_inputs_kept, check_not_a_fit
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_lines
@@ -47,12 +47,9 @@ contains
                              [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
       if (allocated(error)) return
       ! A fit's folder: its summary and curves have the names of a prediction's
-      if (file_exists(join_path(cfg%out_dir, 'fit.journal'))) then
-         call fatal_error(error, cfg%out_dir//': holds a fit (fit.journal), whose summary.txt '// &
-            'and <test>.fit.txt a prediction would replace; give predict another output '// &
-            'folder (-o)', stat_usage)
-         return
-      end if
+      call check_not_a_fit(cfg, 'predict', ['summary.txt'], &
+                           [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
+      if (allocated(error)) return
       ! Nothing is fitted; the problem's set-up asks for one fitted constant, unused here
       if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.
       call setup_problem(cfg, prob, error)

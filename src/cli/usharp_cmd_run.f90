@@ -136,7 +136,7 @@ contains
             real_str(out%seconds, 'f10.2')//' s']
          do i = 1, size(cfg%tests)
             summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
-               real_str(out%per_test(i), 'es12.5')]
+               real_str(out%per_test(i), 'es12.5')//merged_note(prob%targets(i)%exp%nmerged)]
          end do
          summary = [character(len=200) :: summary, '  constant        start          fitted']
          do j = 1, size(start)
@@ -171,6 +171,16 @@ contains
             'identifiability report failed: '//report_error%message, stat_report)
       end subroutine locked_run
    end subroutine run_command
+
+   !> What a summary says of a test whose data repeat a time (a logger's two rows at one
+   !> time stamp, averaged into one as the data are read)
+   pure function merged_note(nmerged) result(note)
+      integer, intent(in) :: nmerged
+      character(len=:), allocatable :: note
+      note = ''
+      if (nmerged > 0) note = '  (rows repeating a time stamp of the data: '//str(nmerged)// &
+                              ', each averaged into the row of that time)'
+   end function merged_note
 
    !> The identifiability report at rank 0's optimum, its Jacobian's points split over the
    !> ranks (every rank calls this after the fit; nothing when the fit failed on any rank)

@@ -4,7 +4,7 @@ module usharp_cmd_simulate
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
-   use usharp_input, only: read_config, override_constants, check_inputs_kept
+   use usharp_input, only: read_config, override_constants, check_inputs_kept, check_not_a_fit
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test, add_stress_noise
    use usharp_history, only: control_strain
@@ -66,6 +66,17 @@ contains
             command = command//' --test '//only_test
          end if
       end if
+      ! Not over a fit's curves (the simulation at the deck's constants is not the fit's)
+      if (present(only_test)) then
+         if (len(only_test) > 0) then
+            call check_not_a_fit(cfg, 'simulate', [only_test//'.sim.txt'], [character(len=1) ::], error)
+         else
+            call check_not_a_fit(cfg, 'simulate', [character(len=1) ::], ['.sim.txt'], error)
+         end if
+      else
+         call check_not_a_fit(cfg, 'simulate', [character(len=1) ::], ['.sim.txt'], error)
+      end if
+      if (allocated(error)) return
       call make_dir(dir, error)
       if (allocated(error)) return
       do i = 1, size(cfg%tests)

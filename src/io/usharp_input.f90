@@ -4,9 +4,9 @@
 !> usharp_input_<group>). Every error names the file and the group and variable, or the line.
 module usharp_input
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, prefix_error, fatal_error
+   use usharp_error, only: error_type, prefix_error, fatal_error, stat_usage
    use usharp_strings, only: str, lower
-   use usharp_filesys, only: absolute_path, join_path
+   use usharp_filesys, only: absolute_path, join_path, file_exists
    use usharp_model, only: model_type, model_at
    use usharp_config, only: run_config
    use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path, string_value
@@ -21,7 +21,7 @@ module usharp_input
    private
 
    public :: read_config, read_config_as, override_constants, resolve_path, known_groups
-   public :: check_inputs_kept, output_names
+   public :: check_inputs_kept, check_not_a_fit, output_names
    public :: read_data_columns
 
    !> The groups of an input file; all but &test at most once
@@ -157,6 +157,31 @@ contains
          end do
       end do
    end subroutine check_inputs_kept
+
+   !> A command other than run does not write over a fit's results: in an output folder that
+   !> holds a fit (its fit.journal), a file the command writes that is there already (a
+   !> <test>.sim.txt of the fit, its identify.txt or summary.txt) is a usage error
+   subroutine check_not_a_fit(cfg, command, fixed, per_test, error)
+      type(run_config), intent(in) :: cfg
+      !> the command's name, for the message
+      character(len=*), intent(in) :: command
+      !> the files the command writes, as for check_inputs_kept
+      character(len=*), intent(in) :: fixed(:), per_test(:)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: outputs(:)
+      integer :: j
+      if (len_trim(cfg%out_dir) == 0) return
+      if (.not. file_exists(join_path(cfg%out_dir, 'fit.journal'))) return
+      outputs = output_names(cfg, fixed, per_test)
+      do j = 1, size(outputs)
+         if (file_exists(join_path(cfg%out_dir, trim(outputs(j))))) then
+            call fatal_error(error, cfg%out_dir//': holds a fit (fit.journal), whose '// &
+               trim(outputs(j))//' '//command//' would replace; give '//command// &
+               ' another output folder (-o)', stat_usage)
+            return
+         end if
+      end do
+   end subroutine check_not_a_fit
 
    !> The names of the files a command writes in its output folder: fixed, then for each test
    !> of cfg its name followed by each of per_test ('.sim.txt', ...)

@@ -305,18 +305,32 @@ contains
       integer :: k, stat
       type(raw_file) :: probe
       logical :: gone
+      character(len=:), allocatable :: why
+      integer(c_int), pointer :: errno
+      integer(c_int), parameter :: eexist = 17
+      why = ''
       do k = 2, len_trim(path) + 1
          if (k <= len_trim(path)) then
             if (path(k:k) /= '/') cycle
          end if
          stat = c_mkdir(path(:k - 1)//c_null_char, int(o'755', c_int))
+         if (stat /= 0) then
+            ! The first folder that could not be made, and why (not that it is there
+            ! already): the probe below would only find the output folder missing
+            call c_f_pointer(c_errno_location(), errno)
+            if (errno /= eexist .and. len(why) == 0) why = path(:k - 1)//': '//errno_text()
+         end if
       end do
       ! Prove the folder is writable by creating and deleting a file in it (the C library's
       ! reason when not: "Not a directory", "File name too long", ...)
       call probe%create(join_path(path, '.usharp-write-test'), error)
       if (allocated(error)) then
-         error%message = path//': output folder cannot be created or written ('// &
-            reason(error%message)//')'
+         if (len(why) > 0 .and. index(error%message, '(No such file or directory)') > 0) then
+            error%message = path//': output folder cannot be created or written ('//why//')'
+         else
+            error%message = path//': output folder cannot be created or written ('// &
+               reason(error%message)//')'
+         end if
          return
       end if
       call probe%close()
