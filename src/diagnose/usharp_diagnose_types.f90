@@ -45,7 +45,7 @@ module usharp_diagnose_types
    !> What one step of a diagnosis cost: simulations of the test set (deterministic) and
    !> time (for the log only)
    type :: step_cost
-      character(len=48) :: name = ''
+      character(len=128) :: name = ''
       integer :: nevals = 0
       real(dp) :: wall = 0.0_dp             !< s, elapsed
       real(dp) :: cpu = 0.0_dp              !< s, processor time of every thread

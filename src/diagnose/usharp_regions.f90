@@ -79,7 +79,7 @@ module usharp_regions
 
    !> Statistics of one region of the residual
    type :: region_stat
-      character(len=80) :: test = ''  !< the test's name, "(held out)" appended
+      character(len=256) :: test = '' !< the test's name, "(held out)" appended
       character(len=48) :: label = ''
       integer :: n = 0
       real(dp) :: ssr = 0.0_dp        !< its part of the objective
