@@ -34,6 +34,15 @@ module test_optimise
 
    real(dp), parameter :: tdata(6) = [0.0_dp, 0.5_dp, 1.0_dp, 2.0_dp, 3.0_dp, 5.0_dp]
 
+   !> Rosenbrock's curved valley as residuals (1 - x1, 10 (x2 - x1**2)): with x1 <= 0.5 the
+   !> least squares lie on the bound, at (0.5, 0.25), objective 0.25
+   type, extends(least_squares_type) :: valley
+   contains
+      procedure :: eval => valley_eval
+      procedure :: residuals => valley_residuals
+      procedure :: nres => valley_nres
+   end type valley
+
 contains
 
    subroutine collect_optimise(testsuite)
@@ -41,6 +50,7 @@ contains
       testsuite = [ &
          new_unittest('levenberg-marquardt-exact-fit', test_lm), &
          new_unittest('levenberg-marquardt-keeps-bounds', test_lm_bounds), &
+         new_unittest('levenberg-marquardt-along-a-bound', test_lm_held), &
          new_unittest('nelder-mead-rosenbrock', test_nm), &
          new_unittest('annealing-rosenbrock', test_sa), &
          new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
@@ -105,6 +115,58 @@ contains
       call check(error, opt%x(2) <= 0.5_dp .and. abs(opt%x(2) - 0.5_dp) < 1e-9_dp, &
                  'b stops at its upper bound 0.5')
    end subroutine test_lm_bounds
+
+   !> A valley that runs into a bound: the variable held at the bound, the other's step is
+   !> solved without it, and the search ends at the constrained least squares (a step solved
+   !> with both and cut back at the bound crept along it: 100 iterations, not converged)
+   subroutine test_lm_held(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(valley) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: e
+      call levenberg_marquardt(obj, [-1.2_dp, 1.0_dp], [-5.0_dp, -5.0_dp], [0.5_dp, 5.0_dp], &
+                               1.0e-7_dp, 1.0e-12_dp, 100, 10000, opt, e)
+      call check(error, .not. allocated(e), 'no error')
+      if (allocated(error)) return
+      call check(error, abs(opt%x(1) - 0.5_dp) < 1.0e-9_dp .and. abs(opt%x(2) - 0.25_dp) < 1.0e-6_dp, &
+                 'the constrained least squares (0.5, 0.25)')
+      if (allocated(error)) return
+      call check(error, abs(opt%f - 0.25_dp) < 1.0e-10_dp, 'objective 0.25')
+      if (allocated(error)) return
+      ! At the constrained least squares a further step cannot lower the objective: the
+      ! damping grows until the step vanishes
+      call check(error, opt%reason == 'relative decrease < eps' .or. opt%reason == 'step too small', &
+                 'converged, not '//trim(opt%reason))
+      if (allocated(error)) return
+      call check(error, opt%iterations <= 40, 'within 40 iterations')
+   end subroutine test_lm_held
+
+   pure integer function valley_nres(self)
+      class(valley), intent(in) :: self
+      valley_nres = 2
+   end function valley_nres
+
+   subroutine valley_residuals(self, xs, rs, fs, ok, error)
+      class(valley), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      real(dp), intent(out) :: rs(:, :), fs(:)
+      logical, intent(out) :: ok(:)
+      type(uerror), allocatable, intent(out) :: error
+      integer :: j
+      do j = 1, size(xs, 2)
+         rs(:, j) = [1.0_dp - xs(1, j), 10.0_dp*(xs(2, j) - xs(1, j)**2)]
+         fs(j) = sum(rs(:, j)**2)
+      end do
+      ok = .true.
+   end subroutine valley_residuals
+
+   subroutine valley_eval(self, x, f, error)
+      class(valley), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(uerror), allocatable, intent(out) :: error
+      f = (1.0_dp - x(1))**2 + 100.0_dp*(x(2) - x(1)**2)**2
+   end subroutine valley_eval
 
    subroutine test_nm(error)
       type(error_type), allocatable, intent(out) :: error

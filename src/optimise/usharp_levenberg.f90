@@ -1,7 +1,8 @@
-!> Levenberg-Marquardt on a least-squares objective, with bounds by projection. The Jacobian
-!> comes from forward differences whose points are evaluated as one batch (in parallel where
-!> the objective can). Damping after Marquardt (scaled by the diagonal of J'J) with Nielsen's
-!> update of the damping factor from the gain ratio.
+!> Levenberg-Marquardt on a least-squares objective, with bounds: a variable at a bound that
+!> the descent direction pushes outward is held there for the step, the step is projected
+!> onto the box. The Jacobian comes from forward differences whose points are evaluated as
+!> one batch (in parallel where the objective can). Damping after Marquardt (scaled by the
+!> diagonal of J'J) with Nielsen's update of the damping factor from the gain ratio.
 module usharp_levenberg
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
@@ -56,7 +57,7 @@ contains
       real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
       real(dp) :: x(size(x0)), xn(size(x0)), dx(size(x0)), g(size(x0)), a(size(x0), size(x0))
       real(dp) :: dmp(size(x0)), b(size(x0), 1), f, fn(1), lambda, nu, pred, gain, amax
-      logical :: ok(1), done, by_sens
+      logical :: ok(1), done, by_sens, held(size(x0))
       integer :: j
 
       n = size(x0)
@@ -108,6 +109,12 @@ contains
          do j = 1, n
             dmp(j) = max(a(j, j), 1.0e-12_dp*amax, tiny(1.0_dp))
          end do
+         ! A variable at a bound that the descent direction pushes outward is held there: the
+         ! step of the others is solved without it. (Solved with it and then cut back to the
+         ! bound, the others' step was made for a move it could not make, and the search crept
+         ! along the bound: on Alloy 617 a quarter of a diagnosis's 100-iteration refits ended
+         ! with the objective a hundredth of a percent below where it had been 50 before.)
+         held = (x <= lo .and. g > 0.0_dp) .or. (x >= hi .and. g < 0.0_dp)
          if (lambda < 0.0_dp) lambda = 1.0e-3_dp
          do
             if (nevals >= max_evals) then
@@ -116,7 +123,12 @@ contains
                exit
             end if
             b(:, 1) = -g
-            call solve_dense(a + lambda*diag(dmp), b, info)
+            if (any(held)) then
+               call solve_dense(held_system(a + lambda*diag(dmp), held), b, info)
+               where (held) b(:, 1) = 0.0_dp
+            else
+               call solve_dense(a + lambda*diag(dmp), b, info)
+            end if
             if (info /= 0) then
                lambda = lambda*nu
                nu = 2.0_dp*nu
@@ -161,6 +173,22 @@ contains
       opt%nevals = nevals
 
    contains
+
+      !> The damped system with the held variables' rows and columns replaced by the identity
+      !> (their step 0, with a right-hand side of 0 there)
+      pure function held_system(m, held) result(k)
+         real(dp), intent(in) :: m(:, :)
+         logical, intent(in) :: held(:)
+         real(dp) :: k(size(m, 1), size(m, 2))
+         integer :: i
+         k = m
+         do i = 1, size(held)
+            if (.not. held(i)) cycle
+            k(i, :) = 0.0_dp
+            k(:, i) = 0.0_dp
+            k(i, i) = 1.0_dp
+         end do
+      end function held_system
 
       pure function diag(v) result(d)
          real(dp), intent(in) :: v(:)
