@@ -34,6 +34,8 @@ contains
       character(len=:), allocatable :: dnames(:)
       real(dp), allocatable :: dvals(:)
       integer :: i, k
+      logical :: one_test
+      one_test = .false.
       allocate (written(0))
       call read_config(path, cfg, error)
       if (allocated(error)) return
@@ -64,15 +66,12 @@ contains
                return
             end if
             command = command//' --test '//only_test
+            one_test = .true.
          end if
       end if
       ! Not over a fit's curves (the simulation at the deck's constants is not the fit's)
-      if (present(only_test)) then
-         if (len(only_test) > 0) then
-            call check_not_a_fit(cfg, 'simulate', [only_test//'.sim.txt'], [character(len=1) ::], error)
-         else
-            call check_not_a_fit(cfg, 'simulate', [character(len=1) ::], ['.sim.txt'], error)
-         end if
+      if (one_test) then
+         call check_not_a_fit(cfg, 'simulate', [only_test//'.sim.txt'], [character(len=1) ::], error)
       else
          call check_not_a_fit(cfg, 'simulate', [character(len=1) ::], ['.sim.txt'], error)
       end if
