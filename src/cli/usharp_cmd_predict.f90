@@ -2,14 +2,14 @@
 !> it: each test's error figures, the same curves as a fit writes and a summary
 module usharp_cmd_predict
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
+   use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: real_str, pad
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, check_not_a_fit
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_lines
-   use usharp_filesys, only: make_dir, join_path, file_exists
+   use usharp_filesys, only: make_dir, join_path
    use usharp_cmd_run, only: write_curves
    implicit none
    private
