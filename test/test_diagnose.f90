@@ -28,11 +28,14 @@ module test_diagnose
    use usharp_diagnose_refit, only: judge, ratio_beyond_doubt
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
-   use usharp_diagnose_numerics, only: best_of_starts, global_points
+   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax
+   use usharp_diagnose_units, only: lm_unit, starts_unit
+   use usharp_diagnose_memo, only: run_memo
+   use usharp_diagnose_journal, only: diagnose_journal
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_optimiser, only: optimum_type
    use omp_lib, only: omp_set_num_threads, omp_get_max_threads
-   use test_util, only: write_text, check_message
+   use test_util, only: write_text, check_message, scratch_dir
    implicit none
    private
    public :: collect_diagnose, model_groups, small_matrix
@@ -72,6 +75,7 @@ contains
          new_unittest('baseline-ignores-held-out-data', test_held_out_unused), &
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('starts-on-threads-as-one-after-the-other', test_starts_threads), &
+         new_unittest('runs-made-before-are-not-made-again', test_memo), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
@@ -493,6 +497,102 @@ contains
       call check(error, nevals(1) == nevals(2) .and. ep(1)%nevals == ep(2)%nevals .and. nevals(1) > 0, &
                  'simulations counted differently on two threads')
    end subroutine test_starts_threads
+
+   !> A Levenberg-Marquardt run asked for again takes the outcome it had, bit for bit, and
+   !> simulates nothing: starts 1-2, then 2-4, give for 2-4 what best_of_starts gives alone,
+   !> with the simulations of starts 3-4 only; a run of another problem is made. Journaled and
+   !> then replayed with a new memo, the same calls give the same outcomes and counts, and
+   !> start 1 again simulates nothing (the replayed units fill the memo as computed ones do).
+   subroutine test_memo(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_problem) :: ep, ep2
+      type(optimum_type) :: ref, opt, single, first(2)
+      type(run_memo), target :: memo, memo2
+      type(run_memo), pointer :: mp
+      type(diagnose_journal), target :: jfile(2)
+      type(diagnose_journal), pointer :: jr
+      real(dp), allocatable :: xs(:, :), lo(:), hi(:), fref(:), f(:)
+      integer :: nev, n0, sims34, pass, d12(2)
+      character(len=*), parameter :: journal = scratch_dir//'/diag-memo.journal'
+      call write_relaxation_data('memo.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text('diag-memo.nml', [character(len=100) :: &
+         model_groups, "&fit fitted = 'B', 'n', 'A1', method = 'lm' /", "&diagnose holdout = 'held' /", &
+         "&test name = 'fit', history = 'relaxation', data_file = 'memo.txt' /", &
+         "&test name = 'held', history = 'relaxation', data_file = 'memo.txt' /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call check(error, .not. allocated(e), 'baseline failed')
+      if (allocated(error)) return
+      xs = global_points(cfg, ctx%prob, 4)
+      call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep)
+      call ep%bounds(lo, hi)
+      ! Without a memo: starts 2-4, and 3-4 alone
+      allocate (fref(3))
+      nev = 0
+      call best_of_starts(ep, xs(:, 2:4), lo, hi, ctx%h, 400, ref, nev, fref)
+      n0 = ep%nevals
+      nev = 0
+      call best_of_starts(ep, xs(:, 3:4), lo, hi, ctx%h, 400, single, nev)
+      sims34 = ep%nevals - n0
+      do pass = 1, 2
+         ! pass 1 computes into a journal, pass 2 replays it with a new memo
+         if (pass == 1) then
+            call execute_command_line('rm -f '//journal)
+            call jfile(1)%open(journal, 'memo test', 'start', e)
+            mp => memo
+         else
+            call jfile(2)%open(journal, 'memo test', 'resume', e)
+            mp => memo2
+         end if
+         call check(error, .not. allocated(e), 'journal')
+         if (allocated(error)) return
+         jr => jfile(pass)
+         n0 = ep%nevals
+         nev = 0
+         call starts_unit(jr, ep, xs(:, 1:2), lo, hi, ctx%h, 400, first(pass), nev, e, memo=mp)
+         call check(error, .not. allocated(e), 'starts 1-2')
+         if (allocated(error)) return
+         ! (a replayed unit counts the simulations it had)
+         d12(pass) = ep%nevals - n0
+         n0 = ep%nevals
+         nev = 0
+         allocate (f(3))
+         call starts_unit(jr, ep, xs(:, 2:4), lo, hi, ctx%h, 400, opt, nev, e, f, memo=mp)
+         call check(error, .not. allocated(e), 'starts 2-4')
+         if (allocated(error)) return
+         call check(error, opt%f == ref%f .and. all(opt%x == ref%x) .and. all(f == fref), &
+                    'starts 2-4 with start 2 from the memo end elsewhere: '//real_str(opt%f, 'es23.16')// &
+                    ' against '//real_str(ref%f, 'es23.16'))
+         if (allocated(error)) return
+         call check(error, ep%nevals - n0 == sims34, 'starts 2-4 after 1-2 simulated '// &
+                    real_str(real(ep%nevals - n0, dp), 'f8.0')//' times, starts 3-4 alone '// &
+                    real_str(real(sims34, dp), 'f8.0'))
+         if (allocated(error)) return
+         deallocate (f)
+         ! Start 1 again as a run of its own: from the memo, no simulation
+         n0 = ep%nevals
+         call lm_unit(jr, ep, xs(:, 1), lo, hi, ctx%h, lm_ftol, lm_itermax, 400, opt, e, memo=mp)
+         call check(error, .not. allocated(e) .and. ep%nevals == n0 .and. opt%nevals == 0, &
+                    'start 1 again was simulated')
+         if (allocated(error)) return
+         call jfile(pass)%close(e)
+      end do
+      call check(error, first(1)%f == first(2)%f .and. all(first(1)%x == first(2)%x) .and. &
+                 d12(1) == d12(2) .and. d12(1) > 0, 'the replay ended elsewhere')
+      if (allocated(error)) return
+      ! Another problem (every test): made, not taken
+      call new_effect_problem(ctx%prob, [1, 2], 0, ctx%eff_base, ctx%peak, ep2)
+      n0 = ep2%nevals
+      jr => null()
+      call lm_unit(jr, ep2, xs(:, 1), lo, hi, ctx%h, lm_ftol, lm_itermax, 400, opt, e, memo=mp)
+      call check(error, .not. allocated(e) .and. ep2%nevals > n0, 'a run of another problem was taken from the memo')
+      call execute_command_line('rm -f '//journal)
+   end subroutine test_memo
 
    !> The constants given are only a start: from B three times too high (an unconverged fit)
    !> the baseline comes back to the B the data were made with

@@ -52,12 +52,14 @@ contains
       dir = join_path(cfg%out_dir, 'diagnose')
       call make_dir(dir, error)
       if (allocated(error)) return
+      ! The journal's own format joins the fingerprint: a journal of another layout of the
+      ! diagnosis's units is refused rather than misread
       if (present(mode)) then
-         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file), &
-                           mode, error)
+         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
+                           ' units=2', mode, error)
       else
-         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file), &
-                           'start', error)
+         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
+                           ' units=2', 'start', error)
       end if
       if (allocated(error)) return
       call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)

@@ -45,6 +45,7 @@ module usharp_diagnose
    use usharp_diagnose_report, only: diagnose_report, write_report
    use usharp_diagnose_profile, only: profile_leading
    use usharp_diagnose_journal, only: diagnose_journal
+   use usharp_diagnose_memo, only: run_memo
    implicit none
    private
 
@@ -71,12 +72,13 @@ contains
       procedure(diagnose_progress), optional :: progress
       type(diagnose_journal), intent(inout), target, optional :: journal
       type(diagnose_context) :: ctx
-      call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal)
+      type(run_memo), target :: memo
+      call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
       if (allocated(error)) return
       call diagnose_effects(ctx, res, error)
       if (allocated(error)) return
       if (joint_wanted(res, opts%joint)) then
-         call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal)
+         call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
          if (allocated(error)) return
       end if
       call tell(ctx, 'done', res%nevals)
@@ -191,7 +193,7 @@ contains
    !> test fitted, from the baseline's constants; its verdict becomes this one's, worded for
    !> the weaker evidence (an effect found so was fitted to the tests it explains, not
    !> predicted), and its simulations and steps count in this one's
-   subroutine joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal)
+   subroutine joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(diagnose_context), intent(in) :: ctx
@@ -200,6 +202,7 @@ contains
       type(experiment_type), intent(in), optional :: experiments(:)
       procedure(diagnose_progress), optional :: progress
       type(diagnose_journal), intent(inout), target, optional :: journal
+      type(run_memo), intent(inout), target :: memo
       type(run_config) :: jcfg
       type(diagnose_options) :: jopts
       type(diagnose_context) :: jctx
@@ -215,7 +218,7 @@ contains
       jcfg%diagnose%holdout = .false.
       jopts = opts
       jopts%joint = .true.
-      call diagnose_baseline(jcfg, jopts, jctx, jres, error, experiments, progress, journal)
+      call diagnose_baseline(jcfg, jopts, jctx, jres, error, experiments, progress, journal, memo)
       if (allocated(error)) return
       jctx%clock0 = ctx%clock0
       call diagnose_effects(jctx, jres, error)
@@ -252,7 +255,7 @@ contains
    !> The first step of a diagnosis: the baseline fitted to the fit tests alone (the held-out
    !> tests' data are not read before it is fitted: only their prediction follows), its
    !> regions and floors; ctx is what the later steps work on
-   subroutine diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal)
+   subroutine diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(diagnose_context), intent(out) :: ctx
@@ -262,6 +265,8 @@ contains
       procedure(diagnose_progress), optional :: progress
       !> See diagnose_run
       type(diagnose_journal), intent(inout), target, optional :: journal
+      !> The runs made so far, which it adds to (absent: each run is made)
+      type(run_memo), intent(inout), target, optional :: memo
       integer(int64) :: clock0
       call system_clock(clock0)
       call step_done(res, '')
@@ -272,6 +277,7 @@ contains
       ctx%clock0 = clock0
       if (present(progress)) ctx%progress => progress
       if (present(journal)) ctx%journal => journal
+      if (present(memo)) ctx%memo => memo
       call tell(ctx, 'baseline fit', res%nevals)
       call fit_baseline(ctx, res, error)
       if (allocated(error)) return

@@ -14,7 +14,7 @@ module usharp_diagnose_baseline
    use usharp_diagnose_options, only: gap_z
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
    use usharp_diagnose_units, only: lm_unit, starts_unit
-   use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, &
+   use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, lm_ftol, lm_itermax, &
                                        jacobian, pseudo_inverse, test_sizes, block_sums
    implicit none
    private
@@ -36,8 +36,8 @@ contains
       integer :: i
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
       call base%bounds(lo, hi)
-      call lm_unit(ctx%journal, base, min(max(base%start(), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, 100, &
-                   ctx%opts%max_evals, opt, error)
+      call lm_unit(ctx%journal, base, min(max(base%start(), lo), hi), lo, hi, ctx%h, lm_ftol, lm_itermax, &
+                   ctx%opts%max_evals, opt, error, memo=ctx%memo)
       if (allocated(error)) return
       res%nevals = res%nevals + opt%nevals
       res%baseline_starts = 1 + max(ctx%prob%cfg%fit%multistart, 0)
@@ -46,7 +46,7 @@ contains
          call tell(ctx, 'baseline fit from '//str(res%baseline_starts)//' starts', res%nevals)
          call starts_unit(ctx%journal, base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
                           lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, error, &
-                          over_ranks=ctx%opts%over_ranks)
+                          over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
          if (allocated(error)) return
       end if
       ! Global starts come later, only when the local refits leave a structured gap

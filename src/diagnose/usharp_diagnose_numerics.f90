@@ -23,7 +23,8 @@ module usharp_diagnose_numerics
    implicit none
    private
 
-   public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts, global_points
+   public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts
+   public :: take_starts, global_points, lm_ftol, lm_itermax
    public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
 
@@ -31,6 +32,11 @@ module usharp_diagnose_numerics
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
    !> accumulated inelastic strain
    real(dp), parameter :: soften_rate0 = 100.0_dp
+
+
+   !> Levenberg-Marquardt's settings for a refit's runs: ftol, and most Jacobians
+   real(dp), parameter :: lm_ftol = 1.0e-9_dp
+   integer, parameter :: lm_itermax = 100
 
 contains
 
@@ -354,7 +360,7 @@ contains
    !> Levenberg-Marquardt (100 steps) from every column of xs; opt becomes the lowest end
    !> point when it is lower than opt already is. A start where the model fails is passed
    !> over (its fs: huge).
-   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals, fs, over_ranks)
+   subroutine best_of_starts(ep, xs, lo, hi, h, max_evals, opt, nevals, fs, over_ranks, each, ran_ok)
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: xs(:, :), lo(:), hi(:), h
       integer, intent(in) :: max_evals
@@ -365,6 +371,9 @@ contains
       !> Spread the starts over the MPI ranks (every rank calls this with the same starts);
       !> the outcome is that of one process
       logical, intent(in), optional :: over_ranks
+      !> Each start's outcome, and whether it ran to an outcome (false: passed over)
+      type(optimum_type), intent(out), optional :: each(:)
+      logical, intent(out), optional :: ran_ok(:)
       type(optimum_type), allocatable :: alts(:)
       type(effect_problem), allocatable :: eps(:)
       type(error_type), allocatable :: error
@@ -404,7 +413,7 @@ contains
             j = deal%take()
             if (j == 0) exit
             ran(j) = .true.
-            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
+            call levenberg_marquardt(ep, min(max(xs(:, j), lo), hi), lo, hi, h, lm_ftol, lm_itermax, &
                                      max_evals, alts(j), error)
             if (allocated(error)) then
                deallocate (error)
@@ -421,13 +430,9 @@ contains
          end do
          ep%nevals = n0 + sum_over_ranks(ep%nevals - n0)
       end if
-      ! In the order of the starts, as one process takes them
-      do j = 1, size(xs, 2)
-         if (.not. ok(j)) cycle
-         nevals = nevals + alts(j)%nevals
-         if (present(fs)) fs(j) = alts(j)%f
-         if (alts(j)%f < opt%f) opt = alts(j)
-      end do
+      call take_starts(alts, ok, opt, nevals, fs)
+      if (present(each)) each = alts
+      if (present(ran_ok)) ran_ok = ok
 
    contains
 
@@ -436,11 +441,29 @@ contains
          integer, intent(in) :: j
          type(error_type), allocatable :: err
          eps(j) = ep
-         call levenberg_marquardt(eps(j), min(max(xs(:, j), lo), hi), lo, hi, h, 1.0e-9_dp, 100, &
+         call levenberg_marquardt(eps(j), min(max(xs(:, j), lo), hi), lo, hi, h, lm_ftol, lm_itermax, &
                                   max_evals, alts(j), err)
          ok(j) = .not. allocated(err)
       end subroutine one_start
    end subroutine best_of_starts
+
+   !> The starts' outcomes alts (those with ok) in their order, as one process takes them:
+   !> opt becomes the lowest when lower than it is; their evaluations added to nevals, their
+   !> objectives in fs
+   pure subroutine take_starts(alts, ok, opt, nevals, fs)
+      type(optimum_type), intent(in) :: alts(:)
+      logical, intent(in) :: ok(:)
+      type(optimum_type), intent(inout) :: opt
+      integer, intent(inout) :: nevals
+      real(dp), intent(inout), optional :: fs(:)
+      integer :: j
+      do j = 1, size(alts)
+         if (.not. ok(j)) cycle
+         nevals = nevals + alts(j)%nevals
+         if (present(fs)) fs(j) = alts(j)%f
+         if (alts(j)%f < opt%f) opt = alts(j)
+      end do
+   end subroutine take_starts
 
    !> A start's outcome from the rank that ran it to every rank
    subroutine share_optimum(o, ok, from)

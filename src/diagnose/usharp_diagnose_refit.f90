@@ -16,7 +16,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most
-   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, &
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, softening_reached, &
                                        block_sums, deviance_change
    use usharp_diagnose_baseline, only: per_test, all_regions
@@ -90,7 +90,7 @@ contains
       opt%f = res%f0
       opt%x = log10(res%c)
       call starts_unit(ctx%journal, base, res%x_global, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
-                       error, over_ranks=ctx%opts%over_ranks)
+                       error, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
       if (allocated(error)) return
       res%f0_global = opt%f
       ! Its sums per test, the reference of the tests' own variances in BIC
@@ -215,20 +215,21 @@ contains
       if (e%refitted .and. present(starts)) then
          ! Its own end point, continued (on real data 100 LM steps can stop short: Alloy
          ! 617's initial refit went on from 278 to 198), stands unless one is lower
-         call lm_unit(ctx%journal, ep, e%x_fit, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, &
-                      opt, error)
+         call lm_unit(ctx%journal, ep, e%x_fit, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, &
+                      opt, error, memo=ctx%memo)
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
          allocate (fs(size(starts, 2)))
          call starts_unit(ctx%journal, ep, with_params(e, starts), lo, hi, ctx%h, ctx%opts%max_evals, opt, &
-                          e%nevals, error, fs, ctx%opts%over_ranks)
+                          e%nevals, error, fs, ctx%opts%over_ranks, memo=ctx%memo)
          if (allocated(error)) return
          e%nstarts = e%nstarts + size(fs)
          e%f_lo = min(e%f_lo, opt%f)
          e%f_hi = max(e%f_hi, maxval(fs, fs < huge(1.0_dp)), opt%f)
          moved = opt%f < (1.0_dp - 1.0e-6_dp)*e%f_after
       else
-         call lm_unit(ctx%journal, ep, e%x, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)
+         call lm_unit(ctx%journal, ep, e%x, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, opt, &
+                      error, memo=ctx%memo)
          if (allocated(error)) return
          e%nevals = opt%nevals
          e%nstarts = 1
@@ -239,11 +240,11 @@ contains
          if (allocated(e%x_alt)) then
             call starts_unit(ctx%journal, ep, e%x_alt(:, :min(ctx%opts%refit_starts - 1, size(e%x_alt, 2))), &
                              lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals, error, &
-                             over_ranks=ctx%opts%over_ranks)
+                             over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
             if (allocated(error)) return
          end if
          call starts_unit(ctx%journal, ep, with_params(e, res%x_global), lo, hi, ctx%h, ctx%opts%max_evals, &
-                          opt, e%nevals, error, over_ranks=ctx%opts%over_ranks)
+                          opt, e%nevals, error, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
       end if
    end subroutine fit_constants
 
@@ -419,7 +420,8 @@ contains
       e%held_fitted = size(x0) > 0
       if (size(x0) > 0) then
          call eh%bounds(lo, hi)
-         call lm_unit(ctx%journal, eh, x0, lo, hi, ctx%h, 1.0e-9_dp, 100, ctx%opts%max_evals, opt, error)
+         call lm_unit(ctx%journal, eh, x0, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, opt, &
+                      error, memo=ctx%memo)
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
          x0 = opt%x

@@ -133,14 +133,14 @@ contains
          if (j == 1 .and. complete .and. size(xs, 1) == size(x) .and. size(je, 2) == size(x)) then
             if (all(min(max(xs(:, 1), lo), hi) == x)) then
                call lm_unit(ctx%journal, ep, x, lo, hi, ctx%h, 1.0e-9_dp, 3, ctx%opts%max_evals, opt, &
-                            error, jac0=je)
+                            error, jac0=je, memo=ctx%memo)
             else
                call lm_unit(ctx%journal, ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
-                            merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+                            merge(3, 5, j == 1), ctx%opts%max_evals, opt, error, memo=ctx%memo)
             end if
          else
             call lm_unit(ctx%journal, ep, min(max(xs(:, j), lo), hi), lo, hi, ctx%h, 1.0e-9_dp, &
-                         merge(3, 5, j == 1), ctx%opts%max_evals, opt, error)
+                         merge(3, 5, j == 1), ctx%opts%max_evals, opt, error, memo=ctx%memo)
          end if
          if (allocated(error)) then
             ! A start where the model fails is passed over; the zero start must work (and a

@@ -8,6 +8,7 @@ module usharp_diagnose_types
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: diagnose_options, bic_margin
    use usharp_diagnose_journal, only: diagnose_journal
+   use usharp_diagnose_memo, only: run_memo
    implicit none
    private
 
@@ -67,6 +68,8 @@ module usharp_diagnose_types
       integer(int64) :: clock0 = 0           !< system clock at the start
       !> The journal its units are kept in and replayed from (null: none)
       type(diagnose_journal), pointer :: journal => null()
+      !> The Levenberg-Marquardt runs made so far (null: each run is made)
+      type(run_memo), pointer :: memo => null()
    end type diagnose_context
 
    !> One effect: screening, and the refit when it led
