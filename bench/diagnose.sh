@@ -54,7 +54,8 @@ for f in "$tmp"/*/diagnose/steps.csv; do
   [ -f "$f" ] || continue
   echo
   echo "$(basename "$(dirname "$(dirname "$f")")"): steps (simulations, wall s, cpu s)"
-  column -s, -t < "$f"
+  python3 -c 'import csv, sys
+for r in csv.reader(open(sys.argv[1])): print("%-56s %11s %8s %8s" % tuple(r))' "$f"
 done
 if [ $selfcheck = yes ]; then
   l0=$(load)

@@ -458,23 +458,13 @@ contains
    !> the other on one thread, bit for bit, with the same simulations counted
    subroutine test_starts_threads(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
       type(run_config) :: cfg
-      type(diagnose_options) :: opts
       type(diagnose_context) :: ctx
-      type(diagnose_result) :: res
       type(effect_problem) :: ep(2)
       type(optimum_type) :: opt(2)
       real(dp), allocatable :: xs(:, :), lo(:), hi(:), fs(:, :)
       integer :: nevals(2), k, nthreads
-      call write_relaxation_data('fit.txt', 1.0_dp, e)
-      if (.not. allocated(e)) call read_config(write_text('diag-starts.nml', [character(len=100) :: &
-         model_groups, "&fit fitted = 'B', 'n', 'A1', method = 'lm' /", "&diagnose holdout = 'held' /", &
-         "&test name = 'fit', history = 'relaxation', data_file = 'fit.txt' /", &
-         "&test name = 'held', history = 'relaxation', data_file = 'fit.txt' /"]), cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
-      call check(error, .not. allocated(e), 'baseline failed')
+      call relaxation_baseline('diag-starts', cfg, ctx, error)
       if (allocated(error)) return
       xs = global_points(cfg, ctx%prob, 4)
       allocate (fs(size(xs, 2), 2))
@@ -498,6 +488,26 @@ contains
                  'simulations counted differently on two threads')
    end subroutine test_starts_threads
 
+   !> The baseline of B, n and A1 fitted to a relaxation test (name.txt), another held out
+   !> (the same data), from the deck name.nml
+   subroutine relaxation_baseline(name, cfg, ctx, error)
+      character(len=*), intent(in) :: name
+      type(run_config), intent(out) :: cfg
+      type(diagnose_context), intent(out) :: ctx
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(diagnose_options) :: opts
+      type(diagnose_result) :: res
+      call write_relaxation_data(name//'.txt', 1.0_dp, e)
+      if (.not. allocated(e)) call read_config(write_text(name//'.nml', [character(len=100) :: &
+         model_groups, "&fit fitted = 'B', 'n', 'A1', method = 'lm' /", "&diagnose holdout = 'held' /", &
+         "&test name = 'fit', history = 'relaxation', data_file = '"//name//".txt' /", &
+         "&test name = 'held', history = 'relaxation', data_file = '"//name//".txt' /"]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      call check(error, .not. allocated(e), 'baseline failed')
+   end subroutine relaxation_baseline
+
    !> A Levenberg-Marquardt run asked for again takes the outcome it had, bit for bit, and
    !> simulates nothing: starts 1-2, then 2-4, give for 2-4 what best_of_starts gives alone,
    !> with the simulations of starts 3-4 only; a run of another problem is made. Journaled and
@@ -507,9 +517,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       type(run_config) :: cfg
-      type(diagnose_options) :: opts
       type(diagnose_context) :: ctx
-      type(diagnose_result) :: res
       type(effect_problem) :: ep, ep2
       type(optimum_type) :: ref, opt, single, first(2)
       type(run_memo), target :: memo, memo2
@@ -519,14 +527,7 @@ contains
       real(dp), allocatable :: xs(:, :), lo(:), hi(:), fref(:), f(:)
       integer :: nev, n0, sims34, pass, d12(2)
       character(len=*), parameter :: journal = scratch_dir//'/diag-memo.journal'
-      call write_relaxation_data('memo.txt', 1.0_dp, e)
-      if (.not. allocated(e)) call read_config(write_text('diag-memo.nml', [character(len=100) :: &
-         model_groups, "&fit fitted = 'B', 'n', 'A1', method = 'lm' /", "&diagnose holdout = 'held' /", &
-         "&test name = 'fit', history = 'relaxation', data_file = 'memo.txt' /", &
-         "&test name = 'held', history = 'relaxation', data_file = 'memo.txt' /"]), cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
-      call check(error, .not. allocated(e), 'baseline failed')
+      call relaxation_baseline('diag-memo', cfg, ctx, error)
       if (allocated(error)) return
       xs = global_points(cfg, ctx%prob, 4)
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep)

@@ -4,6 +4,7 @@ module test_table
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_table, only: read_columns, merge_repeated_times
+   use usharp_strings, only: csv_field, split_fields
    use test_util, only: write_text, check_message
    implicit none
    private
@@ -23,8 +24,24 @@ contains
          new_unittest('bad-tables-rejected', test_bad), &
          new_unittest('repeated-times-merged', test_merge), &
          new_unittest('long-line-and-no-final-newline', test_long_line), &
-         new_unittest('real-a617-files-load', test_realdata)]
+         new_unittest('real-a617-files-load', test_realdata), &
+         new_unittest('csv-field-written-and-read-back', test_csv_field)]
    end subroutine collect_table
+
+   !> A field of the tables usharp writes, quoted when needed (a name with a comma would
+   !> otherwise make a row of steps.csv five fields), reads back as one field, whole; a plain
+   !> one stays bare
+   subroutine test_csv_field(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=64) :: fields(4)
+      integer :: n
+      call split_fields('x,'//csv_field('setup (data, problem)')//',3', fields, n)
+      call check(error, n == 3 .and. fields(2) == 'setup (data, problem)' .and. fields(3) == '3', &
+                 'the quoted field did not read back: '//csv_field('setup (data, problem)'))
+      if (allocated(error)) return
+      call check(error, csv_field('baseline') == 'baseline' .and. csv_field('a "b"') == '"a ""b"""', &
+                 'plain or quoted field written wrongly')
+   end subroutine test_csv_field
 
    subroutine test_csv(error)
       type(error_type), allocatable, intent(out) :: error

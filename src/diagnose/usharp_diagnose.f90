@@ -272,7 +272,7 @@ contains
       call step_done(res, '')
       call prepare(cfg, opts, ctx, res, error, experiments)
       if (allocated(error)) return
-      call step_done(res, 'setup (data, problem)')
+      call step_done(res, 'setup: data and problem')
       ! after prepare, which makes ctx anew
       ctx%clock0 = clock0
       if (present(progress)) ctx%progress => progress

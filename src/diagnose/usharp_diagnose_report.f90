@@ -3,7 +3,7 @@
 module usharp_diagnose_report
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_strings, only: str, real_str, gnuplot_string
+   use usharp_strings, only: str, real_str, gnuplot_string, csv_field
    use usharp_process, only: run_process, process_result, proc_exited
    use usharp_regions, only: class_names
    use usharp_filesys, only: join_path, make_dir
@@ -64,7 +64,7 @@ contains
       if (.not. allocated(res%steps)) return
       do j = 1, size(res%steps)
          associate (st => res%steps(j))
-            call add(lines, trim(st%name)//','//str(st%nevals)//','//real_str(st%wall, 'f0.2')//','// &
+            call add(lines, csv_field(trim(st%name))//','//str(st%nevals)//','//real_str(st%wall, 'f0.2')//','// &
                      real_str(st%cpu, 'f0.2'))
          end associate
       end do
@@ -455,13 +455,16 @@ contains
       character(len=*), intent(in) :: dir
       type(diagnose_result), intent(in) :: res
       type(error_type), allocatable, intent(out) :: error
-      character(len=200), allocatable :: rows(:)
+      ! (long enough for a test name of its greatest length, quoted, and the numbers)
+      integer, parameter :: row_len = 600
+      character(len=row_len), allocatable :: rows(:)
       integer :: i, j, lead
       allocate (rows(0))
-      rows = [character(len=200) :: rows, 'test,region,points,objective,noise_part,structured_gap,rms,bias,runs_z,structured']
+      rows = [character(len=row_len) :: rows, 'test,region,points,objective,noise_part,structured_gap,rms,bias,runs_z,structured']
       do i = 1, size(res%regions)
          associate (r => res%regions(i))
-            rows = [character(len=200) :: rows, trim(r%test)//','//trim(r%label)//','//str(r%n)//','// &
+            rows = [character(len=row_len) :: rows, csv_field(trim(r%test))//','//csv_field(trim(r%label))//','// &
+               str(r%n)//','// &
                real_str(r%ssr, 'es12.5')//','//real_str(r%noise, 'es12.5')//','//real_str(r%gap, 'es12.5')// &
                ','//real_str(r%rms, 'es12.5')//','//real_str(r%bias, 'es12.5')//','//real_str(r%z, 'f0.2')// &
                ','//trim(merge('yes', 'no ', r%structured))]
@@ -471,12 +474,12 @@ contains
       if (allocated(error)) return
       deallocate (rows)
       allocate (rows(0))
-      rows = [character(len=200) :: rows, 'rank,effect,parameters,predicted_fall,predicted_dbic,refitted,'// &
+      rows = [character(len=row_len) :: rows, 'rank,effect,parameters,predicted_fall,predicted_dbic,refitted,'// &
               'objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed,'// &
               'chi_square_low_end,power_low_end']
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
-            rows = [character(len=200) :: rows, str(j)//','//trim(e%name)//','//str(e%q)//','// &
+            rows = [character(len=row_len) :: rows, str(j)//','//csv_field(trim(e%name))//','//str(e%q)//','// &
                real_str(e%pred_drop, 'es12.5')//','//real_str(e%pred_dbic, 'f0.2')//','// &
                trim(merge('yes', 'no ', e%refitted))//','//real_str(e%f_after, 'es12.5')//','// &
                real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
@@ -498,7 +501,7 @@ contains
       allocate (rows(size(res%t) + 1))
       rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id,cycle,inelastic'
       do i = 1, size(res%t)
-         rows(i + 1) = trim(res%names(res%test_of(i)))//','// &
+         rows(i + 1) = csv_field(trim(res%names(res%test_of(i))))//','// &
             trim(merge('yes', 'no ', res%held(res%test_of(i))))//','//real_str(res%t(i), 'es14.7')//','// &
             trim(class_names(res%cls(i)))//','//real_str(res%y_ex(i), 'es14.7')//','// &
             real_str(res%y_base(i), 'es14.7')//','//real_str(effect_curve(i), 'es14.7')//','// &

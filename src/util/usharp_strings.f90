@@ -4,7 +4,7 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad
+   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field
 
    !> Text form of a number
    interface str
@@ -136,6 +136,24 @@ contains
       character(len=:), allocatable :: quoted
       quoted = single_quoted(text, "''")
    end function gnuplot_string
+
+   !> A text as one field of a CSV row (RFC 4180): as it is, or in double quotes with each
+   !> quote doubled when it holds a comma, a quote or a line break (split_fields reads it back)
+   pure function csv_field(text) result(field)
+      character(len=*), intent(in) :: text
+      character(len=:), allocatable :: field
+      integer :: i
+      if (scan(text, ',"'//new_line('a')//achar(13)) == 0) then
+         field = text
+         return
+      end if
+      field = '"'
+      do i = 1, len(text)
+         field = field//text(i:i)
+         if (text(i:i) == '"') field = field//'"'
+      end do
+      field = field//'"'
+   end function csv_field
 
    !> name blank-padded to width w (a longer name whole): a table's left-aligned column
    pure function pad(name, w) result(padded)
