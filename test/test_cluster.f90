@@ -443,7 +443,7 @@ contains
    subroutine test_diagnose_changed(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=:), allocatable :: exe, deck, b, data, log
+      character(len=:), allocatable :: exe, deck, b, data, log, j
       integer :: stat
       character(len=4096) :: cwd
       call require_exe(exe, error)
@@ -460,12 +460,22 @@ contains
       call stop_diagnosis(exe//' diagnose -q -o '//b//' '//deck, b, 3)
       call check(error, number_in(b//'.rc') == 143, 'not stopped by TERM: '//read_text(b//'.log'))
       if (allocated(error)) return
+      ! A journal of another layout of the units (its fingerprint without this layout's tag)
+      j = b//'/diagnose/diagnose.journal'
+      call execute_command_line('cp '//j//' '//j//'.kept; sed -i ''1s/ units=[0-9]*//'' '//j)
+      call execute_command_line(exe//' diagnose -q --resume -o '//b//' '//deck//' > /dev/null 2> '// &
+                                b//'.log2', exitstat=stat)
+      call execute_command_line('mv '//j//'.kept '//j)
+      log = read_text(b//'.log2')
+      call check(error, stat == 1 .and. index(log, "cannot resume: the layout of the journal's units changed") > 0, &
+                 'journal of another layout: exit '//str(stat)//', '//log)
+      if (allocated(error)) return
       ! The deck changed (a comment added)
       call execute_command_line('echo "! changed" >> '//deck)
       call execute_command_line(exe//' diagnose -q --resume -o '//b//' '//deck//' > /dev/null 2> '// &
                                 b//'.log2', exitstat=stat)
       log = read_text(b//'.log2')
-      call check(error, stat == 1 .and. index(log, b//'/diagnose/diagnose.journal: cannot resume') > 0 &
+      call check(error, stat == 1 .and. index(log, b//'/diagnose/diagnose.journal: cannot resume: the input file') > 0 &
                  .and. index(log, new_line('a')) == len(log), 'changed deck: exit '//str(stat)//', '//log)
       if (allocated(error)) return
       ! The deck as it was, a data file changed (its last line dropped)

@@ -36,7 +36,7 @@ contains
       type(diagnose_result) :: res
       type(diagnose_journal) :: journal
       type(error_type), allocatable :: e
-      character(len=:), allocatable :: dir
+      character(len=:), allocatable :: dir, journal_mode
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
       call diagnose_options_of(cfg, opts, error)
@@ -54,13 +54,10 @@ contains
       if (allocated(error)) return
       ! The journal's own format joins the fingerprint: a journal of another layout of the
       ! diagnosis's units is refused rather than misread
-      if (present(mode)) then
-         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
-                           ' units=2', mode, error)
-      else
-         call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
-                           ' units=2', 'start', error)
-      end if
+      journal_mode = 'start'
+      if (present(mode)) journal_mode = mode
+      call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
+                        ' units=2', journal_mode, error)
       if (allocated(error)) return
       call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
       call journal%close(e)

@@ -16,7 +16,7 @@ module usharp_diagnose_memo
    implicit none
    private
 
-   public :: run_memo, run_key
+   public :: run_memo, run_key, problem_key
 
    type :: memo_entry
       character(len=:), allocatable :: key
@@ -62,15 +62,24 @@ contains
       self%entries(self%n)%opt = opt
    end subroutine memo_add
 
-   !> What decides a Levenberg-Marquardt run of ep from x0 (bounds lo, hi, difference step h,
-   !> ftol, itermax, max_evals; with_jac0: the first Jacobian given): the effect and its
-   !> parameters' set-up, the tests, and a digest of what their residuals are made from (data,
-   !> weights, control histories, the model's constants, the integrator's settings)
-   function run_key(ep, x0, lo, hi, h, ftol, itermax, max_evals, with_jac0) result(key)
-      type(effect_problem), intent(in) :: ep
+   !> What decides a Levenberg-Marquardt run of an effect problem from x0 (bounds lo, hi,
+   !> difference step h, ftol, itermax, max_evals; with_jac0: the first Jacobian given);
+   !> problem: problem_key of the effect problem
+   pure function run_key(problem, x0, lo, hi, h, ftol, itermax, max_evals, with_jac0) result(key)
+      character(len=*), intent(in) :: problem
       real(dp), intent(in) :: x0(:), lo(:), hi(:), h, ftol
       integer, intent(in) :: itermax, max_evals
       logical, intent(in) :: with_jac0
+      character(len=:), allocatable :: key
+      key = problem//' itermax '//str(itermax)//' max_evals '//str(max_evals)//' jac0 '// &
+            merge('1', '0', with_jac0)//' search '//hex_text([x0, lo, hi, h, ftol])
+   end function run_key
+
+   !> What decides the residuals of ep: the effect and its parameters' set-up, the tests, and
+   !> a digest of what their residuals are made from (data, weights, control histories, the
+   !> model's constants, the integrator's settings)
+   function problem_key(ep) result(key)
+      type(effect_problem), intent(in) :: ep
       character(len=:), allocatable :: key
       character(len=:), allocatable :: made_of
       integer :: i, it
@@ -86,13 +95,11 @@ contains
          if (allocated(ep%prob%cfg%tests(it)%hist%t)) &
             made_of = made_of//reals_bytes([ep%prob%cfg%tests(it)%hist%t, ep%prob%cfg%tests(it)%hist%v])
       end do
-      key = 'effect '//str(ep%k)//' tests'//ints_text(ep%tests)//' constants'//ints_text(ep%prob%idx)//' free '// &
-            merge('1', '0', ep%free_constants)//' pfree'//ints_text(merge(1, 0, ep%pfree))// &
-            ' pnonneg'//ints_text(merge(1, 0, ep%pnonneg))//' itermax '//str(itermax)// &
-            ' max_evals '//str(max_evals)//' jac0 '//merge('1', '0', with_jac0)//' made of '// &
-            hash_hex(hash_text(made_of))//' reals '// &
-            hex_text([ep%p0, ep%pscale, effect_reals(ep%base), x0, lo, hi, h, ftol])
-   end function run_key
+      key = 'effect '//str(ep%k)//' tests'//ints_text(ep%tests)//' constants'//ints_text(ep%prob%idx)// &
+            ' free '//merge('1', '0', ep%free_constants)//' pfree'//ints_text(merge(1, 0, ep%pfree))// &
+            ' pnonneg'//ints_text(merge(1, 0, ep%pnonneg))//' made of '//hash_hex(hash_text(made_of))// &
+            ' parameters '//hex_text([ep%p0, ep%pscale, effect_reals(ep%base)])
+   end function problem_key
 
    !> The values of e, in order (its components are all real(dp))
    pure function effect_reals(e) result(v)

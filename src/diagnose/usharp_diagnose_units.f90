@@ -10,9 +10,9 @@ module usharp_diagnose_units
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_effect_problem, only: effect_problem
    use usharp_diagnose_numerics, only: best_of_starts, take_starts, lm_ftol, lm_itermax
-   use usharp_diagnose_memo, only: run_memo, run_key
+   use usharp_diagnose_memo, only: run_memo, run_key, problem_key
    use usharp_diagnose_journal, only: diagnose_journal, next_unit, record_unit, optimum_text, &
-                                      read_optimum, reals_text, read_reals, text_lines
+                                      read_optimum, text_lines
    implicit none
    private
 
@@ -44,7 +44,8 @@ contains
          if (associated(memo)) then
             select type (obj)
             type is (effect_problem)
-               key = run_key(obj, min(max(x0, lo), hi), lo, hi, h, ftol, itermax, max_evals, present(jac0))
+               key = run_key(problem_key(obj), min(max(x0, lo), hi), lo, hi, h, ftol, itermax, max_evals, &
+                             present(jac0))
                i = memo%find(key)
                if (i > 0) then
                   ! made before: no evaluation now
@@ -90,14 +91,14 @@ contains
       real(dp), intent(out), optional :: fs(:)
       logical, intent(in), optional :: over_ranks
       type(run_memo), pointer, intent(in), optional :: memo
-      character(len=:), allocatable :: text, lines(:)
+      character(len=:), allocatable :: text, lines(:), problem
       type(key_text), allocatable :: keys(:)
       type(optimum_type), allocatable :: alts(:), run(:)
       type(optimum_type) :: none
       real(dp), allocatable :: f(:)
       logical, allocatable :: ok(:), known(:), run_ok(:)
       logical :: replay, memoised
-      integer :: n0, nev0, at, dn, dnev, j, i, nrun, flag
+      integer :: n0, nev0, at, dn, j, i, nrun, flag
       integer, allocatable :: cols(:)
       memoised = .false.
       if (present(memo)) memoised = associated(memo)
@@ -105,8 +106,9 @@ contains
       ok = .false.
       known = .false.
       if (memoised) then
+         problem = problem_key(ep)
          do j = 1, size(xs, 2)
-            keys(j)%s = run_key(ep, min(max(xs(:, j), lo), hi), lo, hi, h, lm_ftol, lm_itermax, &
+            keys(j)%s = run_key(problem, min(max(xs(:, j), lo), hi), lo, hi, h, lm_ftol, lm_itermax, &
                                 max_evals, .false.)
             i = memo%find(keys(j)%s)
             if (i > 0) then
@@ -123,7 +125,7 @@ contains
          if (allocated(error)) return
          if (replay) then
             lines = text_lines(text)
-            read (lines(1), *) dn, dnev
+            read (lines(1), *) dn
             at = 2
             do i = 1, nrun
                read (lines(at), *) flag
@@ -141,7 +143,7 @@ contains
             allocate (run(nrun), run_ok(nrun))
             call best_of_starts(ep, xs(:, cols), lo, hi, h, max_evals, none, nev0, &
                                 over_ranks=over_ranks, each=run, ran_ok=run_ok)
-            text = str(ep%nevals - n0)//' '//str(nev0)//new_line('a')
+            text = str(ep%nevals - n0)//new_line('a')
             do i = 1, nrun
                text = text//str(merge(1, 0, run_ok(i)))//new_line('a')
                if (run_ok(i)) text = text//optimum_text(run(i), error)

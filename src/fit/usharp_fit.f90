@@ -15,7 +15,8 @@ module usharp_fit
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
-                             journal_name, cache_name, fingerprint_mismatch
+                             journal_name, cache_name
+   use usharp_journal, only: fingerprint_mismatch
    use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string

@@ -14,7 +14,7 @@ module usharp_fit_log
    private
 
    public :: fit_log, journal_record, cached_jacobian, read_journal, read_cache, journal_name
-   public :: cache_name, fingerprint_mismatch
+   public :: cache_name
 
    character(len=*), parameter :: journal_name = 'fit.journal'
    character(len=*), parameter :: cache_name = 'fit.cache'
@@ -268,61 +268,4 @@ contains
       close (unit)
    end subroutine read_cache
 
-   !> '' when the fingerprints agree, else what changed (the fingerprint is a list of
-   !> name=hash items; see usharp_fit). old must not be empty.
-   function fingerprint_mismatch(old, new) result(what)
-      character(len=*), intent(in) :: old, new
-      character(len=:), allocatable :: what
-      character(len=:), allocatable :: item, name, old_value
-      integer :: pos, next, eq
-      what = ''
-      pos = 1
-      do while (pos <= len_trim(new))
-         next = index(new(pos:), ' ')
-         if (next == 0) then
-            item = new(pos:len_trim(new))
-            next = len_trim(new) + 1
-         else
-            item = new(pos:pos + next - 2)
-            next = pos + next
-         end if
-         pos = next
-         if (len(item) == 0) cycle
-         eq = index(item, '=')
-         name = item(:eq - 1)
-         old_value = value_of(old, name)
-         if (old_value /= item(eq + 1:)) then
-            if (len(what) > 0) what = what//', '
-            what = what//describe(name)
-         end if
-      end do
-   contains
-      function value_of(list, name) result(val)
-         character(len=*), intent(in) :: list, name
-         character(len=:), allocatable :: val
-         integer :: at, stop_at
-         val = '(none)'
-         at = index(' '//list//' ', ' '//name//'=')
-         if (at == 0) return
-         stop_at = index(list(at:)//' ', ' ')
-         val = list(at + len(name) + 1:at + stop_at - 2)
-      end function value_of
-      function describe(name) result(text)
-         character(len=*), intent(in) :: name
-         character(len=:), allocatable :: text
-         select case (name)
-         case ('version'); text = 'the program version'
-         case ('input'); text = 'the input file'
-         case ('constants'); text = 'the constants file (--constants)'
-         case default
-            if (index(name, 'data:') == 1) then
-               text = "the data file of test '"//name(6:)//"'"
-            else if (index(name, 'history:') == 1) then
-               text = "the control history of test '"//name(9:)//"'"
-            else
-               text = name
-            end if
-         end select
-      end function describe
-   end function fingerprint_mismatch
 end module usharp_fit_log
