@@ -29,7 +29,7 @@ mkdir -p "$out"
 out="$(cd "$out" && pwd)"
 cd "$here"
 # The drop-in sources, in dependency order; the message module and the adapter per code
-core=(src/util/usharp_kinds.f90 src/util/usharp_error.f90 src/util/usharp_strings.f90
+core=(src/util/usharp_kinds.f90 src/util/usharp_math.f90 src/util/usharp_error.f90 src/util/usharp_strings.f90
       src/util/usharp_units.f90 src/model/usharp_effect_values.f90 src/model/usharp_model.f90
       src/model/usharp_model_j2.f90
       "src/model/usharp_model_${model}.f90" src/upf/usharp_upf.f90)

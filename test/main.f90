@@ -21,6 +21,7 @@ program tester
    use test_diagnose_data, only: collect_diagnose_data
    use test_chaboche, only: collect_chaboche
    use test_tmf, only: collect_tmf
+   use test_math, only: collect_math
    implicit none
    type(testsuite_type), allocatable :: suites(:)
    type(unittest_type), allocatable :: tests(:)
@@ -29,6 +30,7 @@ program tester
    integer :: is, it, npass, nfail, nskip
 
    suites = [ &
+      new_testsuite('math', collect_math), &
       new_testsuite('model', collect_model), &
       new_testsuite('models', collect_models), &
       new_testsuite('tmf', collect_tmf), &

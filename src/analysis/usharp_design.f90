@@ -11,6 +11,7 @@
 !> log det of the information over the current tests (D-optimality).
 module usharp_design
    use usharp_kinds, only: dp
+   use usharp_math, only: log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, prefix_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_model, only: constant_names
@@ -180,7 +181,7 @@ contains
       logprob = prob
       logprob%cfg%fit%log_search = .true.
       p = size(prob%idx)
-      x = [(log10(prob%cfg%model%get_constant(prob%idx(j))), j=1, p)]
+      x = [(log10_dp(prob%cfg%model%get_constant(prob%idx(j))), j=1, p)]
       call jacobian_log10(logprob, x, h, r0, jac, f0, nevals, error)
       if (allocated(error)) return
       allocate (info(p, p, size(prob%targets)))
@@ -228,7 +229,7 @@ contains
       end do
       call solve_dense(a, cov, info)
       ! 95 % interval of c: c*10**(+-1.96 se) with se the sd of log10 c
-      comb%half95 = [(10.0_dp**(1.959963984540054_dp*sqrt(max(cov(i, i), 0.0_dp))) - 1.0_dp, &
+      comb%half95 = [(pow10_dp(1.959963984540054_dp*sqrt(max(cov(i, i), 0.0_dp))) - 1.0_dp, &
                       i=1, p)]
       comb%determined = comb%half95 <= res%ci_target
    end function combination_of

@@ -4,6 +4,7 @@
 !> correlations, 95 % confidence intervals, constants at a bound, and the poorly determined directions in words.
 module usharp_identify
    use usharp_kinds, only: dp
+   use usharp_math, only: log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_model, only: constant_names
@@ -124,7 +125,7 @@ contains
       tied = 0
       logprob = prob
       logprob%cfg%fit%log_search = .true.
-      call jacobian_log10(logprob, log10(c), h, r0, jac, f0, res%nevals, error, spread)
+      call jacobian_log10(logprob, log10_dp(c), h, r0, jac, f0, res%nevals, error, spread)
       if (allocated(error)) return
       res%names = constant_names(prob%cfg%model, prob%idx)
       res%c = c
@@ -155,14 +156,14 @@ contains
       cov = robust_covariance(jac, r0, pinv)
       res%se = [(sqrt(max(cov(i, i), 0.0_dp)), i=1, n)]
       t95 = t_quantile_975(res%m - n)
-      res%lo95 = c*10.0_dp**(-t95*res%se)
-      res%hi95 = c*10.0_dp**(t95*res%se)
+      res%lo95 = c*pow10_dp(-t95*res%se)
+      res%hi95 = c*pow10_dp(t95*res%se)
       ! Marginal intervals each miss with 5 %; for a statement about all constants at once
       ! (the A2-B-n valley makes their errors move together) the ellipsoid's shadow is needed
       res%rank = count(res%sv > weak_ratio*res%sv(1) .and. res%sv > 0.0_dp)
       q95 = sqrt(chi2_quantile_95(max(res%rank, 1)))
-      res%lo_joint = c*10.0_dp**(-q95*res%se)
-      res%hi_joint = c*10.0_dp**(q95*res%se)
+      res%lo_joint = c*pow10_dp(-q95*res%se)
+      res%hi_joint = c*pow10_dp(q95*res%se)
       allocate (res%corr(n, n))
       do i = 1, n
          do j = 1, n
@@ -173,7 +174,7 @@ contains
       do j = 1, n
          lo = prob%cfg%fit%lower(prob%idx(j))
          hi = prob%cfg%fit%upper(prob%idx(j))
-         res%at_bound(j) = abs(log10(c(j)/lo)) < 1.0e-6_dp .or. abs(log10(hi/c(j))) < 1.0e-6_dp
+         res%at_bound(j) = abs(log10_dp(c(j)/lo)) < 1.0e-6_dp .or. abs(log10_dp(hi/c(j))) < 1.0e-6_dp
          ! Determined: no weight in the weak directions, not at a bound
          res%determined(j) = .not. res%at_bound(j)
          do i = 1, n
@@ -255,9 +256,9 @@ contains
       do j = 1, n
          if (.not. res%determined(j)) cycle
          if (.not. (res%lo95(j) > 0.0_dp .and. res%hi95(j) > 0.0_dp)) cycle
-         res%loose(j) = log10(res%hi95(j)/res%lo95(j)) > loose_decades
+         res%loose(j) = log10_dp(res%hi95(j)/res%lo95(j)) > loose_decades
          if (res%loose(j)) res%words = [character(len=200) :: res%words, trim(res%names(j))// &
-            ': its 95 % interval spans '//real_str(log10(res%hi95(j)/res%lo95(j)), 'f0.1')// &
+            ': its 95 % interval spans '//real_str(log10_dp(res%hi95(j)/res%lo95(j)), 'f0.1')// &
             ' decades; these tests bound it only loosely']
       end do
       if (size(res%words) == 0 .and. all(res%determined)) res%words = [character(len=200) :: &

@@ -3,6 +3,7 @@
 !> level of each test's data, and the floors below which a set's structured gap is noise
 module usharp_diagnose_baseline
    use usharp_kinds, only: dp
+   use usharp_math, only: pow10_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str
    use usharp_objective, only: fit_problem, test_residuals
@@ -51,7 +52,7 @@ contains
       end if
       ! Global starts come later, only when the local refits leave a structured gap
       allocate (res%x_global(size(ctx%prob%idx), 0))
-      res%c = 10.0_dp**opt%x
+      res%c = pow10_dp(opt%x)
       call set_constants_at(ctx%prob, opt%x)
       res%f0 = opt%f
       res%m = base%nres()

@@ -4,6 +4,7 @@
 !> parameters are free
 module usharp_diagnose_numerics
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp, log_dp, log10_dp, pow10_dp
    use usharp_model, only: model_type
    use usharp_error, only: error_type
    use usharp_config, only: run_config
@@ -47,7 +48,7 @@ contains
       real(dp), intent(in) :: x(:)
       integer :: j
       do j = 1, size(prob%idx)
-         call prob%cfg%model%set_constant(prob%idx(j), 10.0_dp**x(j))
+         call prob%cfg%model%set_constant(prob%idx(j), pow10_dp(x(j)))
       end do
    end subroutine set_constants_at
 
@@ -267,7 +268,7 @@ contains
       integer, intent(in) :: n(:)
       !> Sums of squares per test (weighted residuals of Eq. 7), before and after
       real(dp), intent(in) :: before(:), after(:)
-      d = sum(n*log(max(after, tiny(1.0_dp))/max(before, tiny(1.0_dp))))
+      d = sum(n*log_dp(max(after, tiny(1.0_dp))/max(before, tiny(1.0_dp))))
    end function deviance_change
 
    !> Power of the significance rule (BIC falls by more than bic_margin on nres residuals
@@ -276,7 +277,7 @@ contains
    elemental real(dp) function bic_power(lambda, df, nres) result(p)
       real(dp), intent(in) :: lambda
       integer, intent(in) :: df, nres
-      p = ncx2_sf(df*log(real(max(nres, 2), dp)) + bic_margin, real(max(df, 1), dp), lambda)
+      p = ncx2_sf(df*log_dp(real(max(nres, 2), dp)) + bic_margin, real(max(df, 1), dp), lambda)
    end function bic_power
 
    !> Starts (a, b: columns) of a fit of the saturating softening: zero at the rate
@@ -319,7 +320,7 @@ contains
          if (n > 0) p_end = max(p_end, abs(ein(k0 + 1)) + sum(abs(ein(k0 + 2:k0 + n) - ein(k0 + 1:k0 + n - 1))))
          k0 = k0 + n
       end do
-      share = abs(a)*(1.0_dp - exp(-b*p_end))
+      share = abs(a)*(1.0_dp - exp_dp(-b*p_end))
    end function softening_reached
 
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
@@ -348,8 +349,8 @@ contains
       integer :: j
       allocate (xs(size(prob%idx), n))
       if (n == 0) return
-      blo = log10(cfg%fit%box_lower(prob%idx))
-      bhi = log10(cfg%fit%box_upper(prob%idx))
+      blo = log10_dp(cfg%fit%box_lower(prob%idx))
+      bhi = log10_dp(cfg%fit%box_upper(prob%idx))
       call rng%seed(cfg%fit%seed)
       call latin_hypercube(rng, size(prob%idx), n, u)
       do j = 1, n

@@ -8,6 +8,7 @@
 !> its logarithm (it cannot cross zero).
 module usharp_diagnose_profile
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp, log_dp
    use usharp_error, only: error_type
    use usharp_optimiser, only: least_squares_type, optimum_type
    use usharp_diagnose_journal, only: diagnose_journal
@@ -174,7 +175,7 @@ contains
       pure real(dp) function to_u(x)
          real(dp), intent(in) :: x
          if (log_scale) then
-            to_u = log(max(x, tiny(1.0_dp)))
+            to_u = log_dp(max(x, tiny(1.0_dp)))
          else
             to_u = x
          end if
@@ -183,7 +184,7 @@ contains
       pure real(dp) function from_u(u)
          real(dp), intent(in) :: u
          if (log_scale) then
-            from_u = exp(u)
+            from_u = exp_dp(u)
          else
             from_u = u
          end if

@@ -6,6 +6,7 @@
 module usharp_diagnose_refit
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
+   use usharp_math, only: log_dp, log10_dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type
    use usharp_objective, only: fit_problem
@@ -60,7 +61,7 @@ contains
             if (size(lower) == 0) cycle
             allocate (xc(size(ctx%prob%idx), size(lower)))
             do o = 1, size(lower)
-               xc(:, o) = log10(res%effects(lower(o))%c)
+               xc(:, o) = log10_dp(res%effects(lower(o))%c)
             end do
             call tell_refit(ctx, res, j, counted)
             call refit(ctx, res, res%effects(j), error, xc)
@@ -88,7 +89,7 @@ contains
       call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, base)
       call base%bounds(lo, hi)
       opt%f = res%f0
-      opt%x = log10(res%c)
+      opt%x = log10_dp(res%c)
       call starts_unit(ctx%journal, base, res%x_global, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
                        error, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
       if (allocated(error)) return
@@ -142,8 +143,8 @@ contains
                   other = o
                end if
             end do
-            xc = reshape(log10(res%c), [size(res%c), 1])
-            if (other > 0) xc = reshape([xc, log10(res%effects(other)%c)], [size(res%c), 2])
+            xc = reshape(log10_dp(res%c), [size(res%c), 1])
+            if (other > 0) xc = reshape([xc, log10_dp(res%effects(other)%c)], [size(res%c), 2])
             if (.not. res%global .and. n_lhs > 0) &
                xc = reshape([xc, lhs], [size(res%c), size(xc, 2) + n_lhs])
          end associate
@@ -489,7 +490,7 @@ contains
          dev = deviance_change(res%npts(ctx%ifit), res%per_test0(ctx%ifit), e%per_test_after(ctx%ifit))
       end if
       e%daic = dev + 2.0_dp*e%q
-      e%dbic = dev + e%q*log(real(res%m, dp))
+      e%dbic = dev + e%q*log_dp(real(res%m, dp))
       e%significant = e%dbic < -bic_margin
       ! No structured gap above the floors is asked for: the floors test every direction of
       ! the residual at once against a noise estimate (which a curved response lifts), BIC

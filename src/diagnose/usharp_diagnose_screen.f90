@@ -4,6 +4,7 @@
 !> nonlinear run from zero and from a tenth of the physical limit; its BIC change predicted
 module usharp_diagnose_screen
    use usharp_kinds, only: dp
+   use usharp_math, only: log_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_effects, only: effect_info, param_global
    use usharp_effect_problem, only: effect_problem, new_effect_problem
@@ -170,7 +171,7 @@ contains
       nevals = nevals + 1
       dev_end = 0.0_dp
       if (ok) dev_end = deviance_change(npts, sum0, max(block_sums(npts, r_end), 1.0e-3_dp*sum0))
-      e%pred_dbic = min(dev_lin, dev_end, 0.0_dp) + q*log(real(size(r0), dp))
+      e%pred_dbic = min(dev_lin, dev_end, 0.0_dp) + q*log_dp(real(size(r0), dp))
    end subroutine screen_one
 
    !> The power of the BIC rule against effect ep%k at the low end of its realistic range on

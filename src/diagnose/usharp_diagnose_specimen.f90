@@ -7,6 +7,7 @@
 !> the specimen's structured gap it removes; the effects are ranked by BIC.
 module usharp_diagnose_specimen
    use usharp_kinds, only: dp
+   use usharp_math, only: log_dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
@@ -224,7 +225,7 @@ contains
             end if
          end do
          se_out%f_after = o%f
-         se_out%dbic = sr%m*log(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log(real(sr%m, dp))
+         se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
          se_out%significant = se_out%dbic < -bic_margin
          if (sr%gap > 0.0_dp) se_out%removed = (sr%f0 - o%f)/sr%gap
          call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)

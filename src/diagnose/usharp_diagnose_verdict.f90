@@ -48,12 +48,12 @@ contains
                res%alike = [res%alike, conf(j)]
          end associate
       end do
-      ! Simplest first, ties by BIC (atan keeps its order within a step of the key)
+      ! Simplest first, ties by BIC (x/(1 + |x|) keeps its order within a step of the key)
       allocate (keys(size(res%alike)))
       do j = 1, size(res%alike)
          keys(j) = complexity(res%effects(res%alike(j)))
       end do
-      res%alike = res%alike(order_of(real(keys, dp) + 1.0e-6_dp*atan(res%effects(res%alike)%dbic)))
+      res%alike = res%alike(order_of(real(keys, dp) + 1.0e-6_dp*squash(res%effects(res%alike)%dbic)))
       res%leading = res%alike(1)
       call effect_verdict(res)
       res%verdict = res%verdict//serration_note(res)
@@ -358,4 +358,11 @@ contains
          if (any(e%worse)) text = text//'; makes '//test_list(res, e%worse)//' worse'
       end if
    end function verdict_of
+
+   !> x/(1 + |x|): increasing, in (-1, 1)
+   elemental real(dp) function squash(x)
+      real(dp), intent(in) :: x
+      squash = x/(1.0_dp + abs(x))
+   end function squash
+
 end module usharp_diagnose_verdict

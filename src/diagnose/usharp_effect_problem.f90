@@ -4,6 +4,7 @@
 !> extended integrator, so that fits with and without an effect differ only by the effect.
 module usharp_effect_problem
    use usharp_kinds, only: dp
+   use usharp_math, only: log10_dp, pow10_dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, effects_of, &
@@ -111,7 +112,7 @@ contains
       allocate (x(0))
       if (self%free_constants) then
          do j = 1, size(self%prob%idx)
-            x = [x, log10(self%prob%cfg%model%get_constant(self%prob%idx(j)))]
+            x = [x, log10_dp(self%prob%cfg%model%get_constant(self%prob%idx(j)))]
          end do
       end if
       x = [x, pack(self%p0/self%pscale, self%pfree)]
@@ -126,8 +127,8 @@ contains
       phi = spread(1.0e3_dp, 1, size(self%p0))
       allocate (lo(0), hi(0))
       if (self%free_constants) then
-         lo = log10(self%prob%cfg%fit%lower(self%prob%idx))
-         hi = log10(self%prob%cfg%fit%upper(self%prob%idx))
+         lo = log10_dp(self%prob%cfg%fit%lower(self%prob%idx))
+         hi = log10_dp(self%prob%cfg%fit%upper(self%prob%idx))
       end if
       lo = [lo, pack(plo, self%pfree)]
       hi = [hi, pack(phi, self%pfree)]
@@ -144,7 +145,7 @@ contains
       k0 = 0
       if (self%free_constants) then
          do j = 1, size(self%prob%idx)
-            call model%set_constant(self%prob%idx(j), 10.0_dp**x(j))
+            call model%set_constant(self%prob%idx(j), pow10_dp(x(j)))
          end do
          k0 = size(self%prob%idx)
       end if

@@ -7,6 +7,8 @@
 !> from a noise level estimated from the data themselves.
 module usharp_regions
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp, log_dp, sincos_turn
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_history, only: history_type
    use usharp_forcing, only: noise_sd
    implicit none
@@ -342,10 +344,9 @@ contains
       logical, intent(in) :: mask(:)
       integer, intent(in), optional :: max_period
       type(serration_stat) :: st
-      real(dp), parameter :: pi = acos(-1.0_dp)
       integer, parameter :: nb = 12      ! neighbours each side for the background
       real(dp), allocatable :: x(:), d(:), pg(:), ratio(:), nn(:)
-      real(dp) :: w, c, s
+      real(dp) :: c, s, ck, sk
       integer :: m, j, j0, j1, kk, jmax, pmax, a, b
       pmax = serration_max_period
       if (present(max_period)) pmax = min(pmax, max_period)
@@ -359,14 +360,16 @@ contains
       if (j1 - j0 < 2*nb) return
       allocate (pg(max(1, j0 - nb):j1), ratio(j0:j1), nn(j0:j1))
       do j = lbound(pg, 1), j1
-         w = 2.0_dp*pi*j/m
          c = 0.0_dp
          s = 0.0_dp
          do kk = 1, m
-            c = c + d(kk)*cos(w*kk)
-            s = s + d(kk)*sin(w*kk)
+            ! the angle 2 pi j kk/m in turns, reduced exactly first
+            call sincos_turn(real(modulo(int(j, int64)*kk, int(m, int64)), dp)/m, sk, ck)
+            c = c + d(kk)*ck
+            s = s + d(kk)*sk
          end do
-         pg(j) = (c**2 + s**2)/m/(2.0_dp - 2.0_dp*cos(w))
+         call sincos_turn(real(j, dp)/m, sk, ck)
+         pg(j) = (c**2 + s**2)/m/(2.0_dp - 2.0_dp*ck)
       end do
       do j = j0, j1
          a = max(lbound(pg, 1), j - nb)
@@ -374,11 +377,11 @@ contains
          nn(j) = real(max(j - 2 - a + 1, 0) + max(b - j - 2 + 1, 0), dp)
          ratio(j) = pg(j)/max((sum(pg(a:j - 2)) + sum(pg(j + 2:b)))/nn(j), tiny(1.0_dp))
          ! the chance, as -log
-         ratio(j) = nn(j)*log(1.0_dp + ratio(j)/nn(j))
+         ratio(j) = nn(j)*log_dp(1.0_dp + ratio(j)/nn(j))
       end do
       jmax = maxloc(ratio, 1) + j0 - 1
       kk = j1 - j0 + 1
-      st%p = min(1.0_dp, kk*exp(-ratio(jmax)))
+      st%p = min(1.0_dp, kk*exp_dp(-ratio(jmax)))
       st%period = real(m, dp)/jmax
       ! A sinusoid of amplitude A gives an ordinate of about A**2 m/4
       st%amplitude = 2.0_dp*sqrt(pg(jmax)/m)

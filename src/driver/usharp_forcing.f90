@@ -7,6 +7,7 @@
 !> longer reaches the simulated response as elastic spikes.
 module usharp_forcing
    use usharp_kinds, only: dp
+   use usharp_math, only: pow10_dp
    use usharp_error, only: error_type
    use usharp_history, only: history_type, history_from_points
    use usharp_sort, only: median
@@ -262,14 +263,14 @@ contains
       hi = 10.0_dp
       do it = 1, 40
          mid = 0.5_dp*(lo + hi)
-         z = whittaker(u, y, w, scale*10.0_dp**mid)
+         z = whittaker(u, y, w, scale*pow10_dp(mid))
          if (rms(z - y) > sigma) then
             hi = mid
          else
             lo = mid
          end if
       end do
-      lambda = scale*10.0_dp**lo
+      lambda = scale*pow10_dp(lo)
       do it = 1, 20
          z = whittaker(u, y, w, lambda)
          biased = local_excess(z - y, 2.0_dp*sigma)

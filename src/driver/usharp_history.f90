@@ -3,6 +3,7 @@
 module usharp_history
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
+   use usharp_math, only: pow_dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str
    implicit none
@@ -246,7 +247,7 @@ contains
                           str(max_points/2)//' a history may have')
          return
       end if
-      m = (a_last/a_first)**(1.0_dp/real(npeaks - 1, dp))
+      m = pow_dp(a_last/a_first, 1.0_dp/real(npeaks - 1, dp))
       allocate (t(2*npeaks + 1), v(2*npeaks + 1))
       t(1) = 0.0_dp
       v(1) = 0.0_dp

@@ -10,6 +10,7 @@ module usharp_rosenbrock_driver
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
+   use usharp_math, only: pow_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_model, only: model_type

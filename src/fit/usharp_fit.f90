@@ -4,6 +4,7 @@
 module usharp_fit
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
+   use usharp_math, only: log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, stat_failure, stat_input, stat_usage
    use usharp_strings, only: str, real_str
    use usharp_objective, only: fit_problem, eval_ok, eval_invalid, message_len
@@ -120,7 +121,7 @@ contains
       real(dp), intent(in) :: x(:)
       real(dp) :: c(size(x))
       c = x
-      if (self%prob%cfg%fit%log_search) c = 10.0_dp**x
+      if (self%prob%cfg%fit%log_search) c = pow10_dp(x)
    end function fit_constants_of
 
    pure integer function fit_nres(self) result(m)
@@ -588,10 +589,10 @@ contains
       integer :: s, n, s1, s2
       associate (fc => obj%prob%cfg%fit, idx => obj%prob%idx)
          n = size(idx)
-         lo = log10(fc%lower(idx))
-         hi = log10(fc%upper(idx))
-         blo = log10(fc%box_lower(idx))
-         bhi = log10(fc%box_upper(idx))
+         lo = log10_dp(fc%lower(idx))
+         hi = log10_dp(fc%upper(idx))
+         blo = log10_dp(fc%box_lower(idx))
+         bhi = log10_dp(fc%box_upper(idx))
          nstarts = max(1, fc%multistart)
          if (fc%multistart > 0) then
             call rng%seed(fc%seed)
@@ -612,7 +613,7 @@ contains
             obj%start_sens(s) = obj%nsens + 1
             if (fc%multistart > 0) then
                x0 = blo + u(:, s)*(bhi - blo)
-               if (.not. fc%log_search) x0 = 10.0_dp**x0
+               if (.not. fc%log_search) x0 = pow10_dp(x0)
                call obj%log%event('multi-start '//str(s)//' of '//str(nstarts)//' from evaluation '// &
                                   str(obj%nevals + 1))
             else

@@ -3,6 +3,7 @@
 module usharp_objective
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
+   use usharp_math, only: log_dp, log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, prefix_error
    use usharp_model, only: model_type, model_at
    use usharp_history, only: control_stress
@@ -177,7 +178,7 @@ contains
       integer :: j
       do j = 1, size(self%idx)
          x(j) = self%cfg%model%get_constant(self%idx(j))
-         if (self%cfg%fit%log_search) x(j) = log10(max(x(j), tiny(1.0_dp)))
+         if (self%cfg%fit%log_search) x(j) = log10_dp(max(x(j), tiny(1.0_dp)))
       end do
    end function problem_start_point
 
@@ -191,7 +192,7 @@ contains
       allocate (model, source=self%cfg%model)
       do j = 1, size(self%idx)
          if (self%cfg%fit%log_search) then
-            call model%set_constant(self%idx(j), 10.0_dp**x(j))
+            call model%set_constant(self%idx(j), pow10_dp(x(j)))
          else
             call model%set_constant(self%idx(j), x(j))
          end if
@@ -385,7 +386,7 @@ contains
       end if
       do j = 1, size(x)
          dcdx(j) = 1.0_dp
-         if (self%cfg%fit%log_search) dcdx(j) = model%get_constant(self%idx(j))*log(10.0_dp)
+         if (self%cfg%fit%log_search) dcdx(j) = model%get_constant(self%idx(j))*log_dp(10.0_dp)
       end do
       allocate (k0(size(self%targets)))
       k0(1) = 0

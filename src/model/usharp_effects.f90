@@ -6,6 +6,7 @@
 !> Units: stresses in the model's unit, times in s, temperatures in K.
 module usharp_effects
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type, wrapped_rates
    use usharp_effect_values, only: test_effects
@@ -231,7 +232,7 @@ contains
          ydot = s
          return
       end if
-      e = exp(-(t - tc(k))/tau)
+      e = exp_dp(-(t - tc(k))/tau)
       y = u - s*tau + (yk(k) - vc(k) + s*tau)*e
       ydot = s - (yk(k) - vc(k) + s*tau)*e/tau
    end subroutine lagged_value

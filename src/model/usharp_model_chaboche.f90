@@ -26,6 +26,7 @@ module usharp_model_chaboche
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_units, only: gas_constant
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp, log_dp, pow_dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
    use usharp_model, only: update_status_ok, update_status_cut, block_scalar, block_strain, &
@@ -168,9 +169,9 @@ contains
                              'constants hold at')
             return
          end if
-         self%rate_factor = exp(-self%activation/gas_constant* &
+         self%rate_factor = exp_dp(-self%activation/gas_constant* &
                                 (1.0_dp/self%temperature - 1.0_dp/self%tref))
-         self%eta_factor = self%rate_factor**(-1.0_dp/self%c%n)
+         self%eta_factor = pow_dp(self%rate_factor, -1.0_dp/self%c%n)
          if (.not. (ieee_is_finite(self%eta_factor) .and. self%rate_factor > 0.0_dp .and. &
                     ieee_is_finite(self%rate_factor))) &
             call fatal_error(error, 'the Arrhenius factor at '//str(self%temperature)//' K is '// &
@@ -275,7 +276,7 @@ contains
          f = 0.0_dp
          f_o = 0.0_dp
       else
-         f = exp(model%c%n*log(z))
+         f = exp_dp(model%c%n*log_dp(z))
          f_o = model%c%n*f/(z*model%c%eta*model%eta_factor)
       end if
    end subroutine chaboche_flow
@@ -295,7 +296,7 @@ contains
          h = 0.0_dp
          h_x = 0.0_dp
       else
-         h = a*exp((m - 1.0_dp)*log(x))
+         h = a*exp_dp((m - 1.0_dp)*log_dp(x))
          h_x = (m - 1.0_dp)*h/x
       end if
    end subroutine recovery

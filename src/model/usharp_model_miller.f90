@@ -18,6 +18,7 @@ module usharp_model_miller
    use usharp_units, only: gas_constant
    use usharp_effect_values, only: test_effects
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp, log_dp, pow_dp, asinh_dp, sinh_power_dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, lower
    use usharp_units, only: stress_factor
@@ -143,9 +144,9 @@ contains
       real(dp), intent(in) :: tm           !< melting temperature, K
       real(dp), intent(in) :: temperature  !< K
       if (temperature <= 0.6_dp*tm) then
-         theta = exp(-q/(0.6_dp*gas_constant*tm)*(log(0.6_dp*tm/temperature) + 1.0_dp))
+         theta = exp_dp(-q/(0.6_dp*gas_constant*tm)*(log_dp(0.6_dp*tm/temperature) + 1.0_dp))
       else
-         theta = exp(-q/(gas_constant*temperature))
+         theta = exp_dp(-q/(gas_constant*temperature))
       end if
    end function theta_miller
 
@@ -203,7 +204,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: num, den
       num = model%d0_yield - 0.002_dp*model%c%h1
-      den = asinh((model%d0_rate/model%btheta)**(1.0_dp/model%c%n))**(2.0_dp/3.0_dp)
+      den = pow_dp(asinh_dp(pow_dp(model%d0_rate/model%btheta, 1.0_dp/model%c%n)), 2.0_dp/3.0_dp)
       d0 = num/den
       if (.not. ieee_is_finite(d0) .or. d0 <= 0.0_dp) then
          call fatal_error(error, 'initial drag stress D0 = (d0_yield - 0.002*H1)/asinh(...)**(2/3) = '// &
@@ -278,7 +279,6 @@ contains
       real(dp), intent(in) :: z, n
       real(dp), intent(out) :: p
       real(dp), intent(out), optional :: dp_dz
-      real(dp) :: s
       if (z <= 0.0_dp) then
          p = 0.0_dp
          if (present(dp_dz)) dp_dz = merge(1.0_dp, 0.0_dp, abs(n - 1.0_dp) < epsilon(1.0_dp))
@@ -286,11 +286,7 @@ contains
          p = ieee_value(1.0_dp, ieee_positive_inf)
          if (present(dp_dz)) dp_dz = p
       else
-         ! exp(n*log(s)) rather than s**n: the same to rounding and half the cost of pow,
-         ! which was a third of a simulation's time
-         s = sinh(z)
-         p = exp(n*log(s))
-         if (present(dp_dz)) dp_dz = n*(p/s)*cosh(z)
+         call sinh_power_dp(z, n, p, dp_dz)
       end if
    end subroutine sinh_power
 
@@ -815,7 +811,7 @@ contains
       real(dp), intent(out), optional, contiguous :: jac(:, :)
       real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, soft, dsoft, sg, sgr, w, df(size(y))
       s = sigma - y(2) - y(5)
-      e = exp(-eff%soften_rate*y(4))
+      e = exp_dp(-eff%soften_rate*y(4))
       soft = 1.0_dp - eff%soften*(1.0_dp - e)
       dsoft = -eff%soften*eff%soften_rate*e
       if (soft < 1.0e-3_dp) then

@@ -6,6 +6,7 @@
 !> ftol (relative) over the last four temperatures, or after max_evals evaluations.
 module usharp_annealing
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp
    use usharp_error, only: error_type
    use usharp_optimiser, only: objective_type, optimum_type
    use usharp_rng, only: rng_type
@@ -55,7 +56,7 @@ contains
                   if (xp(h) < lo(h) .or. xp(h) > hi(h)) xp(h) = lo(h) + rng%uniform()*(hi(h) - lo(h))
                   call evaluate(xp, fp)
                   if (allocated(error)) return
-                  if (fp <= f .or. rng%uniform() < exp(-(fp - f)/t)) then
+                  if (fp <= f .or. rng%uniform() < exp_dp(-(fp - f)/t)) then
                      x = xp
                      f = fp
                      nacc(h) = nacc(h) + 1

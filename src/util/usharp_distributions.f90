@@ -5,6 +5,7 @@
 !> so that exp(-lambda/2) never underflows.
 module usharp_distributions
    use usharp_kinds, only: dp
+   use usharp_math, only: exp_dp, log_dp, log_gamma_dp
    implicit none
    private
 
@@ -27,7 +28,7 @@ contains
          q = 1.0_dp
          return
       end if
-      lead = exp(a*log(x) - x - log_gamma(a))
+      lead = exp_dp(a*log_dp(x) - x - log_gamma_dp(a))
       if (x < a + 1.0_dp) then
          ! P(a, x) = x^a e^-x / Gamma(a+1) * sum x^n / ((a+1)...(a+n))
          term = 1.0_dp/a
@@ -76,7 +77,7 @@ contains
       real(dp), intent(in) :: k
       !> noncentrality, >= 0
       real(dp), intent(in) :: lambda
-      real(dp) :: mu, w, sd
+      real(dp) :: mu, w, sd, t
       integer :: mode, j, lo, hi
       if (lambda <= 0.0_dp) then
          p = chi2_sf(x, k)
@@ -86,7 +87,10 @@ contains
       if (mu > 1.0e7_dp) then
          ! Far past any threshold of interest: the normal limit of the mixture
          sd = sqrt(2.0_dp*(k + 2.0_dp*lambda))
-         p = 0.5_dp*erfc((x - k - lambda)/(sd*sqrt(2.0_dp)))
+         ! P(Z > t) = Q(1/2, t**2/2)/2 for t >= 0
+         t = (x - k - lambda)/sd
+         p = 0.5_dp*gamma_q(0.5_dp, 0.5_dp*t*t)
+         if (t < 0.0_dp) p = 1.0_dp - p
          return
       end if
       ! Poisson weights e^-mu mu^j / j! about the mode, out to 12 standard deviations
@@ -95,7 +99,7 @@ contains
       hi = mode + int(12.0_dp*sqrt(mu)) + 20
       p = 0.0_dp
       do j = lo, hi
-         w = exp(-mu + j*log(mu) - log_gamma(j + 1.0_dp))
+         w = exp_dp(-mu + j*log_dp(mu) - log_gamma_dp(j + 1.0_dp))
          p = p + w*chi2_sf(x, k + 2.0_dp*j)
       end do
       p = min(1.0_dp, max(0.0_dp, p))

@@ -1,6 +1,7 @@
 !> Explicit interfaces to the LAPACK routines usharp calls
 module usharp_lapack
    use usharp_kinds, only: dp
+   use usharp_math, only: log_dp
    implicit none
    private
 
@@ -82,7 +83,7 @@ contains
       logdet = 0.0_dp
       if (info /= 0) return
       do i = 1, size(a, 1)
-         logdet = logdet + 2.0_dp*log(l(i, i))
+         logdet = logdet + 2.0_dp*log_dp(l(i, i))
       end do
    end subroutine logdet_spd
 end module usharp_lapack

@@ -2,6 +2,7 @@
 !> synthetic noisy data are reproducible bit for bit on every compiler and platform.
 module usharp_rng
    use usharp_kinds, only: dp, i8
+   use usharp_math, only: log_dp, sincos_turn
    implicit none
    private
 
@@ -63,11 +64,11 @@ contains
    !> Standard normal number (Box-Muller, one of the pair)
    impure real(dp) function rng_normal(self) result(x)
       class(rng_type), intent(inout) :: self
-      real(dp), parameter :: two_pi = 6.283185307179586_dp
-      real(dp) :: u1, u2
+      real(dp) :: u1, u2, s, c
       u1 = self%uniform()
       u2 = self%uniform()
-      x = sqrt(-2.0_dp*log(u1))*cos(two_pi*u2)
+      call sincos_turn(u2, s, c)
+      x = sqrt(-2.0_dp*log_dp(u1))*c
    end function rng_normal
 
 end module usharp_rng

@@ -1,0 +1,342 @@
+!> usharp's own elementary functions against the same functions in quadruple precision (a
+!> reference some 2**60 times tighter), in units in the last place of the double result
+module test_math
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use usharp_kinds, only: dp
+   use usharp_rng, only: rng_type
+   use usharp_math, only: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp, &
+                          sinh_dp, cosh_dp, asinh_dp, log_sinh_dp, sincos_turn, log_gamma_dp
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_is_finite
+   implicit none
+   private
+   public :: collect_math
+
+   integer, parameter :: qp = selected_real_kind(30)
+   integer, parameter :: nsample = 200000
+
+contains
+
+   subroutine collect_math(testsuite)
+      type(unittest_type), allocatable, intent(out) :: testsuite(:)
+      testsuite = [ &
+         new_unittest('exp-and-log-within-an-ulp', test_exp_log), &
+         new_unittest('functions-made-from-exp-and-log', test_derived), &
+         new_unittest('sin-and-cos-of-a-turn', test_sincos), &
+         new_unittest('log-gamma', test_log_gamma), &
+         new_unittest('special-values', test_special), &
+         new_unittest('no-intrinsic-transcendentals-in-src', test_no_intrinsics)]
+   end subroutine collect_math
+
+   !> Error of y against the reference in units of the last place of the reference
+   elemental real(dp) function ulps(y, ref) result(u)
+      real(dp), intent(in) :: y
+      real(qp), intent(in) :: ref
+      u = real(abs(real(y, qp) - ref)/real(spacing(real(ref, dp)), qp), dp)
+   end function ulps
+
+   !> A number spread evenly in [a, b]
+   real(dp) function draw(rng, a, b)
+      type(rng_type), intent(inout) :: rng
+      real(dp), intent(in) :: a, b
+      draw = a + (b - a)*rng%uniform()
+   end function draw
+
+   !> Fail when the largest error (ulp) passes its bound, naming where
+   subroutine bound(error, what, worst, at, most)
+      type(error_type), allocatable, intent(inout) :: error
+      character(len=*), intent(in) :: what
+      real(dp), intent(in) :: worst, at, most
+      character(len=120) :: line
+      write (line, '(a,": ",f0.3," ulp at x = ",es23.16)') what, worst, at
+      write (*, '(4x,a)') trim(line)
+      if (allocated(error)) return
+      if (worst > most) call test_failed(error, trim(line)//' (bound '//trim(adjustl(num(most)))//')')
+   contains
+      function num(x) result(s)
+         real(dp), intent(in) :: x
+         character(len=20) :: s
+         write (s, '(f0.2)') x
+      end function num
+   end subroutine bound
+
+   subroutine test_exp_log(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      real(dp) :: x, w(4), at(4), u
+      integer :: i
+      call rng%seed(11)
+      w = 0.0_dp
+      at = 0.0_dp
+      do i = 1, nsample
+         ! exp over its whole range, and near 0 where the table index changes
+         x = draw(rng, -745.0_dp, 709.7_dp)
+         if (mod(i, 2) == 0) x = draw(rng, -0.1_dp, 0.1_dp)
+         u = ulps(exp_dp(x), exp(real(x, qp)))
+         if (u > w(1)) then; w(1) = u; at(1) = x; end if
+         ! expm1 where it differs from exp - 1
+         x = draw(rng, -40.0_dp, 40.0_dp)
+         if (mod(i, 2) == 0) x = draw(rng, -1.0_dp, 1.0_dp)*10.0_dp**draw(rng, -12.0_dp, 0.0_dp)
+         u = ulps(expm1_dp(x), exp(real(x, qp)) - 1.0_qp)
+         if (u > w(2)) then; w(2) = u; at(2) = x; end if
+         ! log over every binade, subnormals included, and about 1
+         x = 10.0_dp**draw(rng, -320.0_dp, 308.0_dp)
+         if (mod(i, 2) == 0) x = draw(rng, 0.5_dp, 2.0_dp)
+         u = ulps(log_dp(x), log(real(x, qp)))
+         if (u > w(3)) then; w(3) = u; at(3) = x; end if
+         x = draw(rng, -1.0_dp, 1.0_dp)*10.0_dp**draw(rng, -12.0_dp, 0.0_dp)
+         if (mod(i, 2) == 0) x = 10.0_dp**draw(rng, 0.0_dp, 20.0_dp)
+         u = ulps(log1p_dp(x), log(1.0_qp + real(x, qp)))
+         if (u > w(4)) then; w(4) = u; at(4) = x; end if
+      end do
+      call bound(error, 'exp', w(1), at(1), 1.0_dp)
+      call bound(error, 'expm1', w(2), at(2), 1.5_dp)
+      call bound(error, 'log', w(3), at(3), 1.0_dp)
+      call bound(error, 'log1p', w(4), at(4), 1.5_dp)
+   end subroutine test_exp_log
+
+   subroutine test_derived(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      real(dp) :: x, y, z, w(8), at(8), u, ls, coth
+      real(qp) :: ref
+      integer :: i
+      call rng%seed(12)
+      w = 0.0_dp
+      at = 0.0_dp
+      do i = 1, nsample/2
+         x = 10.0_dp**draw(rng, -300.0_dp, 300.0_dp)
+         u = ulps(log10_dp(x), log10(real(x, qp)))
+         if (u > w(1)) then; w(1) = u; at(1) = x; end if
+         ! 10**x for the log10 of a constant
+         x = draw(rng, -20.0_dp, 20.0_dp)
+         u = ulps(pow10_dp(x), 10.0_qp**real(x, qp))
+         if (u > w(2)) then; w(2) = u; at(2) = x; end if
+         x = draw(rng, -30.0_dp, 30.0_dp)
+         if (mod(i, 2) == 0) x = draw(rng, -1.0_dp, 1.0_dp)
+         u = ulps(sinh_dp(x), sinh(real(x, qp)))
+         if (u > w(3)) then; w(3) = u; at(3) = x; end if
+         u = ulps(cosh_dp(x), cosh(real(x, qp)))
+         if (u > w(4)) then; w(4) = u; at(4) = x; end if
+         x = sign(10.0_dp**draw(rng, -10.0_dp, 10.0_dp), draw(rng, -1.0_dp, 1.0_dp))
+         u = ulps(asinh_dp(x), asinh(real(x, qp)))
+         if (u > w(5)) then; w(5) = u; at(5) = x; end if
+         ! ln(sinh z) and coth z over the arguments of the flow and recovery laws
+         z = 10.0_dp**draw(rng, -8.0_dp, 2.8_dp)
+         call log_sinh_dp(z, ls, coth)
+         ref = log(sinh(real(z, qp)))
+         ! in ulp of the result, or of 1 where the result passes through 0 (z near 0.88)
+         u = real(abs(real(ls, qp) - ref)/real(spacing(max(abs(real(ref, dp)), 0.5_dp)), qp), dp)
+         if (u > w(6)) then; w(6) = u; at(6) = z; end if
+         u = ulps(coth, cosh(real(z, qp))/sinh(real(z, qp)))
+         if (u > w(7)) then; w(7) = u; at(7) = z; end if
+         ! the power of the flow law: the error of ln x times y, as any exp(y ln x)
+         x = 10.0_dp**draw(rng, -5.0_dp, 5.0_dp)
+         y = draw(rng, 1.0_dp, 10.0_dp)
+         ref = real(x, qp)**real(y, qp)
+         u = ulps(pow_dp(x, y), ref)/(1.0_dp + abs(y*log(x)))
+         if (u > w(8)) then; w(8) = u; at(8) = x; end if
+      end do
+      ! Each made of two or three of exp, expm1, log and log1p: their errors add
+      call bound(error, 'log10', w(1), at(1), 2.0_dp)
+      call bound(error, 'pow10', w(2), at(2), 2.0_dp)
+      call bound(error, 'sinh', w(3), at(3), 2.0_dp)
+      call bound(error, 'cosh', w(4), at(4), 2.0_dp)
+      call bound(error, 'asinh', w(5), at(5), 2.0_dp)
+      call bound(error, 'ln sinh', w(6), at(6), 3.0_dp)
+      call bound(error, 'coth', w(7), at(7), 3.5_dp)
+      call bound(error, 'pow / (1 + |y ln x|)', w(8), at(8), 2.0_dp)
+   end subroutine test_derived
+
+   subroutine test_sincos(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      real(dp) :: u, s, c, ws, wc, ats, atc
+      real(qp), parameter :: two_pi_q = 2.0_qp*acos(-1.0_qp)
+      integer :: i
+      call rng%seed(13)
+      ws = 0.0_dp
+      wc = 0.0_dp
+      do i = 1, nsample
+         u = draw(rng, -3.0_dp, 3.0_dp)
+         call sincos_turn(u, s, c)
+         ! absolute error in units of 2**-53, the scale of the angle's own rounding
+         if (abs(s - sin(two_pi_q*u)) > ws*epsilon(1.0_dp)) then
+            ws = real(abs(s - sin(two_pi_q*u)), dp)/epsilon(1.0_dp)
+            ats = u
+         end if
+         if (abs(c - cos(two_pi_q*u)) > wc*epsilon(1.0_dp)) then
+            wc = real(abs(c - cos(two_pi_q*u)), dp)/epsilon(1.0_dp)
+            atc = u
+         end if
+      end do
+      call bound(error, 'sin of a turn (in epsilon)', ws, ats, 1.0_dp)
+      call bound(error, 'cos of a turn (in epsilon)', wc, atc, 1.0_dp)
+   end subroutine test_sincos
+
+   subroutine test_log_gamma(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(rng_type) :: rng
+      real(dp) :: x, w, at, e
+      real(qp) :: ref
+      integer :: i
+      call rng%seed(14)
+      w = 0.0_dp
+      at = 0.0_dp
+      do i = 1, nsample/4
+         x = 10.0_dp**draw(rng, -3.0_dp, 5.0_dp)
+         if (mod(i, 2) == 0) x = 0.5_dp*real(1 + mod(i, 4000), dp)   ! the chi-square shapes
+         ref = log_gamma(real(x, qp))
+         ! in epsilon of the result, or of ln Gamma(16) = 27.9 for x below 16, brought down
+         ! from there (the result passes through 0 at 1 and 2)
+         e = real(abs(log_gamma_dp(x) - ref), dp)/(epsilon(1.0_dp)*max(abs(real(ref, dp)), 27.9_dp))
+         if (e > w) then
+            w = e
+            at = x
+         end if
+      end do
+      call bound(error, 'log gamma (in epsilon of max(|result|, 27.9))', w, at, 4.0_dp)
+   end subroutine test_log_gamma
+
+   subroutine test_special(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), parameter :: big = huge(1.0_dp)
+      real(dp) :: inf, s, c
+      inf = big*2.0_dp
+      call check(error, exp_dp(0.0_dp) == 1.0_dp .and. log_dp(1.0_dp) == 0.0_dp .and. &
+                 expm1_dp(0.0_dp) == 0.0_dp .and. log1p_dp(0.0_dp) == 0.0_dp, 'exp(0), log(1)')
+      if (allocated(error)) return
+      call check(error, exp_dp(710.0_dp) == inf .and. exp_dp(-746.0_dp) == 0.0_dp .and. &
+                 exp_dp(-inf) == 0.0_dp .and. exp_dp(inf) == inf .and. ieee_is_finite(exp_dp(709.78_dp)) .and. &
+                 exp_dp(-745.0_dp) > 0.0_dp, 'exp at the ends of its range')
+      if (allocated(error)) return
+      call check(error, log_dp(0.0_dp) == -inf .and. ieee_is_nan(log_dp(-1.0_dp)) .and. &
+                 log_dp(inf) == inf .and. abs(log_dp(tiny(1.0_dp)*epsilon(1.0_dp)) + 744.44007192138126_dp) < 1e-12_dp, &
+                 'log at 0, below 0, at infinity and of the least subnormal')
+      if (allocated(error)) return
+      call check(error, expm1_dp(1.0e-300_dp) == 1.0e-300_dp .and. log1p_dp(-1.0e-300_dp) == -1.0e-300_dp .and. &
+                 expm1_dp(-50.0_dp) == -1.0_dp .and. log1p_dp(-1.0_dp) == -inf, 'expm1 and log1p at their ends')
+      if (allocated(error)) return
+      call check(error, pow10_dp(2.0_dp) == 100.0_dp .and. pow10_dp(-3.0_dp) == 1.0e-3_dp .and. &
+                 pow10_dp(15.0_dp) == 1.0e15_dp .and. pow_dp(-2.0_dp, 3.0_dp) == -8.0_dp .and. &
+                 ieee_is_nan(pow_dp(-2.0_dp, 0.5_dp)) .and. pow_dp(0.0_dp, 2.0_dp) == 0.0_dp .and. &
+                 pow_dp(0.0_dp, -1.0_dp) == inf .and. pow_dp(5.0_dp, 0.0_dp) == 1.0_dp, 'pow and pow10')
+      if (allocated(error)) return
+      call check(error, sinh_dp(-1.0_dp) == -sinh_dp(1.0_dp) .and. sinh_dp(800.0_dp) == inf .and. &
+                 cosh_dp(0.0_dp) == 1.0_dp .and. asinh_dp(-3.0_dp) == -asinh_dp(3.0_dp) .and. &
+                 asinh_dp(0.0_dp) == 0.0_dp, 'sinh, cosh, asinh')
+      if (allocated(error)) return
+      call sincos_turn(0.25_dp, s, c)
+      call check(error, s == 1.0_dp .and. c == 0.0_dp, 'a quarter turn: sin 1, cos 0 exactly')
+      if (allocated(error)) return
+      call sincos_turn(0.5_dp, s, c)
+      call check(error, s == 0.0_dp .and. c == -1.0_dp, 'a half turn: sin 0, cos -1 exactly')
+      if (allocated(error)) return
+      ! within 4 epsilon of ln Gamma(16), from which they are brought down (as above)
+      call check(error, abs(log_gamma_dp(1.0_dp)) < 4*epsilon(1.0_dp)*27.9_dp .and. &
+                 abs(log_gamma_dp(2.0_dp)) < 4*epsilon(1.0_dp)*27.9_dp .and. &
+                 abs(log_gamma_dp(0.5_dp) - 0.57236494292470008707_dp) < 4*epsilon(1.0_dp)*27.9_dp, &
+                 'log gamma at 1, 2, 1/2')
+   end subroutine test_special
+
+   !> No source under src/ but usharp_math calls the intrinsic exp, log, log10, sinh, cosh,
+   !> tanh, asinh, sin, cos, tan, atan, erfc, gamma or log_gamma (outside comments and
+   !> literals): their C library versions differ in the last bit between processors
+   subroutine test_no_intrinsics(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: list = 'build/test-scratch/src-files.txt'
+      character(len=*), parameter :: names(14) = [character(len=9) :: 'exp', 'log', 'log10', &
+         'sinh', 'cosh', 'tanh', 'asinh', 'sin', 'cos', 'tan', 'atan', 'erfc', 'gamma', 'log_gamma']
+      character(len=1000) :: path, line
+      character(len=:), allocatable :: code, found
+      integer :: lu, u, ios, ios2, stat, lineno, nfiles
+      call execute_command_line('mkdir -p build/test-scratch && find src -name "*.f90" -o -name "*.inc" '// &
+                                '| sort > '//list, exitstat=stat)
+      call check(error, stat == 0, 'could not list the sources')
+      if (allocated(error)) return
+      found = ''
+      nfiles = 0
+      open (newunit=lu, file=list, status='old', action='read')
+      do
+         read (lu, '(a)', iostat=ios) path
+         if (ios /= 0) exit
+         if (index(path, 'usharp_math.f90') > 0) cycle
+         nfiles = nfiles + 1
+         open (newunit=u, file=trim(path), status='old', action='read')
+         lineno = 0
+         do
+            read (u, '(a)', iostat=ios2) line
+            if (ios2 /= 0) exit
+            lineno = lineno + 1
+            code = code_of(line)
+            if (calls_one(code)) found = found//' '//trim(path)//':'//itoa(lineno)
+         end do
+         close (u)
+      end do
+      close (lu)
+      call check(error, nfiles > 50, 'too few sources found')
+      if (allocated(error)) return
+      call check(error, len(found) == 0, 'intrinsic elementary functions called at'//found)
+   contains
+      !> The line without its comment and with its literals blanked
+      function code_of(l) result(c)
+         character(len=*), intent(in) :: l
+         character(len=:), allocatable :: c
+         character :: q
+         integer :: i
+         c = ''
+         q = ' '
+         do i = 1, len_trim(l)
+            if (q /= ' ') then
+               if (l(i:i) == q) q = ' '
+               c = c//' '
+            else if (l(i:i) == '!') then
+               exit
+            else if (l(i:i) == "'" .or. l(i:i) == '"') then
+               q = l(i:i)
+               c = c//' '
+            else
+               c = c//l(i:i)
+            end if
+         end do
+      end function code_of
+      logical function calls_one(c) result(yes)
+         character(len=*), intent(in) :: c
+         character(len=:), allocatable :: lc, rest
+         integer :: k, i, j, n
+         lc = lowercase(c)
+         yes = .false.
+         do k = 1, size(names)
+            n = len_trim(names(k))
+            i = 0
+            do
+               j = index(lc(i + 1:), trim(names(k)))
+               if (j == 0) exit
+               i = i + j
+               if (i > 1) then
+                  if (verify(lc(i - 1:i - 1), 'abcdefghijklmnopqrstuvwxyz0123456789_%') == 0) cycle
+               end if
+               rest = adjustl(lc(i + n:))
+               if (len_trim(rest) == 0) cycle
+               if (rest(1:1) == '(') yes = .true.
+            end do
+         end do
+      end function calls_one
+      function lowercase(c) result(l)
+         character(len=*), intent(in) :: c
+         character(len=len(c)) :: l
+         integer :: i
+         l = c
+         do i = 1, len(c)
+            if (c(i:i) >= 'A' .and. c(i:i) <= 'Z') l(i:i) = achar(iachar(c(i:i)) + 32)
+         end do
+      end function lowercase
+      function itoa(i) result(s)
+         integer, intent(in) :: i
+         character(len=:), allocatable :: s
+         character(len=12) :: b
+         write (b, '(i0)') i
+         s = trim(b)
+      end function itoa
+   end subroutine test_no_intrinsics
+
+end module test_math
