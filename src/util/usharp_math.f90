@@ -397,15 +397,11 @@ contains
       real(dp), intent(in) :: z, n
       real(dp), intent(out) :: p
       real(dp), intent(out), optional :: dp_dz
-      real(dp) :: ls, coth
-      if (present(dp_dz)) then
-         call log_sinh_dp(z, ls, coth)
-         p = exp_dp(n*ls)
-         dp_dz = n*p*coth
-      else
-         call log_sinh_dp(z, ls)
-         p = exp_dp(n*ls)
-      end if
+      real(dp) :: m
+      ! ln sinh z as in log_sinh_dp, written out: this is the hottest call of a simulation
+      m = expm1_dp(-2.0_dp*z)
+      p = exp_dp(n*((z - ln2) + log_dp(-m)))
+      if (present(dp_dz)) dp_dz = n*p*((2.0_dp + m)/(-m))
    end subroutine sinh_power_dp
 
    !> sin and cos of the angle 2 pi u (u in turns), reduced exactly to an octant
