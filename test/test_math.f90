@@ -4,6 +4,7 @@ module test_math
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_rng, only: rng_type
+   use usharp_strings, only: str, lower
    use usharp_math, only: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp, &
                           sinh_dp, cosh_dp, asinh_dp, log_sinh_dp, sincos_turn, log_gamma_dp
    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_is_finite
@@ -268,7 +269,7 @@ contains
             if (ios2 /= 0) exit
             lineno = lineno + 1
             code = code_of(line)
-            if (calls_one(code)) found = found//' '//trim(path)//':'//itoa(lineno)
+            if (calls_one(code)) found = found//' '//trim(path)//':'//str(lineno)
          end do
          close (u)
       end do
@@ -303,7 +304,7 @@ contains
          character(len=*), intent(in) :: c
          character(len=:), allocatable :: lc, rest
          integer :: k, i, j, n
-         lc = lowercase(c)
+         lc = lower(c)
          yes = .false.
          do k = 1, size(names)
             n = len_trim(names(k))
@@ -321,22 +322,6 @@ contains
             end do
          end do
       end function calls_one
-      function lowercase(c) result(l)
-         character(len=*), intent(in) :: c
-         character(len=len(c)) :: l
-         integer :: i
-         l = c
-         do i = 1, len(c)
-            if (c(i:i) >= 'A' .and. c(i:i) <= 'Z') l(i:i) = achar(iachar(c(i:i)) + 32)
-         end do
-      end function lowercase
-      function itoa(i) result(s)
-         integer, intent(in) :: i
-         character(len=:), allocatable :: s
-         character(len=12) :: b
-         write (b, '(i0)') i
-         s = trim(b)
-      end function itoa
    end subroutine test_no_intrinsics
 
 end module test_math

@@ -329,11 +329,8 @@ contains
          else
             y = 0.5_dp*(t + t/(t + 1.0_dp))
          end if
-      else if (a < exp_max) then
-         y = 0.5_dp*exp_dp(a)
       else
-         t = exp_dp(0.5_dp*a)
-         y = (0.5_dp*t)*t
+         y = half_exp(a)
       end if
       y = sign(y, x)
    end function sinh_dp
@@ -351,13 +348,23 @@ contains
       else if (a < 22.0_dp) then
          t = exp_dp(a)
          y = 0.5_dp*t + 0.5_dp/t
-      else if (a < exp_max) then
+      else
+         y = half_exp(a)
+      end if
+   end function cosh_dp
+
+   !> e**a/2 for a >= 22 (where e**-a is below the last place of sinh and cosh), in two
+   !> factors past exp_max so that it overflows only where e**a/2 does
+   elemental real(dp) function half_exp(a) result(y)
+      real(dp), intent(in) :: a
+      real(dp) :: t
+      if (a < exp_max) then
          y = 0.5_dp*exp_dp(a)
       else
          t = exp_dp(0.5_dp*a)
          y = (0.5_dp*t)*t
       end if
-   end function cosh_dp
+   end function half_exp
 
    !> Inverse hyperbolic sine
    elemental real(dp) function asinh_dp(x) result(y)
