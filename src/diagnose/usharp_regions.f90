@@ -8,7 +8,6 @@
 module usharp_regions
    use usharp_kinds, only: dp
    use usharp_math, only: exp_dp, log_dp, sincos_turn
-   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_history, only: history_type
    use usharp_forcing, only: noise_sd
    implicit none
@@ -347,7 +346,7 @@ contains
       integer, parameter :: nb = 12      ! neighbours each side for the background
       real(dp), allocatable :: x(:), d(:), pg(:), ratio(:), nn(:)
       real(dp) :: c, s, ck, sk
-      integer :: m, j, j0, j1, kk, jmax, pmax, a, b
+      integer :: m, j, j0, j1, kk, jk, jmax, pmax, a, b
       pmax = serration_max_period
       if (present(max_period)) pmax = min(pmax, max_period)
       x = pack(e, mask)
@@ -362,9 +361,12 @@ contains
       do j = lbound(pg, 1), j1
          c = 0.0_dp
          s = 0.0_dp
+         jk = 0
          do kk = 1, m
-            ! the angle 2 pi j kk/m in turns, reduced exactly first
-            call sincos_turn(real(modulo(int(j, int64)*kk, int(m, int64)), dp)/m, sk, ck)
+            ! the angle 2 pi j kk/m in turns, reduced exactly first: jk = j kk mod m
+            jk = jk + j
+            if (jk >= m) jk = jk - m
+            call sincos_turn(real(jk, dp)/m, sk, ck)
             c = c + d(kk)*ck
             s = s + d(kk)*sk
          end do

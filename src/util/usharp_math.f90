@@ -7,8 +7,8 @@
 !>
 !> exp: a 64-entry table of 2**(j/64) in two parts and a degree-6 polynomial on
 !> |r| <= ln2/128; log: x = 2**e (1 + f) with sqrt(1/2) <= 1 + f < sqrt(2) and the series
-!> of 2 atanh(f/(2 + f)). Both within about 1 unit in the last place (the test suite checks
-!> them against the C library over millions of arguments).
+!> of 2 atanh(f/(2 + f)). Both within about 1 unit in the last place (the test suite's math
+!> suite checks every function here against quadruple precision).
 module usharp_math
    use usharp_kinds, only: dp
    use, intrinsic :: iso_fortran_env, only: int64
@@ -16,7 +16,7 @@ module usharp_math
    private
 
    public :: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp
-   public :: sinh_dp, cosh_dp, asinh_dp, log_sinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp
+   public :: asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp
 
    !> ln 2 = ln2_hi + ln2_lo, ln2_hi with 32 significant bits (so that k*ln2_hi is exact for
    !> |k| < 2**21)
@@ -313,59 +313,6 @@ contains
       y = y + y*(err + x*ln10_lo)
    end function pow10_dp
 
-   !> Hyperbolic sine
-   elemental real(dp) function sinh_dp(x) result(y)
-      real(dp), intent(in) :: x
-      real(dp) :: a, t
-      a = abs(x)
-      if (is_nan(x)) then
-         y = x
-         return
-      else if (a < 22.0_dp) then
-         ! (e**a - e**-a)/2 = (t + t/(t + 1))/2, t = e**a - 1
-         t = expm1_dp(a)
-         if (a < 1.0_dp) then
-            y = 0.5_dp*(2.0_dp*t - t*t/(t + 1.0_dp))
-         else
-            y = 0.5_dp*(t + t/(t + 1.0_dp))
-         end if
-      else
-         y = half_exp(a)
-      end if
-      y = sign(y, x)
-   end function sinh_dp
-
-   !> Hyperbolic cosine
-   elemental real(dp) function cosh_dp(x) result(y)
-      real(dp), intent(in) :: x
-      real(dp) :: a, t
-      a = abs(x)
-      if (is_nan(x)) then
-         y = x
-      else if (a < 0.5_dp*ln2) then
-         t = expm1_dp(a)
-         y = 1.0_dp + t*t/(2.0_dp*(1.0_dp + t))
-      else if (a < 22.0_dp) then
-         t = exp_dp(a)
-         y = 0.5_dp*t + 0.5_dp/t
-      else
-         y = half_exp(a)
-      end if
-   end function cosh_dp
-
-   !> e**a/2 for a >= 22 (where e**-a is below the last place of sinh and cosh), in two
-   !> factors past exp_max so that it overflows only where e**a/2 does
-   elemental real(dp) function half_exp(a) result(y)
-      real(dp), intent(in) :: a
-      real(dp) :: t
-      if (a < exp_max) then
-         y = 0.5_dp*exp_dp(a)
-      else
-         t = exp_dp(0.5_dp*a)
-         y = (0.5_dp*t)*t
-      end if
-   end function half_exp
-
    !> Inverse hyperbolic sine
    elemental real(dp) function asinh_dp(x) result(y)
       real(dp), intent(in) :: x
@@ -385,28 +332,16 @@ contains
       y = sign(y, x)
    end function asinh_dp
 
-   !> ln(sinh z) for z > 0, and (if asked) coth z, its derivative: z - ln2 + ln(1 - e**-2z)
-   !> costs two of these functions where ln(sinh z) costs three (sinh takes two)
-   elemental subroutine log_sinh_dp(z, y, coth)
-      real(dp), intent(in) :: z
-      real(dp), intent(out) :: y
-      real(dp), intent(out), optional :: coth
-      real(dp) :: m
-      m = expm1_dp(-2.0_dp*z)      ! e**-2z - 1, in (-1, 0)
-      y = (z - ln2) + log_dp(-m)
-      if (present(coth)) coth = (2.0_dp + m)/(-m)
-   end subroutine log_sinh_dp
-
    !> sinh(z)**n for 0 < z <= 700, and (if asked) its derivative n sinh(z)**n coth z, as
-   !> exp(n ln sinh z): the power law of the Miller model's flow and recovery, most of a
-   !> simulation's time (one call, its parts inlined here)
+   !> exp(n ln sinh z) with ln sinh z = z - ln2 + ln(1 - e**-2z) and coth z from the same
+   !> e**-2z - 1: two of these functions where sinh, ln and exp would take four. The power
+   !> law of the Miller model's flow and recovery, most of a simulation's time.
    elemental subroutine sinh_power_dp(z, n, p, dp_dz)
       real(dp), intent(in) :: z, n
       real(dp), intent(out) :: p
       real(dp), intent(out), optional :: dp_dz
       real(dp) :: m
-      ! ln sinh z as in log_sinh_dp, written out: this is the hottest call of a simulation
-      m = expm1_dp(-2.0_dp*z)
+      m = expm1_dp(-2.0_dp*z)      ! e**-2z - 1, in (-1, 0)
       p = exp_dp(n*((z - ln2) + log_dp(-m)))
       if (present(dp_dz)) dp_dz = n*p*((2.0_dp + m)/(-m))
    end subroutine sinh_power_dp
