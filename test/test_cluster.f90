@@ -34,7 +34,7 @@ contains
          new_unittest('diagnose-resume-refused-after-input-changed', test_diagnose_changed), &
          new_unittest('mpi-diagnose-2-ranks-stopped-resume-on-1-rank', test_mpi_diagnose_resume), &
          new_unittest('mpi-unequal-starts-dealt-same-on-1-and-2-ranks', test_mpi_unequal_starts), &
-         new_unittest('mpi-one-start-lm-in-lockstep-same-on-1-and-2-ranks', test_mpi_lockstep)]
+         new_unittest('mpi-one-start-lm-helped-same-on-1-and-2-ranks', test_mpi_helped)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -243,14 +243,26 @@ contains
                  'no identifiability report in the 2-rank summary')
    end subroutine test_mpi_unequal_starts
 
-   !> A Levenberg-Marquardt fit of one start on 2 ranks in lockstep (each simulates its share
-   !> of every difference Jacobian's points): the journal, cache, logs, result and report of
-   !> 1 rank, bit for bit
-   subroutine test_mpi_lockstep(error)
+   !> A Levenberg-Marquardt fit of one start on 2 ranks: rank 0 searches, rank 1 simulates
+   !> its share of every difference Jacobian's points (it has no start of its own, so it
+   !> helps from the first Jacobian on, whatever the timing): the journal, cache, logs,
+   !> result and report of 1 rank, bit for bit, and the summary counts rank 1's points
+   subroutine test_mpi_helped(error)
       type(error_type), allocatable, intent(out) :: error
-      call check_same_on_ranks(error, 'mpi-lockstep', 'run '//multistart_deck(0, 40), [character(len=20) :: &
+      character(len=:), allocatable :: summary, tail
+      character(len=*), parameter :: key = 'ranks 2; simulated for another rank''s search: 0, '
+      integer :: at, n, stat
+      call check_same_on_ranks(error, 'mpi-helped', 'run '//multistart_deck(0, 40), [character(len=20) :: &
          'fit.journal', 'fit.cache', 'fit.log', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'identify.txt'])
-   end subroutine test_mpi_lockstep
+      if (allocated(error)) return
+      summary = read_text(scratch_dir//'/mpi-helped-2/summary.txt')
+      at = index(summary, key)
+      call check(error, at > 0, 'no count of the helped points in the 2-rank summary')
+      if (allocated(error)) return
+      tail = summary(at + len(key):)
+      read (tail, *, iostat=stat) n
+      call check(error, stat == 0 .and. n > 0, 'rank 1 simulated no point for rank 0: '//tail)
+   end subroutine test_mpi_helped
 
    !> A command on 1 rank and on 2 ranks into two folders; the files named must be the same
    !> (the self-check's report after its time is taken out)

@@ -134,6 +134,9 @@ contains
             str(out%nsimulated)//' simulated), iterations '// &
             str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
             real_str(out%seconds, 'f10.2')//' s']
+         if (size(out%helped) > 1) summary = [character(len=200) :: summary, &
+            '  ranks '//str(size(out%helped))//'; simulated for another rank''s search: '// &
+            join_counts(out%helped)]
          do i = 1, size(cfg%tests)
             summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
                real_str(out%per_test(i), 'es12.5')//merged_note(prob%targets(i)%exp%nmerged)]
@@ -174,6 +177,17 @@ contains
 
    !> What a summary says of a test whose data repeat a time (a logger's two rows at one
    !> time stamp, averaged into one as the data are read)
+   !> Counts as "1, 2, 3" (at least one)
+   pure function join_counts(n) result(text)
+      integer, intent(in) :: n(:)
+      character(len=:), allocatable :: text
+      integer :: k
+      text = str(n(1))
+      do k = 2, size(n)
+         text = text//', '//str(n(k))
+      end do
+   end function join_counts
+
    pure function merged_note(nmerged) result(note)
       integer, intent(in) :: nmerged
       character(len=:), allocatable :: note

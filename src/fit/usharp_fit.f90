@@ -24,7 +24,8 @@ module usharp_fit
    use usharp_config, only: run_config
    use usharp_mpi, only: n_ranks, this_rank, is_root, share, parallel_sync, tasks_per_share, &
                          task_deal, ranks_that_ran, any_rank, transfer_set, post_send, post_receive, &
-                         header_waiting, receive_header
+                         header_waiting, receive_header, block_of, send_packet, receive_packet, &
+                         tag_help, tag_help_result, counts_of_ranks
    implicit none
    private
 
@@ -82,9 +83,6 @@ module usharp_fit
       logical :: capture = .false.
       !> Stop with stat_exhausted where a simulation would be needed (replay what is there)
       logical :: replay_only = .false.
-      !> Every rank runs this same search at once and they split each batch of points (see
-      !> fit_problem's batch); a stop is decided by all; the ranks other than 0 keep nothing
-      logical :: lockstep = .false.
       character(len=:), allocatable :: tag  !< before the evaluation's number in external work folders
       type(journal_record), allocatable :: kept(:)
       type(cached_jacobian), allocatable :: kept_jac(:)
@@ -92,6 +90,10 @@ module usharp_fit
       integer, allocatable :: start_eval(:), start_sens(:)  !< first evaluation, Jacobian of each start
       integer :: start_now = 0  !< the start being searched
       character(len=:), allocatable :: fingerprint  !< of the inputs, for the logs' first line
+      !> The deal of the run's starts over the ranks: ranks out of starts help with this
+      !> search's batches (see shared_batch)
+      type(task_deal), pointer :: deal => null()
+      integer :: nhelped = 0  !< points this rank simulated for another rank's search
    contains
       procedure :: eval => fit_eval
       procedure :: residuals => fit_residuals
@@ -110,6 +112,8 @@ module usharp_fit
       integer :: nfail = 0, ninvalid = 0, nreplayed = 0
       integer :: nsimulated = 0  !< evaluations and sensitivity Jacobians simulated in this run
       integer :: nstarts = 1  !< local searches run (multi-start)
+      !> On each MPI rank, the points it simulated for another rank's search (see shared_batch)
+      integer, allocatable :: helped(:)
       real(dp) :: seconds = 0.0_dp
    end type fit_outcome
 
@@ -179,40 +183,17 @@ contains
       if (.not. done) then
          call may_simulate(self, error)
          if (allocated(error)) return
-         if (self%lockstep) then
-            call jacobian_of_root(self, x, jac, done)
-         else
-            call self%prob%jacobian(x, jac, done)
-         end if
+         call self%prob%jacobian(x, jac, done)
          self%nsimulated = self%nsimulated + 1
       end if
       if (.not. done) return
       self%nsens = i
-      if (self%lockstep .and. .not. is_root()) return
       if (self%capture) then
          self%kept_jac = [self%kept_jac, cached_jacobian(x, jac)]
       else
          call self%log%record_jacobian(i, x, jac, error)
       end if
    end subroutine fit_jacobian
-
-   !> A sensitivity Jacobian computed by rank 0 and sent to every rank (lockstep: one
-   !> simulation, not split)
-   subroutine jacobian_of_root(self, x, jac, done)
-      class(fit_objective), intent(inout) :: self
-      real(dp), intent(in) :: x(:)
-      real(dp), intent(out) :: jac(:, :)
-      logical, intent(out) :: done
-      real(dp), allocatable :: flat(:)
-      done = .false.
-      if (is_root()) then
-         call self%prob%jacobian(x, jac, done)
-         flat = reshape(jac, [size(jac)])
-      end if
-      call share(flat, 0)
-      jac = reshape(flat, shape(jac))
-      done = any_rank(done)
-   end subroutine jacobian_of_root
 
    !> Residuals at several points, simulated in parallel (OpenMP) and then logged in order,
    !> so the logs and the result do not depend on the number of threads
@@ -245,9 +226,8 @@ contains
       if (nr < size(xs, 2)) then
          call may_simulate(self, error)
          if (allocated(error)) return
-         call self%prob%batch(xs(:, nr + 1:), k0 + nr, rs(:, nr + 1:), fs(nr + 1:), &
-                              per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:), tag_of(self), &
-                              self%lockstep)
+         call shared_batch(self, xs(:, nr + 1:), k0 + nr, rs(:, nr + 1:), fs(nr + 1:), &
+                           per_test(:, nr + 1:), status(nr + 1:), messages(nr + 1:))
          self%nsimulated = self%nsimulated + size(xs, 2) - nr
          call check_stop(self, error)
          if (allocated(error)) return
@@ -259,6 +239,84 @@ contains
          ok(j) = status(j) == eval_ok
       end do
    end subroutine fit_residuals
+
+   !> The points xs (evaluations k0 + j) simulated as one batch: by this rank alone, or, in a
+   !> multi-start run whose other ranks are out of starts, in blocks with the helpers this
+   !> rank can claim (see task_deal), each block simulated where it was sent. A point is
+   !> simulated the same wherever it runs, so the results are those of one rank, bit for bit.
+   subroutine shared_batch(self, xs, k0, rs, fs, per_test, status, messages)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      integer, intent(in) :: k0
+      real(dp), intent(out) :: rs(:, :), fs(:), per_test(:, :)
+      integer, intent(out) :: status(:)
+      character(len=message_len), intent(out) :: messages(:)
+      integer, allocatable :: helpers(:), ints(:)
+      real(dp), allocatable :: reals(:)
+      character(len=:), allocatable :: text
+      integer :: n, nw, w, lo, hi, from, m, nt, j, b
+      n = size(xs, 2)
+      allocate (helpers(0))
+      if (associated(self%deal) .and. n > 1) then
+         ! No more helpers than points beside this rank's own block
+         call self%deal%claim(n - 1)
+         helpers = self%deal%helper_ranks()
+      end if
+      nw = 1 + size(helpers)
+      do w = 1, nw - 1
+         call block_of(n, w, nw, lo, hi)
+         call send_packet(helpers(w), tag_help, [1, k0 + lo - 1, hi - lo + 1], &
+                          reshape(xs(:, lo:hi), [size(xs, 1)*(hi - lo + 1)]), tag_of(self))
+      end do
+      call block_of(n, 0, nw, lo, hi)
+      call self%prob%batch(xs(:, lo:hi), k0 + lo - 1, rs(:, lo:hi), fs(lo:hi), per_test(:, lo:hi), &
+                           status(lo:hi), messages(lo:hi), tag_of(self))
+      m = size(rs, 1)
+      nt = size(per_test, 1)
+      do w = 1, nw - 1
+         call block_of(n, w, nw, lo, hi)
+         b = hi - lo + 1
+         from = helpers(w)
+         call receive_packet(from, tag_help_result, ints, reals, text)
+         status(lo:hi) = ints
+         rs(:, lo:hi) = reshape(reals(1:m*b), [m, b])
+         fs(lo:hi) = reals(m*b + 1:(m + 1)*b)
+         per_test(:, lo:hi) = reshape(reals((m + 1)*b + 1:), [nt, b])
+         do j = lo, hi
+            messages(j) = text((j - lo)*message_len + 1:(j - lo + 1)*message_len)
+         end do
+      end do
+   end subroutine shared_batch
+
+   !> A rank out of starts: simulate the blocks of points the ranks still at work send it
+   !> (see shared_batch) until every rank is out of starts
+   subroutine help_others(prob, deal, nhelped)
+      type(fit_problem), intent(in) :: prob
+      type(task_deal), intent(inout) :: deal
+      !> points simulated, added to
+      integer, intent(inout) :: nhelped
+      integer, allocatable :: ints(:)
+      real(dp), allocatable :: reals(:), rs(:, :), fs(:), per_test(:, :)
+      character(len=:), allocatable :: tag, text
+      character(len=message_len), allocatable :: messages(:)
+      integer, allocatable :: status(:)
+      integer :: owner, n, nx, j
+      if (.not. deal%offer()) return
+      nx = size(prob%idx)
+      do while (deal%await(owner, ints, reals, tag))
+         n = ints(3)
+         nhelped = nhelped + n
+         allocate (rs(prob%nres(), n), fs(n), per_test(size(prob%targets), n), status(n), messages(n))
+         call prob%batch(reshape(reals, [nx, n]), ints(2), rs, fs, per_test, status, messages, tag)
+         allocate (character(len=n*message_len) :: text)
+         do j = 1, n
+            text((j - 1)*message_len + 1:j*message_len) = messages(j)
+         end do
+         call send_packet(owner, tag_help_result, status, [reshape(rs, [size(rs)]), fs, &
+                          reshape(per_test, [size(per_test)])], text)
+         deallocate (rs, fs, per_test, status, messages, text)
+      end do
+   end subroutine help_others
 
    !> When resuming, evaluation k must be at the journal's point (the search is deterministic)
    subroutine check_replay(self, k, x, error)
@@ -312,11 +370,6 @@ contains
       type(error_type), allocatable, intent(out) :: error
       integer :: sig
       sig = stop_signal()
-      ! In lockstep every rank stops at the same evaluation
-      if (self%lockstep) then
-         if (.not. any_rank(sig /= 0)) return
-         sig = max(sig, 15)
-      end if
       if (sig == 0) return
       call fatal_error(error, 'stopped by signal '//str(sig)//' after '//str(self%nevals)// &
                        ' evaluations; continue with --resume', 128 + sig)
@@ -336,7 +389,7 @@ contains
       self%nevals = self%nevals + 1
       k = self%nevals
       if (self%capture) then
-         if (.not. self%lockstep) call keep(self, x, f, per_test, status, message, r)
+         call keep(self, x, f, per_test, status, message, r)
       else
          call self%log%record(k, status, f, per_test, x, self%constants_of(x), error, r)
          if (allocated(error)) return
@@ -461,16 +514,9 @@ contains
       obj%nresumed = size(obj%replay)
       obj%fingerprint = fingerprint
       parallel = n_ranks() > 1 .and. prob%cfg%fit%multistart > 0
-      ! A Levenberg-Marquardt fit of one start is made by every rank at once, each simulating
-      ! its share of every batch of points (the difference Jacobian's columns); the direct
-      ! searches of one start evaluate one point at a time, made by rank 0 alone
-      obj%lockstep = n_ranks() > 1 .and. .not. parallel .and. prob%cfg%fit%method == 'lm'
       ! Under MPI, rank 0 alone writes the logs, once every rank has read the journal
       call parallel_sync()
-      if (.not. is_root()) then
-         obj%capture = .true.
-         if (.not. (parallel .or. obj%lockstep)) return
-      end if
+      if (.not. is_root()) obj%capture = .true.
       if (is_root()) call obj%log%open(dir, fingerprint, prob%nres(), size(prob%idx), error)
       if (allocated(error)) then
          call obj%log%close()
@@ -484,8 +530,9 @@ contains
       if (parallel) then
          call parallel_search(obj, outcome%opt, outcome%nstarts, error)
       else
-         call search(obj, outcome%opt, outcome%nstarts, error)
+         call helped_search(obj, outcome%opt, outcome%nstarts, error)
       end if
+      outcome%helped = counts_of_ranks(obj%nhelped)
       if (.not. is_root()) then
          call release_stop_signals()
          return
@@ -638,6 +685,27 @@ contains
       end associate
    end subroutine search
 
+   !> One search, made by rank 0 with its logs written as it goes; the other ranks help with
+   !> its batches of points (the columns of a difference Jacobian, see shared_batch). The
+   !> direct searches evaluate one point at a time: they are rank 0's alone.
+   subroutine helped_search(obj, opt, nstarts, error)
+      type(fit_objective), intent(inout) :: obj
+      type(optimum_type), intent(out) :: opt
+      integer, intent(out) :: nstarts
+      type(error_type), allocatable, intent(out) :: error
+      type(task_deal), target :: deal
+      ! No task to deal: the deal only pairs rank 0 with its helpers
+      call deal%open(1, 0)
+      nstarts = 1
+      if (is_root()) then
+         obj%deal => deal
+         call search(obj, opt, nstarts, error)
+         obj%deal => null()
+      end if
+      call help_others(obj%prob, deal, obj%nhelped)
+      call deal%close()
+   end subroutine helped_search
+
    !> The starts of a multi-start fit spread over the MPI ranks in chunks (see tasks_per_share),
    !> each start to the next rank that is free (OpenMP threads inside each start), each
    !> searched on its own with its evaluations kept. A rank sends each start it finishes to
@@ -657,7 +725,7 @@ contains
       type(fit_objective) :: dry, w, live
       type(optimum_type) :: one, best
       type(error_type), allocatable :: e, live_error
-      type(task_deal) :: deal
+      type(task_deal), target :: deal
       integer, allocatable :: owner(:)
       logical, allocatable :: ready(:), headed(:)
       integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk, next
@@ -721,8 +789,10 @@ contains
             w%replay = logs(s)%recs
             w%replay_jac = logs(s)%jacs
             w%tag = 'start'//str(s)//'-'
+            w%deal => deal
             if (is_root() .and. associated(obj%progress)) w%progress => obj%progress
             call search(w, one, n, e, s, s)
+            call deal%release()
             logs(s)%recs = w%kept(:w%nkept)
             logs(s)%jacs = w%kept_jac
             logs(s)%nsimulated = w%nsimulated
@@ -737,6 +807,8 @@ contains
             end if
             if (allocated(e)) exit
          end do
+         ! Out of starts: help the ranks still at work with their batches until all are out
+         call help_others(obj%prob, deal, obj%nhelped)
          call deal%close()
          owner(s0:s1) = ranks_that_ran(logs(s0:s1)%stat /= stat_not_run)
          stopped = any(owner(s0:s1) < 0)

@@ -1,8 +1,9 @@
 !> The one place that speaks MPI (the mpi_f08 module): start and stop, this process's rank and
 !> the number of ranks, and the broadcasts with which independent results computed on the
 !> ranks are shared so that every rank (and rank 0, which writes the files) holds them in one
-!> fixed order; the deal that hands independent tasks to the ranks as they become free; the
-!> blocks of a batch of points that ranks in lockstep split among them. A program started
+!> fixed order; the deal that hands independent tasks to the ranks as they become free, and
+!> pairs the ranks out of tasks, as helpers, with those still at work; the blocks of a batch
+!> of points that ranks in lockstep split among them. A program started
 !> without an MPI launcher (mpirun, srun) does not start MPI at all: it is a single rank and
 !> every procedure here makes no MPI call.
 module usharp_mpi
@@ -15,7 +16,8 @@ module usharp_mpi
                       MPI_DOUBLE_PRECISION, MPI_CHARACTER, MPI_LOGICAL, MPI_LOR, MPI_SUM, &
                       MPI_THREAD_FUNNELED, MPI_MAX, MPI_Win, MPI_Win_allocate, MPI_Win_free, &
                       MPI_Win_lock_all, MPI_Win_unlock_all, MPI_Win_lock, MPI_Win_unlock, MPI_Put, &
-                      MPI_Fetch_and_op, MPI_Win_flush, MPI_LOCK_EXCLUSIVE, MPI_INFO_NULL, MPI_ADDRESS_KIND
+                      MPI_Fetch_and_op, MPI_Win_flush, MPI_LOCK_EXCLUSIVE, MPI_INFO_NULL, MPI_ADDRESS_KIND, &
+                      MPI_Send, MPI_Compare_and_swap, MPI_Get_accumulate, MPI_NO_OP, MPI_REPLACE
    use, intrinsic :: iso_c_binding, only: c_ptr
    use usharp_kinds, only: dp
    use usharp_strings, only: str
@@ -26,21 +28,41 @@ module usharp_mpi
    public :: share, any_rank, parallel_sync, parallel_description, tasks_per_share, sum_over_ranks
    public :: task_deal, ranks_that_ran, block_of, share_blocks
    public :: transfer_set, post_send, post_receive, header_waiting, receive_header
+   public :: send_packet, receive_packet, counts_of_ranks
 
    !> Tasks first to last handed out one at a time to whichever rank asks first (a rank asks
    !> when it is free, so unequal tasks even out): a counter on rank 0 that every rank
    !> fetches and increments atomically (MPI one-sided, passive target), or a plain counter
-   !> when there is one rank
+   !> when there is one rank.
+   !>
+   !> A rank out of tasks may offer itself as a helper to the ranks still at work: a rank at
+   !> work claims free helpers (claim) and hands each a block of a batch of independent
+   !> points (send_packet to it, receive_packet of its results), keeping them until its task
+   !> ends (release). The claims sit beside the counter on rank 0, one per rank, changed
+   !> atomically: free, not offered, or the rank that holds it. The last rank to run out of
+   !> tasks sends every other rank the stop (see offer, await).
    type :: task_deal
       private
       integer :: next = 0, last = 0
       logical :: shared = .false.
       type(MPI_Win) :: win
+      integer, allocatable :: helpers(:)  !< the ranks this rank holds
    contains
       procedure :: open => deal_open
       procedure :: take => deal_take
       procedure :: close => deal_close
+      procedure :: claim => deal_claim
+      procedure :: release => deal_release
+      procedure :: helper_ranks => deal_helper_ranks
+      procedure :: offer => deal_offer
+      procedure :: await => deal_await
    end type task_deal
+
+   ! The deal's window on rank 0: the next task, the ranks out of tasks, then each rank's claim
+   integer, parameter :: slot_next = 0, slot_out = 1, slot_claim = 2
+   integer, parameter :: claim_not_offered = -1, claim_free = -2
+   ! The tag of the work a rank hands its helpers (and of the stop), and of their results
+   integer, parameter, public :: tag_help = 81, tag_help_result = 82
 
    !> Non-blocking transfers in flight between a rank and rank 0 (a stream of results that
    !> rank 0 takes as they come while the ranks work on): their buffers must stay in place,
@@ -182,9 +204,10 @@ contains
       logical, intent(in), optional :: alone
       integer(MPI_ADDRESS_KIND) :: bytes
       type(c_ptr) :: base
-      integer :: start(1)
+      integer, allocatable :: start(:)
       self%next = first
       self%last = last
+      self%helpers = [integer ::]
       self%shared = running()
       if (present(alone)) self%shared = self%shared .and. .not. alone
       if (.not. self%shared) return
@@ -192,13 +215,17 @@ contains
          self%shared = .false.
          return
       end if
+      allocate (start(slot_claim + n_ranks()))
       bytes = 0
-      if (is_root()) bytes = storage_size(start)/8
+      if (is_root()) bytes = storage_size(start)/8*size(start)
       call MPI_Win_allocate(bytes, storage_size(start)/8, MPI_INFO_NULL, MPI_COMM_WORLD, base, self%win)
       if (is_root()) then
-         start = first
+         start = claim_not_offered
+         start(slot_next + 1) = first
+         start(slot_out + 1) = 0
          call MPI_Win_lock(MPI_LOCK_EXCLUSIVE, 0, 0, self%win)
-         call MPI_Put(start, 1, MPI_INTEGER, 0, 0_MPI_ADDRESS_KIND, 1, MPI_INTEGER, self%win)
+         call MPI_Put(start, size(start), MPI_INTEGER, 0, 0_MPI_ADDRESS_KIND, size(start), MPI_INTEGER, &
+                      self%win)
          call MPI_Win_unlock(0, self%win)
       end if
       ! No rank takes a task before the counter holds first
@@ -209,12 +236,8 @@ contains
    !> The next task for this rank, or 0 when all are taken
    integer function deal_take(self) result(k)
       class(task_deal), intent(inout) :: self
-      integer :: one, got
       if (self%shared) then
-         one = 1
-         call MPI_Fetch_and_op(one, got, MPI_INTEGER, 0, 0_MPI_ADDRESS_KIND, MPI_SUM, self%win)
-         call MPI_Win_flush(0, self%win)
-         k = got
+         k = fetch_add(self, slot_next, 1)
       else
          k = self%next
          self%next = self%next + 1
@@ -222,7 +245,8 @@ contains
       if (k > self%last) k = 0
    end function deal_take
 
-   !> Stop dealing (every rank that opened it shared must call it, after its last task)
+   !> Stop dealing (every rank that opened it shared must call it, after its last task and,
+   !> where it offered itself, after await said stop)
    subroutine deal_close(self)
       class(task_deal), intent(inout) :: self
       if (.not. self%shared) return
@@ -230,6 +254,139 @@ contains
       call MPI_Win_free(self%win)
       self%shared = .false.
    end subroutine deal_close
+
+   !> Claim free helpers until this rank holds want of them (or none is free); a rank at
+   !> work calls it before a batch it could share
+   subroutine deal_claim(self, want)
+      class(task_deal), intent(inout) :: self
+      integer, intent(in) :: want
+      integer, allocatable :: state(:)
+      integer :: r, old, nothing(1)
+      if (.not. self%shared .or. size(self%helpers) >= want) return
+      allocate (state(1 + n_ranks()))
+      ! One atomic read of the count out of tasks and of the claims: none out, none free
+      nothing = 0
+      call MPI_Get_accumulate(nothing, 0, MPI_INTEGER, state, size(state), MPI_INTEGER, 0, &
+                              int(slot_out, MPI_ADDRESS_KIND), size(state), MPI_INTEGER, MPI_NO_OP, self%win)
+      call MPI_Win_flush(0, self%win)
+      if (state(1) == 0) return
+      do r = 0, n_ranks() - 1
+         if (size(self%helpers) >= want) exit
+         if (state(2 + r) /= claim_free) cycle
+         call MPI_Compare_and_swap(this_rank(), claim_free, old, MPI_INTEGER, 0, &
+                                   int(slot_claim + r, MPI_ADDRESS_KIND), self%win)
+         call MPI_Win_flush(0, self%win)
+         if (old == claim_free) self%helpers = [self%helpers, r]
+      end do
+   end subroutine deal_claim
+
+   !> Free the helpers this rank holds (at the end of its task: another rank may need them)
+   subroutine deal_release(self)
+      class(task_deal), intent(inout) :: self
+      integer :: k
+      if (.not. self%shared) return
+      do k = 1, size(self%helpers)
+         call put_atomic(self, slot_claim + self%helpers(k), claim_free)
+      end do
+      self%helpers = [integer ::]
+   end subroutine deal_release
+
+   !> The ranks this rank holds as helpers, in the order claimed
+   pure function deal_helper_ranks(self) result(ranks)
+      class(task_deal), intent(in) :: self
+      integer, allocatable :: ranks(:)
+      ranks = self%helpers
+   end function deal_helper_ranks
+
+   !> This rank is out of tasks: free its helpers and offer itself as one. False when it was
+   !> the last rank at work (it has sent every other rank the stop and helps no one): else
+   !> it serves work (await) until the stop comes
+   logical function deal_offer(self) result(serving)
+      class(task_deal), intent(inout) :: self
+      integer :: r
+      serving = .false.
+      if (.not. self%shared) return
+      call self%release()
+      call put_atomic(self, slot_claim + this_rank(), claim_free)
+      if (fetch_add(self, slot_out, 1) + 1 < n_ranks()) then
+         serving = .true.
+         return
+      end if
+      ! Every rank is out of tasks and no rank holds a helper: nothing else is in flight
+      do r = 0, n_ranks() - 1
+         if (r /= this_rank()) call send_packet(r, tag_help, [0], [real(dp) ::], '')
+      end do
+   end function deal_offer
+
+   !> A helper's next work: its packet (ints(1) > 0) and the rank to send the results to;
+   !> false at the stop
+   logical function deal_await(self, owner, ints, reals, text) result(working)
+      class(task_deal), intent(inout) :: self
+      integer, intent(out) :: owner
+      integer, allocatable, intent(out) :: ints(:)
+      real(dp), allocatable, intent(out) :: reals(:)
+      character(len=:), allocatable, intent(out) :: text
+      owner = -1
+      call receive_packet(owner, tag_help, ints, reals, text)
+      working = self%shared .and. ints(1) > 0
+   end function deal_await
+
+   !> Atomically add inc to a slot of the deal's window; the value before
+   integer function fetch_add(self, slot, inc) result(before)
+      class(task_deal), intent(inout) :: self
+      integer, intent(in) :: slot, inc
+      call MPI_Fetch_and_op(inc, before, MPI_INTEGER, 0, int(slot, MPI_ADDRESS_KIND), MPI_SUM, self%win)
+      call MPI_Win_flush(0, self%win)
+   end function fetch_add
+
+   !> Atomically set a slot of the deal's window
+   subroutine put_atomic(self, slot, value)
+      class(task_deal), intent(inout) :: self
+      integer, intent(in) :: slot, value
+      integer :: old
+      call MPI_Fetch_and_op(value, old, MPI_INTEGER, 0, int(slot, MPI_ADDRESS_KIND), MPI_REPLACE, self%win)
+      call MPI_Win_flush(0, self%win)
+   end subroutine put_atomic
+
+   !> Send a packet (integers, reals, text: three messages with one tag) to a rank; blocking
+   subroutine send_packet(to, tag, ints, reals, text)
+      integer, intent(in) :: to, tag
+      integer, intent(in) :: ints(:)
+      real(dp), intent(in) :: reals(:)
+      character(len=*), intent(in) :: text
+      call MPI_Send(ints, size(ints), MPI_INTEGER, to, tag, MPI_COMM_WORLD)
+      call MPI_Send(reals, size(reals), MPI_DOUBLE_PRECISION, to, tag, MPI_COMM_WORLD)
+      call MPI_Send(text, len(text), MPI_CHARACTER, to, tag, MPI_COMM_WORLD)
+   end subroutine send_packet
+
+   !> Receive a packet (see send_packet) from a rank, or from any rank when from < 0 (from is
+   !> then the sender); blocking. The messages from one sender with one tag arrive in order.
+   subroutine receive_packet(from, tag, ints, reals, text)
+      integer, intent(inout) :: from
+      integer, intent(in) :: tag
+      integer, allocatable, intent(out) :: ints(:)
+      real(dp), allocatable, intent(out) :: reals(:)
+      character(len=:), allocatable, intent(out) :: text
+      type(MPI_Status) :: status
+      integer :: n
+      if (from < 0) then
+         call MPI_Probe(MPI_ANY_SOURCE, tag, MPI_COMM_WORLD, status)
+         from = status%MPI_SOURCE
+      else
+         call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
+      end if
+      call MPI_Get_count(status, MPI_INTEGER, n)
+      allocate (ints(n))
+      call MPI_Recv(ints, n, MPI_INTEGER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
+      call MPI_Get_count(status, MPI_DOUBLE_PRECISION, n)
+      allocate (reals(n))
+      call MPI_Recv(reals, n, MPI_DOUBLE_PRECISION, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
+      call MPI_Get_count(status, MPI_CHARACTER, n)
+      allocate (character(len=n) :: text)
+      call MPI_Recv(text, n, MPI_CHARACTER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+   end subroutine receive_packet
 
    !> The rank that ran each task, from each rank's own list of which it ran (-1: none
    !> did); every rank must call it
@@ -302,6 +459,18 @@ contains
       total = n
       if (running()) call MPI_Allreduce(n, total, 1, MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
    end function sum_over_ranks
+
+   !> Each rank's n, in the order of the ranks (every rank must call it)
+   function counts_of_ranks(n) result(counts)
+      integer, intent(in) :: n
+      integer, allocatable :: counts(:)
+      integer, allocatable :: mine(:)
+      allocate (mine(n_ranks()))
+      mine = 0
+      mine(this_rank() + 1) = n
+      counts = mine
+      if (running()) call MPI_Allreduce(mine, counts, size(mine), MPI_INTEGER, MPI_SUM, MPI_COMM_WORLD)
+   end function counts_of_ranks
 
    !> Whether flag is true on any rank (every rank must call it)
    logical function any_rank(flag) result(any_true)
