@@ -94,10 +94,15 @@ module usharp_fit
       !> search's batches (see shared_batch)
       type(task_deal), pointer :: deal => null()
       integer :: nhelped = 0  !< points this rank simulated for another rank's search
+      !> Points sent ahead to helpers (see fit_prefetch) whose results are not taken yet,
+      !> and the helpers that have them
+      real(dp), allocatable :: ahead(:, :)
+      integer, allocatable :: ahead_helpers(:)
    contains
       procedure :: eval => fit_eval
       procedure :: residuals => fit_residuals
       procedure :: jacobian => fit_jacobian
+      procedure :: prefetch => fit_prefetch
       procedure :: nres => fit_nres
       procedure :: constants_of => fit_constants_of
       procedure :: record => fit_record
@@ -242,8 +247,10 @@ contains
 
    !> The points xs (evaluations k0 + j) simulated as one batch: by this rank alone, or, in a
    !> multi-start run whose other ranks are out of starts, in blocks with the helpers this
-   !> rank can claim (see task_deal), each block simulated where it was sent. A point is
-   !> simulated the same wherever it runs, so the results are those of one rank, bit for bit.
+   !> rank can claim (see task_deal), each block simulated where it was sent; the helpers'
+   !> blocks come first, this rank's is the last (the smallest). Blocks sent ahead for these
+   !> very points (fit_prefetch) are taken as they are. A point is simulated the same
+   !> wherever it runs, so the results are those of one rank, bit for bit.
    subroutine shared_batch(self, xs, k0, rs, fs, per_test, status, messages)
       class(fit_objective), intent(inout) :: self
       real(dp), intent(in) :: xs(:, :)
@@ -251,30 +258,107 @@ contains
       real(dp), intent(out) :: rs(:, :), fs(:), per_test(:, :)
       integer, intent(out) :: status(:)
       character(len=message_len), intent(out) :: messages(:)
-      integer, allocatable :: helpers(:), ints(:)
-      real(dp), allocatable :: reals(:)
-      character(len=:), allocatable :: text
-      integer :: n, nw, w, lo, hi, from, m, nt, j, b
+      integer, allocatable :: helpers(:)
+      integer :: n, nw, lo, hi
+      logical :: sent
       n = size(xs, 2)
-      allocate (helpers(0))
-      if (associated(self%deal) .and. n > 1) then
-         ! No more helpers than points beside this rank's own block
-         call self%deal%claim(n - 1)
-         helpers = self%deal%helper_ranks()
+      sent = .false.
+      if (allocated(self%ahead)) then
+         sent = all(shape(self%ahead) == shape(xs))
+         if (sent) sent = all(self%ahead == xs)
+         ! Blocks sent ahead for other points hold their helpers until taken; a single point
+         ! (the next trial) is simulated here meanwhile
+         if (.not. sent .and. n > 1) call drop_ahead(self)
+      end if
+      if (sent) then
+         helpers = self%ahead_helpers
+      else if (allocated(self%ahead)) then
+         allocate (helpers(0))
+      else
+         helpers = claim_helpers(self, n)
+         call send_blocks(self, xs, k0, helpers)
       end if
       nw = 1 + size(helpers)
-      do w = 1, nw - 1
-         call block_of(n, w, nw, lo, hi)
+      call block_of(n, nw - 1, nw, lo, hi)
+      call self%prob%batch(xs(:, lo:hi), k0 + lo - 1, rs(:, lo:hi), fs(lo:hi), per_test(:, lo:hi), &
+                           status(lo:hi), messages(lo:hi), tag_of(self))
+      call receive_blocks(helpers, rs, fs, per_test, status, messages)
+      if (sent) deallocate (self%ahead, self%ahead_helpers)
+   end subroutine shared_batch
+
+   !> Send the difference Jacobian's points at a trial point ahead to the helpers this rank
+   !> can claim, while it simulates the trial itself (see least_squares_type's prefetch);
+   !> taken by shared_batch if they are asked for, dropped otherwise. Not with an external
+   !> backend, whose work folders are named by evaluation.
+   subroutine fit_prefetch(self, xs)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      integer, allocatable :: helpers(:)
+      if (.not. associated(self%deal) .or. allocated(self%ahead)) return
+      if (any(self%prob%cfg%tests%ext%enabled)) return
+      helpers = claim_helpers(self, size(xs, 2))
+      if (size(helpers) == 0) return
+      call send_blocks(self, xs, self%nevals + 1, helpers)
+      self%ahead = xs
+      self%ahead_helpers = helpers
+   end subroutine fit_prefetch
+
+   !> Take and drop the results of the blocks sent ahead (before the helpers do other work
+   !> for this rank, or are freed)
+   subroutine drop_ahead(self)
+      class(fit_objective), intent(inout) :: self
+      real(dp), allocatable :: rs(:, :), fs(:), per_test(:, :)
+      integer, allocatable :: status(:)
+      character(len=message_len), allocatable :: messages(:)
+      integer :: n
+      if (.not. allocated(self%ahead)) return
+      n = size(self%ahead, 2)
+      allocate (rs(self%prob%nres(), n), fs(n), per_test(size(self%prob%targets), n), status(n), &
+                messages(n))
+      call receive_blocks(self%ahead_helpers, rs, fs, per_test, status, messages)
+      deallocate (self%ahead, self%ahead_helpers)
+   end subroutine drop_ahead
+
+   !> The helpers to share a batch of n points with: those claimed now or before, at most
+   !> n - 1 (a block each beside this rank's own)
+   function claim_helpers(self, n) result(helpers)
+      class(fit_objective), intent(inout) :: self
+      integer, intent(in) :: n
+      integer, allocatable :: helpers(:)
+      allocate (helpers(0))
+      if (.not. associated(self%deal) .or. n < 2) return
+      call self%deal%claim(n - 1)
+      helpers = self%deal%helper_ranks()
+      helpers = helpers(:min(size(helpers), n - 1))
+   end function claim_helpers
+
+   !> Send helper w its block w of the n = size(xs, 2) points (of 1 + size(helpers) blocks)
+   subroutine send_blocks(self, xs, k0, helpers)
+      class(fit_objective), intent(in) :: self
+      real(dp), intent(in) :: xs(:, :)
+      integer, intent(in) :: k0, helpers(:)
+      integer :: w, lo, hi
+      do w = 1, size(helpers)
+         call block_of(size(xs, 2), w - 1, 1 + size(helpers), lo, hi)
          call send_packet(helpers(w), tag_help, [1, k0 + lo - 1, hi - lo + 1], &
                           reshape(xs(:, lo:hi), [size(xs, 1)*(hi - lo + 1)]), tag_of(self))
       end do
-      call block_of(n, 0, nw, lo, hi)
-      call self%prob%batch(xs(:, lo:hi), k0 + lo - 1, rs(:, lo:hi), fs(lo:hi), per_test(:, lo:hi), &
-                           status(lo:hi), messages(lo:hi), tag_of(self))
+   end subroutine send_blocks
+
+   !> Receive each helper's block of results (see send_blocks) into its columns
+   subroutine receive_blocks(helpers, rs, fs, per_test, status, messages)
+      integer, intent(in) :: helpers(:)
+      real(dp), intent(inout) :: rs(:, :), fs(:), per_test(:, :)
+      integer, intent(inout) :: status(:)
+      character(len=message_len), intent(inout) :: messages(:)
+      integer, allocatable :: ints(:)
+      real(dp), allocatable :: reals(:)
+      character(len=:), allocatable :: text
+      integer :: w, lo, hi, b, m, nt, j, from
       m = size(rs, 1)
       nt = size(per_test, 1)
-      do w = 1, nw - 1
-         call block_of(n, w, nw, lo, hi)
+      do w = 1, size(helpers)
+         call block_of(size(fs), w - 1, 1 + size(helpers), lo, hi)
          b = hi - lo + 1
          from = helpers(w)
          call receive_packet(from, tag_help_result, ints, reals, text)
@@ -286,7 +370,16 @@ contains
             messages(j) = text((j - lo)*message_len + 1:(j - lo + 1)*message_len)
          end do
       end do
-   end subroutine shared_batch
+   end subroutine receive_blocks
+
+   !> The end of this rank's search: results sent ahead dropped, the helpers freed
+   subroutine end_helped(self)
+      class(fit_objective), intent(inout) :: self
+      if (.not. associated(self%deal)) return
+      call drop_ahead(self)
+      call self%deal%release()
+      self%deal => null()
+   end subroutine end_helped
 
    !> A rank out of starts: simulate the blocks of points the ranks still at work send it
    !> (see shared_batch) until every rank is out of starts
@@ -700,7 +793,7 @@ contains
       if (is_root()) then
          obj%deal => deal
          call search(obj, opt, nstarts, error)
-         obj%deal => null()
+         call end_helped(obj)
       end if
       call help_others(obj%prob, deal, obj%nhelped)
       call deal%close()
@@ -792,7 +885,7 @@ contains
             w%deal => deal
             if (is_root() .and. associated(obj%progress)) w%progress => obj%progress
             call search(w, one, n, e, s, s)
-            call deal%release()
+            call end_helped(w)
             logs(s)%recs = w%kept(:w%nkept)
             logs(s)%jacs = w%kept_jac
             logs(s)%nsimulated = w%nsimulated
@@ -854,6 +947,7 @@ contains
       end if
       deallocate (live%replay, live%replay_jac)
       allocate (live%replay(0), live%replay_jac(0))
+      live%nhelped = obj%nhelped
       obj = live
       obj%replay_only = .false.
       opt = best

@@ -25,11 +25,7 @@ contains
       real(dp) :: xs(size(x), size(x)), rs(size(r), size(x)), fs(size(x)), step(size(x))
       logical :: ok(size(x))
       integer :: j
-      do j = 1, size(x)
-         step(j) = merge(-h, h, x(j) + h > hi(j))
-         xs(:, j) = x
-         xs(j, j) = x(j) + step(j)
-      end do
+      call fd_points(x, hi, h, xs, step)
       call obj%residuals(xs, rs, fs, ok, error)
       if (allocated(error)) return
       do j = 1, size(x)
@@ -40,6 +36,19 @@ contains
          end if
       end do
    end subroutine fd_jacobian
+
+   !> The points of the forward-difference Jacobian at x: x + step(j) e_j, the step h taken
+   !> backwards where a forward one would leave the bounds hi
+   pure subroutine fd_points(x, hi, h, xs, step)
+      real(dp), intent(in) :: x(:), hi(:), h
+      real(dp), intent(out) :: xs(:, :), step(:)
+      integer :: j
+      do j = 1, size(x)
+         step(j) = merge(-h, h, x(j) + h > hi(j))
+         xs(:, j) = x
+         xs(j, j) = x(j) + step(j)
+      end do
+   end subroutine fd_points
 
    !> Minimise sum(r**2) from x0 within [lo, hi]. h: difference step; ftol: stop when an
    !> accepted step lowers the objective by less than ftol relative and moves x by < 1e-4;
@@ -57,6 +66,7 @@ contains
       real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
       real(dp) :: x(size(x0)), xn(size(x0)), dx(size(x0)), g(size(x0)), a(size(x0), size(x0))
       real(dp) :: dmp(size(x0)), b(size(x0), 1), f, fn(1), lambda, nu, pred, gain, amax
+      real(dp) :: xs_next(size(x0), size(x0)), step_next(size(x0))
       logical :: ok(1), done, by_sens, held(size(x0))
       integer :: j
 
@@ -140,6 +150,12 @@ contains
                opt%reason = 'step too small'
                done = .true.
                exit
+            end if
+            ! If the trial is accepted, the next Jacobian's points come next: said ahead, so
+            ! that idle capacity can start on them while the trial is simulated
+            if (.not. by_sens .and. nevals + 1 + n < max_evals .and. iter < itermax) then
+               call fd_points(xn, hi, h, xs_next, step_next)
+               call obj%prefetch(xs_next)
             end if
             call obj%residuals(reshape(xn, [n, 1]), rn, fn, ok, error)
             if (allocated(error)) return

@@ -20,6 +20,7 @@ module usharp_optimiser
       procedure(residuals_interface), deferred :: residuals
       procedure(nres_interface), deferred :: nres
       procedure :: jacobian => no_jacobian
+      procedure :: prefetch => no_prefetch
    end type least_squares_type
 
    abstract interface
@@ -59,6 +60,17 @@ module usharp_optimiser
       character(len=:), allocatable :: reason  !< why it stopped
    end type optimum_type
 contains
+
+   !> Points the optimiser is likely to ask for next, as one batch (the difference Jacobian
+   !> at a trial point, asked for if the trial is accepted): an objective may start
+   !> simulating them with capacity that would idle otherwise. It changes no result: the
+   !> optimiser asks for what it needs as before. By default nothing is done.
+   subroutine no_prefetch(self, xs)
+      class(least_squares_type), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      associate (unused => self, unused_xs => xs)
+      end associate
+   end subroutine no_prefetch
 
    !> The Jacobian d r / d x at x, where an objective can give it directly (done); by
    !> default it cannot, and the optimiser differences the residuals
