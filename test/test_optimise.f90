@@ -19,6 +19,7 @@ module test_optimise
    use usharp_lapack, only: dgesv
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, read_text, scratch_dir
+   use usharp_strings, only: str
    use test_fit, only: rosenbrock
    implicit none
    private
@@ -31,6 +32,15 @@ module test_optimise
       procedure :: residuals => decay_residuals
       procedure :: nres => decay_nres
    end type decay
+
+   !> decay, counting the batches of several points and those the search said ahead
+   type, extends(decay) :: decay_ahead
+      real(dp), allocatable :: said(:, :)
+      integer :: batches = 0, hits = 0
+   contains
+      procedure :: residuals => ahead_residuals
+      procedure :: prefetch => ahead_prefetch
+   end type decay_ahead
 
    real(dp), parameter :: tdata(6) = [0.0_dp, 0.5_dp, 1.0_dp, 2.0_dp, 3.0_dp, 5.0_dp]
 
@@ -51,6 +61,7 @@ contains
          new_unittest('levenberg-marquardt-exact-fit', test_lm), &
          new_unittest('levenberg-marquardt-keeps-bounds', test_lm_bounds), &
          new_unittest('levenberg-marquardt-along-a-bound', test_lm_held), &
+         new_unittest('levenberg-marquardt-says-next-jacobian-ahead', test_lm_ahead), &
          new_unittest('nelder-mead-rosenbrock', test_nm), &
          new_unittest('annealing-rosenbrock', test_sa), &
          new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
@@ -80,6 +91,29 @@ contains
       end do
       ok = .true.
    end subroutine decay_residuals
+
+   subroutine ahead_residuals(self, xs, rs, fs, ok, error)
+      class(decay_ahead), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      real(dp), intent(out) :: rs(:, :), fs(:)
+      logical, intent(out) :: ok(:)
+      type(uerror), allocatable, intent(out) :: error
+      if (size(xs, 2) > 1) then
+         self%batches = self%batches + 1
+         if (allocated(self%said)) then
+            if (all(shape(self%said) == shape(xs))) then
+               if (all(self%said == xs)) self%hits = self%hits + 1
+            end if
+         end if
+      end if
+      call decay_residuals(self, xs, rs, fs, ok, error)
+   end subroutine ahead_residuals
+
+   subroutine ahead_prefetch(self, xs)
+      class(decay_ahead), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      self%said = xs
+   end subroutine ahead_prefetch
 
    subroutine decay_eval(self, x, f, error)
       class(decay), intent(inout) :: self
@@ -115,6 +149,22 @@ contains
       call check(error, opt%x(2) <= 0.5_dp .and. abs(opt%x(2) - 0.5_dp) < 1e-9_dp, &
                  'b stops at its upper bound 0.5')
    end subroutine test_lm_bounds
+
+   !> The points said ahead while a trial step is simulated (prefetch) are, bit for bit, the
+   !> difference Jacobian asked for after it: every Jacobian but the first, also at the bound
+   !> (where the step is taken backwards)
+   subroutine test_lm_ahead(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(decay_ahead) :: obj
+      type(optimum_type) :: opt
+      type(uerror), allocatable :: e
+      call levenberg_marquardt(obj, [0.5_dp, 0.1_dp], [0.0_dp, 0.0_dp], [10.0_dp, 0.5_dp], &
+                               1.0e-7_dp, 1.0e-14_dp, 100, 1000, opt, e)
+      call check(error, .not. allocated(e) .and. abs(opt%x(2) - 0.5_dp) < 1e-9_dp, 'b at its bound 0.5')
+      if (allocated(error)) return
+      call check(error, obj%batches > 2 .and. obj%hits == obj%batches - 1, 'Jacobians '// &
+                 str(obj%batches)//', said ahead '//str(obj%hits)//': every one but the first')
+   end subroutine test_lm_ahead
 
    !> A valley that runs into a bound: the variable held at the bound, the other's step is
    !> solved without it, and the search ends at the constrained least squares (a step solved
