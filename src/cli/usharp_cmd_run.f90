@@ -3,7 +3,7 @@
 module usharp_cmd_run
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
-   use usharp_strings, only: str, real_str, pad, shell_quote
+   use usharp_strings, only: str, real_str, pad, shell_quote, join
    use usharp_model, only: model_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
@@ -136,7 +136,7 @@ contains
             real_str(out%seconds, 'f10.2')//' s']
          if (size(out%helped) > 1) summary = [character(len=200) :: summary, &
             '  ranks '//str(size(out%helped))//'; simulated for another rank''s search: '// &
-            join_counts(out%helped)]
+            join(out%helped, ', ')]
          do i = 1, size(cfg%tests)
             summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
                real_str(out%per_test(i), 'es12.5')//merged_note(prob%targets(i)%exp%nmerged)]
@@ -177,17 +177,6 @@ contains
 
    !> What a summary says of a test whose data repeat a time (a logger's two rows at one
    !> time stamp, averaged into one as the data are read)
-   !> Counts as "1, 2, 3" (at least one)
-   pure function join_counts(n) result(text)
-      integer, intent(in) :: n(:)
-      character(len=:), allocatable :: text
-      integer :: k
-      text = str(n(1))
-      do k = 2, size(n)
-         text = text//', '//str(n(k))
-      end do
-   end function join_counts
-
    pure function merged_note(nmerged) result(note)
       integer, intent(in) :: nmerged
       character(len=:), allocatable :: note

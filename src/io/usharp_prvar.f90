@@ -9,7 +9,7 @@
 module usharp_prvar
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
-   use usharp_strings, only: lower, str
+   use usharp_strings, only: lower, str, join
    implicit none
    private
 
@@ -141,7 +141,7 @@ contains
          else if (nname /= ncol) then
             cycle
          end if
-         seen = seen//' '//trim(join(names(:ncol)))
+         seen = seen//' '//join(names(:ncol), ' ')
          do i = 1, size(titles)
             if (icol(i) > 0) cycle
             do j = 1, ncol
@@ -163,16 +163,6 @@ contains
             return
          end if
       end do
-   contains
-      pure function join(w) result(text)
-         character(len=*), intent(in) :: w(:)
-         character(len=:), allocatable :: text
-         integer :: m
-         text = trim(w(1))
-         do m = 2, size(w)
-            text = text//' '//trim(w(m))
-         end do
-      end function join
    end subroutine find_columns
 
    !> Words of a line separated by blanks, tabs or form feeds

@@ -4,7 +4,13 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field
+   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field, join
+
+   !> Items joined into one line with a separator between them ('' for none)
+   interface join
+      module procedure :: join_words
+      module procedure :: join_ints
+   end interface join
 
    !> Text form of a number
    interface str
@@ -25,6 +31,31 @@ contains
          if (ic >= iachar('A') .and. ic <= iachar('Z')) res(i:i) = achar(ic + 32)
       end do
    end function lower
+
+   !> Words (their trailing blanks trimmed) joined with sep
+   pure function join_words(w, sep) result(text)
+      character(len=*), intent(in) :: w(:), sep
+      character(len=:), allocatable :: text
+      integer :: k
+      text = ''
+      do k = 1, size(w)
+         if (k > 1) text = text//sep
+         text = text//trim(w(k))
+      end do
+   end function join_words
+
+   !> Integers joined with sep, as "1, 2, 3" for sep = ', '
+   pure function join_ints(n, sep) result(text)
+      integer, intent(in) :: n(:)
+      character(len=*), intent(in) :: sep
+      character(len=:), allocatable :: text
+      integer :: k
+      text = ''
+      do k = 1, size(n)
+         if (k > 1) text = text//sep
+         text = text//str_int(n(k))
+      end do
+   end function join_ints
 
    pure function str_int(val) result(res)
       integer, intent(in) :: val
