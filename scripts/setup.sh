@@ -50,11 +50,14 @@ if ! command -v fpm >/dev/null 2>&1; then
   hash -r
 fi
 # numpy and scipy make the independent reference data of the diagnosis (bench/independent,
-# and its short version in the tests, which is skipped without them)
+# and its short version in the tests, which is skipped without them). Installed at the
+# versions the tests were checked with: another scipy's solve_ivp may move a case that lies
+# near a verdict's threshold (an installed numpy and scipy are used as they are)
+py_pins=(numpy==2.4.6 scipy==1.17.1)
 if ! python3 -c 'import numpy, scipy' >/dev/null 2>&1; then
-  echo "setup: installing numpy and scipy from PyPI" >&2
-  python3 -m pip install --quiet --disable-pip-version-check numpy scipy 2>/dev/null \
-    || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages numpy scipy \
+  echo "setup: installing ${py_pins[*]} from PyPI" >&2
+  python3 -m pip install --quiet --disable-pip-version-check "${py_pins[@]}" 2>/dev/null \
+    || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages "${py_pins[@]}" \
     || echo "setup: numpy/scipy not installed: the independent-data test will be skipped" >&2
 fi
 command -v pyenv >/dev/null 2>&1 && pyenv rehash 2>/dev/null || true
