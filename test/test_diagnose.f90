@@ -79,6 +79,7 @@ contains
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
+         new_unittest('sub-sample-delay-confirmed-when-measured', test_measured_delay), &
          new_unittest('bic-in-each-tests-own-variance', test_bic_per_test), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
@@ -706,6 +707,42 @@ contains
       call judge(ctx, res, e)
       call check(error, .not. e%significant .and. .not. e%confirmed, 'BIC -5 confirmed')
    end subroutine test_below_floors
+
+   !> A delay below the sampling interval that the data measure (its interval within
+   !> delay_precision) and that removes the fit tests' whole structured gap is confirmed while
+   !> it carries 71 % of the held-out gap (as an independent program's lag of 0.1 s under
+   !> 0.5 s sampling did); not when the data leave it loose, nor when it removes 6 % of the
+   !> fit tests' gap
+   subroutine test_measured_delay(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_outcome) :: e
+      call below_floors_case([1000], [1.0_dp], ctx, res)
+      res%gap_fit = 10.0_dp
+      res%floor_fit = 1.0_dp
+      res%gap_held = 5.0_dp
+      res%floor_held = 1.0_dp
+      e%q = 1
+      e%f_after = exp(-(1000.0_dp + log(1000.0_dp))/1000.0_dp)
+      e%per_test_after = [e%f_after]
+      e%shrink_fit = 1.0_dp
+      e%shrink_held = 0.71_dp
+      e%held_gap = 0.29_dp*res%gap_held
+      e%resolved = .false.
+      e%measured = .true.
+      call judge(ctx, res, e)
+      call check(error, e%significant .and. e%confirmed, 'a measured sub-sample delay not confirmed')
+      if (allocated(error)) return
+      e%measured = .false.
+      call judge(ctx, res, e)
+      call check(error, .not. e%confirmed, 'a loose sub-sample delay confirmed at 71 % of the held-out gap')
+      if (allocated(error)) return
+      e%measured = .true.
+      e%shrink_fit = 0.06_dp
+      call judge(ctx, res, e)
+      call check(error, .not. e%confirmed, 'a measured delay removing 6 % of the fit gap confirmed')
+   end subroutine test_measured_delay
 
    !> BIC counts each fit test's residuals in a variance of their own: a fall of 15 % in a
    !> test of 100 points whose points carry 12 times the variance of the other test's 900

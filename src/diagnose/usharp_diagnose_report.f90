@@ -9,7 +9,8 @@ module usharp_diagnose_report
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only, &
+                                    delay_precision
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
@@ -242,7 +243,9 @@ contains
       end associate
       if (.not. e%resolved .and. e%significant) call add(lines, '- the delay is below the sampling '// &
          'interval of the fit tests, '//real_str(res%dt_sample, 'g0.3')//' s: a finding only when it '// &
-         'removes most of the structured gap on both sets')
+         'removes most of the structured gap on both sets, or when the data measure it (its 95 % '// &
+         'interval within '//real_str(100.0_dp*delay_precision, 'f0.0')//' % of it'// &
+         trim(merge(': so here ', ': not here', e%measured))//') and it removes most of the fit tests'' gap')
       if (allocated(e%c_bound)) then
          if (any(e%c_bound)) call add(lines, '- **flag:** the refit ran away: '// &
             bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit')

@@ -125,6 +125,11 @@ contains
                    ' is the simplest'
          end if
          if (any(e%worse)) text = text//'; it makes '//test_list(res, e%worse)//' worse'
+         if (.not. e%resolved .and. allocated(e%p)) then
+            if (size(e%p) > 0) text = text//'; its delay, '//real_str(e%p(1), 'g0.3')// &
+               ' s, is below the sampling interval of the fit tests ('//real_str(res%dt_sample, 'g0.3')// &
+               ' s): a lag of the rig and an offset between the time stamps of the channels explain it alike'
+         end if
       end associate
       res%verdict = text
    end subroutine effect_verdict
