@@ -21,7 +21,7 @@ module usharp_design
    use usharp_experiment, only: experiment_type
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_identify, only: jacobian_log10
-   use usharp_lapack, only: logdet_spd, solve_dense
+   use usharp_lapack, only: logdet_spd, solve_dense, mat_mul
    use usharp_fit, only: fit_fingerprint
    use usharp_task_farm, only: task_list, task_text, run_tasks
    implicit none
@@ -196,7 +196,7 @@ contains
                s2 = wmean*(100.0_dp*noise)**2/real(n, dp)
             end if
             if (s2 > 0.0_dp) then
-               info(:, :, i) = matmul(transpose(jac(k0 + 1:k0 + n, :)), jac(k0 + 1:k0 + n, :))/s2
+               info(:, :, i) = mat_mul(transpose(jac(k0 + 1:k0 + n, :)), jac(k0 + 1:k0 + n, :))/s2
             else
                info(:, :, i) = 0.0_dp
             end if

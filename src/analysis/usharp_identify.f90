@@ -9,7 +9,7 @@ module usharp_identify
    use usharp_strings, only: str, real_str
    use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, eval_ok, message_len
-   use usharp_lapack, only: svd
+   use usharp_lapack, only: svd, mat_mul
    implicit none
    private
 
@@ -105,7 +105,7 @@ contains
             meat(j, i) = meat(i, j)
          end do
       end do
-      cov = matmul(pinv, matmul(meat, pinv))*real(m, dp)/real(max(m - p, 1), dp)
+      cov = mat_mul(pinv, mat_mul(meat, pinv))*real(m, dp)/real(max(m - p, 1), dp)
    end function robust_covariance
 
    !> The identifiability of the fitted constants of prob at c (physical units)

@@ -3,6 +3,7 @@
 !> level of each test's data, and the floors below which a set's structured gap is noise
 module usharp_diagnose_baseline
    use usharp_kinds, only: dp
+   use usharp_lapack, only: mat_mul
    use usharp_math, only: pow10_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str
@@ -137,12 +138,12 @@ contains
          jf(:, j) = pack(jac(:, j), fit_row)
          jh(:, j) = pack(jac(:, j), .not. fit_row)
       end do
-      ai = pseudo_inverse(matmul(transpose(jf), jf))
+      ai = pseudo_inverse(mat_mul(transpose(jf), jf))
       do j = 1, size(jf, 2)
          jf(:, j) = jf(:, j)*sqrt(pack(ctx%nv, fit_row))
       end do
-      cov = matmul(ai, matmul(matmul(transpose(jf), jf), ai))
-      cm = matmul(cov, matmul(transpose(jh), jh))
+      cov = mat_mul(ai, mat_mul(mat_mul(transpose(jf), jf), ai))
+      cm = mat_mul(cov, mat_mul(transpose(jh), jh))
       do j = 1, size(cm, 1)
          res%pred_held = res%pred_held + cm(j, j)
       end do

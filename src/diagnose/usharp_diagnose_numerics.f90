@@ -13,7 +13,7 @@ module usharp_diagnose_numerics
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
-   use usharp_lapack, only: svd
+   use usharp_lapack, only: svd, mat_mul
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
    use usharp_diagnose_types, only: diagnose_context
@@ -157,8 +157,8 @@ contains
       real(dp) :: a(size(jac, 2), size(jac, 2)), v(size(jac, 2), size(jac, 2)), s(size(jac, 2))
       real(dp) :: g(size(jac, 2)), d(size(jac, 2)), c(size(jac, 2))
       integer :: j, info
-      a = matmul(transpose(jac), jac)
-      g = matmul(transpose(jac), r)
+      a = mat_mul(transpose(jac), jac)
+      g = mat_mul(transpose(jac), r)
       do j = 1, size(d)
          d(j) = sqrt(a(j, j))
          if (d(j) <= 0.0_dp) d(j) = 1.0_dp

@@ -8,6 +8,7 @@
 !> its logarithm (it cannot cross zero).
 module usharp_diagnose_profile
    use usharp_kinds, only: dp
+   use usharp_lapack, only: mat_mul
    use usharp_math, only: exp_dp, log_dp
    use usharp_error, only: error_type
    use usharp_optimiser, only: least_squares_type, optimum_type
@@ -216,7 +217,7 @@ contains
          call ep%bounds(lo, hi)
          call jacobian(ep, e%x_fit, ctx%h, r, jac, ok)
          if (.not. ok) return
-         naive = pseudo_inverse(matmul(transpose(jac), jac))
+         naive = pseudo_inverse(mat_mul(transpose(jac), jac))
          cov = robust_covariance(jac, r, naive)
          pscale = pack(ep%pscale, ep%pfree)
          nonneg = pack(ep%pnonneg, ep%pfree)

@@ -6,6 +6,7 @@
 module usharp_diagnose_refit
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
+   use usharp_lapack, only: mat_mul
    use usharp_math, only: log_dp, log10_dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type
@@ -281,7 +282,7 @@ contains
       ! identifiability report (Eq. 7's residuals do not share one variance)
       call jacobian(ep, x, ctx%h, r, jac, ok)
       n = size(x)
-      cov = robust_covariance(jac, r, pseudo_inverse(matmul(transpose(jac), jac)))
+      cov = robust_covariance(jac, r, pseudo_inverse(mat_mul(transpose(jac), jac)))
       allocate (se(n))
       do j = 1, n
          se(j) = sqrt(max(cov(j, j), 0.0_dp))

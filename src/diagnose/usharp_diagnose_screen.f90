@@ -4,6 +4,7 @@
 !> nonlinear run from zero and from a tenth of the physical limit; its BIC change predicted
 module usharp_diagnose_screen
    use usharp_kinds, only: dp
+   use usharp_lapack, only: mat_mul
    use usharp_math, only: log_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_effects, only: effect_info, param_global
@@ -49,7 +50,7 @@ contains
       ! Each test's sum of squares after the constants' own Gauss-Newton step: the reference
       ! of an effect's linear prediction
       npts = test_sizes(ctx%prob, ctx%ifit)
-      lin0 = block_sums(npts, r0 + matmul(jc, step0))
+      lin0 = block_sums(npts, r0 + mat_mul(jc, step0))
       allocate (res%effects(size(ctx%opts%effects)))
       do i = 1, size(ctx%opts%effects)
          call tell(ctx, 'screening '//trim(ctx%cat(ctx%opts%effects(i))%name), res%nevals)
@@ -113,7 +114,7 @@ contains
       allocate (step(nc + q))
       call gn_decrease(reshape([jc, je(:, nc + 1:)], [size(r0), nc + q]), r0, d1, step)
       ! The linear prediction per test (each test's residuals of a variance of their own)
-      sum0 = block_sums(npts, r0 + matmul(jc, step(:nc)) + matmul(je(:, nc + 1:), step(nc + 1:)))
+      sum0 = block_sums(npts, r0 + mat_mul(jc, step(:nc)) + mat_mul(je(:, nc + 1:), step(nc + 1:)))
       dev_lin = deviance_change(npts, lin0, max(sum0, 1.0e-3_dp*lin0))
       deallocate (step)
       ! The score test is linear: an effect whose first steps leave the valley of the
@@ -197,7 +198,7 @@ contains
       w = [(spread(1.0_dp/sqrt(var(i)), 1, npts(i)), i=1, size(npts))]
       e%lambda_low = huge(1.0_dp)
       do g = 1, size(d, 2)
-         sig = w*matmul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
+         sig = w*mat_mul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
          call gn_decrease(jc*spread(w, 2, size(jc, 2)), sig, proj)
          e%lambda_low = min(e%lambda_low, max(sum(sig**2) - proj, 0.0_dp))
       end do

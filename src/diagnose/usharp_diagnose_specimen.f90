@@ -7,6 +7,7 @@
 !> the specimen's structured gap it removes; the effects are ranked by BIC.
 module usharp_diagnose_specimen
    use usharp_kinds, only: dp
+   use usharp_lapack, only: mat_mul
    use usharp_math, only: log_dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
@@ -229,7 +230,7 @@ contains
          se_out%significant = se_out%dbic < -bic_margin
          if (sr%gap > 0.0_dp) se_out%removed = (sr%f0 - o%f)/sr%gap
          call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
-         naive = pseudo_inverse(matmul(transpose(jac), jac))
+         naive = pseudo_inverse(mat_mul(transpose(jac), jac))
          cov = robust_covariance(jac, r, naive)
          allocate (se(size(o%x)))
          do jj = 1, size(o%x)

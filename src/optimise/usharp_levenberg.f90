@@ -7,7 +7,7 @@ module usharp_levenberg
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
    use usharp_optimiser, only: least_squares_type, optimum_type
-   use usharp_lapack, only: solve_dense
+   use usharp_lapack, only: solve_dense, mat_mul
    implicit none
    private
 
@@ -113,8 +113,8 @@ contains
             nevals = nevals + n
          end if
          opt%iterations = iter
-         a = matmul(transpose(jac), jac)
-         g = matmul(transpose(jac), r)
+         a = mat_mul(transpose(jac), jac)
+         g = mat_mul(transpose(jac), r)
          amax = maxval([(a(j, j), j=1, n)])
          do j = 1, n
             dmp(j) = max(a(j, j), 1.0e-12_dp*amax, tiny(1.0_dp))
@@ -160,7 +160,7 @@ contains
             call obj%residuals(reshape(xn, [n, 1]), rn, fn, ok, error)
             if (allocated(error)) return
             nevals = nevals + 1
-            pred = -(2.0_dp*dot_product(g, dx) + dot_product(dx, matmul(a, dx)))
+            pred = -(2.0_dp*dot_product(g, dx) + dot_product(dx, mat_mul(a, dx)))
             if (ok(1) .and. fn(1) < f .and. pred > 0.0_dp) then
                gain = (f - fn(1))/pred
                lambda = lambda*max(1.0_dp/3.0_dp, 1.0_dp - (2.0_dp*gain - 1.0_dp)**3)
