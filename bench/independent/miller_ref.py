@@ -13,6 +13,11 @@ Units: ksi, s, K. Effects (none in usharp's catalogue in exactly this form):
 - backstress2: a second back stress R2' = H3 eps_in' - gamma3 R2 |eps_in'|
 """
 import math
+import os
+# One BLAS thread: numpy's OpenBLAS sums in an order set by its thread count, and the
+# data made here must not change with the caller's OMP_NUM_THREADS
+os.environ['OPENBLAS_NUM_THREADS'] = '1'
+
 import numpy as np
 from scipy.integrate import solve_ivp
 

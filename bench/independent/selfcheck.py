@@ -16,6 +16,10 @@ import subprocess
 import sys
 import tempfile
 
+# One BLAS thread: numpy's OpenBLAS sums in an order set by its thread count, and the
+# data made here must not change with the caller's OMP_NUM_THREADS
+os.environ['OPENBLAS_NUM_THREADS'] = '1'
+
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))

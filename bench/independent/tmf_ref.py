@@ -11,6 +11,11 @@ usage: python3 tmf_ref.py OUT.csv [--tmin K] [--tmax K] [--phase in|out] [--rang
 """
 import argparse
 import math
+import os
+# One BLAS thread: numpy's OpenBLAS sums in an order set by its thread count, and the
+# data made here must not change with the caller's OMP_NUM_THREADS
+os.environ['OPENBLAS_NUM_THREADS'] = '1'
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
