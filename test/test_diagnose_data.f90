@@ -701,7 +701,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
       if (.not. have_scipy(error)) return
-      call diagnose_independent('thesis-hold-relax', 'softening', '0.55', '1', &
+      call diagnose_independent('thesis-hold-relax', 'softening', '0.55', '5', &
                                 'build/test-scratch/indep-relax-softening', res, error)
       if (allocated(error)) return
       write (*, '(4x,a)') res%verdict
