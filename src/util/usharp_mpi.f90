@@ -17,7 +17,7 @@ module usharp_mpi
                       MPI_THREAD_FUNNELED, MPI_MAX, MPI_Win, MPI_Win_allocate, MPI_Win_free, &
                       MPI_Win_lock_all, MPI_Win_unlock_all, MPI_Win_lock, MPI_Win_unlock, MPI_Put, &
                       MPI_Fetch_and_op, MPI_Win_flush, MPI_LOCK_EXCLUSIVE, MPI_INFO_NULL, MPI_ADDRESS_KIND, &
-                      MPI_Send, MPI_Compare_and_swap, MPI_Get_accumulate, MPI_NO_OP, MPI_REPLACE
+                      MPI_Send, MPI_Compare_and_swap, MPI_Get_accumulate, MPI_NO_OP, MPI_REPLACE, MPI_Datatype
    use, intrinsic :: iso_c_binding, only: c_ptr
    use usharp_kinds, only: dp
    use usharp_strings, only: str
@@ -372,20 +372,23 @@ contains
       if (from < 0) then
          call MPI_Probe(MPI_ANY_SOURCE, tag, MPI_COMM_WORLD, status)
          from = status%MPI_SOURCE
-      else
-         call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
       end if
-      call MPI_Get_count(status, MPI_INTEGER, n)
-      allocate (ints(n))
-      call MPI_Recv(ints, n, MPI_INTEGER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
-      call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
-      call MPI_Get_count(status, MPI_DOUBLE_PRECISION, n)
-      allocate (reals(n))
-      call MPI_Recv(reals, n, MPI_DOUBLE_PRECISION, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
-      call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
-      call MPI_Get_count(status, MPI_CHARACTER, n)
+      allocate (ints(waiting(MPI_INTEGER)))
+      call MPI_Recv(ints, size(ints), MPI_INTEGER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      allocate (reals(waiting(MPI_DOUBLE_PRECISION)))
+      call MPI_Recv(reals, size(reals), MPI_DOUBLE_PRECISION, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      n = waiting(MPI_CHARACTER)
       allocate (character(len=n) :: text)
-      call MPI_Recv(text, n, MPI_CHARACTER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+      call MPI_Recv(text, len(text), MPI_CHARACTER, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+
+   contains
+
+      !> The length of the next message from the sender with the tag, in items of type kind
+      integer function waiting(kind) result(n)
+         type(MPI_Datatype), intent(in) :: kind
+         call MPI_Probe(from, tag, MPI_COMM_WORLD, status)
+         call MPI_Get_count(status, kind, n)
+      end function waiting
    end subroutine receive_packet
 
    !> The rank that ran each task, from each rank's own list of which it ran (-1: none
