@@ -82,8 +82,8 @@ program bench_measured
    write (output_unit, '(a,i0,a,f9.3,a,f6.2)') 'measured, every sample (', nt, ')     ', &
       t_raw, '   ratio to thesis ', t_raw/t_thesis
    write (output_unit, '(a,2f12.4)') 'objective (Eq. 8) smooth, every sample: ', f_smooth, f_raw
-   write (output_unit, '(a)') '# test: steps smooth / every sample; max|stress - tight reference|'// &
-      '/peak smooth, every sample; max|smooth - every sample|/peak; objective smooth, every sample'
+   write (output_unit, '(a)') '# test: knots of the smooth forcing; steps smooth / every sample; '// &
+      'max|stress - tight reference|/peak smooth, every sample; max|smooth - every sample|/peak; objective smooth, every sample'
    do i = 1, nt
       call compare(i)
    end do
@@ -165,7 +165,8 @@ contains
       call simulate_test(raw%model, tight, raw%tests(i), tr, err)
       call check()
       peak = maxval(abs(ts%stress))
-      write (output_unit, '(a20,2i7,3es11.2,2f10.3)') smooth%tests(i)%name, rs%nsteps, rr%nsteps, &
+      write (output_unit, '(a20,2i7,i7,3es11.2,2f10.3)') smooth%tests(i)%name, &
+         size(smooth%tests(i)%hist%tk), rs%nsteps, rr%nsteps, &
          maxval(abs(rs%stress - ts%stress))/peak, maxval(abs(rr%stress - tr%stress))/peak, &
          maxval(abs(rs%stress - rr%stress))/peak, per_smooth(i), per_raw(i)
       open (newunit=u, file=trim(arg(4))//'/'//smooth%tests(i)%name//'.forcing.txt', &

@@ -4,6 +4,7 @@ module test_history
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_history
+   use usharp_strings, only: str
    use usharp_forcing, only: measured_history, turning_points, monotone, signal_resolution
    use usharp_cycles, only: gap_filled_history, record_starts, match_peaks
    use usharp_model_miller, only: miller_model, model_setup
@@ -263,8 +264,19 @@ contains
       end do
       call check(error, worst <= 2.0e-5_dp, 'within two resolution steps of the triangle')
       if (allocated(error)) return
-      call h%spline_at(2.5_dp, 1, 51, val, rate)
+      call spline_eval(h%tk, h%vk, h%d2, 1, size(h%tk), 2.5_dp, val, rate)
       call check(error, rate, 1.0e-3_dp, 'rate along the ramp', thr=1.0e-4_dp)
+      if (allocated(error)) return
+      ! Knots where the signal bends only: the ramps need few, whatever the sampling
+      call check(error, size(h%tk) <= 20, 'few knots ('//str(size(h%tk))//' of 201 samples)')
+      if (allocated(error)) return
+      call check(error, all(h%tk(h%kstops) == t([1, 51, 201])), 'the corners are knots')
+      if (allocated(error)) return
+      do k = 1, 201
+         call check(error, h%v(k), h%value_at(t(k)), 'sample '//str(k)//' on the spline', &
+                    thr=1.0e-12_dp)
+         if (allocated(error)) return
+      end do
    end subroutine test_measured
 
    !> noise = 0 keeps every sample as a corner of a piecewise-linear history

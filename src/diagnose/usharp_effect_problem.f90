@@ -202,7 +202,7 @@ contains
             ! drift (linear in time, so the corners stay the corners)
             hist = test%hist
             if (eff(i)%drift /= 0.0_dp .and. hist%control == control_strain) &
-               hist%v = hist%v - eff(i)%drift*(hist%t - hist%t(1))
+               call hist%add_ramp(-eff(i)%drift)
             if (self%prob%cfg%solver%integrator == 'cvode') then
                call simulate_cvode(mt, hist, tout, self%prob%cfg%solver, res, error, eff(i))
             else

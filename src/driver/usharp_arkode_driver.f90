@@ -44,6 +44,22 @@ contains
       type(solver_options), intent(in) :: opts
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
+      ! A smooth forcing is followed on its spline's knots
+      if (hist%smooth()) then
+         call arkode_on(model, hist%forcing(), tout, opts, res, error)
+      else
+         call arkode_on(model, hist, tout, opts, res, error)
+      end if
+   end subroutine simulate_arkode
+
+   !> simulate_arkode on hist: a piecewise-linear history, or a smooth one's knots
+   subroutine arkode_on(model, hist, tout, opts, res, error)
+      class(model_type), intent(in) :: model
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: tout(:)
+      type(solver_options), intent(in) :: opts
+      type(sim_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
       type(rate_system), target :: sys
       type(c_ptr) :: sunctx, mem
       type(N_Vector), pointer :: yvec, abstol
@@ -153,7 +169,7 @@ contains
          call FN_VDestroy(abstol)
          ierr = FSUNContext_Free(sunctx)
       end subroutine release
-   end subroutine simulate_arkode
+   end subroutine arkode_on
 
    !> The implicit rates; a state outside the model asks ARKODE for a smaller step
    integer(c_int) function rhs_fn(t, yv, fv, udata) result(ierr) bind(C, name='usharp_arkode_rhs')

@@ -60,10 +60,10 @@ contains
       real(dp), allocatable, intent(out) :: spans(:, :)
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: noise
-      integer, allocatable :: starts(:), stops(:), cs(:)
+      integer, allocatable :: starts(:), stops(:), kstops(:)
       type(history_type) :: piece
       type(cycle_shape) :: a, b
-      real(dp), allocatable :: tt(:), vv(:), d2(:), tc(:), vc(:)
+      real(dp), allocatable :: tt(:), vv(:), tk(:), vk(:), d2(:), tc(:), vc(:)
       integer :: i, j, p0, p1, np
       starts = [record_starts(t), size(t) + 1]
       np = size(starts) - 1
@@ -73,7 +73,7 @@ contains
          spans(:, 1) = [t(1), t(size(t))]
          return
       end if
-      allocate (tt(0), vv(0), d2(0), stops(0))
+      allocate (tt(0), vv(0), tk(0), vk(0), d2(0), stops(0), kstops(0))
       do j = 1, np
          p0 = starts(j)
          p1 = starts(j + 1) - 1
@@ -81,30 +81,42 @@ contains
          call measured_history(t(p0:p1), v(p0:p1), control, piece, error, noise)
          if (allocated(error)) return
          if (j > 1) then
+            ! The filled cycles' corners are knots and stops both (d2 = 0: straight between)
             b = piece_end(piece, .false.)
             call fill_gap(tt(size(tt)), a, piece%t(1), b, range, mean, rate, tc, vc)
             stops = [stops, size(tt) + [(i, i=1, size(tc))]]
+            kstops = [kstops, size(tk) + [(i, i=1, size(tc))]]
             tt = [tt, tc]
             vv = [vv, vc]
+            tk = [tk, tc]
+            vk = [vk, vc]
             d2 = [d2, spread(0.0_dp, 1, size(tc))]
          end if
-         cs = piece%corners()
-         stops = [stops, size(tt) + cs]
-         tt = [tt, piece%t]
-         vv = [vv, piece%v]
+         stops = [stops, size(tt) + piece%corners()]
          if (piece%smooth()) then
+            kstops = [kstops, size(tk) + piece%kstops]
+            tk = [tk, piece%tk]
+            vk = [vk, piece%vk]
             d2 = [d2, piece%d2]
          else
+            kstops = [kstops, size(tk) + [(i, i=1, size(piece%t))]]
+            tk = [tk, piece%t]
+            vk = [vk, piece%v]
             d2 = [d2, spread(0.0_dp, 1, size(piece%t))]
          end if
+         tt = [tt, piece%t]
+         vv = [vv, piece%v]
          a = piece_end(piece, .true.)
       end do
       call history_from_points(tt, vv, control, hist, error)
       if (allocated(error)) return
       ! Without a smoothed piece it is piecewise linear through every point
       if (size(stops) == size(tt) .and. all(d2 == 0.0_dp)) return
+      hist%tk = tk
+      hist%vk = vk
       hist%d2 = d2
       hist%stops = stops
+      hist%kstops = kstops
    end subroutine gap_filled_history
 
    !> The cycling of a recorded piece at its end (last = true) or its start: the turning

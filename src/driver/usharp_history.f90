@@ -22,15 +22,19 @@ module usharp_history
    integer, parameter, public :: max_points = 10000000
 
    !> Piecewise-linear history: value v(k) at time t(k); t strictly increasing. A smooth
-   !> history (a measured signal as forcing, usharp_forcing) is instead the cubic spline
-   !> through (t, v) with second derivatives d2, twice continuously differentiable between
-   !> its stops (the turning points, where it has a corner and d2 = 0)
+   !> history (a measured signal as forcing, usharp_forcing) is instead a cubic spline
+   !> through knots (tk, vk), a few of the samples, with second derivatives d2, twice
+   !> continuously differentiable between its stops (the turning points, where it has a
+   !> corner and d2 = 0); its samples (t, v) lie on the spline
    type :: history_type
       integer :: control = control_strain
       real(dp), allocatable :: t(:)  !< corner times (samples of a smooth history), s
       real(dp), allocatable :: v(:)  !< strain (-) or stress (model unit) at the corners
-      real(dp), allocatable :: d2(:)   !< smooth only: second derivative at t, per s**2
-      integer, allocatable :: stops(:) !< smooth only: indices of the corners, first and last
+      !> smooth only: the spline's knots (s; strain, or stress in the model unit), the
+      !> second derivative there (per s**2), and the indices of the corners (the first and
+      !> last included) among the samples (stops) and among the knots (kstops)
+      real(dp), allocatable :: tk(:), vk(:), d2(:)
+      integer, allocatable :: stops(:), kstops(:)
       !> Non-isothermal only: the temperature at the corners (K), linear between them
       real(dp), allocatable :: temp(:)
    contains
@@ -39,7 +43,8 @@ module usharp_history
       procedure :: segment => history_segment
       procedure :: smooth => history_smooth
       procedure :: corners => history_corners
-      procedure :: spline_at => history_spline_at
+      procedure :: forcing => history_forcing
+      procedure :: add_ramp => history_add_ramp
    end type history_type
 
    !> One linear piece of a history: control, start time (s), start value and slope (per s)
@@ -97,7 +102,7 @@ contains
       else if (t >= self%t(size(self%t))) then
          val = self%v(size(self%v))
       else if (self%smooth()) then
-         call self%spline_at(t, 1, size(self%t), val, rate)
+         call spline_eval(self%tk, self%vk, self%d2, 1, size(self%tk), t, val, rate)
       else
          k = segment_of(self%t, t)
          val = self%v(k) + (self%v(k + 1) - self%v(k))*(t - self%t(k))/(self%t(k + 1) - self%t(k))
@@ -123,15 +128,31 @@ contains
       end if
    end function history_corners
 
-   !> Value and rate (per s) of a smooth history at time t, searched between samples k0 and
-   !> k1 (a branch; t outside [t(k0), t(k1)] extends its end intervals' cubics)
-   pure subroutine history_spline_at(self, t, k0, k1, val, rate)
+   !> A smooth history's spline as a history of its own, whose samples are the knots: what
+   !> an integrator that steps across the knots follows
+   pure function history_forcing(self) result(f)
       class(history_type), intent(in) :: self
-      real(dp), intent(in) :: t
-      integer, intent(in) :: k0, k1
-      real(dp), intent(out) :: val, rate
-      call spline_eval(self%t, self%v, self%d2, k0, k1, t, val, rate)
-   end subroutine history_spline_at
+      type(history_type) :: f
+      f%control = self%control
+      f%t = self%tk
+      f%v = self%vk
+      f%tk = self%tk
+      f%vk = self%vk
+      f%d2 = self%d2
+      f%stops = self%kstops
+      f%kstops = self%kstops
+   end function history_forcing
+
+   !> Add rate*(t - t(1)) to the history (rate per s): its samples and, of a smooth history,
+   !> its knots, whose second derivatives a straight line leaves as they are
+   pure subroutine history_add_ramp(self, rate)
+      class(history_type), intent(inout) :: self
+      real(dp), intent(in) :: rate
+      real(dp) :: t0
+      t0 = self%t(1)
+      self%v = self%v + rate*(self%t - t0)
+      if (self%smooth()) self%vk = self%vk + rate*(self%tk - t0)
+   end subroutine history_add_ramp
 
    !> The cubic spline through (tk, vk) with second derivatives mk at time t, its interval
    !> found by bisection between k0 and k1

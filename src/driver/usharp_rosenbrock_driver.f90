@@ -102,14 +102,34 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(test_effects), intent(in), optional :: effects
+      logical :: knots
+      call res%allocate(size(tout))
+      call check_output_times(hist, tout, error)
+      if (allocated(error)) return
+      ! A smooth forcing is followed on its spline's knots; a lag acts on the samples
+      knots = hist%smooth()
+      if (present(effects)) knots = knots .and. effects%lag == 0.0_dp
+      if (knots) then
+         call simulate_on(model, hist%forcing(), tout, opts, res, error, effects)
+      else
+         call simulate_on(model, hist, tout, opts, res, error, effects)
+      end if
+   end subroutine simulate_rosenbrock
+
+   !> simulate_rosenbrock on hist: a piecewise-linear history, or a smooth one's knots
+   subroutine simulate_on(model, hist, tout, opts, res, error, effects)
+      class(model_type), intent(in) :: model
+      type(history_type), intent(in) :: hist
+      real(dp), intent(in) :: tout(:)
+      type(solver_options), intent(in) :: opts
+      type(sim_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(test_effects), intent(in), optional :: effects
       type(rate_system) :: sys
       real(dp) :: rtol, atol_strain, as, ar
       real(dp), allocatable :: y0(:), atol(:)
       integer :: n, i
 
-      call res%allocate(size(tout))
-      call check_output_times(hist, tout, error)
-      if (allocated(error)) return
       call opts%tolerances('rodas4', rtol, atol_strain)
       if (hist%smooth() .and. .not. opts%rtol > 0.0_dp) rtol = rodas4_smooth_rtol
       as = atol_strain
@@ -157,7 +177,7 @@ contains
       case (7); call integrate_7(sys, hist, tout, opts, y0, atol, rtol, res, error)
       case default; call integrate_n(n, sys, hist, tout, opts, y0, atol, rtol, res, error)
       end select
-   end subroutine simulate_rosenbrock
+   end subroutine simulate_on
 
    !> The rates of the plain model under the load of hist (its smooth forcing, if it is one)
    subroutine plain_system(model, hist, sys)
