@@ -53,6 +53,15 @@ module test_optimise
       procedure :: nres => valley_nres
    end type valley
 
+   !> Four of Rosenbrock's valleys side by side (eight unknowns, least squares 0 at all 1):
+   !> a difference Jacobian costs eight evaluations
+   type, extends(least_squares_type) :: valleys
+   contains
+      procedure :: eval => valleys_eval
+      procedure :: residuals => valleys_residuals
+      procedure :: nres => valleys_nres
+   end type valleys
+
 contains
 
    subroutine collect_optimise(testsuite)
@@ -62,6 +71,7 @@ contains
          new_unittest('levenberg-marquardt-keeps-bounds', test_lm_bounds), &
          new_unittest('levenberg-marquardt-along-a-bound', test_lm_held), &
          new_unittest('levenberg-marquardt-says-next-jacobian-ahead', test_lm_ahead), &
+         new_unittest('levenberg-marquardt-broyden-updates', test_lm_broyden), &
          new_unittest('nelder-mead-rosenbrock', test_nm), &
          new_unittest('annealing-rosenbrock', test_sa), &
          new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
@@ -190,6 +200,78 @@ contains
       if (allocated(error)) return
       call check(error, opt%iterations <= 40, 'within 40 iterations')
    end subroutine test_lm_held
+
+   !> Broyden updates between difference Jacobians: the same least squares (the valleys'
+   !> minimum; the bound's constrained one) in fewer evaluations, ending on a difference
+   !> Jacobian
+   subroutine test_lm_broyden(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(valleys) :: obj
+      type(valley) :: one
+      type(optimum_type) :: plain, upd
+      type(uerror), allocatable :: e
+      real(dp), parameter :: x0(8) = [-1.2_dp, 1.0_dp, -1.0_dp, 1.2_dp, 0.5_dp, -0.5_dp, 2.0_dp, 3.0_dp]
+      call levenberg_marquardt(obj, x0, spread(-5.0_dp, 1, 8), spread(5.0_dp, 1, 8), &
+                               1.0e-7_dp, 1.0e-12_dp, 500, 100000, plain, e)
+      call check(error, .not. allocated(e), 'no error')
+      if (allocated(error)) return
+      call levenberg_marquardt(obj, x0, spread(-5.0_dp, 1, 8), spread(5.0_dp, 1, 8), &
+                               1.0e-7_dp, 1.0e-12_dp, 500, 100000, upd, e, updates=4)
+      call check(error, .not. allocated(e), 'no error')
+      if (allocated(error)) return
+      write (*, '(4x,a)') 'evaluations: '//str(plain%nevals)//' with a difference Jacobian at every '// &
+         'iteration, '//str(upd%nevals)//' with up to 4 updates in a row'
+      call check(error, all(abs(plain%x - 1.0_dp) < 1.0e-6_dp) .and. all(abs(upd%x - 1.0_dp) < 1.0e-6_dp), &
+                 'both at the minimum (1, ..., 1)')
+      if (allocated(error)) return
+      ! At the zero residual the steps vanish: either stop is convergence here
+      call check(error, upd%f < 1.0e-14_dp .and. (upd%reason == 'relative decrease < eps' .or. &
+                 upd%reason == 'step too small'), 'converged, not '//trim(upd%reason))
+      if (allocated(error)) return
+      call check(error, upd%nevals < plain%nevals, 'fewer evaluations with the updates: '// &
+                 str(upd%nevals)//' against '//str(plain%nevals))
+      if (allocated(error)) return
+      ! On the bound x1 <= 0.5: the held variable and the updates together
+      call levenberg_marquardt(one, [-1.2_dp, 1.0_dp], [-5.0_dp, -5.0_dp], [0.5_dp, 5.0_dp], &
+                               1.0e-7_dp, 1.0e-12_dp, 100, 10000, upd, e, updates=4)
+      call check(error, .not. allocated(e), 'no error')
+      if (allocated(error)) return
+      call check(error, abs(upd%x(1) - 0.5_dp) < 1.0e-9_dp .and. abs(upd%x(2) - 0.25_dp) < 1.0e-6_dp .and. &
+                 abs(upd%f - 0.25_dp) < 1.0e-10_dp, 'the constrained least squares (0.5, 0.25)')
+   end subroutine test_lm_broyden
+
+   pure integer function valleys_nres(self)
+      class(valleys), intent(in) :: self
+      valleys_nres = 8
+   end function valleys_nres
+
+   subroutine valleys_residuals(self, xs, rs, fs, ok, error)
+      class(valleys), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      real(dp), intent(out) :: rs(:, :), fs(:)
+      logical, intent(out) :: ok(:)
+      type(uerror), allocatable, intent(out) :: error
+      integer :: i, j
+      do j = 1, size(xs, 2)
+         do i = 1, 7, 2
+            rs(i, j) = 1.0_dp - xs(i, j)
+            rs(i + 1, j) = 10.0_dp*(xs(i + 1, j) - xs(i, j)**2)
+         end do
+         fs(j) = sum(rs(:, j)**2)
+      end do
+      ok = .true.
+   end subroutine valleys_residuals
+
+   subroutine valleys_eval(self, x, f, error)
+      class(valleys), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: f
+      type(uerror), allocatable, intent(out) :: error
+      real(dp) :: rs(8, 1), fs(1)
+      logical :: ok(1)
+      call self%residuals(reshape(x, [8, 1]), rs, fs, ok, error)
+      f = fs(1)
+   end subroutine valleys_eval
 
    pure integer function valley_nres(self)
       class(valley), intent(in) :: self

@@ -23,6 +23,11 @@ module usharp_diagnose_baseline
 
    public :: fit_baseline, baseline_regions, per_test, all_regions
 
+   !> Integrator tolerances (rtol, atol_strain) of the Jacobian behind the prediction spread:
+   !> two constants that trade off (log B and n) leave J'J a small eigenvalue that the
+   !> integrator's error at its working tolerance would set
+   real(dp), parameter :: spread_tol(2) = [1.0e-9_dp, 1.0e-12_dp]
+
 contains
 
    !> Baseline: the fit tests without any effect, from the given constants (a start) and,
@@ -127,9 +132,15 @@ contains
       logical, allocatable :: fit_row(:)
       logical :: ok
       integer :: j
+      real(dp) :: tol(2)
       res%pred_held = 0.0_dp
       pvar = 0.0_dp
+      tol = [ep%prob%cfg%solver%rtol, ep%prob%cfg%solver%atol_strain]
+      ep%prob%cfg%solver%rtol = spread_tol(1)
+      ep%prob%cfg%solver%atol_strain = spread_tol(2)
       call jacobian(ep, ep%start(), ctx%h, r, jac, ok)
+      ep%prob%cfg%solver%rtol = tol(1)
+      ep%prob%cfg%solver%atol_strain = tol(2)
       res%nevals = res%nevals + size(jac, 2) + 1
       if (.not. ok) return
       fit_row = .not. res%held(res%test_of)

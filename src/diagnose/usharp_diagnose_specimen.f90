@@ -24,7 +24,7 @@ module usharp_diagnose_specimen
    use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
-   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, &
+   use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
                                        soften_rate0, softening_reached, low_end_deltas, bic_power
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_profile, only: profile_interval, profile_result
@@ -129,7 +129,7 @@ contains
       if (refit_constants) then
          call ep%bounds(lo, hi)
          call levenberg_marquardt(ep, ep%start(), lo, hi, cfg%fit%fd_step, 1.0e-9_dp, 100, &
-                                  opts%max_evals, opt, error)
+                                  opts%max_evals, opt, error, updates=lm_updates)
          if (allocated(error)) return
          sr%nevals = sr%nevals + opt%nevals
          sr%nevals_rep = opt%nevals
@@ -216,7 +216,8 @@ contains
          do jj = 1, size(starts, 2)
             ek%p0 = starts(:, jj)
             x0 = min(max(ek%start(), lo), hi)
-            call levenberg_marquardt(ek, x0, lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, opts%max_evals, o1, error)
+            call levenberg_marquardt(ek, x0, lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, opts%max_evals, o1, error, &
+                                     updates=lm_updates)
             if (allocated(error)) return
             se_out%nevals = se_out%nevals + o1%nevals
             if (jj == 1) then

@@ -9,7 +9,7 @@ module usharp_diagnose_units
    use usharp_optimiser, only: least_squares_type, optimum_type
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_effect_problem, only: effect_problem
-   use usharp_diagnose_numerics, only: best_of_starts, take_starts, lm_ftol, lm_itermax
+   use usharp_diagnose_numerics, only: best_of_starts, take_starts, lm_ftol, lm_itermax, lm_updates
    use usharp_diagnose_memo, only: run_memo, run_key, problem_key
    use usharp_diagnose_journal, only: diagnose_journal, next_unit, record_unit, optimum_text, &
                                       read_optimum, text_lines
@@ -66,7 +66,7 @@ contains
          call add_evals(obj, dn)
       else
          n0 = evals_of(obj)
-         call levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error, jac0)
+         call levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error, jac0, lm_updates)
          text = str(evals_of(obj) - n0)//new_line('a')//optimum_text(opt, error)
          call record_unit(jr, text, e)
          if (allocated(e)) then

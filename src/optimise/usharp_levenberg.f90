@@ -51,9 +51,10 @@ contains
    end subroutine fd_points
 
    !> Minimise sum(r**2) from x0 within [lo, hi]. h: difference step; ftol: stop when an
-   !> accepted step lowers the objective by less than ftol relative and moves x by < 1e-4;
-   !> also after itermax Jacobians or max_evals evaluations.
-   subroutine levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error, jac0)
+   !> accepted step lowers the objective by less than ftol relative and moves x by < 1e-4
+   !> (on a difference Jacobian); also after itermax iterations or max_evals evaluations.
+   subroutine levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error, jac0, &
+                                  updates)
       class(least_squares_type), intent(inout) :: obj
       real(dp), intent(in) :: x0(:), lo(:), hi(:), h, ftol
       integer, intent(in) :: itermax, max_evals
@@ -62,13 +63,18 @@ contains
       !> The difference Jacobian at x0 (inside the bounds) as this would compute it, when the
       !> caller has it already: the first iteration uses it
       real(dp), intent(in), optional :: jac0(:, :)
+      !> Most accepted steps in a row whose Jacobian is the previous one with Broyden's rank-1
+      !> update (Madsen, Nielsen and Tingleff 2004, sec. 3.4) instead of a new difference
+      !> Jacobian; 0 (the default): a difference Jacobian at every iteration. Where the search
+      !> creeps along a curved valley, each iteration then costs one evaluation, not n + 1.
+      integer, intent(in), optional :: updates
       integer :: n, m, iter, nevals, info
       real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
       real(dp) :: x(size(x0)), xn(size(x0)), dx(size(x0)), g(size(x0)), a(size(x0), size(x0))
       real(dp) :: dmp(size(x0)), b(size(x0), 1), f, fn(1), lambda, nu, pred, gain, amax
       real(dp) :: xs_next(size(x0), size(x0)), step_next(size(x0))
       logical :: ok(1), done, by_sens, held(size(x0))
-      integer :: j
+      integer :: j, nupd, max_updates
 
       n = size(x0)
       m = obj%nres()
@@ -90,6 +96,10 @@ contains
       lambda = -1.0_dp
       nu = 2.0_dp
       done = .false.
+      max_updates = 0
+      if (present(updates)) max_updates = max(updates, 0)
+      nupd = max_updates
+      by_sens = .false.
       opt%reason = 'itermax reached'
       do iter = 1, itermax
          if (nevals + n >= max_evals) then
@@ -99,18 +109,20 @@ contains
          if (iter == 1 .and. present(jac0)) then
             jac = jac0
             by_sens = .false.
+            nupd = 0
+         else if (nupd < max_updates .and. .not. by_sens) then
+            continue
          else
             call obj%jacobian(x, jac, by_sens, error)
-         end if
-         if (allocated(error)) return
-         if (iter == 1 .and. present(jac0)) then
-            continue
-         else if (by_sens) then
-            nevals = nevals + 1
-         else
-            call fd_jacobian(obj, x, r, hi, h, jac, error)
             if (allocated(error)) return
-            nevals = nevals + n
+            nupd = 0
+            if (by_sens) then
+               nevals = nevals + 1
+            else
+               call fd_jacobian(obj, x, r, hi, h, jac, error)
+               if (allocated(error)) return
+               nevals = nevals + n
+            end if
          end if
          opt%iterations = iter
          a = mat_mul(transpose(jac), jac)
@@ -147,13 +159,19 @@ contains
             xn = min(max(x + b(:, 1), lo), hi)
             dx = xn - x
             if (maxval(abs(dx)) < 1.0e-12_dp) then
+               if (nupd > 0) then
+                  ! on an updated Jacobian: tried again with a difference one
+                  nupd = max_updates
+                  exit
+               end if
                opt%reason = 'step too small'
                done = .true.
                exit
             end if
             ! If the trial is accepted, the next Jacobian's points come next: said ahead, so
             ! that idle capacity can start on them while the trial is simulated
-            if (.not. by_sens .and. nevals + 1 + n < max_evals .and. iter < itermax) then
+            if (.not. by_sens .and. nevals + 1 + n < max_evals .and. iter < itermax .and. &
+                nupd + 1 >= max_updates) then
                call fd_points(xn, hi, h, xs_next, step_next)
                call obj%prefetch(xs_next)
             end if
@@ -166,12 +184,32 @@ contains
                lambda = lambda*max(1.0_dp/3.0_dp, 1.0_dp - (2.0_dp*gain - 1.0_dp)**3)
                nu = 2.0_dp
                if (f - fn(1) < ftol*f .and. maxval(abs(dx)) < 1.0e-4_dp) then
-                  opt%reason = 'relative decrease < eps'
-                  done = .true.
+                  if (nupd == 0) then
+                     opt%reason = 'relative decrease < eps'
+                     done = .true.
+                  else
+                     ! Converged on an updated Jacobian: confirmed with a difference one
+                     nupd = max_updates
+                  end if
+               end if
+               if (.not. by_sens .and. nupd < max_updates) then
+                  ! Broyden: J + (r(xn) - r(x) - J dx) dx'/(dx'dx), the least change of J
+                  ! that maps the step onto the change of the residuals it made
+                  r = rn(:, 1) - r - mat_mul(jac, dx)
+                  do j = 1, n
+                     jac(:, j) = jac(:, j) + r*(dx(j)/dot_product(dx, dx))
+                  end do
+                  nupd = nupd + 1
                end if
                x = xn
                r = rn(:, 1)
                f = fn(1)
+               exit
+            end if
+            ! A step the updated Jacobian's model promised and the residuals did not give:
+            ! the next try with a difference Jacobian
+            if (nupd > 0 .and. nupd < max_updates) then
+               nupd = max_updates
                exit
             end if
             lambda = lambda*nu
