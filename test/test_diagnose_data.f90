@@ -517,7 +517,11 @@ contains
    !> B and n fitted to 1 % cycling with 1 % noise (40 draws), 1.2 % cycling at a tenth of the
    !> rate held out without noise: its objective is the prediction's error alone, made by the
    !> scatter of the fitted constants, and averages what the constants' own uncertainty
-   !> explains (pred_held, within 3 Monte Carlo standard errors), which is well above zero
+   !> explains (pred_held, within 3 Monte Carlo standard errors), which is well above zero.
+   !> Fits ending at nearly the same constants give nearly the same spread: B and n trade off,
+   !> and a Jacobian at the integrator's working tolerance had left J'J's small eigenvalue to
+   !> its error (the spread of one draw 2.5e-5 against 1.6e-3 from another path to the same
+   !> minimum); from one draw to the next it stays within a factor 3
    subroutine test_prediction_spread(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -548,6 +552,9 @@ contains
          real_str(se, 'es9.2')//', constants'' uncertainty '//real_str(sum(pred)/ndraw, 'es10.3')
       call check(error, sum(pred)/ndraw > 3.0_dp*se .and. abs(sum(excess - pred)/ndraw) < 3.0_dp*se, &
                  'the held-out excess and the constants'' uncertainty disagree')
+      if (allocated(error)) return
+      call check(error, maxval(pred) < 3.0_dp*minval(pred), 'the constants'' uncertainty swings from '// &
+                 real_str(minval(pred), 'es9.2')//' to '//real_str(maxval(pred), 'es9.2')//' between draws')
    end subroutine test_prediction_spread
 
    !> A deck of two cyclic tests (c1: 1 % range at 1e-3/s, 3 cycles, fitted; c2 held out:

@@ -44,18 +44,11 @@ module test_optimise
 
    real(dp), parameter :: tdata(6) = [0.0_dp, 0.5_dp, 1.0_dp, 2.0_dp, 3.0_dp, 5.0_dp]
 
-   !> Rosenbrock's curved valley as residuals (1 - x1, 10 (x2 - x1**2)): with x1 <= 0.5 the
-   !> least squares lie on the bound, at (0.5, 0.25), objective 0.25
-   type, extends(least_squares_type) :: valley
-   contains
-      procedure :: eval => valley_eval
-      procedure :: residuals => valley_residuals
-      procedure :: nres => valley_nres
-   end type valley
-
-   !> Four of Rosenbrock's valleys side by side (eight unknowns, least squares 0 at all 1):
-   !> a difference Jacobian costs eight evaluations
+   !> Rosenbrock's curved valleys side by side, each as residuals (1 - x1, 10 (x2 - x1**2)):
+   !> least squares 0 at all 1; a difference Jacobian of four costs eight evaluations. With
+   !> one valley and x1 <= 0.5 the least squares lie on the bound, at (0.5, 0.25), objective 0.25
    type, extends(least_squares_type) :: valleys
+      integer :: k = 4     !< how many valleys
    contains
       procedure :: eval => valleys_eval
       procedure :: residuals => valleys_residuals
@@ -181,9 +174,10 @@ contains
    !> with both and cut back at the bound crept along it: 100 iterations, not converged)
    subroutine test_lm_held(error)
       type(error_type), allocatable, intent(out) :: error
-      type(valley) :: obj
+      type(valleys) :: obj
       type(optimum_type) :: opt
       type(uerror), allocatable :: e
+      obj%k = 1
       call levenberg_marquardt(obj, [-1.2_dp, 1.0_dp], [-5.0_dp, -5.0_dp], [0.5_dp, 5.0_dp], &
                                1.0e-7_dp, 1.0e-12_dp, 100, 10000, opt, e)
       call check(error, .not. allocated(e), 'no error')
@@ -206,11 +200,11 @@ contains
    !> Jacobian
    subroutine test_lm_broyden(error)
       type(error_type), allocatable, intent(out) :: error
-      type(valleys) :: obj
-      type(valley) :: one
+      type(valleys) :: obj, one
       type(optimum_type) :: plain, upd
       type(uerror), allocatable :: e
       real(dp), parameter :: x0(8) = [-1.2_dp, 1.0_dp, -1.0_dp, 1.2_dp, 0.5_dp, -0.5_dp, 2.0_dp, 3.0_dp]
+      one%k = 1
       call levenberg_marquardt(obj, x0, spread(-5.0_dp, 1, 8), spread(5.0_dp, 1, 8), &
                                1.0e-7_dp, 1.0e-12_dp, 500, 100000, plain, e)
       call check(error, .not. allocated(e), 'no error')
@@ -242,7 +236,7 @@ contains
 
    pure integer function valleys_nres(self)
       class(valleys), intent(in) :: self
-      valleys_nres = 8
+      valleys_nres = 2*self%k
    end function valleys_nres
 
    subroutine valleys_residuals(self, xs, rs, fs, ok, error)
@@ -253,7 +247,7 @@ contains
       type(uerror), allocatable, intent(out) :: error
       integer :: i, j
       do j = 1, size(xs, 2)
-         do i = 1, 7, 2
+         do i = 1, 2*self%k - 1, 2
             rs(i, j) = 1.0_dp - xs(i, j)
             rs(i + 1, j) = 10.0_dp*(xs(i + 1, j) - xs(i, j)**2)
          end do
@@ -267,38 +261,11 @@ contains
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: f
       type(uerror), allocatable, intent(out) :: error
-      real(dp) :: rs(8, 1), fs(1)
+      real(dp) :: rs(2*self%k, 1), fs(1)
       logical :: ok(1)
-      call self%residuals(reshape(x, [8, 1]), rs, fs, ok, error)
+      call self%residuals(reshape(x, [size(x), 1]), rs, fs, ok, error)
       f = fs(1)
    end subroutine valleys_eval
-
-   pure integer function valley_nres(self)
-      class(valley), intent(in) :: self
-      valley_nres = 2
-   end function valley_nres
-
-   subroutine valley_residuals(self, xs, rs, fs, ok, error)
-      class(valley), intent(inout) :: self
-      real(dp), intent(in) :: xs(:, :)
-      real(dp), intent(out) :: rs(:, :), fs(:)
-      logical, intent(out) :: ok(:)
-      type(uerror), allocatable, intent(out) :: error
-      integer :: j
-      do j = 1, size(xs, 2)
-         rs(:, j) = [1.0_dp - xs(1, j), 10.0_dp*(xs(2, j) - xs(1, j)**2)]
-         fs(j) = sum(rs(:, j)**2)
-      end do
-      ok = .true.
-   end subroutine valley_residuals
-
-   subroutine valley_eval(self, x, f, error)
-      class(valley), intent(inout) :: self
-      real(dp), intent(in) :: x(:)
-      real(dp), intent(out) :: f
-      type(uerror), allocatable, intent(out) :: error
-      f = (1.0_dp - x(1))**2 + 100.0_dp*(x(2) - x(1)**2)**2
-   end subroutine valley_eval
 
    subroutine test_nm(error)
       type(error_type), allocatable, intent(out) :: error
