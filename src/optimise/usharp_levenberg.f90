@@ -63,10 +63,10 @@ contains
       !> The difference Jacobian at x0 (inside the bounds) as this would compute it, when the
       !> caller has it already: the first iteration uses it
       real(dp), intent(in), optional :: jac0(:, :)
-      !> Most accepted steps in a row whose Jacobian is the previous one with Broyden's rank-1
-      !> update (Madsen, Nielsen and Tingleff 2004, sec. 3.4) instead of a new difference
-      !> Jacobian; 0 (the default): a difference Jacobian at every iteration. Where the search
-      !> creeps along a curved valley, each iteration then costs one evaluation, not n + 1.
+      !> Most accepted steps one difference Jacobian serves, brought up to date after each by
+      !> Broyden's rank-1 update (Madsen, Nielsen and Tingleff 2004, sec. 3.4); 0 or 1 (0 the
+      !> default): a difference Jacobian at every iteration. Where the search creeps along a
+      !> curved valley, most iterations then cost one evaluation, not n + 1.
       integer, intent(in), optional :: updates
       integer :: n, m, iter, nevals, info
       real(dp), allocatable :: jac(:, :), r(:), rn(:, :)
