@@ -4,6 +4,7 @@
 module test_diagnose
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
+   use usharp_math, only: cubic_piece
    use usharp_error, only: uerror => error_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config
@@ -12,7 +13,7 @@ module test_diagnose
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
-   use usharp_effects, only: test_effects, lagged_value, effect_model, extended_rates, n_extended
+   use usharp_effects, only: test_effects, lagged_value, lag_corners, effect_model, extended_rates, n_extended
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
@@ -202,32 +203,58 @@ contains
                  'compliance has no effect')
    end subroutine test_compliance
 
-   !> The closed-form lag solves dy/dt = (u - y)/tau: its rate against central differences of
-   !> its value, and the ODE residual; a vanishing tau returns the command
+   !> The closed-form lag solves dy/dt = (u - y)/tau, of a piecewise-linear control and of a
+   !> cubic spline's pieces (a smooth forcing): its rate against central differences of its
+   !> value, and the ODE residual; a vanishing tau returns the command
    subroutine test_lag(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp), parameter :: tc(3) = [0.0_dp, 10.0_dp, 30.0_dp], vc(3) = [0.0_dp, 0.01_dp, -0.01_dp]
+      ! second derivatives of a spline through the same corners (not a natural one: any
+      ! moments make a twice-differentiable cubic on each piece)
+      real(dp), parameter :: mc(3) = [2.0e-4_dp, -5.0e-4_dp, 3.0e-4_dp]
       real(dp), parameter :: tau = 0.7_dp, h = 1.0e-5_dp
       real(dp) :: yk(3), y, yd, yp, ym, dum, t, u
-      integer :: k
-      yk(1) = 0.0_dp
-      do k = 1, 2
-         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), dum)
-      end do
-      do k = 1, 2
-         t = tc(k) + 0.37_dp*(tc(k + 1) - tc(k))
-         call lagged_value(tc, vc, yk, k, tau, t, y, yd)
-         call lagged_value(tc, vc, yk, k, tau, t + h, yp, dum)
-         call lagged_value(tc, vc, yk, k, tau, t - h, ym, dum)
-         call check(error, abs(yd - (yp - ym)/(2.0_dp*h)) < 1.0e-7_dp*abs(yd) + 1.0e-12_dp, &
-                    'lag rate differs from differences')
-         if (allocated(error)) return
-         u = vc(k) + (vc(k + 1) - vc(k))*(t - tc(k))/(tc(k + 1) - tc(k))
-         call check(error, abs(yd - (u - y)/tau) < 1.0e-10_dp, 'lag does not solve its ODE')
-         if (allocated(error)) return
+      integer :: k, pass
+      do pass = 1, 2
+         if (pass == 1) then
+            yk = lag_corners(tc, vc, tau)
+         else
+            yk = lag_corners(tc, vc, tau, mc)
+         end if
+         do k = 1, 2
+            t = tc(k) + 0.37_dp*(tc(k + 1) - tc(k))
+            if (pass == 1) then
+               call lagged_value(tc, vc, yk, k, tau, t, y, yd)
+               call lagged_value(tc, vc, yk, k, tau, t + h, yp, dum)
+               call lagged_value(tc, vc, yk, k, tau, t - h, ym, dum)
+               u = vc(k) + (vc(k + 1) - vc(k))*(t - tc(k))/(tc(k + 1) - tc(k))
+            else
+               call lagged_value(tc, vc, yk, k, tau, t, y, yd, mc)
+               call lagged_value(tc, vc, yk, k, tau, t + h, yp, dum, mc)
+               call lagged_value(tc, vc, yk, k, tau, t - h, ym, dum, mc)
+               call cubic_piece(tc, vc, mc, k, t, u, dum)
+            end if
+            call check(error, abs(yd - (yp - ym)/(2.0_dp*h)) < 1.0e-7_dp*abs(yd) + 1.0e-12_dp, &
+                       'lag rate differs from differences')
+            if (allocated(error)) return
+            call check(error, abs(yd - (u - y)/tau) < 1.0e-10_dp, 'lag does not solve its ODE')
+            if (allocated(error)) return
+         end do
+         ! the lagged value runs on continuously across corner 2
+         if (pass == 2) then
+            call lagged_value(tc, vc, yk, 1, tau, tc(2), yp, dum, mc)
+            call lagged_value(tc, vc, yk, 2, tau, tc(2), ym, dum, mc)
+            call check(error, abs(yp - ym) < 1.0e-15_dp .and. abs(yk(2) - yp) < 1.0e-15_dp, &
+                       'the lag of the spline jumps at a corner')
+            if (allocated(error)) return
+         end if
       end do
       call lagged_value(tc, vc, yk, 2, 1.0e-9_dp, 20.0_dp, y, yd)
       call check(error, abs(y) < 1.0e-8_dp, 'a vanishing lag does not return the command')
+      if (allocated(error)) return
+      call cubic_piece(tc, vc, mc, 2, 20.0_dp, u, dum)
+      call lagged_value(tc, vc, lag_corners(tc, vc, 1.0e-9_dp, mc), 2, 1.0e-9_dp, 20.0_dp, y, yd, mc)
+      call check(error, abs(y - u) < 1.0e-8_dp*abs(vc(2)), 'a vanishing lag does not return the spline')
    end subroutine test_lag
 
    subroutine test_runs(error)

@@ -3,7 +3,7 @@
 module usharp_history
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
-   use usharp_math, only: pow_dp
+   use usharp_math, only: pow_dp, cubic_piece
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str
    implicit none
@@ -12,7 +12,7 @@ module usharp_history
    public :: history_type, control_strain, control_stress, segment_type
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
    public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
-   public :: rate_jump_history, spline_eval, add_tmf_temperature
+   public :: rate_jump_history, spline_eval, knot_piece, add_tmf_temperature
 
    !> Control modes
    integer, parameter :: control_strain = 1, control_stress = 2
@@ -160,8 +160,15 @@ contains
       real(dp), intent(in) :: tk(:), vk(:), mk(:), t
       integer, intent(in) :: k0, k1
       real(dp), intent(out) :: val, rate
-      real(dp) :: h, a, b
-      integer :: lo, hi, mid
+      call cubic_piece(tk, vk, mk, knot_piece(tk, k0, k1, t), t, val, rate)
+   end subroutine spline_eval
+
+   !> The piece of a spline with knots tk that holds time t: the k with tk(k) <= t < tk(k + 1),
+   !> by bisection between k0 and k1 (k0 when t < tk(k0), k1 - 1 when t >= tk(k1))
+   pure integer function knot_piece(tk, k0, k1, t) result(lo)
+      real(dp), intent(in) :: tk(:), t
+      integer, intent(in) :: k0, k1
+      integer :: hi, mid
       lo = k0
       hi = k1
       do while (hi - lo > 1)
@@ -172,13 +179,8 @@ contains
             hi = mid
          end if
       end do
-      h = tk(lo + 1) - tk(lo)
-      a = (tk(lo + 1) - t)/h
-      b = 1.0_dp - a
-      val = a*vk(lo) + b*vk(lo + 1) + ((a**3 - a)*mk(lo) + (b**3 - b)*mk(lo + 1))*(h*h/6.0_dp)
-      rate = (vk(lo + 1) - vk(lo))/h + ((1.0_dp - 3.0_dp*a*a)*mk(lo) + &
-                                        (3.0_dp*b*b - 1.0_dp)*mk(lo + 1))*(h/6.0_dp)
-   end subroutine spline_eval
+   end function knot_piece
+
 
    !> Segment k of the history, from corner k to corner k+1
    pure type(segment_type) function history_segment(self, k) result(seg)

@@ -10,13 +10,13 @@ module usharp_rosenbrock_driver
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
-   use usharp_math, only: pow_dp
+   use usharp_math, only: pow_dp, cubic_piece
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_model, only: model_type
    use usharp_effects, only: test_effects, extended_rates, lagged_value, lag_corners, &
                              extended_size, extended_initial
-   use usharp_history, only: history_type, control_strain, segment_type, spline_eval
+   use usharp_history, only: history_type, control_strain, segment_type, knot_piece
    use usharp_simulation, only: solver_options, sim_result, check_output_times, rodas4_smooth_rtol
    implicit none
    private
@@ -102,14 +102,11 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       type(test_effects), intent(in), optional :: effects
-      logical :: knots
       call res%allocate(size(tout))
       call check_output_times(hist, tout, error)
       if (allocated(error)) return
-      ! A smooth forcing is followed on its spline's knots; a lag acts on the samples
-      knots = hist%smooth()
-      if (present(effects)) knots = knots .and. effects%lag == 0.0_dp
-      if (knots) then
+      ! A smooth forcing is followed on its spline's knots, through a lag too
+      if (hist%smooth()) then
          call simulate_on(model, hist%forcing(), tout, opts, res, error, effects)
       else
          call simulate_on(model, hist, tout, opts, res, error, effects)
@@ -142,11 +139,13 @@ contains
          sys%stiffness = model%youngs/(1.0_dp + effects%compliance)
          sys%tc = hist%t
          sys%vc = hist%v
-         ! Without a lag the effects follow a smooth forcing as the plain model does (its
-         ! turning points the only corners); a lag acts on the samples piecewise linearly
-         sys%smooth = hist%smooth() .and. effects%lag == 0.0_dp
+         ! The effects follow a smooth forcing as the plain model does (its turning points
+         ! the only corners), a lag solved on each cubic piece; a piecewise-linear control
+         ! is lagged on each segment
+         sys%smooth = hist%smooth()
          if (sys%smooth) then
             sys%mc = hist%d2
+            if (effects%lag > 0.0_dp) sys%yk = lag_corners(hist%t, hist%v, effects%lag, hist%d2)
          else
             sys%yk = lag_corners(hist%t, hist%v, effects%lag)
          end if
@@ -245,9 +244,9 @@ contains
          call lagged_value(sys%tc, sys%vc, sys%yk, sys%k, sys%eff%lag, t, load, rate)
       else if (sys%smooth) then
          if (sys%hi > 0) then
-            call spline_eval(sys%tc, sys%vc, sys%mc, sys%lo, sys%hi, t, load, rate)
+            call smooth_load(sys, knot_piece(sys%tc, sys%lo, sys%hi, t), t, load, rate)
          else
-            call spline_eval(sys%tc, sys%vc, sys%mc, sys%k, sys%kend, t, load, rate)
+            call smooth_load(sys, knot_piece(sys%tc, sys%k, sys%kend, t), t, load, rate)
          end if
       else
          load = sys%seg%value(t)
@@ -263,6 +262,20 @@ contains
          dsig_dt = rate
       end if
    end subroutine stress_of
+
+   !> The load of a smooth forcing and its rate at time t in piece k of its spline: the
+   !> spline itself, or for the extended model with a lag the spline seen through it
+   pure subroutine smooth_load(sys, k, t, load, rate)
+      type(rate_system), intent(in) :: sys
+      integer, intent(in) :: k
+      real(dp), intent(in) :: t
+      real(dp), intent(out) :: load, rate
+      if (sys%extended .and. sys%eff%lag > 0.0_dp) then
+         call lagged_value(sys%tc, sys%vc, sys%yk, k, sys%eff%lag, t, load, rate, sys%mc)
+      else
+         call cubic_piece(sys%tc, sys%vc, sys%mc, k, t, load, rate)
+      end if
+   end subroutine smooth_load
 
    !> The rates (1/s, unit/s) at time t (s) and state y; ok false outside the model (D <= 0)
    !> or when not finite

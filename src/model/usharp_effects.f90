@@ -6,7 +6,7 @@
 !> Units: stresses in the model's unit, times in s, temperatures in K.
 module usharp_effects
    use usharp_kinds, only: dp
-   use usharp_math, only: exp_dp
+   use usharp_math, only: exp_dp, cubic_piece
    use usharp_error, only: error_type
    use usharp_model, only: model_type, wrapped_rates
    use usharp_effect_values, only: test_effects
@@ -216,15 +216,36 @@ contains
       call model%extended_initial(eff, y)
    end subroutine extended_initial
 
-   !> Value of a piecewise-linear control (corners tc, vc) seen through a first-order lag of
-   !> time constant tau (s) starting at rest on vc(1), at time t in segment k; yk(k) holds the
-   !> lagged value at corner k (from lag_corners). On a segment of slope s the lag solves to
-   !> y = u - s*tau + (y_k - u_k + s*tau)*exp(-(t - t_k)/tau).
-   pure subroutine lagged_value(tc, vc, yk, k, tau, t, y, ydot)
+   !> Value of a control seen through a first-order lag of time constant tau (s), starting at
+   !> rest on vc(1), at time t in piece k; yk(k) holds the lagged value at corner k (from
+   !> lag_corners). The control is piecewise linear between the corners (tc, vc), or with mc
+   !> (second derivatives at the corners) the cubic spline through them (a smooth forcing,
+   !> followed on its knots). On a piece the lag solves to y = yp + (y_k - yp(t_k))
+   !> exp(-(t - t_k)/tau) with yp = u - tau u' + tau**2 u'' - tau**3 u''' (u its control),
+   !> for a linear piece of slope s yp = u - s tau.
+   pure subroutine lagged_value(tc, vc, yk, k, tau, t, y, ydot, mc)
       real(dp), intent(in) :: tc(:), vc(:), yk(:), tau, t
       integer, intent(in) :: k
       real(dp), intent(out) :: y, ydot
-      real(dp) :: s, u, e
+      real(dp), intent(in), optional :: mc(:)
+      real(dp) :: s, u, e, u1, u2, u3, p0, p1, ypk
+      if (present(mc)) then
+         call cubic_piece(tc, vc, mc, k, t, u, u1, u2, u3)
+         if (tau <= 0.0_dp) then
+            y = u
+            ydot = u1
+            return
+         end if
+         ! yp at t and at the piece's start (where u = vc(k))
+         p0 = u - tau*(u1 - tau*(u2 - tau*u3))
+         p1 = u1 - tau*(u2 - tau*u3)
+         call cubic_piece(tc, vc, mc, k, tc(k), u, u1, u2)
+         ypk = u - tau*(u1 - tau*(u2 - tau*u3))
+         e = exp_dp(-(t - tc(k))/tau)
+         y = p0 + (yk(k) - ypk)*e
+         ydot = p1 - (yk(k) - ypk)*e/tau
+         return
+      end if
       s = (vc(k + 1) - vc(k))/(tc(k + 1) - tc(k))
       u = vc(k) + s*(t - tc(k))
       if (tau <= 0.0_dp) then
@@ -238,15 +259,17 @@ contains
    end subroutine lagged_value
 
    !> Lagged control value at every corner (first-order lag, time constant tau s, at rest on
-   !> the first value); with tau = 0 the corners themselves
-   pure function lag_corners(tc, vc, tau) result(yk)
+   !> the first value); with tau = 0 the corners themselves. With mc, of the cubic spline
+   !> through the corners with second derivatives mc (see lagged_value).
+   pure function lag_corners(tc, vc, tau, mc) result(yk)
       real(dp), intent(in) :: tc(:), vc(:), tau
+      real(dp), intent(in), optional :: mc(:)
       real(dp) :: yk(size(tc))
       real(dp) :: rate
       integer :: k
       yk(1) = vc(1)
       do k = 1, size(tc) - 1
-         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), rate)
+         call lagged_value(tc, vc, yk, k, tau, tc(k + 1), yk(k + 1), rate, mc)
       end do
    end function lag_corners
 

@@ -16,7 +16,7 @@ module usharp_math
    private
 
    public :: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp
-   public :: asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp
+   public :: asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp, cubic_piece
 
    !> ln 2 = ln2_hi + ln2_lo, ln2_hi with 32 significant bits (so that k*ln2_hi is exact for
    !> |k| < 2**21)
@@ -409,4 +409,23 @@ contains
                z*(1.0_dp/1188.0_dp + z*(-691.0_dp/360360.0_dp + z*(1.0_dp/156.0_dp)))))))/w
       y = (w - 0.5_dp)*log_dp(w) - w + half_log_two_pi + series - log_dp(prod)
    end function log_gamma_dp
+
+   !> Piece k (from knot k to k + 1) of the cubic spline through (tk, vk) with second
+   !> derivatives mk at the knots: its value u and derivatives in t at time t (per unit of
+   !> tk), the second and third if asked (the third is constant on a piece)
+   pure subroutine cubic_piece(tk, vk, mk, k, t, u, du, d2u, d3u)
+      real(dp), intent(in) :: tk(:), vk(:), mk(:), t
+      integer, intent(in) :: k
+      real(dp), intent(out) :: u, du
+      real(dp), intent(out), optional :: d2u, d3u
+      real(dp) :: h, a, b
+      h = tk(k + 1) - tk(k)
+      a = (tk(k + 1) - t)/h
+      b = 1.0_dp - a
+      u = a*vk(k) + b*vk(k + 1) + ((a**3 - a)*mk(k) + (b**3 - b)*mk(k + 1))*(h*h/6.0_dp)
+      du = (vk(k + 1) - vk(k))/h + ((1.0_dp - 3.0_dp*a*a)*mk(k) + &
+                                    (3.0_dp*b*b - 1.0_dp)*mk(k + 1))*(h/6.0_dp)
+      if (present(d2u)) d2u = a*mk(k) + b*mk(k + 1)
+      if (present(d3u)) d3u = (mk(k + 1) - mk(k))/h
+   end subroutine cubic_piece
 end module usharp_math
