@@ -482,8 +482,9 @@ contains
                  'a baseline figure changed with the held-out data')
    end subroutine test_held_out_unused
 
-   !> The starts of a refit side by side on two threads (tasks) end where they end one after
-   !> the other on one thread, bit for bit, with the same simulations counted
+   !> The starts of a refit side by side on two threads (tasks), each point's two tests tasks
+   !> too, end where they end one after the other on one thread, bit for bit, with the same
+   !> simulations counted
    subroutine test_starts_threads(error)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
@@ -499,7 +500,7 @@ contains
       nthreads = omp_get_max_threads()
       do k = 1, 2
          call omp_set_num_threads(k)
-         call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep(k))
+         call new_effect_problem(ctx%prob, [1, 2], 0, ctx%eff_base, ctx%peak, ep(k))
          call ep(k)%bounds(lo, hi)
          opt(k)%f = huge(1.0_dp)
          nevals(k) = 0

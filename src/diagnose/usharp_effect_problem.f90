@@ -153,7 +153,9 @@ contains
       p = unpack(x(k0 + 1:)*pack(self%pscale, self%pfree), self%pfree, p)
    end subroutine ep_unpack
 
-   !> Residuals of the problem's tests at x (test after test); ok false on a failure
+   !> Residuals of the problem's tests at x; ok false on a failure. The tests are simulated
+   !> as tasks that an idle thread takes up (the trial points of Levenberg-Marquardt come one
+   !> at a time), each alone: the same numbers on any number of threads.
    subroutine ep_residual_at(self, x, r, ok, fitted, strain, eps_in, only)
       class(effect_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
@@ -165,13 +167,13 @@ contains
       real(dp), intent(out), optional :: eps_in(:)  !< its inelastic strain, -
       !> Simulate only this test (an index into the problem's tests)
       integer, intent(in), optional :: only
-      class(model_type), allocatable :: model, mt
+      class(model_type), allocatable :: model
       type(test_effects), allocatable :: eff(:)
       type(error_type), allocatable :: error
-      type(sim_result) :: res
-      type(history_type) :: hist
-      real(dp), allocatable :: p(:), tout(:), ysim(:)
-      integer :: i, it, k0, n, nt
+      real(dp), allocatable :: p(:)
+      integer, allocatable :: k0(:)
+      logical, allocatable :: failed(:)
+      integer :: it, nt, ntr
       ok = .false.
       if (.not. present(only)) r = 0.0_dp
       call self%unpack(x, model, p)
@@ -184,18 +186,49 @@ contains
          allocate (eff(nt))
          eff = self%base
       end if
-      k0 = 0
-      do it = 1, size(self%tests)
+      ! each test's first row less one
+      allocate (k0(size(self%tests)), failed(size(self%tests)))
+      k0(1) = 0
+      do it = 2, size(self%tests)
+         k0(it) = k0(it - 1) + size(self%prob%targets(self%tests(it - 1))%t)
+      end do
+      failed = .false.
+      ntr = size(self%tests)
+      if (present(only)) then
+         call one(only)
+      else if (omp_in_parallel()) then
+         !$omp taskloop grainsize(1) default(shared)
+         do it = 1, ntr
+            call one(it)
+         end do
+         !$omp end taskloop
+      else
+         !$omp parallel do schedule(dynamic) default(shared)
+         do it = 1, ntr
+            call one(it)
+         end do
+         !$omp end parallel do
+      end if
+      ok = .not. any(failed) .and. all(abs(r) < huge(1.0_dp))
+
+   contains
+
+      !> Test it of the problem: its rows of r (and of the optional outputs)
+      subroutine one(it)
+         integer, intent(in) :: it
+         class(model_type), allocatable :: mt
+         type(error_type), allocatable :: err
+         type(sim_result) :: res
+         type(history_type) :: hist
+         real(dp), allocatable :: tout(:), ysim(:)
+         integer :: i, n
          i = self%tests(it)
-         if (present(only)) then
-            if (it /= only) then
-               k0 = k0 + size(self%prob%targets(i)%t)
-               cycle
-            end if
-         end if
          associate (tg => self%prob%targets(i), test => self%prob%cfg%tests(i))
-            call effect_model(model, eff(i), mt, error, test%temperature)
-            if (allocated(error)) return
+            call effect_model(model, eff(i), mt, err, test%temperature)
+            if (allocated(err)) then
+               failed(it) = .true.
+               return
+            end if
             ! The stress channel lags by shift: the data at t saw the response at t - shift
             tout = min(max(tg%t - eff(i)%shift, test%hist%t(1)), test%hist%end_time())
             ! An extensometer drift: a strain-controlled specimen follows the command less the
@@ -204,24 +237,25 @@ contains
             if (eff(i)%drift /= 0.0_dp .and. hist%control == control_strain) &
                call hist%add_ramp(-eff(i)%drift)
             if (self%prob%cfg%solver%integrator == 'cvode') then
-               call simulate_cvode(mt, hist, tout, self%prob%cfg%solver, res, error, eff(i))
+               call simulate_cvode(mt, hist, tout, self%prob%cfg%solver, res, err, eff(i))
             else
-               call simulate_rosenbrock(mt, hist, tout, self%prob%cfg%solver, res, error, eff(i))
+               call simulate_rosenbrock(mt, hist, tout, self%prob%cfg%solver, res, err, eff(i))
             end if
-            if (allocated(error)) return
+            if (allocated(err)) then
+               failed(it) = .true.
+               return
+            end if
             n = size(tg%t)
             ! ... and the measured strain is the specimen's plus the drift
             if (eff(i)%drift /= 0.0_dp) res%strain = res%strain + eff(i)%drift*(tout - hist%t(1))
             ysim = simulated(test, res)
-            r(k0 + 1:k0 + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
-                                              tg%y_ex_max)
-            if (present(fitted)) fitted(k0 + 1:k0 + n) = ysim
-            if (present(strain)) strain(k0 + 1:k0 + n) = res%strain
-            if (present(eps_in)) eps_in(k0 + 1:k0 + n) = res%eps_in
-            k0 = k0 + n
+            r(k0(it) + 1:k0(it) + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
+                                                      tg%y_ex_max)
+            if (present(fitted)) fitted(k0(it) + 1:k0(it) + n) = ysim
+            if (present(strain)) strain(k0(it) + 1:k0(it) + n) = res%strain
+            if (present(eps_in)) eps_in(k0(it) + 1:k0(it) + n) = res%eps_in
          end associate
-      end do
-      ok = all(abs(r) < huge(1.0_dp))
+      end subroutine one
    end subroutine ep_residual_at
 
    !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty. A
