@@ -7,7 +7,7 @@
 !> longer reaches the simulated response as elastic spikes.
 module usharp_forcing
    use usharp_kinds, only: dp
-   use usharp_math, only: pow10_dp
+   use usharp_math, only: pow10_dp, cubic_piece
    use usharp_error, only: error_type
    use usharp_history, only: history_type, history_from_points, spline_eval
    use usharp_sort, only: median
@@ -143,7 +143,7 @@ contains
             most = tol
             worst = 0
             do i = idx(j) + 1, idx(j + 1) - 1
-               call spline_eval(tk, zk, m, j, j + 1, t(i), s, rate)
+               call cubic_piece(tk, zk, m, j, t(i), s, rate)
                dev = abs(s - z(i))
                if (dev > most) then
                   most = dev

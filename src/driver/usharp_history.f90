@@ -181,7 +181,6 @@ contains
       end do
    end function knot_piece
 
-
    !> Segment k of the history, from corner k to corner k+1
    pure type(segment_type) function history_segment(self, k) result(seg)
       class(history_type), intent(in) :: self

@@ -193,13 +193,16 @@ contains
                   end if
                end if
                if (.not. by_sens .and. nupd < max_updates) then
-                  ! Broyden: J + (r(xn) - r(x) - J dx) dx'/(dx'dx), the least change of J
-                  ! that maps the step onto the change of the residuals it made
-                  r = rn(:, 1) - r - mat_mul(jac, dx)
-                  do j = 1, n
-                     jac(:, j) = jac(:, j) + r*(dx(j)/dot_product(dx, dx))
-                  end do
                   nupd = nupd + 1
+                  ! Broyden: J + (r(xn) - r(x) - J dx) dx'/(dx'dx), the least change of J
+                  ! that maps the step onto the change of the residuals it made (not when a
+                  ! difference Jacobian comes next)
+                  if (nupd < max_updates) then
+                     r = rn(:, 1) - r - mat_mul(jac, dx)
+                     do j = 1, n
+                        jac(:, j) = jac(:, j) + r*(dx(j)/dot_product(dx, dx))
+                     end do
+                  end if
                end if
                x = xn
                r = rn(:, 1)
