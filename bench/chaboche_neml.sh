@@ -6,6 +6,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-fpm run --profile release --flag "-I/usr/include/sundials/fortran" --example bench_chaboche \
+fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --example bench_chaboche \
   -- "$@" 2>/dev/null | grep -E "^(# (constants|values|history)| *-?[0-9])" >"$out"
 python3 bench/chaboche_neml.py "$out"

@@ -11,8 +11,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.local/bin:$PATH"
-fpm build --profile release --flag "-I/usr/include/sundials/fortran" > /dev/null
-exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran" --runner echo 2>/dev/null | tail -n 1)
+fpm build --profile release --flag "-I/usr/include/sundials/fortran -flto" > /dev/null
+exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --runner echo 2>/dev/null | tail -n 1)
 mpirun="mpirun --oversubscribe -np 2"
 [ "$(id -u)" -eq 0 ] && mpirun="mpirun --allow-run-as-root --oversubscribe -np 2"
 out=$(mktemp -d)

@@ -8,8 +8,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.local/bin:$PATH"
-fpm build --profile release --flag "-I/usr/include/sundials/fortran" > /dev/null
-exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran" --runner echo 2>/dev/null | tail -n 1)
+fpm build --profile release --flag "-I/usr/include/sundials/fortran -flto" > /dev/null
+exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --runner echo 2>/dev/null | tail -n 1)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 printf '%-14s %12s %14s %12s\n' "phase" "peak (ksi)" "max |diff|" "/ peak"
