@@ -651,7 +651,8 @@ contains
    !> Parsimony of the verdict: two confirmed effects, compliance (1 parameter) and scatter
    !> (4, per test, BIC 14 lower): both leave only noise, so the simpler leads and the report
    !> says they cannot be told apart; when compliance leaves a structured gap and scatter is
-   !> 14 lower, scatter leads alone; within 10 of BIC, the simpler leads
+   !> 14 lower, scatter leads alone; within 10 of BIC, the simpler leads. Its words: "explains"
+   !> where the rest of a gap lies below its floor, "partly explains" where it does not
    subroutine test_parsimony(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
@@ -683,6 +684,23 @@ contains
       call conclude(res)
       call check(error, res%leading == 2 .and. index(res%verdict, 'compliance partly explains') == 1, &
                  'within 10 of BIC: '//res%verdict)
+      if (allocated(error)) return
+      ! 73.9 % of a held-out gap of 2.3 floors removed, its rest (0.6) below the floor and the
+      ! part removed above it: all that the data resolve, and the words say so
+      res%gap_held = 2.3_dp
+      res%effects(1) = outcome(4, 'scatter', 4, -50.0_dp, 0.999_dp, 0.6_dp)
+      res%effects(2) = outcome(1, 'compliance', 1, -100.0_dp, 0.999_dp, 0.6_dp)
+      call conclude(res)
+      call check(error, res%leading == 2 .and. index(res%verdict, 'compliance explains the gap') == 1 .and. &
+                 index(res%verdict, '73.9 % on the held-out tests, the rest below its floor') > 0, &
+                 'rest below the floor: '//res%verdict)
+      if (allocated(error)) return
+      ! Its rest above the floor (1.2): "partly", with no such words
+      res%effects(1) = outcome(4, 'scatter', 4, -50.0_dp, 0.999_dp, 1.2_dp)
+      res%effects(2) = outcome(1, 'compliance', 1, -100.0_dp, 0.999_dp, 1.2_dp)
+      call conclude(res)
+      call check(error, res%leading == 2 .and. index(res%verdict, 'compliance partly explains') == 1 .and. &
+                 index(res%verdict, 'below its floor') == 0, 'rest above the floor: '//res%verdict)
    contains
       function outcome(k, name, q, dbic, shrink, held_gap) result(e)
          integer, intent(in) :: k, q

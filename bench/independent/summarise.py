@@ -2,7 +2,8 @@
 """Summary of the cases selfcheck.py kept (--keep DIR): per matrix and injected effect, how
 often the answer was right (an accepted effect first, or named as explaining the gap equally
 well with a separating test proposed; clean data: no significant effect), the held-out
-structured gap the right answers removed (least and median), and the answers at the low end
+structured gap the right answers removed (least and median, and how many removed at least
+80 % of it or left a rest below its floor, which the verdict says), and the answers at the low end
 of each effect's range (each row's first repetition, or every one of a folder whose name ends
 in 'low', made with --u 0). A case kept in several folders (the same data: the same seed,
 matrix, row and repetition) counts once, as diagnosed in the last folder given.
@@ -62,21 +63,24 @@ def main(dirs):
         lead, rem, v, alike = verdict(case)
         ok = right(row, (lead, rem, v, alike))
         key = (mname, row)
-        r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[]))
+        r = rows.setdefault(key, dict(n=0, ok=0, rem=[], ans=[], most=0))
         r['n'] += 1
         r['ok'] += ok
         if ok and rem == rem:
             r['rem'].append(rem)
+            r['most'] += rem >= 80.0 or bool(re.search(r'% on the held-out tests, the rest below its floor', v))
         r['ans'].append(lead + ('' if lead in sc.ACCEPT[row] or not ok else '~' + next(x for x in alike if x in sc.ACCEPT[row])))
         if rep == 0 or lowall:
             low[row].append((mname, label, ok, lead))
-    print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s}  answers')
+    print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s} '
+          f'{">=80 % or rest at noise":>24s}  answers')
     tot = ok = 0
     order = lambda k: (list(sc.MATRICES).index(k[0]), sc.ROWS.index(k[1]))
     for (mname, row), r in sorted(rows.items(), key=lambda kr: order(kr[0])):
         rem = sorted(r['rem'])
         rs = f'{rem[0]:.0f} / {rem[len(rem)//2]:.0f}' if rem else '-'
-        print(f'{mname:20s} {row:12s} {r["ok"]:>4d} / {r["n"]:<3d} {rs:>34s}  {" ".join(r["ans"])}')
+        ms = f'{r["most"]} of {len(rem)}' if rem else '-'
+        print(f'{mname:20s} {row:12s} {r["ok"]:>4d} / {r["n"]:<3d} {rs:>34s} {ms:>24s}  {" ".join(r["ans"])}')
         tot += r['n']; ok += r['ok']
     print(f'right {ok} of {tot}')
     print('\nlow end (first repetition of each row, or --u 0):')

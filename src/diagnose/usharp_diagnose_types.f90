@@ -14,6 +14,7 @@ module usharp_diagnose_types
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
+   public :: explains_resolved, rest_at_noise
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader
 
@@ -266,6 +267,32 @@ contains
       explains_most = (e%shrink_fit >= most .or. .not. fit_structured(res)) .and. &
                       (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held)
    end function explains_most
+
+   !> True when an effect that removed the share removed of a set's structured gap gap
+   !> leaves no detectable rest of it (at or below the set's floor) while the part it removed
+   !> is detectable (above the floor). The share is a ratio of two noisy gaps, each scattered
+   !> by a third of the floor: with a gap of twice its floor, 70 % and 100 % are alike to the
+   !> data (a lag of 0.12 s with the relaxation test held out removed 73.7 % of a held-out gap
+   !> of 2.3 floors, its rest at 0.6 of the floor)
+   elemental logical function rest_at_noise(gap, removed, floor)
+      real(dp), intent(in) :: gap      !< structured gap at the baseline
+      real(dp), intent(in) :: removed  !< share of it the effect removed
+      real(dp), intent(in) :: floor    !< the set's floor (3 standard errors of the gap noise)
+      rest_at_noise = (1.0_dp - removed)*gap <= floor .and. removed*gap > floor
+   end function rest_at_noise
+
+   !> True when e explains the gap as far as the tests resolve it: on each set with a
+   !> structured gap, most of it removed (explains_most) or its rest at the noise level with a
+   !> detectable part removed (rest_at_noise). It sets the verdict's wording, "explains"
+   !> against "partly explains"; what an effect must remove to be confirmed is explains_most's
+   pure logical function explains_resolved(e, res)
+      type(effect_outcome), intent(in) :: e
+      type(diagnose_result), intent(in) :: res
+      explains_resolved = (e%shrink_fit >= most .or. .not. fit_structured(res) .or. &
+                           rest_at_noise(res%gap_fit, e%shrink_fit, res%floor_fit)) .and. &
+                          (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held .or. &
+                           .not. held_quiet(res) .and. rest_at_noise(res%gap_held, e%shrink_held, res%floor_held))
+   end function explains_resolved
 
    !> True when a diagnosis should go on to fit the held-out tests too: no effect is
    !> confirmed and the fit tests cannot say which effect there is. Either they have no

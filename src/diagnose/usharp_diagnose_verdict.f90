@@ -9,10 +9,14 @@ module usharp_diagnose_verdict
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
-                                    leaves_noise, explains_most, fit_effects_shown, bic_only, &
-                                    held_fit_only, form_left_open, form_beats_leader
+                                    leaves_noise, explains_resolved, rest_at_noise, most, &
+                                    fit_effects_shown, bic_only, held_fit_only, form_left_open, &
+                                    form_beats_leader
    implicit none
    private
+
+   !> Said of a set's share removed below most whose rest lies at the noise level
+   character(len=*), parameter :: rest_note = ', the rest below its floor'
 
    public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note
 
@@ -90,7 +94,7 @@ contains
       character(len=:), allocatable :: text, others
       integer :: j
       associate (e => res%effects(res%leading))
-         if (explains_most(e, res)) then
+         if (explains_resolved(e, res)) then
             text = trim(e%name)//' explains the gap'
          else
             text = trim(e%name)//' partly explains the gap'
@@ -107,10 +111,14 @@ contains
          else
             text = text//', structured gap removed '//real_str(100.0_dp*e%shrink_fit, 'f0.1')// &
                    ' % on the fit tests'
+            if (fit_structured(res) .and. e%shrink_fit < most .and. &
+                rest_at_noise(res%gap_fit, e%shrink_fit, res%floor_fit)) text = text//rest_note
             if (held_quiet(res)) then
                text = text//'; the held-out tests had none and still have none'
             else
                text = text//' and '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % on the held-out tests'
+               if (e%shrink_held < most .and. rest_at_noise(res%gap_held, e%shrink_held, res%floor_held)) &
+                  text = text//rest_note
             end if
          end if
          if (size(res%alike) > 1) then
@@ -335,7 +343,7 @@ contains
       type(diagnose_result), intent(in) :: res
       character(len=:), allocatable :: text
       integer :: i, j
-      if (e%confirmed .and. explains_most(e, res)) then
+      if (e%confirmed .and. explains_resolved(e, res)) then
          text = 'confirmed: explains the gap'
       else if (e%confirmed) then
          text = 'confirmed: partly explains the gap'
