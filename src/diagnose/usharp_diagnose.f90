@@ -33,9 +33,9 @@ module usharp_diagnose
    use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin
-   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, rest_at_noise, &
-                                    fit_structured, diagnose_progress, tell, step_done, joint_wanted, &
-                                    named_effect, joint_decides, fit_gap_left, rest_wanted
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
+                                    rest_at_noise, fit_structured, diagnose_progress, tell, step_done, &
+                                    joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
@@ -50,7 +50,8 @@ module usharp_diagnose
    private
 
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
-   public :: write_report, gn_decrease, diagnose_options_of, held_quiet, rest_at_noise, named_effect, fit_structured
+   public :: write_report, gn_decrease, diagnose_options_of, held_quiet, rest_at_noise, named_effect
+   public :: fit_structured
    public :: joint_decides
    public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
 

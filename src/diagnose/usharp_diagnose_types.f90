@@ -268,9 +268,9 @@ contains
                       (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held)
    end function explains_most
 
-   !> True when an effect that removed the share removed of a set's structured gap gap
-   !> leaves no detectable rest of it (at or below the set's floor) while the part it removed
-   !> is detectable (above the floor). The share is a ratio of two noisy gaps, each scattered
+   !> True when an effect that removed a share of a set's structured gap leaves no
+   !> detectable rest of it (at or below the set's floor) while the part it removed is
+   !> detectable (above the floor). The share is a ratio of two noisy gaps, each scattered
    !> by a third of the floor: with a gap of twice its floor, 70 % and 100 % are alike to the
    !> data (a lag of 0.12 s with the relaxation test held out removed 73.7 % of a held-out gap
    !> of 2.3 floors, its rest at 0.6 of the floor)
