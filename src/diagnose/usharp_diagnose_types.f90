@@ -264,8 +264,7 @@ contains
    pure logical function explains_most(e, res)
       type(effect_outcome), intent(in) :: e
       type(diagnose_result), intent(in) :: res
-      explains_most = (e%shrink_fit >= most .or. .not. fit_structured(res)) .and. &
-                      (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held)
+      explains_most = explains(e, res, .false.)
    end function explains_most
 
    !> True when an effect that removed a share of a set's structured gap leaves no
@@ -288,11 +287,24 @@ contains
    pure logical function explains_resolved(e, res)
       type(effect_outcome), intent(in) :: e
       type(diagnose_result), intent(in) :: res
-      explains_resolved = (e%shrink_fit >= most .or. .not. fit_structured(res) .or. &
-                           rest_at_noise(res%gap_fit, e%shrink_fit, res%floor_fit)) .and. &
-                          (e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held .or. &
-                           .not. held_quiet(res) .and. rest_at_noise(res%gap_held, e%shrink_held, res%floor_held))
+      explains_resolved = explains(e, res, .true.)
    end function explains_resolved
+
+   !> explains_most, or with resolved explains_resolved: each set's test, both must hold
+   pure logical function explains(e, res, resolved)
+      type(effect_outcome), intent(in) :: e
+      type(diagnose_result), intent(in) :: res
+      logical, intent(in) :: resolved  !< a rest below the floor counts too (rest_at_noise)
+      logical :: fit_ok, held_ok
+      fit_ok = e%shrink_fit >= most .or. .not. fit_structured(res)
+      held_ok = e%shrink_held >= most .or. held_quiet(res) .and. e%held_gap <= res%floor_held
+      if (resolved) then
+         fit_ok = fit_ok .or. rest_at_noise(res%gap_fit, e%shrink_fit, res%floor_fit)
+         held_ok = held_ok .or. .not. held_quiet(res) .and. &
+                   rest_at_noise(res%gap_held, e%shrink_held, res%floor_held)
+      end if
+      explains = fit_ok .and. held_ok
+   end function explains
 
    !> True when a diagnosis should go on to fit the held-out tests too: no effect is
    !> confirmed and the fit tests cannot say which effect there is. Either they have no
