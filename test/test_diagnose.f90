@@ -838,19 +838,31 @@ contains
       res%floor_held = 0.1_dp
    end subroutine below_floors_case
 
-   !> The leading n_refit effects are refitted and those the screening cannot tell from the
-   !> last of them (predicted BIC within 10 % or bic_margin), not one more
+   !> The leading n_refit effects are refitted and those the screening cannot tell from them
+   !> (predicted BIC within 10 % or bic_margin of the last, or a predicted fall within
+   !> rival_share of the largest), not one more
    subroutine test_near_ties(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
       allocate (res%effects(5))
       res%effects%pred_dbic = [-1081.0_dp, -1066.0_dp, -1007.0_dp, -984.0_dp, -152.0_dp]
+      res%effects%pred_drop = [60.0_dp, 59.0_dp, 56.0_dp, 30.0_dp, 8.0_dp]
       call check(error, n_leading(res, 3) == 4, 'a near tie at -984 against -1007 not refitted')
       if (allocated(error)) return
       res%effects(4)%pred_dbic = -500.0_dp
       call check(error, n_leading(res, 3) == 3, 'an effect far behind refitted')
       if (allocated(error)) return
+      ! A second back stress of 1.37 ksi (ratcheting test held out): 4th at -606.1 against
+      ! -690.5, outside 10 %, but its predicted fall is 87 % of the leader's
+      res%effects%pred_dbic = [-757.4_dp, -740.3_dp, -690.5_dp, -606.1_dp, -124.9_dp]
+      res%effects%pred_drop = [1.124_dp, 1.119_dp, 1.071_dp, 0.974_dp, 0.156_dp]
+      call check(error, n_leading(res, 3) == 4, 'a predicted fall at 87 % of the leader''s not refitted')
+      if (allocated(error)) return
+      res%effects(4)%pred_drop = 0.85_dp
+      call check(error, n_leading(res, 3) == 3, 'a predicted fall at 76 % of the leader''s refitted')
+      if (allocated(error)) return
       res%effects%pred_dbic = [-8.0_dp, -7.0_dp, -6.0_dp, -5.0_dp, -4.0_dp]
+      res%effects%pred_drop = 1.0_dp
       call check(error, n_leading(res, 3) == 3, 'insignificant predictions refitted beyond n_refit')
    end subroutine test_near_ties
 

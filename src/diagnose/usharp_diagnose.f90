@@ -32,7 +32,7 @@ module usharp_diagnose
    use usharp_effects, only: effect_catalogue, param_per_test
    use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
-   use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin
+   use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin, rival_share
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     rest_at_noise, fit_structured, diagnose_progress, tell, step_done, &
                                     joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
@@ -237,17 +237,23 @@ contains
    end subroutine joint_stage
 
    !> How many of the screened effects to refit: the leading n_refit and those the screening
-   !> cannot tell from the last of them (predicted BIC within 10 % of it, or within bic_margin,
-   !> and significant): a temperature offset that screened 4th at -984 against scatter's -1007
-   !> was never refitted, and scatter, which carries it with two parameters more, led
+   !> cannot tell from them (significant, and a predicted BIC within 10 % of the last one or
+   !> within bic_margin, or a predicted fall at least rival_share of the largest so far): a
+   !> temperature offset that screened 4th at -984 against scatter's -1007 was never
+   !> refitted, and scatter, which carries it with two parameters more, led; a second back
+   !> stress of 1.37 ksi screened 4th at 87 % of the leader's fall and was never tried
    pure integer function n_leading(res, n_refit) result(n)
       type(diagnose_result), intent(in) :: res
       integer, intent(in) :: n_refit
+      logical :: near_bic, near_fall
       n = min(n_refit, size(res%effects))
       if (n < 1) return
       do while (n < size(res%effects))
-         associate (last => res%effects(n)%pred_dbic, next => res%effects(n + 1)%pred_dbic)
-            if (.not. (next < -bic_margin .and. next < last + max(bic_margin, 0.1_dp*abs(last)))) exit
+         associate (last => res%effects(n)%pred_dbic, next => res%effects(n + 1))
+            if (.not. next%pred_dbic < -bic_margin) exit
+            near_bic = next%pred_dbic < last + max(bic_margin, 0.1_dp*abs(last))
+            near_fall = next%pred_drop >= rival_share*maxval(res%effects(1:n)%pred_drop)
+            if (.not. (near_bic .or. near_fall)) exit
          end associate
          n = n + 1
       end do

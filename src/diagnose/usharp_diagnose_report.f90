@@ -8,7 +8,7 @@ module usharp_diagnose_report
    use usharp_regions, only: class_names
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
-   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
+   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only, &
                                     delay_precision
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
@@ -167,7 +167,8 @@ contains
                real_str(bic_margin, 'f0.0')//'; those that lower BIC ran again from the baseline''s '// &
                'constants, the best other refit''s and Latin-hypercube points, the lowest end kept):')
       if (count(res%effects%refitted) > opts%n_refit) call add(lines, '(beyond the leading '// &
-         str(opts%n_refit)//': those the screening could not tell from the last of them; the lower-ranked '// &
+         str(opts%n_refit)//': those the screening could not tell from them (predicted BIC within 10 % of the last, '// &
+         'or a predicted fall at least '//str(nint(100.0_dp*rival_share))//' % of the largest); the lower-ranked '// &
          'where none of the leading was confirmed or took the fit tests'' structured gap to its floor, '// &
          'or where only the held-out tests had one; '// &
          'those simpler than a leader with parameters per test that the screening found significant)')
