@@ -5,7 +5,7 @@
 # history class) and the region tables on stdout. Needs ../shared/realdata and gnuplot.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 if [ ! -d ../shared/realdata/a617-950C ]; then
   echo "skipped: ../shared/realdata/a617-950C not found"; exit 0
 fi

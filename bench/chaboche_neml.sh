@@ -4,8 +4,9 @@
 # Needs: pip install neml. Optional: 13 constants (order of the model's names) as arguments.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/release-flags.sh
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --example bench_chaboche \
+fpm run --profile release --flag "$FLAGS" --example bench_chaboche \
   -- "$@" 2>/dev/null | grep -E "^(# (constants|values|history)| *-?[0-9])" >"$out"
 python3 bench/chaboche_neml.py "$out"

@@ -13,7 +13,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.local/bin:$PATH"
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
 exe=$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)
 tmp=$(mktemp -d)

@@ -5,7 +5,7 @@
 # and the largest relative difference of the objective over all evaluations.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
 exe=$(cd "$PWD" && realpath "$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)")
 tmp=$(mktemp -d)

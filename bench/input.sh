@@ -5,7 +5,7 @@
 # Usage: bench/input.sh [usharp executable]   (default: the release build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 exe=${1:-}
 if [ -z "$exe" ]; then
    fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1

@@ -3,5 +3,5 @@
 # sensitivities (thesis LCF + relaxation, seven constants; release build, one thread)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 OMP_NUM_THREADS=1 fpm run --profile release --flag "$FLAGS" --example bench_jacobian 2>/dev/null

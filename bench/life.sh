@@ -9,7 +9,7 @@
 # Usage: bash bench/life.sh [out_dir]   (default: a temporary folder, removed at the end)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 if [ ! -d ../shared/realdata/a617-950C ]; then
   echo "measured data not found at ../shared/realdata/a617-950C" >&2
   exit 1

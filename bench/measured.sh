@@ -8,7 +8,7 @@
 # docs/figures/a617-950C-forcing.png. Needs ../shared/realdata beside the project.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 if [ ! -d ../shared/realdata/a617-950C ]; then
   echo "measured data not found at ../shared/realdata/a617-950C" >&2
   exit 1

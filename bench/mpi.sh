@@ -10,9 +10,10 @@
 # usage: bash bench/mpi.sh   (release build; Open MPI's mpirun)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/release-flags.sh
 export PATH="$HOME/.local/bin:$PATH"
-fpm build --profile release --flag "-I/usr/include/sundials/fortran -flto" > /dev/null
-exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --runner echo 2>/dev/null | tail -n 1)
+fpm build --profile release --flag "$FLAGS" > /dev/null
+exe=$(fpm run --profile release --flag "$FLAGS" --runner echo 2>/dev/null | tail -n 1)
 mpirun="mpirun --oversubscribe -np 2"
 [ "$(id -u)" -eq 0 ] && mpirun="mpirun --allow-run-as-root --oversubscribe -np 2"
 out=$(mktemp -d)

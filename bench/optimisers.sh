@@ -5,7 +5,7 @@
 # speed-up of the Levenberg-Marquardt fit on 2 threads, and multi-start from the box.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
 exe=$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)
 tmp=$(mktemp -d)

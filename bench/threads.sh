@@ -5,9 +5,10 @@
 # usage: bash bench/threads.sh [deck]   (release build; default decks/thesis-run2-multistart.nml)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/release-flags.sh
 export PATH="$HOME/.local/bin:$PATH"
-fpm build --profile release --flag "-I/usr/include/sundials/fortran -flto" > /dev/null
-exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --runner echo 2>/dev/null | tail -n 1)
+fpm build --profile release --flag "$FLAGS" > /dev/null
+exe=$(fpm run --profile release --flag "$FLAGS" --runner echo 2>/dev/null | tail -n 1)
 deck=${1:-decks/thesis-run2-multistart.nml}
 out=$(mktemp -d)
 trap 'rm -rf "$out"; [ -n "${load_pids:-}" ] && kill $load_pids 2>/dev/null; true' EXIT

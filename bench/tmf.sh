@@ -7,9 +7,10 @@
 # usage: bash bench/tmf.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/release-flags.sh
 export PATH="$HOME/.local/bin:$PATH"
-fpm build --profile release --flag "-I/usr/include/sundials/fortran -flto" > /dev/null
-exe=$(fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --runner echo 2>/dev/null | tail -n 1)
+fpm build --profile release --flag "$FLAGS" > /dev/null
+exe=$(fpm run --profile release --flag "$FLAGS" --runner echo 2>/dev/null | tail -n 1)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 printf '%-14s %12s %14s %12s\n' "phase" "peak (ksi)" "max |diff|" "/ peak"

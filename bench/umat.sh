@@ -2,4 +2,5 @@
 # Stress-update calls per second and time per thesis test on the umat path (release, one core).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-OMP_NUM_THREADS=1 fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --example bench_umat 2>/dev/null
+. scripts/release-flags.sh
+OMP_NUM_THREADS=1 fpm run --profile release --flag "$FLAGS" --example bench_umat 2>/dev/null

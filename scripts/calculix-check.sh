@@ -10,6 +10,7 @@
 # The cache folder: $USHARP_CCX_CACHE (default ~/.cache/usharp-ccx).
 set -uo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
+. "$here/scripts/release-flags.sh"
 cache="${USHARP_CCX_CACHE:-$HOME/.cache/usharp-ccx}"
 work="${1:-$here/build/calculix-check}"
 ccx="$cache/ccx-external"
@@ -57,9 +58,9 @@ mkdir -p "$work/lib" && cp "$work/umat/check-umat_miller_calculix/libMILLER.so" 
   || fail "the single-file UMAT library is missing"
 
 # usharp's uniaxial driver on the same histories, output every 0.05 s
-(cd "$here" && fpm build --profile release --flag "-I/usr/include/sundials/fortran -flto" >/dev/null 2>&1) \
+(cd "$here" && fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1) \
   || fail "usharp did not build"
-exe="$here/$(cd "$here" && fpm run --profile release --flag "-I/usr/include/sundials/fortran -flto" --runner 2>/dev/null | tail -n 1)"
+exe="$here/$(cd "$here" && fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)"
 
 cat > "$work/driver.nml" <<'NML'
 &model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3, poisson=0.3 /

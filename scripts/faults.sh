@@ -10,7 +10,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 if [ $# -ge 1 ]; then
   exe=$(realpath "$1")
 else
-  FLAGS="-I/usr/include/sundials/fortran -flto"
+  . "$root/scripts/release-flags.sh"
   (cd "$root" && fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1)
   exe=$(cd "$root" && realpath "$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)")
 fi

@@ -4,7 +4,7 @@
 # Usage: bash data/tutorial/generate.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-FLAGS="-I/usr/include/sundials/fortran -flto"
+. scripts/release-flags.sh
 fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
 exe=$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)
 tmp=$(mktemp -d)
