@@ -13,7 +13,8 @@ module test_diagnose
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
-   use usharp_effects, only: test_effects, lagged_value, lag_corners, effect_model, extended_rates, n_extended
+   use usharp_effects, only: test_effects, lagged_value, lag_corners, effect_model, extended_rates, n_extended, &
+                             effect_catalogue, effect_index
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
@@ -26,7 +27,7 @@ module test_diagnose
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader
    use usharp_diagnose_verdict, only: conclude
-   use usharp_diagnose_refit, only: judge, ratio_beyond_doubt
+   use usharp_diagnose_refit, only: judge, ratio_beyond_doubt, gamma3_undetermined
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax
@@ -87,6 +88,7 @@ contains
          new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
          new_unittest('form-left-open-below-the-floor-fits-every-test', test_open_below_floor), &
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
+         new_unittest('second-back-stress-held-where-gamma3-is-undetermined', test_gamma3_held), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -1247,6 +1249,42 @@ contains
       r = ratio_beyond_doubt(1.2_dp, 30.0_dp, ieee_value(1.0_dp, ieee_quiet_nan), 31.0_dp)
       call check(error, abs(r - 1.2_dp) < 1.0e-12_dp, 'no interval: the fitted ratio')
    end subroutine test_beyond_doubt
+
+   !> A second back stress judged beyond its limit is refitted with gamma3 held only where
+   !> gamma3 is undetermined (the LCF-held-out case: gamma3 25 [-2.8, 52.7]), not where the
+   !> data fix it, not for a plausible or an already held refit, not for another effect
+   subroutine test_gamma3_held(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_context) :: ctx
+      type(effect_outcome) :: e
+      ctx%cat = effect_catalogue(20.0_dp)
+      e%k = effect_index('backstress2')
+      e%plausible = .false.
+      e%p = [673.4_dp, 24.9_dp]
+      e%p_lo = [513.6_dp, -2.84_dp]
+      e%p_hi = [833.2_dp, 52.7_dp]
+      call check(error, gamma3_undetermined(ctx, e), 'gamma3 spanning zero not held')
+      if (allocated(error)) return
+      e%p_hi(2) = ieee_value(1.0_dp, ieee_quiet_nan)
+      e%p_lo(2) = 10.0_dp
+      call check(error, gamma3_undetermined(ctx, e), 'gamma3 with an interval not finite not held')
+      if (allocated(error)) return
+      e%p_lo(2) = 10.0_dp
+      e%p_hi(2) = 40.0_dp
+      call check(error, .not. gamma3_undetermined(ctx, e), 'gamma3 the data fix held')
+      if (allocated(error)) return
+      e%p_lo(2) = -2.84_dp
+      e%plausible = .true.
+      call check(error, .not. gamma3_undetermined(ctx, e), 'a plausible refit held')
+      if (allocated(error)) return
+      e%plausible = .false.
+      e%held = .true.
+      call check(error, .not. gamma3_undetermined(ctx, e), 'a held refit held again')
+      if (allocated(error)) return
+      e%held = .false.
+      e%k = effect_index('softening')
+      call check(error, .not. gamma3_undetermined(ctx, e), 'another effect held')
+   end subroutine test_gamma3_held
 
    !> The chi-square tails the power statement uses, against closed forms and scipy 1.x
    !> (scipy.special.gammaincc, scipy.stats.chi2.sf and ncx2.sf, printed to 17 digits)

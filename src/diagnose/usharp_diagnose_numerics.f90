@@ -330,15 +330,20 @@ contains
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
    !> and zero effect (the second back stress from a small modulus, so that its rate has a
    !> gradient; the softening at the rate soften_rate0)
-   subroutine effect_fit(ctx, k, ep)
+   subroutine effect_fit(ctx, k, ep, held)
       type(diagnose_context), intent(in) :: ctx
       !> Catalogue effect
       integer, intent(in) :: k
       type(effect_problem), intent(out) :: ep
+      !> The second back stress's gamma3 held at the screening's value (see refit)
+      logical, intent(in), optional :: held
       call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
       ep%pfree = free_params(ep, ctx%ifit, .false.)
       if (k == 8) ep%p0 = [0.01_dp*ctx%peak, ctx%opts%gamma3]
       if (k == 7) ep%p0 = [0.0_dp, soften_rate0]
+      if (present(held)) then
+         if (held .and. k == 8) ep%pfree(2) = .false.
+      end if
    end subroutine effect_fit
 
    !> n Latin-hypercube points of the constants (log10) over the &fit multi-start box,

@@ -211,7 +211,7 @@ contains
          if (.not. allocated(e%x_fit)) return
          allocate (e%p_profiled(size(e%p)))
          e%p_profiled = .false.
-         call effect_fit(ctx, e%k, ep)
+         call effect_fit(ctx, e%k, ep, e%held)
          if (size(e%x_fit) /= ep%nx()) return
          nc = size(ctx%prob%idx)
          call ep%bounds(lo, hi)

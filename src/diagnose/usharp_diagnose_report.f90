@@ -228,6 +228,10 @@ contains
          call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
             real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']'//what)
       end do
+      if (e%held .and. allocated(e%p_all)) call add(lines, '- gamma3 held at '// &
+         real_str(e%p_all(size(e%p_all)), 'es11.4')//' (the screening''s value): fitted free, its '// &
+         'interval [' //real_str(e%gamma3_lo, 'es11.4')//', '//real_str(e%gamma3_hi, 'es11.4')// &
+         '] spans zero and the saturation H3/gamma3 ran beyond the peak stress')
       ! The held-out tests' own values of a per-test effect (fitted to each with the constants
       ! fixed)
       associate (info => cat(e%k))

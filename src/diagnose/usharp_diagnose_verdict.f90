@@ -84,7 +84,9 @@ contains
       type(effect_outcome), intent(in) :: e
       type(effect_info) :: cat(n_effects)
       cat = effect_catalogue(1.0_dp)
-      key = 2*e%q + merge(1, 0, cat(e%k)%sharing == param_per_test)
+      ! A parameter held at a chosen value (the second back stress's gamma3) is still one of
+      ! the effect's form
+      key = 2*(e%q + merge(1, 0, e%held)) + merge(1, 0, cat(e%k)%sharing == param_per_test)
    end function complexity
 
    !> The verdict when an effect leads: how much of the gap it explains, on which sets, what
