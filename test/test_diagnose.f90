@@ -1012,7 +1012,8 @@ contains
    !> structured gap, or one that no significant effect explains, or one an effect takes to
    !> its floor without carrying to the held-out tests (its form left open, whatever the
    !> held-out gap); not when a significant effect explains only part of the fit tests' gap,
-   !> nor when one is confirmed
+   !> nor when one is confirmed, unless its confirmation is a prediction from a baseline that
+   !> ran to a search bound while the fit tests have no structured gap
    subroutine test_joint_rule(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
@@ -1084,6 +1085,17 @@ contains
       res%floor_held = 1.0_dp
       call check(error, .not. joint_wanted(res, .false.), 'the held-out tests confirm it')
       if (allocated(error)) return
+      ! ... but the baseline ran away (a constant at a search bound): the prediction that
+      ! confirms it rests on constants the fit tests leave loose
+      res%c_bound = [.true., .false.]
+      call check(error, joint_wanted(res, .false.), 'a prediction from a baseline at a bound confirms it')
+      if (allocated(error)) return
+      res%gap_fit = 1.0_dp
+      call check(error, .not. joint_wanted(res, .false.), &
+                 'a baseline at a bound, the leader takes most of the fit tests'' structured gap')
+      if (allocated(error)) return
+      res%gap_fit = 0.0_dp
+      deallocate (res%c_bound)
       res%leading = 0
       res%effects(2)%confirmed = .false.
       res%effects(2)%significant = .false.
