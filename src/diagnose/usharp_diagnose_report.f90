@@ -10,7 +10,7 @@ module usharp_diagnose_report
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only, &
-                                    delay_precision
+                                    delay_precision, partial_carry, form_beats_leader
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
@@ -304,7 +304,11 @@ contains
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      if (bic_only(res)) then
+      if (partial_carry(res) .and. form_beats_leader(res) == 0) then
+         call add(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
+            'tests, but its prediction carries only part of the held-out tests'': either what the fit '// &
+            'tests alone make of its parameters fails there, or another effect adds to it.')
+      else if (bic_only(res)) then
          call add(lines, 'An effect leads on the fit tests by BIC alone (the held-out tests below their '// &
             'floor, and the fit tests'' structured gap below its floor too or mostly left): the held-out '// &
             'floor is too wide for the prediction to confirm it.')

@@ -11,7 +11,7 @@ module usharp_diagnose_verdict
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, &
                                     fit_effects_shown, bic_only, held_fit_only, form_left_open, &
-                                    form_beats_leader
+                                    form_beats_leader, partial_carry
    implicit none
    private
 
@@ -159,7 +159,10 @@ contains
          'their prediction cannot confirm it)'
       character(len=:), allocatable :: gaps
       integer :: n
-      if (jres%leading > 0) then
+      if (partial_carry(res) .and. form_beats_leader(res) == 0) then
+         ! The prediction confirmed the leader; every test fitted says how much more it closes
+         res%verdict = res%verdict//'; '//carry_note(res, jres)
+      else if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
          if (bic_only(res)) then
             associate (e => res%effects(res%leading))
@@ -199,6 +202,30 @@ contains
          res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
       end if
    end subroutine joint_verdict
+
+   !> What every test fitted together (jres) makes of a leader that carried only part of the
+   !> held-out gap (see partial_carry), as a clause: the same effect closing every gap says
+   !> that what the fit tests alone make of its parameters fails, not its form
+   function carry_note(res, jres) result(text)
+      type(diagnose_result), intent(in) :: res, jres
+      character(len=:), allocatable :: text
+      associate (e => res%effects(res%leading))
+         text = 'with the held-out tests fitted too, '//jres%verdict
+         if (jres%leading == 0) return
+         associate (je => jres%effects(jres%leading))
+            if (je%name /= e%name) return
+            text = 'fitted to every test together, '//trim(e%name)//' removes '// &
+                   real_str(100.0_dp*je%shrink_fit, 'f0.1')//' % of their structured gap (BIC '// &
+                   real_str(je%dbic, 'f0.1')//')'
+            if (explains_resolved(je, jres)) then
+               text = text//': it can explain every test, but the parameters the fit tests alone give '// &
+                      'it carry '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out gap'
+            else
+               text = text//': the held-out tests show more than it carries'
+            end if
+         end associate
+      end associate
+   end function carry_note
 
    !> Why a leader that rests on a fit of the held-out tests (see held_fit_only) gave way to
    !> the diagnosis with every test fitted, as a clause
