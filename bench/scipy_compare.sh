@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The thesis's run 2 objective per evaluation (decks/thesis-run2.nml at its start constants):
 # usharp (release, one core) against a scipy Radau script of the same model at the same
-# accuracy, measured side by side (bench/scipy_compare.py; numpy and scipy needed).
+# accuracy, measured side by side (bench/scipy_compare.py; numpy and scipy needed): at the
+# cheapest of its decade tolerances as accurate, and interpolated to exactly the same accuracy.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/release-flags.sh
