@@ -816,7 +816,7 @@ contains
       type(task_deal), target :: deal
       integer, allocatable :: owner(:)
       logical, allocatable :: ready(:), headed(:)
-      integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk, next
+      integer :: np, s, s0, s1, t, n, first_open, last, nsim, chunk, next, nfreed
       logical :: streaming, stopped
       np = n_ranks()
       nstarts = max(1, obj%prob%cfg%fit%multistart)
@@ -851,6 +851,7 @@ contains
       ! records are in logs now); it takes each start's records as the start is replayed
       streaming = is_root()
       next = 1
+      nfreed = 0
       if (streaming) then
          deallocate (obj%replay, obj%replay_jac)
          allocate (obj%replay(0), obj%replay_jac(0))
@@ -974,9 +975,10 @@ contains
             next = next + 1
             ! The residual vectors replayed are not read again: their memory serves the
             ! starts still to come
-            do k = 1, min(live%nevals, size(live%replay))
+            do k = nfreed + 1, min(live%nevals, size(live%replay))
                if (allocated(live%replay(k)%r)) deallocate (live%replay(k)%r)
             end do
+            nfreed = max(nfreed, min(live%nevals, size(live%replay)))
          end do
       end subroutine replay_ready
 
