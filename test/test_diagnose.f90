@@ -36,6 +36,8 @@ module test_diagnose
    use usharp_diagnose_journal, only: diagnose_journal
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_optimiser, only: optimum_type
+   use usharp_diagnose_specimen, only: specimen_result, residual_quad
+   use usharp_lapack, only: solve_dense
    use omp_lib, only: omp_set_num_threads, omp_get_max_threads
    use test_util, only: write_text, check_message, scratch_dir
    implicit none
@@ -85,6 +87,7 @@ contains
          new_unittest('bic-in-each-tests-own-variance', test_bic_per_test), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('partial-prediction-fitted-with-every-test', test_partial_carry), &
+         new_unittest('specimen-residual-covariance-with-the-constants', test_specimen_quad), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
          new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
          new_unittest('form-left-open-below-the-floor-fits-every-test', test_open_below_floor), &
@@ -1059,6 +1062,50 @@ contains
       call check(error, res%verdict == before//'; with the held-out tests fitted too, lag explains the gap', &
                  res%verdict)
    end subroutine test_partial_carry
+
+   !> The specimen's residual quadratic form r' S^-1 r, S = diag(nv) + Jc C Jc', by the
+   !> push-through identity, against S solved whole; without C, sum(r**2/nv)
+   subroutine test_specimen_quad(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(specimen_result) :: sr
+      real(dp), allocatable :: r(:), s(:, :), x(:, :), g(:, :)
+      real(dp) :: q, direct
+      integer :: i, j, m, info
+      m = 40
+      allocate (r(m), sr%nv(m), sr%jc(m, 3), g(3, 3))
+      do i = 1, m
+         r(i) = sin(0.7_dp*i) + 0.1_dp*i/m
+         sr%nv(i) = 0.5_dp + 0.01_dp*i
+         do j = 1, 3
+            sr%jc(i, j) = cos(0.3_dp*i*j) + 0.05_dp*j
+         end do
+      end do
+      q = residual_quad(sr, r)
+      call check(error, abs(q - sum(r**2/sr%nv)) <= 1.0e-12_dp*q, 'without the constants'' covariance')
+      if (allocated(error)) return
+      ! A covariance of full rank and one of rank 1 (a pseudo-inverse's)
+      g = reshape([1.0_dp, 0.2_dp, -0.1_dp, 0.2_dp, 0.5_dp, 0.05_dp, -0.1_dp, 0.05_dp, 0.3_dp], [3, 3])
+      do i = 1, 2
+         if (i == 1) then
+            sr%cov = g
+         else
+            sr%cov = spread([1.0_dp, -2.0_dp, 0.5_dp], 2, 3)*spread([1.0_dp, -2.0_dp, 0.5_dp], 1, 3)
+         end if
+         s = matmul(matmul(sr%jc, sr%cov), transpose(sr%jc))
+         do j = 1, m
+            s(j, j) = s(j, j) + sr%nv(j)
+         end do
+         x = reshape(r, [m, 1])
+         call solve_dense(s, x, info)
+         direct = dot_product(r, x(:, 1))
+         q = residual_quad(sr, r)
+         call check(error, info == 0 .and. abs(q - direct) <= 1.0e-10_dp*direct, &
+                    'push-through '//real_str(q, 'es22.14')//' against solved '//real_str(direct, 'es22.14'))
+         if (allocated(error)) return
+         call check(error, q < sum(r**2/sr%nv), 'the constants'' uncertainty lowers the quadratic form')
+         if (allocated(error)) return
+      end do
+   end subroutine test_specimen_quad
 
    subroutine test_joint_rule(error)
       type(error_type), allocatable, intent(out) :: error

@@ -17,16 +17,12 @@ module usharp_diagnose_baseline
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, lm_ftol, lm_itermax, &
-                                       jacobian, pseudo_inverse, test_sizes, block_sums
+                                       jacobian, test_sizes, block_sums, tight_jacobian, sandwich_covariance, &
+                                      test_noise_variance
    implicit none
    private
 
    public :: fit_baseline, baseline_regions, per_test, all_regions
-
-   !> Integrator tolerances (rtol, atol_strain) of the Jacobian behind the prediction spread:
-   !> two constants that trade off (log B and n) leave J'J a small eigenvalue that the
-   !> integrator's error at its working tolerance would set
-   real(dp), parameter :: spread_tol(2) = [1.0e-9_dp, 1.0e-12_dp]
 
 contains
 
@@ -128,19 +124,13 @@ contains
       type(effect_problem), intent(inout) :: ep
       type(diagnose_result), intent(inout) :: res
       real(dp), intent(out) :: pvar
-      real(dp), allocatable :: r(:), jac(:, :), jf(:, :), jh(:, :), ai(:, :), cov(:, :), cm(:, :)
+      real(dp), allocatable :: r(:), jac(:, :), jf(:, :), jh(:, :), cov(:, :), cm(:, :)
       logical, allocatable :: fit_row(:)
       logical :: ok
       integer :: j
-      real(dp) :: tol(2)
       res%pred_held = 0.0_dp
       pvar = 0.0_dp
-      tol = [ep%prob%cfg%solver%rtol, ep%prob%cfg%solver%atol_strain]
-      ep%prob%cfg%solver%rtol = spread_tol(1)
-      ep%prob%cfg%solver%atol_strain = spread_tol(2)
-      call jacobian(ep, ep%start(), ctx%h, r, jac, ok)
-      ep%prob%cfg%solver%rtol = tol(1)
-      ep%prob%cfg%solver%atol_strain = tol(2)
+      call tight_jacobian(ep, ep%start(), ctx%h, r, jac, ok)
       res%nevals = res%nevals + size(jac, 2) + 1
       if (.not. ok) return
       fit_row = .not. res%held(res%test_of)
@@ -149,11 +139,7 @@ contains
          jf(:, j) = pack(jac(:, j), fit_row)
          jh(:, j) = pack(jac(:, j), .not. fit_row)
       end do
-      ai = pseudo_inverse(mat_mul(transpose(jf), jf))
-      do j = 1, size(jf, 2)
-         jf(:, j) = jf(:, j)*sqrt(pack(ctx%nv, fit_row))
-      end do
-      cov = mat_mul(ai, mat_mul(mat_mul(transpose(jf), jf), ai))
+      cov = sandwich_covariance(jf, pack(ctx%nv, fit_row))
       cm = mat_mul(cov, mat_mul(transpose(jh), jh))
       do j = 1, size(cm, 1)
          res%pred_held = res%pred_held + cm(j, j)
@@ -195,14 +181,10 @@ contains
       type(fit_problem), intent(in) :: prob
       real(dp), intent(in) :: sd(:)
       real(dp), allocatable :: nv(:)
-      integer :: i, n
+      integer :: i
       allocate (nv(0))
       do i = 1, size(prob%targets)
-         associate (tg => prob%targets(i))
-            n = size(tg%t)
-            nv = [nv, (sd(i)*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), &
-                                             spread(0.0_dp, 1, n), tg%w, tg%y_ex_max))**2]
-         end associate
+         nv = [nv, test_noise_variance(prob, i, sd(i))]
       end do
    end function noise_variance
 

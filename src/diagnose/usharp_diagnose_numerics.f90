@@ -8,7 +8,7 @@ module usharp_diagnose_numerics
    use usharp_model, only: model_type
    use usharp_error, only: error_type
    use usharp_config, only: run_config
-   use usharp_objective, only: fit_problem
+   use usharp_objective, only: fit_problem, test_residuals
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_levenberg, only: levenberg_marquardt
@@ -28,6 +28,7 @@ module usharp_diagnose_numerics
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
+   public :: tight_jacobian, sandwich_covariance, test_noise_variance
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -42,6 +43,12 @@ module usharp_diagnose_numerics
    !> took 82813 simulations in place of 115790 (bench/diagnose.sh)
    real(dp), parameter :: lm_ftol = 1.0e-9_dp
    integer, parameter :: lm_itermax = 100, lm_updates = 4
+
+   !> Integrator tolerances (rtol, atol on strain) of the Jacobians behind the constants'
+   !> covariance and what it adds to a prediction (tight_jacobian): at the working tolerance
+   !> two constants that trade off (log B and n) left the smallest eigenvalue of J'J to the
+   !> integrator's error
+   real(dp), parameter :: tight_tol(2) = [1.0e-9_dp, 1.0e-12_dp]
 
 contains
 
@@ -504,6 +511,52 @@ contains
       o%x = reals(2:)
       o%reason = reason
    end subroutine share_optimum
+
+   !> The residuals r and their forward-difference Jacobian jac at x (step h), simulated at
+   !> the tight tolerances tight_tol
+   subroutine tight_jacobian(ep, x, h, r, jac, ok)
+      type(effect_problem), intent(inout) :: ep
+      real(dp), intent(in) :: x(:), h
+      real(dp), allocatable, intent(out) :: r(:), jac(:, :)
+      logical, intent(out) :: ok
+      real(dp) :: tol(2)
+      tol = [ep%prob%cfg%solver%rtol, ep%prob%cfg%solver%atol_strain]
+      ep%prob%cfg%solver%rtol = tight_tol(1)
+      ep%prob%cfg%solver%atol_strain = tight_tol(2)
+      call jacobian(ep, x, h, r, jac, ok)
+      ep%prob%cfg%solver%rtol = tol(1)
+      ep%prob%cfg%solver%atol_strain = tol(2)
+   end subroutine tight_jacobian
+
+   !> Covariance of the parameters of a least-squares fit from the Jacobian jf of its
+   !> residuals and their noise variances nv: the sandwich (Jf'Jf)^+ Jf' N Jf (Jf'Jf)^+
+   pure function sandwich_covariance(jf, nv) result(cov)
+      real(dp), intent(in) :: jf(:, :), nv(:)
+      real(dp), allocatable :: cov(:, :)
+      real(dp), allocatable :: ai(:, :), jn(:, :)
+      integer :: j
+      ai = pseudo_inverse(mat_mul(transpose(jf), jf))
+      jn = jf
+      do j = 1, size(jf, 2)
+         jn(:, j) = jf(:, j)*sqrt(nv)
+      end do
+      cov = mat_mul(ai, mat_mul(mat_mul(transpose(jn), jn), ai))
+   end function sandwich_covariance
+
+   !> The noise variance of each residual of test i of prob (objective units) for a noise of
+   !> standard deviation sd in the test's response
+   pure function test_noise_variance(prob, i, sd) result(nv)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: i
+      real(dp), intent(in) :: sd
+      real(dp), allocatable :: nv(:)
+      integer :: n
+      associate (tg => prob%targets(i))
+         n = size(tg%t)
+         nv = (sd*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), spread(0.0_dp, 1, n), &
+                                 tg%w, tg%y_ex_max))**2
+      end associate
+   end function test_noise_variance
 
    !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
    !> the largest singular value dropped), after scaling to a unit diagonal

@@ -7,7 +7,7 @@
 !> the specimen's structured gap it removes; the effects are ranked by BIC.
 module usharp_diagnose_specimen
    use usharp_kinds, only: dp
-   use usharp_lapack, only: mat_mul
+   use usharp_lapack, only: mat_mul, solve_dense
    use usharp_math, only: log_dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
@@ -25,13 +25,14 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
-                                       soften_rate0, softening_reached, low_end_deltas, bic_power
+                                       soften_rate0, softening_reached, low_end_deltas, bic_power, &
+                                       tight_jacobian, sandwich_covariance, test_noise_variance
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_profile, only: profile_interval, profile_result
    implicit none
    private
 
-   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
+   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index, residual_quad
 
    !> One effect fitted to the specimen
    type :: specimen_effect
@@ -63,12 +64,19 @@ module usharp_diagnose_specimen
       integer :: m = 0                       !< the specimen's points
       real(dp) :: f0 = 0.0_dp                !< the specimen's objective, predicted
       real(dp) :: noise = 0.0_dp             !< the part of it the noise explains
+      !> of noise, the part the constants' own uncertainty explains (their covariance from
+      !> the replicates' noise, carried to the specimen)
+      real(dp) :: pred = 0.0_dp
       real(dp) :: gap = 0.0_dp               !< structured gap: f0 - noise
       real(dp) :: noise_sd = 0.0_dp          !< response unit
       character(len=32) :: unit = ''
       type(specimen_effect), allocatable :: effects(:)   !< ranked by BIC
       integer :: nevals = 0
       integer :: nevals_rep = 0              !< of them, simulations of the replicates' set
+      !> The specimen's residual covariance, diag(nv) + jc cov jc': its noise variances, its
+      !> Jacobian in the constants and their covariance from the replicates (empty when the
+      !> constants are given)
+      real(dp), allocatable :: nv(:), jc(:, :), cov(:, :)
    end type specimen_result
 
 contains
@@ -96,11 +104,11 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
       type(fit_problem) :: prob
-      type(effect_problem) :: ep
+      type(effect_problem) :: ep, es
       type(optimum_type) :: opt
       type(test_effects) :: base
       type(effect_info) :: cat(n_effects)
-      real(dp), allocatable :: lo(:), hi(:), r0(:), nv(:), dbic(:)
+      real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:)
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
       integer :: i, nt, j, n
@@ -135,6 +143,17 @@ contains
          sr%nevals_rep = opt%nevals
          call set_constants_at(prob, opt%x)
          sr%f_rep = opt%f
+         ! What the replicates leave open of the constants: their covariance from the
+         ! replicates' noise (the sandwich at a tight tolerance)
+         call tight_jacobian(ep, opt%x, cfg%fit%fd_step, rr, jr, ok)
+         sr%nevals = sr%nevals + size(jr, 2) + 1
+         if (ok) then
+            allocate (nvr(0))
+            do i = 1, size(reps)
+               nvr = [nvr, test_noise_variance(prob, reps(i), noise_sd(prob%targets(reps(i))%exp%y))]
+            end do
+            sr%cov = sandwich_covariance(jr, nvr)
+         end if
       else
          call ep%eval(ep%start(), sr%f_rep, error)
          if (allocated(error)) return
@@ -152,13 +171,20 @@ contains
          return
       end if
       sr%f0 = sum(r0**2)
-      associate (tg => prob%targets(ispec))
-         n = size(tg%t)
-         sr%noise_sd = noise_sd(tg%exp%y)
-         nv = (sr%noise_sd*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), &
-                                          spread(0.0_dp, 1, n), tg%w, tg%y_ex_max))**2
-      end associate
-      sr%noise = sum(nv)
+      sr%noise_sd = noise_sd(prob%targets(ispec)%exp%y)
+      sr%nv = test_noise_variance(prob, ispec, sr%noise_sd)
+      if (allocated(sr%cov)) then
+         ! The specimen's residuals in the constants (the same packing as the replicates')
+         call new_effect_problem(prob, [ispec], 0, base, peak, es)
+         call tight_jacobian(es, es%start(), cfg%fit%fd_step, rr, sr%jc, ok)
+         sr%nevals = sr%nevals + size(sr%jc, 2) + 1
+         if (ok) then
+            sr%pred = sum(mat_mul(sr%jc, sr%cov)*sr%jc)
+         else
+            deallocate (sr%cov)
+         end if
+      end if
+      sr%noise = sum(sr%nv) + sr%pred
       sr%gap = max(sr%f0 - sr%noise, 0.0_dp)
       sr%unit = merge('strain (-)     ', 'stress ('//prob%cfg%units//')   ', &
                       fits_strain(prob%cfg%tests(ispec)))
@@ -227,10 +253,18 @@ contains
             end if
          end do
          se_out%f_after = o%f
-         se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
-         se_out%significant = se_out%dbic < -bic_margin
          if (sr%gap > 0.0_dp) se_out%removed = (sr%f0 - o%f)/sr%gap
          call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
+         ! BIC in the residual's covariance: what the replicates leave open of the constants
+         ! is not the specimen's (a clean specimen took a temperature of -0.5 K, BIC -10.6,
+         ! for the constants' own error when they were held as exact)
+         if (okj .and. size(r) == sr%m) then
+            se_out%dbic = sr%m*log_dp(max(residual_quad(sr, r), tiny(1.0_dp))/residual_quad(sr, r0)) + &
+                          se_out%q*log_dp(real(sr%m, dp))
+         else
+            se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
+         end if
+         se_out%significant = se_out%dbic < -bic_margin
          naive = pseudo_inverse(mat_mul(transpose(jac), jac))
          cov = robust_covariance(jac, r, naive)
          allocate (se(size(o%x)))
@@ -297,6 +331,34 @@ contains
       end subroutine low_end_power
    end subroutine specimen_run
 
+   !> r' S^-1 r for the specimen's residuals r, S = diag(nv) + jc cov jc' (see
+   !> specimen_result), by the push-through identity: S^-1 = D^-1 - D^-1 jc cov (I + A cov)^-1
+   !> jc' D^-1 with A = jc' D^-1 jc, so that only a matrix of the constants' size is solved
+   function residual_quad(sr, r) result(q)
+      type(specimen_result), intent(in) :: sr
+      real(dp), intent(in) :: r(:)
+      real(dp) :: q
+      real(dp), allocatable :: b(:), a(:, :), y(:, :), dj(:, :)
+      integer :: j, nc, info
+      q = sum(r**2/sr%nv)
+      if (.not. allocated(sr%cov)) return
+      nc = size(sr%cov, 1)
+      dj = sr%jc
+      do j = 1, nc
+         dj(:, j) = sr%jc(:, j)/sr%nv
+      end do
+      b = mat_mul(transpose(dj), r)
+      a = mat_mul(transpose(sr%jc), dj)
+      a = mat_mul(a, sr%cov)
+      do j = 1, nc
+         a(j, j) = a(j, j) + 1.0_dp
+      end do
+      y = reshape(b, [nc, 1])
+      call solve_dense(a, y, info)
+      if (info /= 0) return
+      q = q - dot_product(b, mat_mul(sr%cov, y(:, 1)))
+   end function residual_quad
+
    !> The per-specimen report (Markdown)
    function specimen_report(sr) result(lines)
       type(specimen_result), intent(in) :: sr
@@ -324,6 +386,10 @@ contains
          str(sr%m)//' points, of which the noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '// &
          trim(sr%unit)//') explains '//real_str(sr%noise, 'es10.3')//'; structured gap '// &
          real_str(sr%gap, 'es10.3')//'.')
+      if (allocated(sr%cov)) call add('The noise part includes '//real_str(sr%pred, 'es10.3')//' that the '// &
+         'constants'' own uncertainty explains (their covariance from the replicates'' noise), and each '// &
+         'BIC below is taken in the residual''s covariance with it: what the replicates leave open of '// &
+         'the constants is not the specimen''s.')
       call add('')
       call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
          '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'); intervals 95 % '// &
