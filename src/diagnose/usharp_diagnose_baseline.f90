@@ -7,7 +7,7 @@ module usharp_diagnose_baseline
    use usharp_math, only: pow10_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str
-   use usharp_objective, only: fit_problem, test_residuals
+   use usharp_objective, only: fit_problem
    use usharp_experiment, only: fits_strain
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se, &

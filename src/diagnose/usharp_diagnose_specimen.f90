@@ -13,7 +13,7 @@ module usharp_diagnose_specimen
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
    use usharp_model, only: constant_names
-   use usharp_objective, only: fit_problem, setup_problem, test_residuals
+   use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type, fits_strain
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
                              effect_nparams, param_per_test
@@ -111,7 +111,7 @@ contains
       real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:)
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
-      integer :: i, nt, j, n
+      integer :: i, nt, j
       real(dp) :: peak
       logical :: ok
       nt = size(cfg%tests)
@@ -173,6 +173,8 @@ contains
       sr%f0 = sum(r0**2)
       sr%noise_sd = noise_sd(prob%targets(ispec)%exp%y)
       sr%nv = test_noise_variance(prob, ispec, sr%noise_sd)
+      ! (data without noise leave no covariance to weigh by)
+      if (allocated(sr%cov) .and. any(.not. sr%nv > 0.0_dp)) deallocate (sr%cov)
       if (allocated(sr%cov)) then
          ! The specimen's residuals in the constants (the same packing as the replicates')
          call new_effect_problem(prob, [ispec], 0, base, peak, es)
@@ -258,7 +260,7 @@ contains
          ! BIC in the residual's covariance: what the replicates leave open of the constants
          ! is not the specimen's (a clean specimen took a temperature of -0.5 K, BIC -10.6,
          ! for the constants' own error when they were held as exact)
-         if (okj .and. size(r) == sr%m) then
+         if (okj .and. size(r) == sr%m .and. allocated(sr%cov)) then
             se_out%dbic = sr%m*log_dp(max(residual_quad(sr, r), tiny(1.0_dp))/residual_quad(sr, r0)) + &
                           se_out%q*log_dp(real(sr%m, dp))
          else
@@ -334,7 +336,7 @@ contains
    !> r' S^-1 r for the specimen's residuals r, S = diag(nv) + jc cov jc' (see
    !> specimen_result), by the push-through identity: S^-1 = D^-1 - D^-1 jc cov (I + A cov)^-1
    !> jc' D^-1 with A = jc' D^-1 jc, so that only a matrix of the constants' size is solved
-   function residual_quad(sr, r) result(q)
+   pure function residual_quad(sr, r) result(q)
       type(specimen_result), intent(in) :: sr
       real(dp), intent(in) :: r(:)
       real(dp) :: q
