@@ -36,8 +36,8 @@ module test_diagnose
    use usharp_diagnose_journal, only: diagnose_journal
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_optimiser, only: optimum_type
-   use usharp_diagnose_specimen, only: specimen_result, residual_quad
-   use usharp_lapack, only: solve_dense
+   use usharp_diagnose_specimen, only: specimen_result, specimen_deviance, constants_directions
+   use usharp_lapack, only: solve_dense, logdet_spd
    use omp_lib, only: omp_set_num_threads, omp_get_max_threads
    use test_util, only: write_text, check_message, scratch_dir
    implicit none
@@ -1054,6 +1054,22 @@ contains
                  'structured gap (BIC -676.3): it can explain every test, but the parameters the fit tests '// &
                  'alone give it carry 54.6 % of the held-out gap') > 0, res%verdict)
       if (allocated(error)) return
+      ! The prediction's leader stays the one named
+      res%effects(1)%k = 7
+      jres%effects(1)%k = 7
+      res%joint = jres
+      call check(error, .not. joint_decides(res) .and. named_effect(res) == 7, 'the prediction''s leader is named')
+      if (allocated(error)) return
+      deallocate (res%joint)
+      ! Every test fitted together at the noise level without an effect
+      res%verdict = before
+      jres%leading = 0
+      jres%gap_fit = 0.1_dp
+      call joint_verdict(res, jres)
+      call check(error, index(res%verdict, 'the model without an effect is at the noise level') > 0, res%verdict)
+      if (allocated(error)) return
+      jres%leading = 1
+      jres%gap_fit = 1.2_dp
       ! Another effect leads when every test is fitted: its verdict is added as it is
       res%verdict = before
       jres%effects(1)%name = 'lag'
@@ -1063,48 +1079,65 @@ contains
                  res%verdict)
    end subroutine test_partial_carry
 
-   !> The specimen's residual quadratic form r' S^-1 r, S = diag(nv) + Jc C Jc', by the
-   !> push-through identity, against S solved whole; without C, sum(r**2/nv)
+   !> The specimen's -2 log-likelihood in the covariance s diag(nv) + Jc C Jc', minimised over
+   !> the noise scale s: against the whole matrix factorised and solved at each s; without C,
+   !> m ln(|x|**2/m) + m; and where the residual's structure lies along the constants'
+   !> directions far beyond what C allows, an effect removing it keeps nearly the whole of
+   !> its deviance (the constants cannot take it up for free)
    subroutine test_specimen_quad(error)
       type(error_type), allocatable, intent(out) :: error
       type(specimen_result) :: sr
-      real(dp), allocatable :: r(:), s(:, :), x(:, :), g(:, :)
-      real(dp) :: q, direct
-      integer :: i, j, m, info
+      real(dp), allocatable :: r(:), s(:, :), x(:, :), jc(:, :), cov(:, :), re(:)
+      real(dp) :: dev, direct, t, best, logdet, old, new
+      integer :: i, j, m, info, it
       m = 40
-      allocate (r(m), sr%nv(m), sr%jc(m, 3), g(3, 3))
+      allocate (r(m), sr%nv(m), jc(m, 3))
       do i = 1, m
          r(i) = sin(0.7_dp*i) + 0.1_dp*i/m
          sr%nv(i) = 0.5_dp + 0.01_dp*i
          do j = 1, 3
-            sr%jc(i, j) = cos(0.3_dp*i*j) + 0.05_dp*j
+            jc(i, j) = cos(0.3_dp*i*j) + 0.05_dp*j
          end do
       end do
-      q = residual_quad(sr, r)
-      call check(error, abs(q - sum(r**2/sr%nv)) <= 1.0e-12_dp*q, 'without the constants'' covariance')
+      allocate (sr%w(m, 0), sr%sig2(0))
+      dev = specimen_deviance(sr, r)
+      direct = m*log(sum(r**2/sr%nv)/m) + m
+      call check(error, abs(dev - direct) <= 1.0e-9_dp*abs(direct), 'without the constants'' covariance: '// &
+                 real_str(dev, 'es22.14')//' against '//real_str(direct, 'es22.14'))
       if (allocated(error)) return
-      ! A covariance of full rank and one of rank 1 (a pseudo-inverse's)
-      g = reshape([1.0_dp, 0.2_dp, -0.1_dp, 0.2_dp, 0.5_dp, 0.05_dp, -0.1_dp, 0.05_dp, 0.3_dp], [3, 3])
+      cov = reshape([1.0_dp, 0.2_dp, -0.1_dp, 0.2_dp, 0.5_dp, 0.05_dp, -0.1_dp, 0.05_dp, 0.3_dp], [3, 3])
       do i = 1, 2
-         if (i == 1) then
-            sr%cov = g
-         else
-            sr%cov = spread([1.0_dp, -2.0_dp, 0.5_dp], 2, 3)*spread([1.0_dp, -2.0_dp, 0.5_dp], 1, 3)
-         end if
-         s = matmul(matmul(sr%jc, sr%cov), transpose(sr%jc))
-         do j = 1, m
-            s(j, j) = s(j, j) + sr%nv(j)
+         ! A covariance of full rank and one of rank 1 (a pseudo-inverse's)
+         if (i == 2) cov = spread([1.0_dp, -2.0_dp, 0.5_dp], 2, 3)*spread([1.0_dp, -2.0_dp, 0.5_dp], 1, 3)
+         call constants_directions(sr, jc, cov)
+         dev = specimen_deviance(sr, r)
+         ! The whole matrix at s on a fine grid of ln s, then the least
+         best = huge(1.0_dp)
+         do it = -4000, 4000
+            t = 1.0e-3_dp*it
+            s = matmul(matmul(jc, cov), transpose(jc))
+            do j = 1, m
+               s(j, j) = s(j, j) + exp(t)*sr%nv(j)
+            end do
+            call logdet_spd(s, logdet, info)
+            x = reshape(r, [m, 1])
+            call solve_dense(s, x, info)
+            best = min(best, logdet - sum(log(sr%nv)) + dot_product(r, x(:, 1)))
          end do
-         x = reshape(r, [m, 1])
-         call solve_dense(s, x, info)
-         direct = dot_product(r, x(:, 1))
-         q = residual_quad(sr, r)
-         call check(error, info == 0 .and. abs(q - direct) <= 1.0e-10_dp*direct, &
-                    'push-through '//real_str(q, 'es22.14')//' against solved '//real_str(direct, 'es22.14'))
-         if (allocated(error)) return
-         call check(error, q < sum(r**2/sr%nv), 'the constants'' uncertainty lowers the quadratic form')
+         call check(error, abs(dev - best) <= 1.0e-5_dp*abs(best), 'profiled '//real_str(dev, 'es22.14')// &
+                    ' against the whole matrix '//real_str(best, 'es22.14'))
          if (allocated(error)) return
       end do
+      ! Structure along the constants' directions of 1e4 times what C allows there: an effect
+      ! that removes it lowers the deviance nearly as with the constants held exact
+      cov = 1.0e-4_dp*reshape([1.0_dp, 0.2_dp, -0.1_dp, 0.2_dp, 0.5_dp, 0.05_dp, -0.1_dp, 0.05_dp, 0.3_dp], [3, 3])
+      call constants_directions(sr, jc, cov)
+      re = 0.3_dp*sin(2.1_dp*[(real(i, dp), i=1, m)])
+      r = re + 3.0_dp*jc(:, 1)
+      new = specimen_deviance(sr, re) - specimen_deviance(sr, r)
+      old = m*log(sum(re**2/sr%nv)/sum(r**2/sr%nv))
+      call check(error, new < 0.9_dp*old .and. new < 0.0_dp, 'structure beyond the constants'' uncertainty: '// &
+                 real_str(new, 'es10.3')//' against '//real_str(old, 'es10.3')//' with the constants exact')
    end subroutine test_specimen_quad
 
    subroutine test_joint_rule(error)

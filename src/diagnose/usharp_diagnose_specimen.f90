@@ -7,8 +7,8 @@
 !> the specimen's structured gap it removes; the effects are ranked by BIC.
 module usharp_diagnose_specimen
    use usharp_kinds, only: dp
-   use usharp_lapack, only: mat_mul, solve_dense
-   use usharp_math, only: log_dp
+   use usharp_lapack, only: mat_mul, svd
+   use usharp_math, only: log_dp, exp_dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config
@@ -32,7 +32,8 @@ module usharp_diagnose_specimen
    implicit none
    private
 
-   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index, residual_quad
+   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
+   public :: specimen_deviance, constants_directions
 
    !> One effect fitted to the specimen
    type :: specimen_effect
@@ -73,10 +74,11 @@ module usharp_diagnose_specimen
       type(specimen_effect), allocatable :: effects(:)   !< ranked by BIC
       integer :: nevals = 0
       integer :: nevals_rep = 0              !< of them, simulations of the replicates' set
-      !> The specimen's residual covariance, diag(nv) + jc cov jc': its noise variances, its
-      !> Jacobian in the constants and their covariance from the replicates (empty when the
-      !> constants are given)
-      real(dp), allocatable :: nv(:), jc(:, :), cov(:, :)
+      !> The specimen's residual covariance s diag(nv) + Jc C Jc' (s profiled; C the constants'
+      !> covariance from the replicates, Jc the specimen's residuals in them): its noise
+      !> variances nv, an orthonormal basis w of the directions diag(nv)^-1/2 Jc C^1/2 spans
+      !> and their squared singular values sig2 (none when the constants are given)
+      real(dp), allocatable :: nv(:), w(:, :), sig2(:)
    end type specimen_result
 
 contains
@@ -108,7 +110,7 @@ contains
       type(optimum_type) :: opt
       type(test_effects) :: base
       type(effect_info) :: cat(n_effects)
-      real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:)
+      real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:), jc(:, :), cov(:, :)
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
       integer :: i, nt, j
@@ -152,7 +154,7 @@ contains
             do i = 1, size(reps)
                nvr = [nvr, test_noise_variance(prob, reps(i), noise_sd(prob%targets(reps(i))%exp%y))]
             end do
-            sr%cov = sandwich_covariance(jr, nvr)
+            cov = sandwich_covariance(jr, nvr)
          end if
       else
          call ep%eval(ep%start(), sr%f_rep, error)
@@ -174,16 +176,14 @@ contains
       sr%noise_sd = noise_sd(prob%targets(ispec)%exp%y)
       sr%nv = test_noise_variance(prob, ispec, sr%noise_sd)
       ! (data without noise leave no covariance to weigh by)
-      if (allocated(sr%cov) .and. any(.not. sr%nv > 0.0_dp)) deallocate (sr%cov)
-      if (allocated(sr%cov)) then
+      if (allocated(cov) .and. .not. any(.not. sr%nv > 0.0_dp)) then
          ! The specimen's residuals in the constants (the same packing as the replicates')
          call new_effect_problem(prob, [ispec], 0, base, peak, es)
-         call tight_jacobian(es, es%start(), cfg%fit%fd_step, rr, sr%jc, ok)
-         sr%nevals = sr%nevals + size(sr%jc, 2) + 1
+         call tight_jacobian(es, es%start(), cfg%fit%fd_step, rr, jc, ok)
+         sr%nevals = sr%nevals + size(jc, 2) + 1
          if (ok) then
-            sr%pred = sum(mat_mul(sr%jc, sr%cov)*sr%jc)
-         else
-            deallocate (sr%cov)
+            sr%pred = sum(mat_mul(jc, cov)*jc)
+            call constants_directions(sr, jc, cov)
          end if
       end if
       sr%noise = sum(sr%nv) + sr%pred
@@ -260,9 +260,8 @@ contains
          ! BIC in the residual's covariance: what the replicates leave open of the constants
          ! is not the specimen's (a clean specimen took a temperature of -0.5 K, BIC -10.6,
          ! for the constants' own error when they were held as exact)
-         if (okj .and. size(r) == sr%m .and. allocated(sr%cov)) then
-            se_out%dbic = sr%m*log_dp(max(residual_quad(sr, r), tiny(1.0_dp))/residual_quad(sr, r0)) + &
-                          se_out%q*log_dp(real(sr%m, dp))
+         if (okj .and. size(r) == sr%m .and. allocated(sr%w)) then
+            se_out%dbic = specimen_deviance(sr, r) - specimen_deviance(sr, r0) + se_out%q*log_dp(real(sr%m, dp))
          else
             se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
          end if
@@ -333,33 +332,86 @@ contains
       end subroutine low_end_power
    end subroutine specimen_run
 
-   !> r' S^-1 r for the specimen's residuals r, S = diag(nv) + jc cov jc' (see
-   !> specimen_result), by the push-through identity: S^-1 = D^-1 - D^-1 jc cov (I + A cov)^-1
-   !> jc' D^-1 with A = jc' D^-1 jc, so that only a matrix of the constants' size is solved
-   pure function residual_quad(sr, r) result(q)
+   !> The directions of the specimen's residual covariance that the constants' uncertainty
+   !> adds (see specimen_result): with C = V diag(c) V', Z = diag(nv)^-1/2 Jc V diag(c)^1/2 =
+   !> W diag(sig) U', kept where sig is above 1e-8 of its largest
+   pure subroutine constants_directions(sr, jc, cov)
+      type(specimen_result), intent(inout) :: sr
+      real(dp), intent(in) :: jc(:, :), cov(:, :)
+      real(dp), allocatable :: c(:), v(:, :), z(:, :), sz(:), vz(:, :)
+      integer :: j, k, info
+      allocate (c(size(cov, 1)), v(size(cov, 1), size(cov, 1)))
+      call svd(cov, c, v, info)
+      if (info /= 0) return
+      do j = 1, size(c)
+         v(:, j) = v(:, j)*sqrt(max(c(j), 0.0_dp))
+      end do
+      z = mat_mul(jc, v)
+      do j = 1, size(z, 2)
+         z(:, j) = z(:, j)/sqrt(sr%nv)
+      end do
+      allocate (sz(size(z, 2)), vz(size(z, 2), size(z, 2)))
+      call svd(z, sz, vz, info)
+      if (info /= 0) return
+      k = count(sz > 1.0e-8_dp*maxval(sz))
+      if (.not. maxval(sz) > 0.0_dp) k = 0
+      sr%w = mat_mul(z, vz(:, :k))
+      do j = 1, k
+         sr%w(:, j) = sr%w(:, j)/sz(j)
+      end do
+      sr%sig2 = sz(:k)**2
+   end subroutine constants_directions
+
+   !> The specimen's residuals r as -2 log-likelihood (without constants) in the covariance
+   !> s diag(nv) + Jc C Jc', minimised over the noise scale s: with x = diag(nv)^-1/2 r, its
+   !> coordinates g = w'x and the rest p = |x - w g|**2, (m - k) ln s + sum ln(s + sig2) +
+   !> p/s + sum g**2/(s + sig2) (no cancellation where the constants take up most of r).
+   !> Without that covariance (k = 0) the minimum is m ln(|x|**2/m) + m, and a difference of
+   !> two of them BIC's m ln(f1/f0)
+   pure function specimen_deviance(sr, r) result(dev)
       type(specimen_result), intent(in) :: sr
       real(dp), intent(in) :: r(:)
-      real(dp) :: q
-      real(dp), allocatable :: b(:), a(:, :), y(:, :), dj(:, :)
-      integer :: j, nc, info
-      q = sum(r**2/sr%nv)
-      if (.not. allocated(sr%cov)) return
-      nc = size(sr%cov, 1)
-      dj = sr%jc
-      do j = 1, nc
-         dj(:, j) = sr%jc(:, j)/sr%nv
+      real(dp) :: dev
+      real(dp), allocatable :: x(:), g(:)
+      real(dp) :: p, a, b, t1, t2, f1, f2
+      real(dp), parameter :: golden = 0.6180339887498949_dp
+      integer :: it, m
+      m = size(r)
+      x = r/sqrt(sr%nv)
+      g = mat_mul(transpose(sr%w), x)
+      p = sum((x - mat_mul(sr%w, g))**2)
+      ! ln s between what the rest alone and the whole residual give, widened
+      a = log_dp(max(p, tiny(1.0_dp)*m)/m) - 2.0_dp
+      b = log_dp(max(sum(x**2), tiny(1.0_dp)*m)/m) + 2.0_dp
+      t1 = b - golden*(b - a)
+      t2 = a + golden*(b - a)
+      f1 = at(t1)
+      f2 = at(t2)
+      do it = 1, 200
+         if (b - a < 1.0e-12_dp) exit
+         if (f1 <= f2) then
+            b = t2
+            t2 = t1
+            f2 = f1
+            t1 = b - golden*(b - a)
+            f1 = at(t1)
+         else
+            a = t1
+            t1 = t2
+            f1 = f2
+            t2 = a + golden*(b - a)
+            f2 = at(t2)
+         end if
       end do
-      b = mat_mul(transpose(dj), r)
-      a = mat_mul(transpose(sr%jc), dj)
-      a = mat_mul(a, sr%cov)
-      do j = 1, nc
-         a(j, j) = a(j, j) + 1.0_dp
-      end do
-      y = reshape(b, [nc, 1])
-      call solve_dense(a, y, info)
-      if (info /= 0) return
-      q = q - dot_product(b, mat_mul(sr%cov, y(:, 1)))
-   end function residual_quad
+      dev = min(f1, f2)
+   contains
+      pure real(dp) function at(t) result(f)
+         real(dp), intent(in) :: t
+         real(dp) :: s
+         s = exp_dp(t)
+         f = (m - size(g))*t + sum(log_dp(s + sr%sig2)) + p/s + sum(g**2/(s + sr%sig2))
+      end function at
+   end function specimen_deviance
 
    !> The per-specimen report (Markdown)
    function specimen_report(sr) result(lines)
@@ -388,10 +440,10 @@ contains
          str(sr%m)//' points, of which the noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '// &
          trim(sr%unit)//') explains '//real_str(sr%noise, 'es10.3')//'; structured gap '// &
          real_str(sr%gap, 'es10.3')//'.')
-      if (allocated(sr%cov)) call add('The noise part includes '//real_str(sr%pred, 'es10.3')//' that the '// &
+      if (allocated(sr%w)) call add('The noise part includes '//real_str(sr%pred, 'es10.3')//' that the '// &
          'constants'' own uncertainty explains (their covariance from the replicates'' noise), and each '// &
-         'BIC below is taken in the residual''s covariance with it: what the replicates leave open of '// &
-         'the constants is not the specimen''s.')
+         'BIC below is taken in the residual''s covariance with it beside the noise, whose scale is '// &
+         'fitted: what the replicates leave open of the constants is not the specimen''s.')
       call add('')
       call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
          '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'); intervals 95 % '// &

@@ -363,9 +363,7 @@ contains
    end function loose_prediction
 
    !> The leader's prediction carries less than most of the held-out tests' structured gap
-   !> and leaves a rest above their floor, while on the fit tests it leaves none above theirs
-   !> (most of a structured gap removed, or its rest below the floor, or none there to
-   !> remove). Fitted to the fit tests alone its parameters may be what fails (a softening of
+   !> and leaves a rest above their floor, while on the fit tests it leaves none above theirs. Fitted to the fit tests alone its parameters may be what fails (a softening of
    !> 0.17, fitted to the LCF and ratcheting tests as a slower one, carried 55 % of the
    !> relaxation test's gap), or another effect adds to it: only every test fitted together
    !> tells which, and how much of every gap the effect closes. Not where the baseline ran to
@@ -377,11 +375,8 @@ contains
       if (.not. any(res%held) .or. held_quiet(res) .or. loose_prediction(res)) return
       associate (e => res%effects(res%leading))
          if (e%held_fitted) return
-         if (fit_structured(res)) then
-            if (e%shrink_fit < most .and. .not. rest_at_noise(res%gap_fit, e%shrink_fit, res%floor_fit)) return
-         end if
-         partial_carry = e%shrink_held < most .and. &
-                         .not. rest_at_noise(res%gap_held, e%shrink_held, res%floor_held)
+         if ((1.0_dp - e%shrink_fit)*res%gap_fit > res%floor_fit) return
+         partial_carry = e%shrink_held < most .and. (1.0_dp - e%shrink_held)*res%gap_held > res%floor_held
       end associate
    end function partial_carry
 
@@ -486,6 +481,8 @@ contains
       type(diagnose_result), intent(in) :: res
       joint_decides = .false.
       if (.not. allocated(res%joint)) return
+      ! A leader the prediction confirmed, which the joint stage only adds to, stays named
+      if (partial_carry(res) .and. form_beats_leader(res) == 0) return
       joint_decides = res%joint%leading > 0 .or. .not. fit_structured(res%joint)
    end function joint_decides
 end module usharp_diagnose_types

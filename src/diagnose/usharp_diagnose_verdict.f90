@@ -211,7 +211,12 @@ contains
       character(len=:), allocatable :: text
       associate (e => res%effects(res%leading))
          text = 'with the held-out tests fitted too, '//jres%verdict
-         if (jres%leading == 0) return
+         if (jres%leading == 0) then
+            if (.not. fit_structured(jres)) text = 'fitted to every test together, the model without '// &
+               'an effect is at the noise level: the held-out gap it leaves may come from constants the '// &
+               'fit tests alone leave loose'
+            return
+         end if
          associate (je => jres%effects(jres%leading))
             if (je%name /= e%name) return
             text = 'fitted to every test together, '//trim(e%name)//' removes '// &
