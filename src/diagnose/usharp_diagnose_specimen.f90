@@ -114,7 +114,7 @@ contains
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
       integer :: i, nt, j
-      real(dp) :: peak
+      real(dp) :: peak, dev0
       logical :: ok
       nt = size(cfg%tests)
       if (ispec < 1 .or. ispec > nt .or. nt < 2) then
@@ -186,6 +186,8 @@ contains
             call constants_directions(sr, jc, cov)
          end if
       end if
+      ! The prediction's -2 log-likelihood, against which each effect's is set
+      if (allocated(sr%w)) dev0 = specimen_deviance(sr, r0)
       sr%noise = sum(sr%nv) + sr%pred
       sr%gap = max(sr%f0 - sr%noise, 0.0_dp)
       sr%unit = merge('strain (-)     ', 'stress ('//prob%cfg%units//')   ', &
@@ -261,7 +263,7 @@ contains
          ! is not the specimen's (a clean specimen took a temperature of -0.5 K, BIC -10.6,
          ! for the constants' own error when they were held as exact)
          if (okj .and. size(r) == sr%m .and. allocated(sr%w)) then
-            se_out%dbic = specimen_deviance(sr, r) - specimen_deviance(sr, r0) + se_out%q*log_dp(real(sr%m, dp))
+            se_out%dbic = specimen_deviance(sr, r) - dev0 + se_out%q*log_dp(real(sr%m, dp))
          else
             se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
          end if
