@@ -36,7 +36,8 @@ module test_diagnose
    use usharp_diagnose_journal, only: diagnose_journal
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_optimiser, only: optimum_type
-   use usharp_diagnose_specimen, only: specimen_result, specimen_deviance, constants_directions
+   use usharp_diagnose_specimen, only: specimen_result, specimen_deviance, constants_directions, &
+                                       specimen_noncentrality, profiled_deviance
    use usharp_lapack, only: solve_dense, logdet_spd
    use omp_lib, only: omp_set_num_threads, omp_get_max_threads
    use test_util, only: write_text, check_message, scratch_dir
@@ -1083,12 +1084,14 @@ contains
    !> the noise scale s: against the whole matrix factorised and solved at each s; without C,
    !> m ln(|x|**2/m) + m; and where the residual's structure lies along the constants'
    !> directions far beyond what C allows, an effect removing it keeps nearly the whole of
-   !> its deviance (the constants cannot take it up for free)
+   !> its deviance (the constants cannot take it up for free). The noise scale at the minimum,
+   !> and a signal's chi-square in that covariance (what the power is computed from), against
+   !> the whole matrix solved
    subroutine test_specimen_quad(error)
       type(error_type), allocatable, intent(out) :: error
       type(specimen_result) :: sr
-      real(dp), allocatable :: r(:), s(:, :), x(:, :), jc(:, :), cov(:, :), re(:)
-      real(dp) :: dev, direct, t, best, logdet, old, new
+      real(dp), allocatable :: r(:), s(:, :), x(:, :), jc(:, :), cov(:, :), re(:), d(:)
+      real(dp) :: dev, direct, t, best, logdet, old, new, sc, tbest, lam
       integer :: i, j, m, info, it
       m = 40
       allocate (r(m), sr%nv(m), jc(m, 3))
@@ -1122,10 +1125,27 @@ contains
             call logdet_spd(s, logdet, info)
             x = reshape(r, [m, 1])
             call solve_dense(s, x, info)
+            if (logdet - sum(log(sr%nv)) + dot_product(r, x(:, 1)) < best) tbest = t
             best = min(best, logdet - sum(log(sr%nv)) + dot_product(r, x(:, 1)))
          end do
          call check(error, abs(dev - best) <= 1.0e-5_dp*abs(best), 'profiled '//real_str(dev, 'es22.14')// &
                     ' against the whole matrix '//real_str(best, 'es22.14'))
+         if (allocated(error)) return
+         ! The scale at the minimum, and a signal's chi-square there: d' S^-1 d solved whole
+         call profiled_deviance(sr, r, dev, sc)
+         call check(error, abs(log(sc) - tbest) <= 2.0e-3_dp, 'the noise scale at the minimum: ln s '// &
+                    real_str(log(sc), 'f0.5')//' against the grid''s '//real_str(tbest, 'f0.5'))
+         if (allocated(error)) return
+         d = 0.2_dp*cos(1.3_dp*[(real(j, dp), j=1, m)]) + 0.5_dp*jc(:, 2)
+         s = matmul(matmul(jc, cov), transpose(jc))
+         do j = 1, m
+            s(j, j) = s(j, j) + sc*sr%nv(j)
+         end do
+         x = reshape(d, [m, 1])
+         call solve_dense(s, x, info)
+         lam = specimen_noncentrality(sr, d, sc)
+         call check(error, abs(lam - dot_product(d, x(:, 1))) <= 1.0e-9_dp*lam, 'chi-square of a signal '// &
+                    real_str(lam, 'es22.14')//' against the whole matrix '//real_str(dot_product(d, x(:, 1)), 'es22.14'))
          if (allocated(error)) return
       end do
       ! Structure along the constants' directions of 1e4 times what C allows there: an effect

@@ -33,7 +33,7 @@ module usharp_diagnose_specimen
    private
 
    public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
-   public :: specimen_deviance, constants_directions
+   public :: specimen_deviance, profiled_deviance, constants_directions, specimen_noncentrality
 
    !> One effect fitted to the specimen
    type :: specimen_effect
@@ -114,7 +114,7 @@ contains
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
       integer :: i, nt, j
-      real(dp) :: peak, dev0
+      real(dp) :: peak, dev0, s0
       logical :: ok
       nt = size(cfg%tests)
       if (ispec < 1 .or. ispec > nt .or. nt < 2) then
@@ -187,7 +187,7 @@ contains
          end if
       end if
       ! The prediction's -2 log-likelihood, against which each effect's is set
-      if (allocated(sr%w)) dev0 = specimen_deviance(sr, r0)
+      if (allocated(sr%w)) call profiled_deviance(sr, r0, dev0, s0)
       sr%noise = sum(sr%nv) + sr%pred
       sr%gap = max(sr%f0 - sr%noise, 0.0_dp)
       sr%unit = merge('strain (-)     ', 'stress ('//prob%cfg%units//')   ', &
@@ -306,7 +306,8 @@ contains
 
       !> The power of the significance rule against effect ek%k at the low end of its range
       !> on the specimen (low_end_deltas, bic_power): its signal simulated there against the
-      !> prediction r0, over the prediction's mean square (what BIC sees)
+      !> prediction r0, in the covariance the BIC change is taken in (see
+      !> specimen_noncentrality; without it, over the prediction's mean square)
       subroutine low_end_power(ek, se_out)
          type(effect_problem), intent(inout) :: ek
          type(specimen_effect), intent(inout) :: se_out
@@ -328,7 +329,11 @@ contains
             call ek%residual_at(pack((pz + d(:, g))/ek%pscale, ek%pfree), r, okr)
             se_out%nevals = se_out%nevals + 1
             if (.not. okr) return
-            se_out%lambda_low = min(se_out%lambda_low, sum((r - r0)**2)/(sr%f0/sr%m))
+            if (allocated(sr%w)) then
+               se_out%lambda_low = min(se_out%lambda_low, specimen_noncentrality(sr, r - r0, s0))
+            else
+               se_out%lambda_low = min(se_out%lambda_low, sum((r - r0)**2)/(sr%f0/sr%m))
+            end if
          end do
          se_out%power_low = bic_power(se_out%lambda_low, se_out%q, sr%m)
       end subroutine low_end_power
@@ -374,6 +379,15 @@ contains
       type(specimen_result), intent(in) :: sr
       real(dp), intent(in) :: r(:)
       real(dp) :: dev
+      real(dp) :: scale
+      call profiled_deviance(sr, r, dev, scale)
+   end function specimen_deviance
+
+   !> specimen_deviance, and the noise scale s at its minimum
+   pure subroutine profiled_deviance(sr, r, dev, scale)
+      type(specimen_result), intent(in) :: sr
+      real(dp), intent(in) :: r(:)
+      real(dp), intent(out) :: dev, scale
       real(dp), allocatable :: x(:), g(:)
       real(dp) :: p, a, b, t1, t2, f1, f2
       real(dp), parameter :: golden = 0.6180339887498949_dp
@@ -406,6 +420,7 @@ contains
          end if
       end do
       dev = min(f1, f2)
+      scale = exp_dp(merge(t1, t2, f1 <= f2))
    contains
       pure real(dp) function at(t) result(f)
          real(dp), intent(in) :: t
@@ -413,7 +428,21 @@ contains
          s = exp_dp(t)
          f = (m - size(g))*t + sum(log_dp(s + sr%sig2)) + p/s + sum(g**2/(s + sr%sig2))
       end function at
-   end function specimen_deviance
+   end subroutine profiled_deviance
+
+   !> The expected chi-square of a signal d in the specimen's residuals, d' S^-1 d in their
+   !> covariance S = s diag(nv) + Jc C Jc' (see specimen_deviance) at noise scale s: with
+   !> x = diag(nv)^-1/2 d and g = w'x, (|x|**2 - |g|**2)/s + sum g**2/(s + sig2). What the
+   !> constants' uncertainty can take up of the signal does not count in full.
+   pure real(dp) function specimen_noncentrality(sr, d, s) result(lambda)
+      type(specimen_result), intent(in) :: sr
+      real(dp), intent(in) :: d(:)
+      real(dp), intent(in) :: s   !< noise scale, > 0
+      real(dp), allocatable :: x(:), g(:)
+      x = d/sqrt(sr%nv)
+      g = mat_mul(transpose(sr%w), x)
+      lambda = max(sum(x**2) - sum(g**2), 0.0_dp)/s + sum(g**2/(s + sr%sig2))
+   end function specimen_noncentrality
 
    !> The per-specimen report (Markdown)
    function specimen_report(sr) result(lines)
