@@ -17,7 +17,7 @@ module test_diagnose
                              effect_catalogue, effect_index
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
-   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
    use usharp_strings, only: real_str
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
@@ -27,10 +27,10 @@ module test_diagnose
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader
    use usharp_diagnose_verdict, only: conclude, joint_verdict
-   use usharp_diagnose_refit, only: judge, ratio_beyond_doubt, gamma3_undetermined
+   use usharp_diagnose_refit, only: judge, ratio_beyond_doubt, rate_undetermined
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
-   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax
+   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -93,7 +93,7 @@ contains
          new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
          new_unittest('form-left-open-below-the-floor-fits-every-test', test_open_below_floor), &
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
-         new_unittest('second-back-stress-held-where-gamma3-is-undetermined', test_gamma3_held), &
+         new_unittest('rate-held-where-undetermined', test_rate_held), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -1421,41 +1421,61 @@ contains
       call check(error, abs(r - 1.2_dp) < 1.0e-12_dp, 'no interval: the fitted ratio')
    end subroutine test_beyond_doubt
 
-   !> A second back stress judged beyond its limit is refitted with gamma3 held only where
-   !> gamma3 is undetermined (the LCF-held-out case: gamma3 25 [-2.8, 52.7]), not where the
-   !> data fix it, not for a plausible or an already held refit, not for another effect
-   subroutine test_gamma3_held(error)
+   !> An effect judged beyond its limit is refitted with its rate held only where the rate
+   !> is undetermined (the LCF-held-out case: a second back stress with gamma3 25 [-2.8,
+   !> 52.7]), not where the data fix it, not for a plausible or an already held refit; the
+   !> rates held are the second back stress's gamma3 and the softening's b, no other
+   !> effect's parameter
+   subroutine test_rate_held(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_context) :: ctx
       type(effect_outcome) :: e
+      integer :: k
       ctx%cat = effect_catalogue(20.0_dp)
       e%k = effect_index('backstress2')
       e%plausible = .false.
       e%p = [673.4_dp, 24.9_dp]
       e%p_lo = [513.6_dp, -2.84_dp]
       e%p_hi = [833.2_dp, 52.7_dp]
-      call check(error, gamma3_undetermined(ctx, e), 'gamma3 spanning zero not held')
+      call check(error, rate_undetermined(ctx, e), 'gamma3 spanning zero not held')
       if (allocated(error)) return
       e%p_hi(2) = ieee_value(1.0_dp, ieee_quiet_nan)
       e%p_lo(2) = 10.0_dp
-      call check(error, gamma3_undetermined(ctx, e), 'gamma3 with an interval not finite not held')
+      call check(error, rate_undetermined(ctx, e), 'gamma3 with an interval not finite not held')
       if (allocated(error)) return
       e%p_lo(2) = 10.0_dp
       e%p_hi(2) = 40.0_dp
-      call check(error, .not. gamma3_undetermined(ctx, e), 'gamma3 the data fix held')
+      call check(error, .not. rate_undetermined(ctx, e), 'gamma3 the data fix held')
       if (allocated(error)) return
       e%p_lo(2) = -2.84_dp
       e%plausible = .true.
-      call check(error, .not. gamma3_undetermined(ctx, e), 'a plausible refit held')
+      call check(error, .not. rate_undetermined(ctx, e), 'a plausible refit held')
       if (allocated(error)) return
       e%plausible = .false.
       e%held = .true.
-      call check(error, .not. gamma3_undetermined(ctx, e), 'a held refit held again')
+      call check(error, .not. rate_undetermined(ctx, e), 'a held refit held again')
       if (allocated(error)) return
       e%held = .false.
+      ! A softening far beyond its limit whose rate b the data leave open
       e%k = effect_index('softening')
-      call check(error, .not. gamma3_undetermined(ctx, e), 'another effect held')
-   end subroutine test_gamma3_held
+      e%p = [-15.0_dp, 40.0_dp]
+      e%p_lo = [-40.0_dp, 3.0_dp]
+      e%p_hi = [-2.0_dp, ieee_value(1.0_dp, ieee_positive_inf)]
+      call check(error, rate_undetermined(ctx, e), 'a softening''s open b not held')
+      if (allocated(error)) return
+      e%p_hi(2) = 400.0_dp
+      call check(error, .not. rate_undetermined(ctx, e), 'a softening''s b the data fix held')
+      if (allocated(error)) return
+      do k = 1, size(ctx%cat)
+         select case (trim(ctx%cat(k)%name))
+         case ('softening', 'backstress2')
+            call check(error, held_rate(ctx%cat(k)) == 2, trim(ctx%cat(k)%name)//'''s rate is not its second parameter')
+         case default
+            call check(error, held_rate(ctx%cat(k)) == 0, trim(ctx%cat(k)%name)//' has a rate to hold')
+         end select
+         if (allocated(error)) return
+      end do
+   end subroutine test_rate_held
 
    !> The chi-square tails the power statement uses, against closed forms and scipy 1.x
    !> (scipy.special.gammaincc, scipy.stats.chi2.sf and ncx2.sf, printed to 17 digits)

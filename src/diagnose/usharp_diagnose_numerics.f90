@@ -9,7 +9,7 @@ module usharp_diagnose_numerics
    use usharp_error, only: error_type
    use usharp_config, only: run_config
    use usharp_objective, only: fit_problem, test_residuals
-   use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test, param_global
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
@@ -28,7 +28,7 @@ module usharp_diagnose_numerics
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
-   public :: tight_jacobian, sandwich_covariance, test_noise_variance
+   public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -334,6 +334,17 @@ contains
       share = abs(a)*(1.0_dp - exp_dp(-b*p_end))
    end function softening_reached
 
+   !> The parameter of a global effect that screening holds at its start (no gradient at
+   !> zero: the second back stress's gamma3, the softening's b), when it is the last of its
+   !> parameters (the refit's layout puts it last); 0 when there is none
+   pure integer function held_rate(info) result(j)
+      type(effect_info), intent(in) :: info
+      j = 0
+      if (info%sharing /= param_global .or. info%nparam < 2) return
+      if (count(.not. info%screened(1:info%nparam)) /= 1) return
+      if (.not. info%screened(info%nparam)) j = info%nparam
+   end function held_rate
+
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
    !> and zero effect (the second back stress from a small modulus, so that its rate has a
    !> gradient; the softening at the rate soften_rate0)
@@ -342,14 +353,15 @@ contains
       !> Catalogue effect
       integer, intent(in) :: k
       type(effect_problem), intent(out) :: ep
-      !> The second back stress's gamma3 held at the screening's value (see refit)
+      !> The rates that screening holds (the parameters without a gradient at zero: the
+      !> second back stress's gamma3, the softening's b) held at their start (see refit)
       logical, intent(in), optional :: held
       call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
       ep%pfree = free_params(ep, ctx%ifit, .false.)
       if (k == 8) ep%p0 = [0.01_dp*ctx%peak, ctx%opts%gamma3]
       if (k == 7) ep%p0 = [0.0_dp, soften_rate0]
       if (present(held)) then
-         if (held .and. k == 8) ep%pfree(2) = .false.
+         if (held .and. held_rate(ctx%cat(k)) > 0) ep%pfree(held_rate(ctx%cat(k))) = .false.
       end if
    end subroutine effect_fit
 

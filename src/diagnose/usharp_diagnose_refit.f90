@@ -21,14 +21,14 @@ module usharp_diagnose_refit
                                     delay_precision
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, softening_reached, &
-                                       block_sums, deviance_change
+                                       block_sums, deviance_change, held_rate
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
    private
 
    public :: refit, refit_candidates, refit_global, refit_deciding, judge, ratio_beyond_doubt, &
-             gamma3_undetermined
+             rate_undetermined
 
 contains
 
@@ -193,7 +193,7 @@ contains
       e%f_after = opt%f
       e%q = count(ep%pfree)
       call magnitudes(ctx, res, ep, opt%x, e, mdl, p)
-      if (gamma3_undetermined(ctx, e)) then
+      if (rate_undetermined(ctx, e)) then
          call refit_held(ctx, res, e, ep, opt, mdl, p, error)
          if (allocated(error)) return
       end if
@@ -204,24 +204,29 @@ contains
       call judge(ctx, res, e)
    end subroutine refit
 
-   !> A second back stress beyond its limit (a saturation H3/gamma3 above the peak stress)
-   !> whose gamma3 the fit tests leave undetermined (its 95 % interval spans zero or is not
+   !> An effect beyond its limit whose rate (a global parameter that screening holds, see
+   !> held_rate) the fit tests leave undetermined (its 95 % interval spans zero or is not
    !> finite): the refit wandered along a valley the data do not close (with the LCF test held
-   !> out, 2.23 ksi came out as 27 ksi, gamma3 25 [-2.8, 52.7]), and its magnitude says nothing
-   pure logical function gamma3_undetermined(ctx, e) result(undetermined)
+   !> out, a second back stress of 2.23 ksi came out as 27 ksi, gamma3 25 [-2.8, 52.7]), and
+   !> its magnitude says nothing
+   pure logical function rate_undetermined(ctx, e) result(undetermined)
       type(diagnose_context), intent(in) :: ctx
       type(effect_outcome), intent(in) :: e
+      integer :: j
       undetermined = .false.
-      if (e%held .or. e%plausible .or. ctx%cat(e%k)%name /= 'backstress2') return
-      if (size(e%p_lo) < 2) return
-      undetermined = .not. (e%p_lo(2)*e%p_hi(2) > 0.0_dp .and. ieee_is_finite(e%p_lo(2)) .and. &
-                            ieee_is_finite(e%p_hi(2)))
-   end function gamma3_undetermined
+      if (e%held .or. e%plausible) return
+      j = held_rate(ctx%cat(e%k))
+      if (j == 0 .or. size(e%p_lo) < j) return
+      undetermined = .not. (e%p_lo(j)*e%p_hi(j) > 0.0_dp .and. ieee_is_finite(e%p_lo(j)) .and. &
+                            ieee_is_finite(e%p_hi(j)))
+   end function rate_undetermined
 
-   !> e's refit again with gamma3 held at the screening's value (H3 and the constants fitted,
-   !> from the screening end point and from the free refit's constants); taken in place of
-   !> the free refit (ep, opt, mdl, p and e) when its magnitude is within the limit, so that
-   !> the verdict judges a second back stress of a size the data allow, not the runaway
+
+   !> e's refit again with its rate (see held_rate) held at the screening's value (the
+   !> other parameters and the constants fitted, from the screening end point and from the
+   !> free refit's constants); taken in place of the free refit (ep, opt, mdl, p and e) when
+   !> its magnitude is within the limit, so that the verdict judges an effect of a size the
+   !> data allow, not the runaway
    subroutine refit_held(ctx, res, e, ep, opt, mdl, p, error)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
@@ -240,7 +245,8 @@ contains
       nc = size(ctx%prob%idx)
       call effect_fit(ctx, e%k, eh, .true.)
       call eh%bounds(lo, hi)
-      ! x holds the constants, then H3 (gamma3 is the last of the free refit's layout)
+      ! x holds the constants, then the effect's parameters (its rate is the last of the free
+      ! refit's layout)
       x0 = min(max(e%x(1:nc + 1), lo), hi)
       x1 = reshape(min(max([opt%x(1:nc), x0(nc + 1)], lo), hi), [nc + 1, 1])
       trial = e
@@ -252,8 +258,8 @@ contains
                        over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
       if (allocated(error)) return
       trial%held = .true.
-      trial%gamma3_lo = e%p_lo(2)
-      trial%gamma3_hi = e%p_hi(2)
+      trial%rate_lo = e%p_lo(held_rate(ctx%cat(e%k)))
+      trial%rate_hi = e%p_hi(held_rate(ctx%cat(e%k)))
       trial%x = x0
       trial%x_fit = oh%x
       trial%f_after = oh%f

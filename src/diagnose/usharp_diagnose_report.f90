@@ -12,6 +12,7 @@ module usharp_diagnose_report
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only, &
                                     delay_precision, partial_carry, form_beats_leader
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
+   use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
    private
@@ -228,10 +229,13 @@ contains
          call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
             real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']'//what)
       end do
-      if (e%held .and. allocated(e%p_all)) call add(lines, '- gamma3 held at '// &
-         real_str(e%p_all(size(e%p_all)), 'es11.4')//' (the screening''s value): fitted free, its '// &
-         'interval [' //real_str(e%gamma3_lo, 'es11.4')//', '//real_str(e%gamma3_hi, 'es11.4')// &
-         '] spans zero and the saturation H3/gamma3 ran beyond the peak stress')
+      if (e%held .and. allocated(e%p_all)) then
+         k = held_rate(cat(e%k))
+         if (k > 0) call add(lines, '- '//trim(cat(e%k)%pname(k))//' held at '// &
+            real_str(e%p_all(k), 'es11.4')//' (the screening''s value): fitted free, its interval ['// &
+            real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')//'] spans zero or is '// &
+            'open and '//trim(e%worst_what)//' ran beyond its limit')
+      end if
       ! The held-out tests' own values of a per-test effect (fitted to each with the constants
       ! fixed)
       associate (info => cat(e%k))

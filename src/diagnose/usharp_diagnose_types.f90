@@ -110,10 +110,11 @@ module usharp_diagnose_types
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
       logical :: significant = .false., confirmed = .false.
       logical :: plausible = .true.          !< every magnitude within the effect's physical limit
-      !> The second back stress refitted with gamma3 held at the screening's value: free, the
-      !> fit tests left gamma3 undetermined and its saturation beyond the limit (see refit)
+      !> Refitted with its rate (the second back stress's gamma3, the softening's b) held at
+      !> the screening's value: free, the fit tests left the rate undetermined and the
+      !> magnitude beyond its limit (see refit)
       logical :: held = .false.
-      real(dp) :: gamma3_lo = 0.0_dp, gamma3_hi = 0.0_dp  !< gamma3's interval when free
+      real(dp) :: rate_lo = 0.0_dp, rate_hi = 0.0_dp  !< the rate's interval when free
       real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
       character(len=64) :: worst_what = ''   !< which magnitude that is
       !> A delay (shift, lag) resolved by the data: not below their sampling interval
