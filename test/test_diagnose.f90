@@ -25,7 +25,8 @@ module test_diagnose
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
-                                    held_fit_only, form_beats_leader
+                                    held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
+                                    joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
    use usharp_diagnose_verdict, only: conclude, joint_verdict
    use usharp_diagnose_refit, only: judge, ratio_beyond_doubt, rate_undetermined
    use usharp_diagnose_separate, only: separate
@@ -1169,7 +1170,8 @@ contains
       res%floor_held_noise = 154.0_dp
       allocate (res%effects(2))
       res%effects%refitted = .true.
-      call check(error, joint_wanted(res, .false.), 'a structured gap that no significant effect explains')
+      call check(error, joint_reason(res, .false.) == joint_held_only .and. joint_wanted(res, .false.), &
+                 'a structured gap that no significant effect explains')
       if (allocated(error)) return
       call check(error, .not. joint_wanted(res, .true.), 'the joint diagnosis does not go on')
       if (allocated(error)) return
@@ -1181,7 +1183,7 @@ contains
       call check(error, .not. joint_wanted(res, .false.), 'a significant effect explains part of the fit gap')
       if (allocated(error)) return
       res%effects(2)%shrink_fit = 0.99_dp
-      call check(error, joint_wanted(res, .false.), 'an effect takes the fit gap to its floor, not confirmed')
+      call check(error, joint_reason(res, .false.) == joint_form_open, 'an effect takes the fit gap to its floor, not confirmed')
       if (allocated(error)) return
       res%effects(2)%plausible = .false.
       call check(error, .not. joint_wanted(res, .false.), 'that effect at an implausible magnitude')
@@ -1196,12 +1198,12 @@ contains
       res%gap_fit = 0.0_dp
       res%gap_held = 0.0_dp
       res%floor_held = 2645.0_dp
-      call check(error, joint_wanted(res, .false.), 'an effect leads by BIC alone, both sets below their floors')
+      call check(error, joint_reason(res, .false.) == joint_bic_only, 'an effect leads by BIC alone, both sets below their floors')
       if (allocated(error)) return
       ! The fit tests with a structured gap that the leader mostly leaves, the held-out quiet
       res%gap_fit = 1.0_dp
       res%effects(2)%shrink_fit = 0.11_dp
-      call check(error, joint_wanted(res, .false.), 'an effect leads by BIC alone, most of the fit gap left')
+      call check(error, joint_reason(res, .false.) == joint_bic_only, 'an effect leads by BIC alone, most of the fit gap left')
       if (allocated(error)) return
       res%effects(2)%shrink_fit = 0.95_dp
       call check(error, .not. joint_wanted(res, .false.), 'the leader takes most of the fit tests'' gap')
@@ -1236,7 +1238,7 @@ contains
       ! ratcheting tests carried 55 % to the relaxation test): every test fitted says whether
       ! the effect can close it all
       res%effects(2)%shrink_held = 0.55_dp
-      call check(error, joint_wanted(res, .false.), 'the prediction carries part of the held-out gap')
+      call check(error, joint_reason(res, .false.) == joint_partial, 'the prediction carries part of the held-out gap')
       if (allocated(error)) return
       res%gap_held = 3.0_dp
       res%effects(2)%shrink_held = 0.75_dp
@@ -1247,7 +1249,7 @@ contains
       ! ... but the baseline ran away (a constant at a search bound): the prediction that
       ! confirms it rests on constants the fit tests leave loose
       res%c_bound = [.true., .false.]
-      call check(error, joint_wanted(res, .false.), 'a prediction from a baseline at a bound confirms it')
+      call check(error, joint_reason(res, .false.) == joint_loose, 'a prediction from a baseline at a bound confirms it')
       if (allocated(error)) return
       res%gap_fit = 1.0_dp
       call check(error, .not. joint_wanted(res, .false.), &
@@ -1335,7 +1337,7 @@ contains
       res%effects%shrink_fit = [1.0_dp, 0.126_dp]
       res%effects(2)%held_fitted = .true.
       res%leading = 2
-      call check(error, held_fit_only(res) .and. joint_wanted(res, .false.), &
+      call check(error, held_fit_only(res) .and. joint_reason(res, .false.) == joint_held_fit, &
                  'fit tests quiet, the leader fitted to the held-out test')
       if (allocated(error)) return
       call check(error, .not. joint_wanted(res, .true.), 'the joint stage is not run twice')
@@ -1390,7 +1392,7 @@ contains
       res%effects%dbic = [-713.1_dp, -306.7_dp]
       res%effects%shrink_fit = [1.0_dp, 0.672_dp]
       res%leading = 2
-      call check(error, form_beats_leader(res) == 1 .and. joint_wanted(res, .false.), &
+      call check(error, form_beats_leader(res) == 1 .and. joint_reason(res, .false.) == joint_form_beats, &
                  'a better form on the fit tests than the leader''s')
       if (allocated(error)) return
       res%effects(2)%shrink_fit = 0.9_dp

@@ -9,8 +9,9 @@ module usharp_diagnose_report
    use usharp_filesys, only: join_path, make_dir
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_effects_shown, bic_only, &
-                                    delay_precision, partial_carry, form_beats_leader
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
+                                    joint_reason, joint_partial, joint_bic_only, joint_held_fit, &
+                                    joint_form_beats, joint_loose, joint_form_open
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -296,7 +297,7 @@ contains
       end if
    end subroutine shrink_section
 
-   !> Section 5, when the prediction could not confirm an effect (see joint_wanted): the
+   !> Section 5, when the prediction could not decide (see joint_reason): the
    !> diagnosis of every test fitted together (jres)
    subroutine joint_section(lines, res, opts)
       character(len=200), allocatable, intent(inout) :: lines(:)
@@ -308,22 +309,36 @@ contains
       call add(lines, '')
       call add(lines, '## 5. Every test fitted together')
       call add(lines, '')
-      if (partial_carry(res) .and. form_beats_leader(res) == 0) then
+      select case (joint_reason(res, .false.))
+      case (joint_partial)
          call add(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
             'tests, but its prediction carries only part of the held-out tests'': either what the fit '// &
             'tests alone make of its parameters fails there, or another effect adds to it.')
-      else if (bic_only(res)) then
+      case (joint_bic_only)
          call add(lines, 'An effect leads on the fit tests by BIC alone (the held-out tests below their '// &
             'floor, and the fit tests'' structured gap below its floor too or mostly left): the held-out '// &
             'floor is too wide for the prediction to confirm it.')
-      else if (fit_effects_shown(res)) then
+      case (joint_held_fit)
+         call add(lines, trim(res%effects(res%leading)%name)//' explains little of the fit tests and met '// &
+            'the held-out tests only by its parameters fitted to them (an effect per test), not by a '// &
+            'prediction: only every effect fitted to every test compares fairly.')
+      case (joint_form_beats)
+         call add(lines, trim(res%effects(form_beats_leader(res))%name)//' fits the fit tests better than '// &
+            'the leader '//trim(res%effects(res%leading)%name)//' and leaves their form open, but does not '// &
+            'carry to the held-out tests: only every test fitted together tells whether its parameters or '// &
+            'its form failed there.')
+      case (joint_loose)
+         call add(lines, trim(res%effects(res%leading)%name)//' rests on its prediction of the held-out '// &
+            'tests alone (the fit tests show no structured gap), while the baseline''s constants sit at a '// &
+            'search bound: the prediction tests those constants as much as the effect.')
+      case (joint_form_open)
          call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
             'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
-      else
+      case default
          call add(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
             'tests show one against their noise, so nothing fitted to the fit tests alone can be '// &
             'confirmed by the prediction.')
-      end if
+      end select
       call add(lines, 'The diagnosis again with every test '// &
          'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &
          'which is weaker evidence than a prediction; a test that shows it on its own confirms it.')

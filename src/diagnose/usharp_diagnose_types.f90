@@ -17,7 +17,7 @@ module usharp_diagnose_types
    public :: explains_resolved, rest_at_noise
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
-             partial_carry
+             partial_carry, joint_reason
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -184,6 +184,17 @@ module usharp_diagnose_types
       type(diagnose_result), allocatable :: joint
    end type diagnose_result
 
+   !> Why a diagnosis goes on to fit every test together (see joint_reason): none; the
+   !> leader rests on BIC alone (see bic_only); on a fit of the held-out tests (see
+   !> held_fit_only); an effect of open form fitted the fit tests better (see
+   !> form_beats_leader); its prediction rests on constants at a search bound (see
+   !> loose_prediction); it carries part of the held-out gap (see partial_carry); with no
+   !> leader, the fit tests leave an effect's form open (see form_open); or they carry
+   !> nothing an effect could be fitted to while the held-out tests have a gap
+   integer, parameter, public :: joint_none = 0, joint_bic_only = 1, joint_held_fit = 2, &
+                                 joint_form_beats = 3, joint_loose = 4, joint_partial = 5, &
+                                 joint_form_open = 6, joint_held_only = 7
+
 contains
 
    !> Tell the listener, if any, of a step: stage, simulations so far
@@ -312,40 +323,57 @@ contains
       explains = fit_ok .and. held_ok
    end function explains
 
-   !> True when a diagnosis should go on to fit the held-out tests too: no effect is
-   !> confirmed and the fit tests cannot say which effect there is. Either they have no
-   !> structured gap, or no effect fitted to them is significant, while the held-out tests
-   !> have one against their noise (with or without the constants' uncertainty on top): the
-   !> fit tests carry nothing an effect could be fitted to, and the gap is the constants they
-   !> leave loose (fitted together, every test reaches its noise level) or an effect only
-   !> the held-out tests show (a softening of later cycles that a relaxation and a
-   !> ratcheting test do not reach). Or an effect takes
-   !> their structured gap to its floor (see form_open) but does not carry to the held-out
-   !> tests: the fit tests show it and leave its form open (a softening and a slow hardening
-   !> with other constants fit them alike), and only the held-out tests can decide the form.
-   !> Or the leading effect rests on BIC alone (see bic_only): the prediction confirmed
-   !> nothing, and fitted to the held-out tests too every effect meets their data. Or it
-   !> rests on a fit of the held-out tests (see held_fit_only), or an effect of open form
-   !> fitted the fit tests better (see form_beats_leader), or its prediction rests on
-   !> constants the fit tests leave at a search bound (see loose_prediction).
-   pure logical function joint_wanted(res, joint)
+   !> Why a diagnosis should go on to fit the held-out tests too (joint_none: it should not):
+   !> no effect is confirmed and the fit tests cannot say which effect there is. Either they
+   !> have no structured gap, or no effect fitted to them is significant, while the held-out
+   !> tests have one against their noise (with or without the constants' uncertainty on
+   !> top): the fit tests carry nothing an effect could be fitted to, and the gap is the
+   !> constants they leave loose (fitted together, every test reaches its noise level) or an
+   !> effect only the held-out tests show (a softening of later cycles that a relaxation and
+   !> a ratcheting test do not reach). Or an effect takes their structured gap to its floor
+   !> (see form_open) but does not carry to the held-out tests: the fit tests show it and
+   !> leave its form open (a softening and a slow hardening with other constants fit them
+   !> alike), and only the held-out tests can decide the form. Or a leader's prediction
+   !> cannot decide: it rests on BIC alone (see bic_only), on a fit of the held-out tests
+   !> (see held_fit_only), an effect of open form fitted the fit tests better (see
+   !> form_beats_leader), it rests on constants the fit tests leave at a search bound (see
+   !> loose_prediction), or it carries only part of the held-out gap (see partial_carry).
+   !> The first of these that holds, in this order, is the reason.
+   pure integer function joint_reason(res, joint) result(why)
       type(diagnose_result), intent(in) :: res
       logical, intent(in) :: joint       !< this diagnosis is already the joint one
-      integer :: j
-      joint_wanted = .false.
+      why = joint_none
       if (joint) return
       if (res%leading /= 0) then
-         joint_wanted = bic_only(res) .or. held_fit_only(res) .or. form_beats_leader(res) > 0 .or. &
-                        loose_prediction(res) .or. partial_carry(res)
+         if (bic_only(res)) then
+            why = joint_bic_only
+         else if (held_fit_only(res)) then
+            why = joint_held_fit
+         else if (form_beats_leader(res) > 0) then
+            why = joint_form_beats
+         else if (loose_prediction(res)) then
+            why = joint_loose
+         else if (partial_carry(res)) then
+            why = joint_partial
+         end if
       else if (fit_effects_shown(res)) then
-         joint_wanted = form_left_open(res)
-      else
+         if (form_left_open(res)) why = joint_form_open
+      else if (res%gap_held_noise > res%floor_held_noise) then
          ! The fit tests' gap below its floor, yet an effect may lower their BIC (the floor
          ! tests every direction at once, BIC the effect's own): a softening of 0.11 with the
          ! relaxation test held out, fitted to the other two as a hardening (BIC -587) that
          ! made the relaxation test worse, had left the verdict at "no significant effect"
-         joint_wanted = res%gap_held_noise > res%floor_held_noise .or. form_left_open(res)
+         why = joint_held_only
+      else if (form_left_open(res)) then
+         why = joint_form_open
       end if
+   end function joint_reason
+
+   !> True when a diagnosis should go on to fit the held-out tests too (see joint_reason)
+   pure logical function joint_wanted(res, joint)
+      type(diagnose_result), intent(in) :: res
+      logical, intent(in) :: joint       !< this diagnosis is already the joint one
+      joint_wanted = joint_reason(res, joint) /= joint_none
    end function joint_wanted
 
    !> The leader rests on its prediction of the held-out tests alone (the fit tests have no
@@ -483,7 +511,7 @@ contains
       joint_decides = .false.
       if (.not. allocated(res%joint)) return
       ! A leader the prediction confirmed, which the joint stage only adds to, stays named
-      if (partial_carry(res) .and. form_beats_leader(res) == 0) return
+      if (joint_reason(res, .false.) == joint_partial) return
       joint_decides = res%joint%leading > 0 .or. .not. fit_structured(res%joint)
    end function joint_decides
 end module usharp_diagnose_types

@@ -10,8 +10,9 @@ module usharp_diagnose_verdict
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, &
-                                    fit_effects_shown, bic_only, held_fit_only, form_left_open, &
-                                    form_beats_leader, partial_carry
+                                    fit_effects_shown, form_left_open, form_beats_leader, joint_reason, &
+                                    joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
+                                    joint_partial
    implicit none
    private
 
@@ -144,64 +145,79 @@ contains
       res%verdict = text
    end subroutine effect_verdict
 
-   !> The verdict of a diagnosis whose prediction could not confirm an effect (see
-   !> joint_wanted), from its joint stage (jres: every test fitted): an effect the joint stage
-   !> confirms leads, said to rest on a fit to the tests it explains and not on a prediction;
-   !> a joint baseline at the noise level says the held-out gap came from the constants the
-   !> fit tests leave loose
+   !> The verdict of a diagnosis whose prediction could not decide (see joint_reason), from
+   !> its joint stage (jres: every test fitted): an effect the joint stage confirms leads,
+   !> said to rest on a fit to the tests it explains and not on a prediction, with why the
+   !> prediction could not decide; a joint baseline at the noise level says the held-out gap
+   !> came from the constants the fit tests leave loose. A leader that carried part of the
+   !> held-out gap stays, with what every test fitted together makes of it.
    subroutine joint_verdict(res, jres)
       type(diagnose_result), intent(inout) :: res
       type(diagnose_result), intent(in) :: jres
-      character(len=*), parameter :: quiet = ' (fitted with the held-out tests: the fit tests alone '// &
-         'show no structured gap that an effect explains, so their prediction cannot confirm it)'
-      character(len=*), parameter :: open = ' (fitted with the held-out tests: fitted to the fit '// &
-         'tests alone, the effects that explain them do not carry to the held-out tests, so ' // &
-         'their prediction cannot confirm it)'
-      character(len=:), allocatable :: gaps
-      integer :: n
-      if (partial_carry(res) .and. form_beats_leader(res) == 0) then
-         ! The prediction confirmed the leader; every test fitted says how much more it closes
+      integer :: n, why
+      why = joint_reason(res, .false.)
+      if (why == joint_partial) then
          res%verdict = res%verdict//'; '//carry_note(res, jres)
       else if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
-         if (bic_only(res)) then
-            associate (e => res%effects(res%leading))
-               if (fit_structured(res)) then
-                  gaps = ', removing '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured '// &
-                         'gap, with the held-out tests below their floor'
-               else
-                  gaps = ' with both sets'' structured gaps below their floors'
-               end if
-               res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: on the fit tests alone '// &
-                  trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')//gaps// &
-                  ', which the prediction cannot confirm)'//jres%verdict(n + 1:)
-            end associate
-         else if (held_fit_only(res)) then
-            res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//held_fit_note(res)// &
-               ')'//jres%verdict(n + 1:)
-         else if (form_beats_leader(res) > 0) then
-            res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//beaten_note(res)// &
-               ')'//jres%verdict(n + 1:)
-         else if (fit_effects_shown(res) .or. form_left_open(res)) then
-            res%verdict = jres%verdict(:n)//open//jres%verdict(n + 1:)
-         else
-            res%verdict = jres%verdict(:n)//quiet//jres%verdict(n + 1:)
-         end if
+         res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//why_note(res, why)// &
+                       ')'//jres%verdict(n + 1:)
       else if (.not. fit_structured(jres)) then
          res%verdict = 'no significant effect: fitted together with the fit tests, the held-out '// &
             'tests too are at the noise level (structured gap '//real_str(jres%gap_fit, 'es9.2')// &
             ' against its floor '//real_str(jres%floor_fit, 'es9.2')//'): their predicted gap '// &
             'comes from constants the fit tests alone leave loose, not from a missing effect'// &
             serration_note(res)
-         if (bic_only(res)) res%verdict = res%verdict//'; '//trim(res%effects(res%leading)%name)// &
-            ' led by BIC on the fit tests alone, which every test fitted together does not bear out'
-         if (held_fit_only(res)) res%verdict = res%verdict//'; '//held_fit_note(res)// &
-            ', which every test fitted together does not bear out'
-         if (form_beats_leader(res) > 0) res%verdict = res%verdict//'; '//beaten_note(res)
+         select case (why)
+         case (joint_bic_only)
+            res%verdict = res%verdict//'; '//trim(res%effects(res%leading)%name)// &
+               ' led by BIC on the fit tests alone, which every test fitted together does not bear out'
+         case (joint_held_fit)
+            res%verdict = res%verdict//'; '//held_fit_note(res)//', which every test fitted together '// &
+               'does not bear out'
+         case (joint_form_beats)
+            res%verdict = res%verdict//'; '//beaten_note(res)
+         end select
       else
          res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
       end if
    end subroutine joint_verdict
+
+   !> Why the prediction of a diagnosis could not decide (see joint_reason), as a clause
+   function why_note(res, why) result(text)
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: why
+      character(len=:), allocatable :: text
+      select case (why)
+      case (joint_bic_only)
+         associate (e => res%effects(res%leading))
+            text = 'on the fit tests alone '//trim(e%name)//' led by BIC '//real_str(e%dbic, 'f0.1')
+            if (fit_structured(res)) then
+               text = text//', removing '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their '// &
+                      'structured gap, with the held-out tests below their floor'
+            else
+               text = text//' with both sets'' structured gaps below their floors'
+            end if
+            text = text//', which the prediction cannot confirm'
+         end associate
+      case (joint_held_fit)
+         text = held_fit_note(res)
+      case (joint_form_beats)
+         text = beaten_note(res)
+      case (joint_loose)
+         text = 'the prediction of the held-out tests that named '//trim(res%effects(res%leading)%name)// &
+                ' rests on constants the fit tests leave at a search bound, so it tests those constants '// &
+                'as much as the effect'
+      case default
+         if (fit_effects_shown(res) .or. form_left_open(res)) then
+            text = 'fitted to the fit tests alone, the effects that explain them do not carry to the '// &
+                   'held-out tests, so their prediction cannot confirm it'
+         else
+            text = 'the fit tests alone show no structured gap that an effect explains, so their '// &
+                   'prediction cannot confirm it'
+         end if
+      end select
+   end function why_note
 
    !> What every test fitted together (jres) makes of a leader that carried only part of the
    !> held-out gap (see partial_carry), as a clause: the same effect closing every gap says
