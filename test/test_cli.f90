@@ -8,6 +8,7 @@ module test_cli
    use test_util, only: require_exe, read_text, scratch_dir
    use usharp_filesys, only: make_dir
    use usharp_kinds, only: dp
+   use usharp_strings, only: report_line_len
    implicit none
    private
    public :: collect_cli
@@ -168,7 +169,7 @@ contains
       use usharp_cmd_predict, only: predict_command
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=*), parameter :: dir = scratch_dir//'/predict-out'
       real(dp) :: rms, rel
       character(len=32) :: name
@@ -200,7 +201,7 @@ contains
       use usharp_error, only: stat_input
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       call predict_command('decks/thesis-run2.nml', scratch_dir//'/predict-none', '', summary, e)
       call check(error, allocated(e), 'an error')
       if (allocated(error)) return

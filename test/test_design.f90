@@ -15,6 +15,7 @@ module test_design
    use usharp_identify, only: identify_result, identify_at
    use usharp_design, only: design_result, design_run, design_report, test_information
    use test_util, only: write_text, check_message
+   use usharp_strings, only: report_line_len
    implicit none
    private
    public :: collect_design, synthetic_problem
@@ -133,7 +134,7 @@ contains
       type(uerror), allocatable :: e
       type(run_config) :: cfg
       type(design_result) :: res
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       integer :: j
       call read_config(write_text('design-comb.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B', 'C2', 'H1', 'H2', 'n' /", &

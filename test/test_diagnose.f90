@@ -28,10 +28,10 @@ module test_diagnose
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
    use usharp_diagnose_verdict, only: conclude, joint_verdict
-   use usharp_diagnose_refit, only: judge, ratio_beyond_doubt, rate_undetermined
+   use usharp_diagnose_refit, only: judge, rate_undetermined
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
-   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate
+   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal

@@ -12,7 +12,7 @@ module test_diagnose_data
    use usharp_regions, only: point_classes, inelastic_points, serration_of, serration_stat, &
                              kinematics_of, control_kinematics, class_loading, class_unloading, &
                              class_reversal, class_hold
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, report_line_len
    use usharp_rng, only: rng_type
    use usharp_optimiser, only: least_squares_type, optimum_type
    use usharp_levenberg, only: levenberg_marquardt
@@ -314,7 +314,7 @@ contains
       if (allocated(error)) return
       if (.not. (sr%effects(1)%name == 'drift' .and. sr%effects(1)%significant)) then
          block
-            character(len=200), allocatable :: lines(:)
+            character(len=report_line_len), allocatable :: lines(:)
             lines = specimen_report(sr)
             write (*, '(a)') (trim(lines(i)), i=1, size(lines))
          end block

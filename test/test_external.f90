@@ -5,7 +5,7 @@ module test_external
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
-   use usharp_strings, only: str
+   use usharp_strings, only: str, report_line_len
    use usharp_prvar, only: read_prvar
    use usharp_config, only: run_config
    use usharp_input, only: read_config
@@ -330,7 +330,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       type(run_config) :: cfg
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: fom, log, dir
       integer :: k, n
       call external_config('ext-fail', 'echo noise; echo 9.99 > FOM.TXT; echo bad > GUESS.TXT; '// &
@@ -362,7 +362,7 @@ contains
    subroutine test_standin_fit(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: exe, standin, nml, p_int, p_ext, ext
       real(dp), allocatable :: f_int(:), f_ext(:)
       integer :: k

@@ -10,7 +10,7 @@ module test_safety
                              file_exists, make_dir, hash_text, hash_hex
    use usharp_output, only: write_lines
    use usharp_cmd_run, only: run_command
-   use usharp_strings, only: str
+   use usharp_strings, only: str, report_line_len
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message, fit_deck
    implicit none
@@ -28,6 +28,7 @@ contains
          new_unittest('writer-reports-a-full-device', test_dev_full), &
          new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
          new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
+         new_unittest('specimen-reports-kept-without-force', test_specimen_kept), &
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
          new_unittest('user-files-and-fits-kept', test_strangers_kept), &
          new_unittest('output-folder-locked', test_lock), &
@@ -139,7 +140,7 @@ contains
    subroutine test_journal_kept(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir, journal
       type(cli_command) :: cmd
       input = deck('journal.nml', 'max_evals=12', '')
@@ -172,6 +173,34 @@ contains
       call check(error, e%stat, stat_usage, 'exit code 2')
    end subroutine test_journal_kept
 
+   !> A per-specimen diagnosis into a folder that holds a report of an earlier one is refused
+   !> before any work, the report kept, naming --force (as a run's journal is)
+   subroutine test_specimen_kept(error)
+      use usharp_cmd_diagnose, only: diagnose_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, mine, notes
+      input = fit_deck('specimen-kept.nml', '', [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', weighting='threshold', sig=14 /", &
+         "&test name='relax', history='relaxation', data_file='"//thesis//"relax.sim.txt', weighting='relaxation' /", &
+         "&diagnose specimen = 'lcf' /"])
+      dir = scratch_dir//'/specimen-kept-out'
+      call check(error, shell('rm -rf '//dir//'; mkdir -p '//dir//'/diagnose') == 0, 'clean folder')
+      if (allocated(error)) return
+      mine = write_text('specimen-kept-out/diagnose/specimen-lcf.md', [character(len=20) :: 'my notes'])
+      notes = read_text(mine)
+      call check(error, index(notes, 'my notes') == 1, 'the report to keep was not written: '//mine)
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', summary, e)
+      call check_message(error, e, 'specimen-lcf.md: holds the report of an earlier run; start again and '// &
+                         'overwrite it with --force')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'exit code 2')
+      if (allocated(error)) return
+      call check(error, read_text(mine) == notes, 'the report is untouched')
+   end subroutine test_specimen_kept
+
    !> A run into a folder that holds a summary.txt no run made (no journal) is refused, the
    !> file kept, unless --force; a prediction, a simulation or an identification into a fit's
    !> folder is refused, the fit's files kept
@@ -181,7 +210,7 @@ contains
       use usharp_cmd_identify, only: identify_command
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: input, dir, fit_summary, fit_curve
       input = deck('strangers.nml', 'max_evals=12', '')
@@ -227,7 +256,7 @@ contains
    subroutine test_inputs_kept(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir, best, data
       input = deck('kept.nml', 'max_evals=12', '')
       dir = scratch_dir//'/kept-out'
@@ -266,7 +295,7 @@ contains
    subroutine test_lock(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir
       integer :: fd
       input = deck('lock.nml', 'max_evals=6', '')
@@ -292,7 +321,7 @@ contains
    subroutine test_fingerprint(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir, data, hist
       character(len=4000) :: edited(1)
       integer :: stat
@@ -354,7 +383,7 @@ contains
    subroutine test_report_failed(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: exe, input, dir, ext
       exe = usharp_exe()
       if (len(exe) == 0) then
@@ -391,7 +420,7 @@ contains
    subroutine test_external_127(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir, script
       integer :: stat
       dir = scratch_dir//'/ext127-out'
@@ -420,7 +449,7 @@ contains
    subroutine test_external_term(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, dir, pid
       integer :: stat
       dir = scratch_dir//'/extterm-out'
@@ -471,7 +500,7 @@ contains
    subroutine test_resume_cost(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: input, full, part
       integer :: ntotal, nkept, nrep, nsim, stat, m
       input = deck('lmresume.nml', "method='lm', multistart=2, seed=3, identify=.false.", &
@@ -514,7 +543,7 @@ contains
    subroutine test_external_resume(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: exe, input, full, part, count, ext
       integer :: ntotal, nrep, nsim, nkept, m, stat, nruns
       exe = usharp_exe()

@@ -63,6 +63,14 @@ contains
       call check(error, v(3, 1), 2.0_dp, 'time of the quoted "Cycle, 2" row')
       if (allocated(error)) return
       call check(error, v(3, 2), -3.0_dp, 'stress picked by name')
+      if (allocated(error)) return
+      ! A filter value that no row holds (a typing error) is refused, not read as fewer rows
+      call read_columns(path, [character(len=32) :: 'elapsed time sec', 'Stress Mpa'], v, uerr, &
+                        'Label', [character(len=16) :: 'Cycle 1', 'Cycle 2'])
+      call check(error, allocated(uerr), 'a filter value no row holds was taken')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, "no row has 'Cycle 2' in column Label (it holds: Cycle 1, "// &
+                 "Cycle, 2, Cycle 3)") > 0, uerr%message)
    end subroutine test_csv
 
    !> A comment longer than the line buffer (its rest passed over, the next record read whole),

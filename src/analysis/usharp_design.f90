@@ -13,7 +13,7 @@ module usharp_design
    use usharp_kinds, only: dp
    use usharp_math, only: log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, prefix_error, stat_failure
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, report_line_len
    use usharp_model, only: constant_names
    use usharp_config, only: run_config
    use usharp_simulation, only: sim_result
@@ -321,33 +321,33 @@ contains
    !> The design as lines of text
    function design_report(res) result(lines)
       type(design_result), intent(in) :: res
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       integer :: j
-      lines = [character(len=200) :: 'test-matrix design at the known constants: stress noise sd '// &
+      lines = [character(len=report_line_len) :: 'test-matrix design at the known constants: stress noise sd '// &
          real_str(100.0_dp*res%noise, 'f0.2')//' % of each test''s peak, determined = predicted '// &
          '95 % interval within '//real_str(100.0_dp*res%ci_target, 'f0.1')//' %', &
          '  (information in log10 of the constants; prior sd '//real_str(res%prior_decades, 'f0.1')// &
          ' decades; '//str(res%nevals)//' simulated points; predicted 95 % half-widths in %)', '']
-      lines = [character(len=200) :: lines, '  current tests: '//test_list(res, res%current%tests)]
-      lines = [character(len=200) :: lines, header(res, 'gain'), &
+      lines = [character(len=report_line_len) :: lines, '  current tests: '//test_list(res, res%current%tests)]
+      lines = [character(len=report_line_len) :: lines, header(res, 'gain'), &
          row(res, res%current, 0.0_dp, 'current')]
-      lines = [character(len=200) :: lines, '', '  each candidate added to the current tests, '// &
+      lines = [character(len=report_line_len) :: lines, '', '  each candidate added to the current tests, '// &
          'ranked by constants determined, then the widest interval, then the gain in ln det:', &
          header(res, 'gain')]
       do j = 1, size(res%single)
-         lines = [character(len=200) :: lines, row(res, res%single(j), &
+         lines = [character(len=report_line_len) :: lines, row(res, res%single(j), &
             res%single(j)%logdet - res%current%logdet, &
             test_list(res, res%single(j)%tests(size(res%single(j)%tests):)))]
       end do
-      lines = [character(len=200) :: lines, '', '  best test matrices of up to '// &
+      lines = [character(len=report_line_len) :: lines, '', '  best test matrices of up to '// &
          str(res%max_tests)//' tests ('//str(res%ncombinations)//' combinations; ranked by '// &
          'constants determined, then the widest interval):', header(res, 'ln det')]
       do j = 1, size(res%best)
-         lines = [character(len=200) :: lines, row(res, res%best(j), res%best(j)%logdet, &
+         lines = [character(len=report_line_len) :: lines, row(res, res%best(j), res%best(j)%logdet, &
             test_list(res, res%best(j)%tests))]
       end do
       if (size(res%best) > 0) then
-         lines = [character(len=200) :: lines, '', '  recommended: '// &
+         lines = [character(len=report_line_len) :: lines, '', '  recommended: '// &
             test_list(res, res%best(1)%tests)//': '//determined_words(res, res%best(1))]
       end if
    end function design_report

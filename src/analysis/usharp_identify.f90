@@ -6,7 +6,7 @@ module usharp_identify
    use usharp_kinds, only: dp
    use usharp_math, only: log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, report_line_len
    use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, eval_ok, message_len
    use usharp_lapack, only: svd, mat_mul
@@ -39,7 +39,7 @@ module usharp_identify
       logical, allocatable :: at_bound(:), determined(:)
       !> determined, but its 95 % interval spans more than loose_decades (a factor of 10)
       logical, allocatable :: loose(:)
-      character(len=200), allocatable :: words(:)
+      character(len=report_line_len), allocatable :: words(:)
       real(dp) :: s2 = 0.0_dp, ssr = 0.0_dp
       integer :: m = 0, nevals = 0
    end type identify_result
@@ -198,7 +198,7 @@ contains
       do j = 1, n
          if (tied(j) == 0) cycle
          res%determined(j) = .false.
-         res%words = [character(len=200) :: res%words, trim(res%names(j))//' is tied to '// &
+         res%words = [character(len=report_line_len) :: res%words, trim(res%names(j))//' is tied to '// &
             trim(res%names(tied(j)))//' (correlation '//real_str(res%corr(j, tied(j)), 'f5.2')// &
             '): not determined on its own']
       end do
@@ -213,7 +213,7 @@ contains
       n = size(res%c)
       allocate (res%words(0))
       do j = 1, n
-         if (res%at_bound(j)) res%words = [character(len=200) :: res%words, &
+         if (res%at_bound(j)) res%words = [character(len=report_line_len) :: res%words, &
             trim(res%names(j))//' sits at a bound of the search ('//real_str(res%c(j), 'es10.3')// &
             '): not determined within the bounds']
       end do
@@ -248,7 +248,7 @@ contains
             end do
             line = line//' are determined, not each'
          end if
-         res%words = [character(len=200) :: res%words, line//' (singular value '// &
+         res%words = [character(len=report_line_len) :: res%words, line//' (singular value '// &
             real_str(res%sv(i)/res%sv(1), 'es8.1')//' of the largest)']
       end do
       allocate (res%loose(n))
@@ -257,29 +257,29 @@ contains
          if (.not. res%determined(j)) cycle
          if (.not. (res%lo95(j) > 0.0_dp .and. res%hi95(j) > 0.0_dp)) cycle
          res%loose(j) = log10_dp(res%hi95(j)/res%lo95(j)) > loose_decades
-         if (res%loose(j)) res%words = [character(len=200) :: res%words, trim(res%names(j))// &
+         if (res%loose(j)) res%words = [character(len=report_line_len) :: res%words, trim(res%names(j))// &
             ': its 95 % interval spans '//real_str(log10_dp(res%hi95(j)/res%lo95(j)), 'f0.1')// &
             ' decades; these tests bound it only loosely']
       end do
-      if (size(res%words) == 0 .and. all(res%determined)) res%words = [character(len=200) :: &
+      if (size(res%words) == 0 .and. all(res%determined)) res%words = [character(len=report_line_len) :: &
          'every fitted constant is determined by these tests']
    end subroutine describe
 
    !> The report as lines of text
    function identify_report(res) result(lines)
       type(identify_result), intent(in) :: res
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       character(len=:), allocatable :: line
       integer :: i, j, n
       n = size(res%c)
-      lines = [character(len=200) :: 'identifiability at the optimum ('//str(res%m)// &
+      lines = [character(len=report_line_len) :: 'identifiability at the optimum ('//str(res%m)// &
          ' residuals, '//str(n)//' constants, s^2 = SSR/(m-p) = '//real_str(res%s2, 'es10.3')//')', &
          '  singular values of the scaled Jacobian (d residual / d log10 constant), relative:']
       line = '   '
       do i = 1, n
          line = line//' '//real_str(res%sv(i)/res%sv(1), 'es9.2')
       end do
-      lines = [character(len=200) :: lines, line, &
+      lines = [character(len=report_line_len) :: lines, line, &
          '  constant      value       95 % interval (sandwich)    simultaneous 95 % ('// &
          str(res%rank)//' directions)   status']
       do j = 1, n
@@ -302,18 +302,18 @@ contains
          else
             line = line//'not determined'
          end if
-         lines = [character(len=200) :: lines, line]
+         lines = [character(len=report_line_len) :: lines, line]
       end do
-      lines = [character(len=200) :: lines, '  correlations:']
+      lines = [character(len=report_line_len) :: lines, '  correlations:']
       do i = 1, n
          line = '    '//res%names(i)
          do j = 1, n
             line = line//' '//real_str(res%corr(i, j), 'f6.2')
          end do
-         lines = [character(len=200) :: lines, line]
+         lines = [character(len=report_line_len) :: lines, line]
       end do
       do i = 1, size(res%words)
-         lines = [character(len=200) :: lines, '  - '//trim(res%words(i))]
+         lines = [character(len=report_line_len) :: lines, '  - '//trim(res%words(i))]
       end do
    end function identify_report
 

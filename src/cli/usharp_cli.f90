@@ -15,6 +15,7 @@ module usharp_cli
    use usharp_cmd_design, only: design_command
    use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
    use usharp_mpi, only: is_root
+   use usharp_strings, only: report_line_len
    implicit none
    private
 
@@ -38,7 +39,7 @@ contains
       !> called with (what it does, simulations, seconds) during a diagnosis
       procedure(diagnose_progress), optional :: stage
       character(len=4096), allocatable :: written(:)
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       integer :: k
 
       ! Under MPI, commands that spread no work over ranks run on rank 0 alone

@@ -8,6 +8,7 @@ module usharp_cmd_design
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
    use usharp_mpi, only: is_root
+   use usharp_strings, only: report_line_len
    implicit none
    private
 
@@ -19,7 +20,7 @@ contains
    !> <out_dir>/design.journal (mode: see run_tasks)
    subroutine design_command(path, out_dir, constants_file, lines, error, mode)
       character(len=*), intent(in) :: path, out_dir, constants_file, mode
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(design_result) :: res

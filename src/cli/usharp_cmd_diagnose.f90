@@ -9,10 +9,11 @@ module usharp_cmd_diagnose
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
-   use usharp_error, only: fatal_error, stat_input
-   use usharp_filesys, only: make_dir, join_path
+   use usharp_error, only: fatal_error, stat_input, stat_usage
+   use usharp_filesys, only: make_dir, join_path, file_exists
    use usharp_output, only: write_lines
    use usharp_mpi, only: is_root, parallel_sync, n_ranks
+   use usharp_strings, only: report_line_len
    implicit none
    private
 
@@ -27,7 +28,7 @@ contains
    !> by a signal continues with --resume; the per-specimen mode runs whole.
    subroutine diagnose_command(path, out_dir, constants_file, lines, error, progress, mode)
       character(len=*), intent(in) :: path, out_dir, constants_file
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       procedure(diagnose_progress), optional :: progress
       character(len=*), intent(in), optional :: mode
@@ -43,7 +44,9 @@ contains
       if (allocated(error)) return
       if (len_trim(cfg%diagnose%specimen) > 0) then
          ! (on rank 0 alone under MPI)
-         if (is_root()) call specimen_command(cfg, opts, lines, error)
+         journal_mode = 'start'
+         if (present(mode)) journal_mode = mode
+         if (is_root()) call specimen_command(cfg, opts, lines, error, journal_mode == 'force')
          return
       end if
       ! Under MPI every rank runs the diagnosis, the starts of its global stages spread over
@@ -68,13 +71,16 @@ contains
 
    !> Per-specimen mode: each named specimen (or every test) against its replicates;
    !> <out_dir>/diagnose/specimen-<name>.md
-   subroutine specimen_command(cfg, opts, lines, error)
+   subroutine specimen_command(cfg, opts, lines, error, force)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
+      !> overwrite the reports of an earlier run (--force)
+      logical, intent(in) :: force
       type(specimen_result) :: sr
-      character(len=200), allocatable :: part(:)
+      character(len=report_line_len), allocatable :: part(:)
+      character(len=:), allocatable :: report
       integer, allocatable :: which(:)
       integer :: i
       if (trim(cfg%diagnose%specimen) == 'all') then
@@ -89,6 +95,15 @@ contains
       end if
       call make_dir(join_path(cfg%out_dir, 'diagnose'), error)
       if (allocated(error)) return
+      ! An earlier run's reports are not overwritten unasked (before any work is done)
+      do i = 1, size(which)
+         report = join_path(join_path(cfg%out_dir, 'diagnose'), 'specimen-'//trim(cfg%tests(which(i))%name)//'.md')
+         if (.not. force .and. file_exists(report)) then
+            call fatal_error(error, report//': holds the report of an earlier run; start again and '// &
+               'overwrite it with --force', stat_usage)
+            return
+         end if
+      end do
       allocate (lines(0))
       do i = 1, size(which)
          call specimen_run(cfg, which(i), opts, .true., sr, error)
@@ -97,7 +112,7 @@ contains
          call write_lines(join_path(join_path(cfg%out_dir, 'diagnose'), 'specimen-'// &
                           trim(sr%name)//'.md'), part, error)
          if (allocated(error)) return
-         lines = [character(len=200) :: lines, part, '']
+         lines = [character(len=report_line_len) :: lines, part, '']
       end do
    end subroutine specimen_command
 
@@ -105,7 +120,7 @@ contains
    !> repetitions are kept in <out_dir>/selfcheck.journal (mode: see run_tasks)
    subroutine selfcheck_command(path, out_dir, lines, error, mode)
       character(len=*), intent(in) :: path, out_dir, mode
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(diagnose_options) :: opts

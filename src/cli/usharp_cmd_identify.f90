@@ -9,6 +9,7 @@ module usharp_cmd_identify
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
+   use usharp_strings, only: report_line_len
    implicit none
    private
 
@@ -18,7 +19,7 @@ contains
 
    subroutine identify_command(path, out_dir, constants_file, lines, error)
       character(len=*), intent(in) :: path, out_dir, constants_file
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(fit_problem) :: prob

@@ -3,7 +3,7 @@
 module usharp_cmd_predict
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: real_str, pad
+   use usharp_strings, only: real_str, pad, report_line_len
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, check_not_a_fit
    use usharp_objective, only: fit_problem, setup_problem, simulated
@@ -24,13 +24,13 @@ contains
    !> into out_dir (&output out_dir when empty); summary returns the table.
    subroutine predict_command(path, out_dir, constants_file, summary, error)
       character(len=*), intent(in) :: path, out_dir, constants_file
-      character(len=200), allocatable, intent(out) :: summary(:)
+      character(len=report_line_len), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(sim_result), allocatable :: res(:)
       real(dp) :: rms, rel, worst
-      character(len=200) :: row
+      character(len=report_line_len) :: row
       character(len=:), allocatable :: name
       integer :: w
       real(dp), allocatable :: y(:)
@@ -64,7 +64,7 @@ contains
       do i = 1, size(cfg%tests)
          w = max(w, len(cfg%tests(i)%name) + 6)
       end do
-      summary = [character(len=200) :: 'usharp predict '//path//' with the constants of '// &
+      summary = [character(len=report_line_len) :: 'usharp predict '//path//' with the constants of '// &
          constants_file, '  '//pad('test', w)//'   RMS error    RMS/peak   max error']
       do i = 1, size(cfg%tests)
          y = simulated(cfg%tests(i), res(i))
@@ -78,10 +78,10 @@ contains
             name = cfg%tests(i)%name
             if (part == 1) name = cfg%tests(i)%name//' peaks'
             write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
-            summary = [character(len=200) :: summary, '  '//pad(name, w)//trim(row)]
+            summary = [character(len=report_line_len) :: summary, '  '//pad(name, w)//trim(row)]
          end do
       end do
-      summary = [character(len=200) :: summary, '  (errors in '//cfg%units// &
+      summary = [character(len=report_line_len) :: summary, '  (errors in '//cfg%units// &
          ', strain for stress-controlled tests; peak: the largest |value| of the data)', &
          '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
       if (any([(cfg%tests(i)%has_peaks(), i=1, size(cfg%tests))])) summary(size(summary)) = &

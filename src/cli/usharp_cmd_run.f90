@@ -3,7 +3,7 @@
 module usharp_cmd_run
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
-   use usharp_strings, only: str, real_str, pad, shell_quote, join
+   use usharp_strings, only: str, real_str, pad, shell_quote, join, report_line_len
    use usharp_model, only: model_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
@@ -41,7 +41,7 @@ contains
                           auto_resume)
       character(len=*), intent(in) :: path, out_dir, constants_file
       logical, intent(in) :: resume
-      character(len=200), allocatable, intent(out) :: summary(:)
+      character(len=report_line_len), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
       procedure(progress_interface), optional :: progress
       logical, intent(in), optional :: force
@@ -68,7 +68,7 @@ contains
          class(model_type), allocatable :: best
          type(identify_result) :: ident
          type(error_type), allocatable :: report_error
-         character(len=200), allocatable :: report(:)
+         character(len=report_line_len), allocatable :: report(:)
          character(len=:), allocatable :: dir
          real(dp), allocatable :: start(:), dvals(:)
          character(len=:), allocatable :: dnames(:)
@@ -126,7 +126,7 @@ contains
          call write_curves(prob, best, dir, error)
          if (allocated(error)) return
 
-         summary = [character(len=200) :: &
+         summary = [character(len=report_line_len) :: &
             'usharp run '//path//': '//out%opt%reason, &
             '  objective ('//trim(cfg%fit%objective)//'): start '//real_str(out%f_start, 'es12.5')// &
             ', best '//real_str(out%opt%f, 'es12.5'), &
@@ -134,39 +134,39 @@ contains
             str(out%nsimulated)//' simulated), iterations '// &
             str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
             real_str(out%seconds, 'f10.2')//' s']
-         if (size(out%helped) > 1) summary = [character(len=200) :: summary, &
+         if (size(out%helped) > 1) summary = [character(len=report_line_len) :: summary, &
             '  ranks '//str(size(out%helped))//'; simulated for another rank''s search: '// &
             join(out%helped, ', ')]
          do i = 1, size(cfg%tests)
-            summary = [character(len=200) :: summary, '  test '//cfg%tests(i)%name//': '// &
+            summary = [character(len=report_line_len) :: summary, '  test '//cfg%tests(i)%name//': '// &
                real_str(out%per_test(i), 'es12.5')//merged_note(prob%targets(i)%exp%nmerged)]
          end do
-         summary = [character(len=200) :: summary, '  constant        start          fitted']
+         summary = [character(len=report_line_len) :: summary, '  constant        start          fitted']
          do j = 1, size(start)
-            summary = [character(len=200) :: summary, '  '//pad(cfg%model%constant_name(j), w)//'  '// &
+            summary = [character(len=report_line_len) :: summary, '  '//pad(cfg%model%constant_name(j), w)//'  '// &
                real_str(start(j), 'es14.6')//'  '//real_str(best%get_constant(j), 'es14.6')// &
                merge('         ', '  (fixed)', cfg%fit%fitted(j))]
          end do
          call best%derived_values(dnames, dvals)
          do j = 1, size(dvals)
-            summary = [character(len=200) :: summary, '  '//trim(dnames(j))//' = '// &
+            summary = [character(len=report_line_len) :: summary, '  '//trim(dnames(j))//' = '// &
                real_str(dvals(j), 'g0.6')//' '//cfg%units]
          end do
-         summary = [character(len=200) :: summary, '  wrote '//join_path(dir, 'best.nml')// &
+         summary = [character(len=report_line_len) :: summary, '  wrote '//join_path(dir, 'best.nml')// &
             ', GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, '// &
             '<test>.fit.txt']
          if (cfg%fit%identify) then
             if (.not. spread) call identify_at(prob, out%constants, cfg%fit%fd_step, ident, report_error)
             if (allocated(report_error)) then
                ! The fit stands: its results are written; the report's failure is a warning
-               report = [character(len=200) :: 'warning: the identifiability report failed: '// &
+               report = [character(len=report_line_len) :: 'warning: the identifiability report failed: '// &
                          report_error%message]
             else
                report = identify_report(ident)
             end if
             call write_lines(join_path(dir, 'identify.txt'), report, error)
             if (allocated(error)) return
-            summary = [character(len=200) :: summary, report]
+            summary = [character(len=report_line_len) :: summary, report]
          end if
          call write_lines(join_path(dir, 'summary.txt'), summary, error)
          if (allocated(error)) return
@@ -207,19 +207,19 @@ contains
       character(len=*), intent(in) :: units
       type(fit_outcome), intent(in) :: out
       type(error_type), allocatable, intent(out) :: error
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       integer :: j
-      lines = [character(len=200) :: &
+      lines = [character(len=report_line_len) :: &
          '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
          real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
          '! simulate with it: usharp simulate '//shell_word(path)//' --constants '//shell_word(file), &
          ! The model and unit the constants are for: -c checks them against the deck's
          "&model name = '"//best%name()//"', units = '"//units//"' /", '&constants']
       do j = 1, best%n_constants()
-         lines = [character(len=200) :: lines, '  '//lower_name(best%constant_name(j))//' = '// &
+         lines = [character(len=report_line_len) :: lines, '  '//lower_name(best%constant_name(j))//' = '// &
             real_str(best%get_constant(j), 'es23.15e3')]
       end do
-      lines = [character(len=200) :: lines, '/']
+      lines = [character(len=report_line_len) :: lines, '/']
       call write_lines(file, lines, error)
    contains
       !> A path as one word of a shell command line: quoted when it holds more than letters,

@@ -3,6 +3,7 @@
 !> from several starts, Latin-hypercube starts of the constants, and which of an effect's
 !> parameters are free
 module usharp_diagnose_numerics
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_math, only: exp_dp, log_dp, log10_dp, pow10_dp
    use usharp_model, only: model_type
@@ -28,7 +29,7 @@ module usharp_diagnose_numerics
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
-   public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate
+   public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate, ratio_beyond_doubt
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -333,6 +334,17 @@ contains
       end do
       share = abs(a)*(1.0_dp - exp_dp(-b*p_end))
    end function softening_reached
+
+   !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the
+   !> end of the value's 95 % interval nearest zero where the interval is finite and of one
+   !> sign, else (a value the data leave undetermined) the fitted ratio itself
+   pure real(dp) function ratio_beyond_doubt(ratio, p, p_lo, p_hi) result(r)
+      real(dp), intent(in) :: ratio        !< |p|/limit
+      real(dp), intent(in) :: p, p_lo, p_hi  !< fitted value and its interval
+      r = ratio
+      if (p_lo*p_hi > 0.0_dp .and. ieee_is_finite(p_lo) .and. ieee_is_finite(p_hi)) &
+         r = ratio*min(abs(p_lo), abs(p_hi))/abs(p)
+   end function ratio_beyond_doubt
 
    !> The parameter of a global effect that screening holds at its start (no gradient at
    !> zero: the second back stress's gamma3, the softening's b), when it is the last of its

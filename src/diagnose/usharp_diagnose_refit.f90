@@ -12,7 +12,7 @@ module usharp_diagnose_refit
    use usharp_model, only: model_type
    use usharp_objective, only: fit_problem
    use usharp_effects, only: param_per_test
-   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_effect_problem, only: effect_problem, new_effect_problem, failed_objective
    use usharp_optimiser, only: optimum_type
    use usharp_identify, only: robust_covariance
    use usharp_diagnose_options, only: bic_margin
@@ -21,14 +21,13 @@ module usharp_diagnose_refit
                                     delay_precision
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, softening_reached, &
-                                       block_sums, deviance_change, held_rate
+                                       block_sums, deviance_change, held_rate, ratio_beyond_doubt
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
    private
 
-   public :: refit, refit_candidates, refit_global, refit_deciding, judge, ratio_beyond_doubt, &
-             rate_undetermined
+   public :: refit, refit_candidates, refit_global, refit_deciding, judge, rate_undetermined
 
 contains
 
@@ -307,7 +306,9 @@ contains
          if (allocated(error)) return
          e%nstarts = e%nstarts + size(fs)
          e%f_lo = min(e%f_lo, opt%f)
-         e%f_hi = max(e%f_hi, maxval(fs, fs < huge(1.0_dp)), opt%f)
+         ! A start whose simulation failed has no objective to show
+         e%f_hi = max(e%f_hi, maxval(fs, fs < failed_objective), opt%f)
+         e%nstarts_failed = e%nstarts_failed + count(fs >= failed_objective)
          moved = opt%f < (1.0_dp - 1.0e-6_dp)*e%f_after
       else
          call lm_unit(ctx%journal, ep, e%x, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, opt, &
@@ -372,6 +373,10 @@ contains
       e%c = [(mdl%get_constant(ctx%prob%idx(j)), j=1, nc)]
       pscale = pack(ep%pscale, ep%pfree)
       e%p = pack(p, ep%pfree)
+      ! At the search box's outer ends (1000 times the parameter's unit), not at zero, the
+      ! physical bound of a parameter that cannot be negative
+      e%p_bound = x(nc + 1:) >= hi(nc + 1:) - 1.0e-6_dp*(hi(nc + 1:) - lo(nc + 1:)) .or. &
+                  (lo(nc + 1:) < 0.0_dp .and. x(nc + 1:) <= lo(nc + 1:) + 1.0e-6_dp*(hi(nc + 1:) - lo(nc + 1:)))
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
       call name_params(ctx, res, ep, e)
@@ -474,17 +479,6 @@ contains
          sure = max(sure, least)
       end subroutine worse_of
    end subroutine judge_magnitude
-
-   !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the
-   !> end of the value's 95 % interval nearest zero where the interval is finite and of one
-   !> sign, else (a value the data leave undetermined) the fitted ratio itself
-   pure real(dp) function ratio_beyond_doubt(ratio, p, p_lo, p_hi) result(r)
-      real(dp), intent(in) :: ratio        !< |p|/limit
-      real(dp), intent(in) :: p, p_lo, p_hi  !< fitted value and its interval
-      r = ratio
-      if (p_lo*p_hi > 0.0_dp .and. ieee_is_finite(p_lo) .and. ieee_is_finite(p_hi)) &
-         r = ratio*min(abs(p_lo), abs(p_hi))/abs(p)
-   end function ratio_beyond_doubt
 
    !> Held-out tests: constants and global parameters carried over; per-test parameters of
    !> a held-out test fitted to it with the constants fixed (p updated)

@@ -3,7 +3,7 @@
 module usharp_diagnose_report
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_strings, only: str, real_str, gnuplot_string, csv_field
+   use usharp_strings, only: str, real_str, gnuplot_string, csv_field, report_line_len, add_line
    use usharp_process, only: run_process, process_result, proc_exited
    use usharp_regions, only: class_names
    use usharp_filesys, only: join_path, make_dir
@@ -26,113 +26,113 @@ contains
    function diagnose_report(res, opts) result(lines)
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       allocate (lines(0))
-      call add(lines, '# usharp diagnose')
-      call add(lines, '')
-      call add(lines, '**Verdict:** '//res%verdict)
-      call add(lines, '')
+      call add_line(lines, '# usharp diagnose')
+      call add_line(lines, '')
+      call add_line(lines, '**Verdict:** '//res%verdict)
+      call add_line(lines, '')
       call where_section(lines, res)
       call which_section(lines, res, opts)
       call shrink_section(lines, res, opts)
       call separate_section(lines, res)
       if (allocated(res%joint)) call joint_section(lines, res, opts)
-      call add(lines, '')
-      call add(lines, str(res%nevals)//' simulations of the test set.')
+      call add_line(lines, '')
+      call add_line(lines, str(res%nevals)//' simulations of the test set.')
       call steps_list(lines, res)
    end function diagnose_report
 
    !> The simulations of each step that ran any, one line each
    subroutine steps_list(lines, res)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       integer :: j
       if (.not. allocated(res%steps)) return
       if (.not. any(res%steps%nevals > 0)) return
-      call add(lines, '')
-      call add(lines, 'Simulations by step:')
-      call add(lines, '')
+      call add_line(lines, '')
+      call add_line(lines, 'Simulations by step:')
+      call add_line(lines, '')
       do j = 1, size(res%steps)
-         if (res%steps(j)%nevals > 0) call add(lines, '- '//trim(res%steps(j)%name)//': '//str(res%steps(j)%nevals))
+         if (res%steps(j)%nevals > 0) call add_line(lines, '- '//trim(res%steps(j)%name)//': '//str(res%steps(j)%nevals))
       end do
    end subroutine steps_list
 
    !> The log of a diagnosis: each step's simulations, elapsed and processor time (s)
    function diagnose_log(res) result(lines)
       type(diagnose_result), intent(in) :: res
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       integer :: j
       allocate (lines(0))
-      call add(lines, 'step,simulations,wall_s,cpu_s')
+      call add_line(lines, 'step,simulations,wall_s,cpu_s')
       if (.not. allocated(res%steps)) return
       do j = 1, size(res%steps)
          associate (st => res%steps(j))
-            call add(lines, csv_field(trim(st%name))//','//str(st%nevals)//','//real_str(st%wall, 'f0.2')//','// &
+            call add_line(lines, csv_field(trim(st%name))//','//str(st%nevals)//','//real_str(st%wall, 'f0.2')//','// &
                      real_str(st%cpu, 'f0.2'))
          end associate
       end do
-      call add(lines, 'total,'//str(sum(res%steps%nevals))//','//real_str(sum(res%steps%wall), 'f0.2')//','// &
+      call add_line(lines, 'total,'//str(sum(res%steps%nevals))//','//real_str(sum(res%steps%wall), 'f0.2')//','// &
                real_str(sum(res%steps%cpu), 'f0.2'))
    end function diagnose_log
 
    !> Section 1: the baseline per test, the floors, the regions ranked by structured gap
    subroutine where_section(lines, res)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       integer, allocatable :: order(:)
       integer :: i, k
-      call add(lines, '## 1. Where the gap lies')
-      call add(lines, '')
-      call add(lines, 'Baseline: the model without any effect fitted to the fit tests (objective '// &
+      call add_line(lines, '## 1. Where the gap lies')
+      call add_line(lines, '')
+      call add_line(lines, 'Baseline: the model without any effect fitted to the fit tests (objective '// &
                real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals, best of '//str(res%baseline_starts)// &
                ' start'//trim(merge('s', ' ', res%baseline_starts > 1))//'); held-out tests predicted.')
       if (allocated(res%c_bound)) then
-         if (any(res%c_bound)) call add(lines, '**Flag:** the baseline fit ran away: '// &
+         if (any(res%c_bound)) call add_line(lines, '**Flag:** the baseline fit ran away: '// &
             bound_list(res%cnames, res%c, res%c_bound)//' at a search bound of &fit (lower, upper); '// &
             'its figures describe a fit that did not converge inside the bounds.')
       end if
-      call add(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
-      call add(lines, 'explains is set against the residual. Structured gap = objective - noise part.')
-      call add(lines, '')
-      call add(lines, '| test | role | response | noise sd | % of peak | objective | noise part | structured gap |')
-      call add(lines, '|---|---|---|---|---|---|---|---|')
+      call add_line(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
+      call add_line(lines, 'explains is set against the residual. Structured gap = objective - noise part.')
+      call add_line(lines, '')
+      call add_line(lines, '| test | role | response | noise sd | % of peak | objective | noise part | structured gap |')
+      call add_line(lines, '|---|---|---|---|---|---|---|---|')
       do i = 1, size(res%names)
-         call add(lines, '| '//trim(res%names(i))//' | '//trim(merge('held out', 'fit     ', res%held(i)))// &
+         call add_line(lines, '| '//trim(res%names(i))//' | '//trim(merge('held out', 'fit     ', res%held(i)))// &
             ' | '//trim(res%unit(i))//' | '//real_str(res%noise(i), 'es10.3')//' | '// &
             real_str(100.0_dp*res%noise(i)/res%peak(i), 'f0.2')//' | '// &
             real_str(res%per_test0(i), 'es10.3')//' | '//real_str(region_noise(res, i), 'es10.3')//' | '// &
             real_str(max(res%per_test0(i) - region_noise(res, i), 0.0_dp), 'es10.3')//' |')
       end do
-      call add(lines, '')
-      call add(lines, 'A set of tests has a structured gap only above '//str(nint(gap_z))// &
+      call add_line(lines, '')
+      call add_line(lines, 'A set of tests has a structured gap only above '//str(nint(gap_z))// &
                ' standard errors of the gap noise alone leaves (the scatter of the noise')
-      call add(lines, 'estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &
+      call add_line(lines, 'estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &
                real_str(res%floor_fit, 'es10.3')//', held-out tests '//real_str(res%gap_held, 'es10.3')// &
                ' against '//real_str(res%floor_held, 'es10.3')//'.')
-      if (any(res%held)) call add(lines, 'The held-out tests'' noise part includes '// &
+      if (any(res%held)) call add_line(lines, 'The held-out tests'' noise part includes '// &
          real_str(res%pred_held, 'es10.3')//' that the fitted constants'' own uncertainty explains (their '// &
          'covariance from the fit tests'' noise), and their floor its scatter.')
-      call add(lines, '')
-      call add(lines, 'Regions ranked by structured gap (share: of the objective of the test set the region')
-      call add(lines, 'belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')
-      call add(lines, '')
-      call add(lines, '| rank | test | region | points | share % | RMS | bias | runs z | residual/noise | |')
-      call add(lines, '|---|---|---|---|---|---|---|---|---|---|')
+      call add_line(lines, '')
+      call add_line(lines, 'Regions ranked by structured gap (share: of the objective of the test set the region')
+      call add_line(lines, 'belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')
+      call add_line(lines, '')
+      call add_line(lines, '| rank | test | region | points | share % | RMS | bias | runs z | residual/noise | |')
+      call add_line(lines, '|---|---|---|---|---|---|---|---|---|---|')
       order = top_regions(res%regions, 15)
       do k = 1, size(order)
          i = order(k)
-         call add(lines, '| '//str(k)//' | '//trim(res%regions(i)%test)//' | '//trim(res%regions(i)%label)// &
+         call add_line(lines, '| '//str(k)//' | '//trim(res%regions(i)%test)//' | '//trim(res%regions(i)%label)// &
             ' | '//str(res%regions(i)%n)//' | '//real_str(100.0_dp*res%regions(i)%ssr/set_total(res, i), 'f0.1')// &
             ' | '//real_str(res%regions(i)%rms, 'es9.2')//' | '//real_str(res%regions(i)%bias, 'es9.2')// &
             ' | '//real_str(res%regions(i)%z, 'f0.1')//' | '//real_str(res%regions(i)%ratio, 'f0.2')//' | '// &
             trim(merge('structured', 'noise     ', res%regions(i)%structured))//' |')
       end do
-      call add(lines, '')
+      call add_line(lines, '')
    end subroutine where_section
 
    !> Section 2: screening and refits
    subroutine which_section(lines, res, opts, heading)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
       character(len=*), intent(in), optional :: heading  !< instead of section 2's
@@ -140,51 +140,51 @@ contains
       type(effect_info) :: cat(n_effects)
       cat = effect_catalogue(1.0_dp)
       if (present(heading)) then
-         call add(lines, heading)
+         call add_line(lines, heading)
       else
-         call add(lines, '## 2. Which unmodelled effect causes it')
+         call add_line(lines, '## 2. Which unmodelled effect explains it')
       end if
-      call add(lines, '')
-      call add(lines, 'Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
-      call add(lines, 'step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
-      call add(lines, 'Power: of the significance rule (dBIC < -'//real_str(bic_margin, 'f0.0')//') against the '// &
+      call add_line(lines, '')
+      call add_line(lines, 'Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
+      call add_line(lines, 'step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
+      call add_line(lines, 'Power: of the significance rule (dBIC < -'//real_str(bic_margin, 'f0.0')//') against the '// &
          'effect at the low end of its realistic range on the fit tests, from the expected chi-square of '// &
          'its signal there beyond what the constants take up, at the baseline''s residual (linear in the '// &
          'effect; a per-test effect at that magnitude in every fit test; of two parameters the weaker).')
-      call add(lines, '')
-      call add(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC | '// &
+      call add_line(lines, '')
+      call add_line(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC | '// &
          'low end | chi-square there | power |')
-      call add(lines, '|---|---|---|---|---|---|---|---|---|')
+      call add_line(lines, '|---|---|---|---|---|---|---|---|---|')
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
-            call add(lines, '| '//str(j)//' | '//trim(e%name)//' | '//str(e%q)//' | '// &
+            call add_line(lines, '| '//str(j)//' | '//trim(e%name)//' | '//str(e%q)//' | '// &
                real_str(e%pred_drop, 'es10.3')//' | '//real_str(100.0_dp*e%pred_drop/res%f0, 'f0.1')// &
                ' | '//real_str(e%pred_dbic, 'f0.1')//' | '//trim(cat(e%k)%low_what)//' | '// &
                power_cells(e%lambda_low, e%power_low)//' |')
          end associate
       end do
-      call add(lines, '')
-      call add(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
+      call add_line(lines, '')
+      call add_line(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
                'effect''s parameters; dAIC, dBIC < 0: better; significant: dBIC < -'// &
                real_str(bic_margin, 'f0.0')//'; those that lower BIC ran again from the baseline''s '// &
                'constants, the best other refit''s and Latin-hypercube points, the lowest end kept):')
-      if (count(res%effects%refitted) > opts%n_refit) call add(lines, '(beyond the leading '// &
+      if (count(res%effects%refitted) > opts%n_refit) call add_line(lines, '(beyond the leading '// &
          str(opts%n_refit)//': those the screening could not tell from them (predicted BIC within 10 % of the last, '// &
          'or a predicted fall at least '//str(nint(100.0_dp*rival_share))//' % of the largest); the lower-ranked '// &
          'where none of the leading was confirmed or took the fit tests'' structured gap to its floor, '// &
          'or where only the held-out tests had one; '// &
          'those simpler than a leader with parameters per test that the screening found significant)')
-      if (res%global) call add(lines, '(no significant local refit brought the fit tests'' structured gap '// &
+      if (res%global) call add_line(lines, '(no significant local refit brought the fit tests'' structured gap '// &
          'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
          str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them '// &
          real_str(res%f0_global, 'es10.3')//', the lower of the two is the reference of dAIC, dBIC)')
-      call add(lines, '')
-      call add(lines, '| effect | objective before | after | dAIC | dBIC | gap removed, fit % | held-out % | verdict |')
-      call add(lines, '|---|---|---|---|---|---|---|---|')
+      call add_line(lines, '')
+      call add_line(lines, '| effect | objective before | after | dAIC | dBIC | gap removed, fit % | held-out % | verdict |')
+      call add_line(lines, '|---|---|---|---|---|---|---|---|')
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
             if (.not. e%refitted) cycle
-            call add(lines, '| '//trim(e%name)//' | '//real_str(res%f0, 'es10.3')//' | '// &
+            call add_line(lines, '| '//trim(e%name)//' | '//real_str(res%f0, 'es10.3')//' | '// &
                real_str(e%f_after, 'es10.3')//' | '//real_str(e%daic, 'f0.1')//' | '// &
                real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' | '// &
                held_share(e)//' | '//trim(verdict_of(e, res))//' |')
@@ -193,7 +193,7 @@ contains
       do j = 1, size(res%effects)
          if (res%effects(j)%refitted) call refit_details(lines, res, res%effects(j))
       end do
-      call add(lines, '')
+      call add_line(lines, '')
    contains
       !> The held-out gap an effect removes, %; '-' when every test is fitted
       function held_share(e) result(text)
@@ -206,7 +206,7 @@ contains
 
    !> One refit: its fitted magnitude, the objective per test and the top regions before and after
    subroutine refit_details(lines, res, e)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(in) :: e
       integer, allocatable :: order(:)
@@ -215,24 +215,30 @@ contains
       type(effect_info) :: cat(n_effects)
       order = top_regions(res%regions, 15)
       cat = effect_catalogue(1.0_dp)
-      call add(lines, '')
+      call add_line(lines, '')
       if (len_trim(e%worst_what) > 0) then
-         call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest against the '// &
+         call add_line(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest against the '// &
             'physical limit of the catalogue: '//trim(e%worst_what)//', '//real_str(e%worst, 'f0.2')//' of it):')
       else
-         call add(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; no physical limit):')
+         call add_line(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; no physical limit):')
       end if
       do k = 1, size(e%p)
          what = ''
          if (allocated(e%p_profiled)) then
             if (e%p_profiled(k)) what = ' (profile likelihood)'
          end if
-         call add(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
+         if (allocated(e%p_bound)) then
+            if (k <= size(e%p_bound)) then
+               if (e%p_bound(k)) what = what//': at its search bound, which the data do not move it '// &
+                  'from: its value is not determined and this interval does not hold'
+            end if
+         end if
+         call add_line(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
             real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']'//what)
       end do
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
-         if (k > 0) call add(lines, '- '//trim(cat(e%k)%pname(k))//' held at '// &
+         if (k > 0) call add_line(lines, '- '//trim(cat(e%k)%pname(k))//' held at '// &
             real_str(e%p_all(k), 'es11.4')//' (the screening''s value): fitted free, its interval ['// &
             real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')//'] spans zero or is '// &
             'open and '//trim(e%worst_what)//' ran beyond its limit')
@@ -244,54 +250,58 @@ contains
             do g = 1, info%nparam
                do i = 1, size(res%names)
                   if (res%held(i) .and. (g - 1)*size(res%names) + i <= size(e%p_all)) &
-                     call add(lines, '- '//trim(info%pname(g))//' '//trim(res%names(i))// &
+                     call add_line(lines, '- '//trim(info%pname(g))//' '//trim(res%names(i))// &
                         ' (held out, fitted to it with the constants fixed) = '// &
                         real_str(e%p_all((g - 1)*size(res%names) + i), 'es11.4'))
                end do
             end do
          end if
       end associate
-      if (.not. e%resolved .and. e%significant) call add(lines, '- the delay is below the sampling '// &
+      if (.not. e%resolved .and. e%significant) call add_line(lines, '- the delay is below the sampling '// &
          'interval of the fit tests, '//real_str(res%dt_sample, 'g0.3')//' s: a finding only when it '// &
          'removes most of the structured gap on both sets, or when the data measure it (its 95 % '// &
          'interval within '//real_str(100.0_dp*delay_precision, 'f0.0')//' % of it'// &
          trim(merge(': so here ', ': not here', e%measured))//') and it removes most of the fit tests'' gap')
       if (allocated(e%c_bound)) then
-         if (any(e%c_bound)) call add(lines, '- **flag:** the refit ran away: '// &
+         if (any(e%c_bound)) call add_line(lines, '- **flag:** the refit ran away: '// &
             bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit')
       end if
-      if (e%nstarts > 1) call add(lines, '- refitted from '//str(e%nstarts)//' starts (its screening end '// &
-         'point and further starts of the constants): objective '// &
-         real_str(e%f_lo, 'es10.3')//' to '//real_str(e%f_hi, 'es10.3')//', the lowest is used')
-      call add(lines, '- objective per test, before -> after:')
+      if (e%nstarts > 1) then
+         what = ''
+         if (e%nstarts_failed > 0) what = '; '//str(e%nstarts_failed)//' of them failed to simulate'
+         call add_line(lines, '- refitted from '//str(e%nstarts)//' starts (its screening end '// &
+            'point and further starts of the constants): objective '// &
+            real_str(e%f_lo, 'es10.3')//' to '//real_str(e%f_hi, 'es10.3')//', the lowest is used'//what)
+      end if
+      call add_line(lines, '- objective per test, before -> after:')
       do k = 1, size(res%names)
-         call add(lines, '  - '//trim(res%names(k))//trim(merge(' (held out)', '           ', res%held(k)))// &
+         call add_line(lines, '  - '//trim(res%names(k))//trim(merge(' (held out)', '           ', res%held(k)))// &
             ': '//real_str(res%per_test0(k), 'es10.3')//' -> '//real_str(e%per_test_after(k), 'es10.3'))
       end do
-      call add(lines, '- top regions, structured gap before -> after:')
+      call add_line(lines, '- top regions, structured gap before -> after:')
       do k = 1, min(5, size(order))
          i = order(k)
-         call add(lines, '  - '//trim(res%regions(i)%test)//' '//trim(res%regions(i)%label)//': '// &
+         call add_line(lines, '  - '//trim(res%regions(i)%test)//' '//trim(res%regions(i)%label)//': '// &
             real_str(res%regions(i)%gap, 'es10.3')//' -> '//real_str(e%regions(i)%gap, 'es10.3'))
       end do
    end subroutine refit_details
 
    !> Section 3: how far the leading effect closes the gap
    subroutine shrink_section(lines, res, opts)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
-      call add(lines, '## 3. How far the gap shrinks')
-      call add(lines, '')
-      call add(lines, 'Structured gap at the baseline: fit tests '//real_str(res%gap_fit, 'es10.3')// &
+      call add_line(lines, '## 3. How far the gap shrinks')
+      call add_line(lines, '')
+      call add_line(lines, 'Structured gap at the baseline: fit tests '//real_str(res%gap_fit, 'es10.3')// &
                ', held-out tests '//real_str(res%gap_held, 'es10.3')//'.')
       if (res%leading > 0) then
          associate (e => res%effects(res%leading))
-            call add(lines, 'With '//trim(e%name)//': fit tests '//real_str(100.0_dp*e%shrink_fit, 'f0.1')// &
+            call add_line(lines, 'With '//trim(e%name)//': fit tests '//real_str(100.0_dp*e%shrink_fit, 'f0.1')// &
                ' % removed, held-out tests '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % removed.')
          end associate
       else
-         call add(lines, 'No effect is confirmed (significant, plausible, and removing at least '// &
+         call add_line(lines, 'No effect is confirmed (significant, plausible, and removing at least '// &
             real_str(100.0_dp*opts%confirm_shrink, 'f0.0')//' % of the held-out structured gap, '// &
             'or opening none where there was none).')
       end if
@@ -300,58 +310,58 @@ contains
    !> Section 5, when the prediction could not decide (see joint_reason): the
    !> diagnosis of every test fitted together (jres)
    subroutine joint_section(lines, res, opts)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       !> the diagnosis of the fit tests, its joint stage in res%joint
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
       integer :: i
       associate (jres => res%joint)
-      call add(lines, '')
-      call add(lines, '## 5. Every test fitted together')
-      call add(lines, '')
+      call add_line(lines, '')
+      call add_line(lines, '## 5. Every test fitted together')
+      call add_line(lines, '')
       select case (joint_reason(res, .false.))
       case (joint_partial)
-         call add(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
+         call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
             'tests, but its prediction carries only part of the held-out tests'': either what the fit '// &
             'tests alone make of its parameters fails there, or another effect adds to it.')
       case (joint_bic_only)
-         call add(lines, 'An effect leads on the fit tests by BIC alone (the held-out tests below their '// &
+         call add_line(lines, 'An effect leads on the fit tests by BIC alone (the held-out tests below their '// &
             'floor, and the fit tests'' structured gap below its floor too or mostly left): the held-out '// &
             'floor is too wide for the prediction to confirm it.')
       case (joint_held_fit)
-         call add(lines, trim(res%effects(res%leading)%name)//' explains little of the fit tests and met '// &
+         call add_line(lines, trim(res%effects(res%leading)%name)//' explains little of the fit tests and met '// &
             'the held-out tests only by its parameters fitted to them (an effect per test), not by a '// &
             'prediction: only every effect fitted to every test compares fairly.')
       case (joint_form_beats)
-         call add(lines, trim(res%effects(form_beats_leader(res))%name)//' fits the fit tests better than '// &
+         call add_line(lines, trim(res%effects(form_beats_leader(res))%name)//' fits the fit tests better than '// &
             'the leader '//trim(res%effects(res%leading)%name)//' and leaves their form open, but does not '// &
             'carry to the held-out tests: only every test fitted together tells whether its parameters or '// &
             'its form failed there.')
       case (joint_loose)
-         call add(lines, trim(res%effects(res%leading)%name)//' rests on its prediction of the held-out '// &
+         call add_line(lines, trim(res%effects(res%leading)%name)//' rests on its prediction of the held-out '// &
             'tests alone (the fit tests show no structured gap), while the baseline''s constants sit at a '// &
             'search bound: the prediction tests those constants as much as the effect.')
       case (joint_form_open)
-         call add(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
+         call add_line(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
             'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
       case default
-         call add(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
+         call add_line(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
             'tests show one against their noise, so nothing fitted to the fit tests alone can be '// &
             'confirmed by the prediction.')
       end select
-      call add(lines, 'The diagnosis again with every test '// &
+      call add_line(lines, 'The diagnosis again with every test '// &
          'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &
          'which is weaker evidence than a prediction; a test that shows it on its own confirms it.')
-      call add(lines, '')
-      call add(lines, 'Baseline of every test: objective '//real_str(jres%f0, 'es10.3')//', structured gap '// &
+      call add_line(lines, '')
+      call add_line(lines, 'Baseline of every test: objective '//real_str(jres%f0, 'es10.3')//', structured gap '// &
          real_str(jres%gap_fit, 'es10.3')//' against its floor '//real_str(jres%floor_fit, 'es10.3')// &
          '; per test:')
       do i = 1, size(jres%names)
-         call add(lines, '- '//trim(jres%names(i))//': '//real_str(jres%per_test0(i), 'es10.3'))
+         call add_line(lines, '- '//trim(jres%names(i))//': '//real_str(jres%per_test0(i), 'es10.3'))
       end do
-      call add(lines, '')
-      call add(lines, '**Verdict of this stage:** '//jres%verdict)
-      call add(lines, '')
+      call add_line(lines, '')
+      call add_line(lines, '**Verdict of this stage:** '//jres%verdict)
+      call add_line(lines, '')
       call which_section(lines, jres, opts, '### Which effect, every test fitted')
       call separate_section(lines, jres, '### Which test would tell them apart, every test fitted')
       end associate
@@ -360,32 +370,32 @@ contains
    !> Section 4, when effects explain the gap equally well: the candidate tests that would
    !> separate them
    subroutine separate_section(lines, res, heading)
-      character(len=200), allocatable, intent(inout) :: lines(:)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       character(len=*), intent(in), optional :: heading  !< instead of section 4's
       integer :: j, c
       if (.not. allocated(res%seps)) return
       if (size(res%seps) == 0) return
-      call add(lines, '')
+      call add_line(lines, '')
       if (present(heading)) then
-         call add(lines, heading)
+         call add_line(lines, heading)
       else
-         call add(lines, '## 4. Which test would tell them apart')
+         call add_line(lines, '## 4. Which test would tell them apart')
       end if
-      call add(lines, '')
-      call add(lines, 'Each candidate simulated with each effect''s refit (a per-test parameter at the fit '// &
+      call add_line(lines, '')
+      call add_line(lines, 'Each candidate simulated with each effect''s refit (a per-test parameter at the fit '// &
          'tests'' mean); D = sum of the squared difference of the two responses over the noise '// &
          'variance of the fit tests'' data scaled to the candidate''s peak (expected discrimination, '// &
          'a chi-square: above about 10 the test separates them at that noise; the constants are not '// &
          'refitted to the candidate, so D is an upper estimate).')
       do j = 1, size(res%seps)
          associate (sp => res%seps(j))
-            call add(lines, '')
-            call add(lines, '| candidate test | D: '//trim(res%effects(sp%a)%name)//' vs '// &
+            call add_line(lines, '')
+            call add_line(lines, '| candidate test | D: '//trim(res%effects(sp%a)%name)//' vs '// &
                      trim(res%effects(sp%b)%name)//' |')
-            call add(lines, '|---|---|')
+            call add_line(lines, '|---|---|')
             do c = 1, size(sp%d)
-               call add(lines, '| '//trim(sp%names(c))//trim(merge(' (best)', '       ', c == sp%best))// &
+               call add_line(lines, '| '//trim(sp%names(c))//trim(merge(' (best)', '       ', c == sp%best))// &
                   ' | '//real_str(sp%d(c), 'es9.2')//' |')
             end do
          end associate
@@ -406,21 +416,6 @@ contains
          text = text//trim(names(j))//' = '//real_str(c(j), 'es10.3')
       end do
    end function bound_list
-
-   !> One line, wrapped at a space when longer than the lines hold
-   recursive subroutine add(lines, text)
-      character(len=200), allocatable, intent(inout) :: lines(:)
-      character(len=*), intent(in) :: text
-      integer :: cut
-      if (len(text) <= len(lines)) then
-         lines = [character(len=len(lines)) :: lines, text]
-         return
-      end if
-      cut = index(text(1:len(lines)), ' ', back=.true.)
-      if (cut <= 1) cut = len(lines)
-      lines = [character(len=len(lines)) :: lines, text(1:cut)]
-      call add(lines, '  '//text(cut + 1:))
-   end subroutine add
 
    !> Noise part of test i's objective
    real(dp) function region_noise(res, i) result(v)
@@ -454,7 +449,7 @@ contains
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
       !> The report, with a last line naming what was written
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
       logical :: plotted
       lines = diagnose_report(res, opts)
@@ -464,11 +459,11 @@ contains
       if (allocated(error)) return
       call draw_plots(dir, res, plotted)
       if (plotted) then
-         lines = [character(len=200) :: lines, '', '## Plots', '', &
+         lines = [character(len=report_line_len) :: lines, '', '## Plots', '', &
                   '![residual against time](residuals.png)', '', &
                   '![fit before and after the leading effect](fit.png)']
       else
-         lines = [character(len=200) :: lines, '', '## Plots', '', &
+         lines = [character(len=report_line_len) :: lines, '', '## Plots', '', &
                   'Plots not drawn: gnuplot was not found or failed (scripts/setup.sh installs it);'// &
                   ' the data are in residuals.csv.']
       end if
@@ -477,7 +472,7 @@ contains
       ! Times vary from run to run: in the log, not in the report
       call write_lines(join_path(dir, 'steps.csv'), diagnose_log(res), error)
       if (allocated(error)) return
-      lines = [character(len=200) :: lines, '', 'wrote '//join_path(dir, 'report.md')//', '// &
+      lines = [character(len=report_line_len) :: lines, '', 'wrote '//join_path(dir, 'report.md')//', '// &
                'regions.csv, effects.csv, residuals.csv, steps.csv'//trim(merge(', *.png', '       ', plotted))]
    end subroutine write_report
 

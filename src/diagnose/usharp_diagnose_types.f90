@@ -115,6 +115,8 @@ module usharp_diagnose_types
       !> magnitude beyond its limit (see refit)
       logical :: held = .false.
       real(dp) :: rate_lo = 0.0_dp, rate_hi = 0.0_dp  !< the rate's interval when free
+      !> Of its free parameters, those at a search bound (their intervals do not hold)
+      logical, allocatable :: p_bound(:)
       real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
       character(len=64) :: worst_what = ''   !< which magnitude that is
       !> A delay (shift, lag) resolved by the data: not below their sampling interval
@@ -125,6 +127,7 @@ module usharp_diagnose_types
       logical, allocatable :: worse(:)       !< fit tests it makes worse beyond their noise
       !> Objectives of the refit from its further starts (the best is kept): the spread
       real(dp) :: f_lo = 0.0_dp, f_hi = 0.0_dp
+      integer :: nstarts_failed = 0          !< of its starts, those that failed to simulate
       integer :: nstarts = 0
       integer :: nevals = 0
       type(region_stat), allocatable :: regions(:)

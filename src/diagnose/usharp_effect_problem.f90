@@ -21,6 +21,10 @@ module usharp_effect_problem
 
    public :: effect_problem, new_effect_problem
 
+   !> The objective of a point whose simulation failed: far above any objective of a test,
+   !> so that a search turns away from it
+   real(dp), parameter, public :: failed_objective = 2.0e10_dp
+
    !> Residuals of the tests `tests` with effect k (0: none)
    type, extends(least_squares_type) :: effect_problem
       type(fit_problem) :: prob                !< tests, targets, model, solver
@@ -319,7 +323,7 @@ contains
          !$omp end parallel do
       end if
       do j = 1, n
-         fs(j) = merge(sum(rs(:, j)**2), 2.0e10_dp, ok(j))
+         fs(j) = merge(sum(rs(:, j)**2), failed_objective, ok(j))
       end do
       self%nevals = self%nevals + n
       if (n == 1 .and. ok(1)) then

@@ -7,7 +7,7 @@ module usharp_selfcheck
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, report_line_len
    use usharp_config, only: run_config
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type
@@ -42,7 +42,7 @@ module usharp_selfcheck
       real(dp) :: seconds = 0.0_dp
       integer :: nevals = 0
       integer :: failed = 0                          !< diagnoses that stopped with an error
-      character(len=200), allocatable :: misses(:)  !< the reports of the wrong answers
+      character(len=report_line_len), allocatable :: misses(:)  !< the reports of the wrong answers
    end type selfcheck_result
 
    !> The repetitions as tasks: task k is row (k - 1)/reps + 1, repetition modulo(k - 1, reps) + 1
@@ -165,7 +165,7 @@ contains
       type(task_text), allocatable :: results(:)
       type(experiment_type), allocatable :: exps(:)
       type(rng_type) :: rng
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       integer :: row, rep, j, c0, c1, rate, t, failed, nevals, first, named_flag, noise_flag, stat
       real(dp) :: shrink
       call system_clock(c0, rate)
@@ -209,7 +209,7 @@ contains
             read (lines(1), *) failed, nevals, first, named_flag, shrink
             noise_flag = 0
          end if
-         sc%misses = [character(len=200) :: sc%misses, lines(2:)]
+         sc%misses = [character(len=report_line_len) :: sc%misses, lines(2:)]
          if (failed == 1) then
             sc%failed = sc%failed + 1
             cycle
@@ -236,7 +236,7 @@ contains
       type(error_type), allocatable :: e
       type(rng_type) :: rng
       real(dp), allocatable :: p(:)
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       character(len=80) :: head
       real(dp) :: shrink
       integer :: row, rep, ki, first, j
@@ -255,13 +255,13 @@ contains
       allocate (lines(0))
       if (allocated(e)) then
          ! A diagnosis that fails counts as a wrong answer, with its message
-         lines = [character(len=200) :: '', '# failed: injected '//str(ki)// &
+         lines = [character(len=report_line_len) :: '', '# failed: injected '//str(ki)// &
             ', repetition '//str(rep)//': '//e%message(1:min(len(e%message), 150))]
          write (head, '(a)') '1 0 0 0 0.0 0'
       else
          first = named_effect(res)
          named_k = named(res, ki)
-         if (.not. named_k) lines = [character(len=200) :: lines, '', '---', '', &
+         if (.not. named_k) lines = [character(len=report_line_len) :: lines, '', '---', '', &
             '# miss: injected '//str(ki)//', repetition '//str(rep)//', parameters '// &
             real_list(p), diagnose_report(res, self%o)]
          ! Held-out tests at the noise level have no gap to remove: not counted
@@ -275,7 +275,7 @@ contains
          if (.not. held_quiet(res)) at_noise = rest_at_noise(res%gap_held, shrink, res%floor_held)
          ! A right answer that removes less than target_shrink of the held-out gap is shown too
          if (named_k .and. ki > 0 .and. shrink < target_shrink) lines = &
-            [character(len=200) :: lines, '', '---', '', '# short: injected '//str(ki)// &
+            [character(len=report_line_len) :: lines, '', '---', '', '# short: injected '//str(ki)// &
             ', repetition '//str(rep)//', parameters '//real_list(p)//': held-out gap removed '// &
             real_str(100.0_dp*shrink, 'f0.1')//' %', diagnose_report(res, self%o)]
          write (head, '(a,1x,i0,1x,i0,1x,i1,1x,es25.17e3,1x,i1)') '0', res%nevals, first, &
@@ -300,7 +300,7 @@ contains
    !> The lines of a text whose lines end with new_line('a')
    subroutine split_lines(text, lines)
       character(len=*), intent(in) :: text
-      character(len=200), allocatable, intent(out) :: lines(:)
+      character(len=report_line_len), allocatable, intent(out) :: lines(:)
       integer :: at, nl, n
       n = 0
       do at = 1, len(text)
@@ -318,13 +318,13 @@ contains
    !> The confusion table (rows: injected, columns: ranked first) in Markdown
    function selfcheck_report(sc) result(lines)
       type(selfcheck_result), intent(in) :: sc
-      character(len=200), allocatable :: lines(:)
+      character(len=report_line_len), allocatable :: lines(:)
       type(effect_info) :: cat(n_effects)
-      character(len=200) :: ln
+      character(len=report_line_len) :: ln
       integer :: row, j
       cat = effect_catalogue(1.0_dp)
       allocate (lines(0))
-      lines = [character(len=200) :: lines, '# usharp diagnose --selfcheck', '', &
+      lines = [character(len=report_line_len) :: lines, '# usharp diagnose --selfcheck', '', &
                str(sc%reps)//' repetitions per row, effects injected at random realistic '// &
                'magnitudes with noise; rows: injected, columns: ranked first', '']
       ln = '| injected |'
@@ -344,13 +344,13 @@ contains
          end do
          lines = [lines, ln]
       end do
-      lines = [character(len=200) :: lines, '', 'Held-out structured gap removed by the injected '// &
+      lines = [character(len=report_line_len) :: lines, '', 'Held-out structured gap removed by the injected '// &
                'effect (min / median over repetitions):', '']
       do row = 1, size(sc%injected)
          if (sc%injected(row) == 0) cycle
          associate (v => pack(sc%shrink(row, :), .not. ieee_is_nan(sc%shrink(row, :))))
             if (size(v) == 0) then
-               lines = [character(len=200) :: lines, '- '//trim(name_of(sc%injected(row)))// &
+               lines = [character(len=report_line_len) :: lines, '- '//trim(name_of(sc%injected(row)))// &
                         ': no repetition had a held-out gap']
             else
                ln = '- '//trim(name_of(sc%injected(row)))//': '//real_str(100.0_dp*minval(v), 'f0.1')// &
@@ -364,17 +364,17 @@ contains
                     sc%at_noise(row, :)))//' of '//str(size(v))
                if (size(v) < sc%reps) ln = trim(ln)//' ('//str(sc%reps - size(v))// &
                   ' repetitions without a held-out gap)'
-               lines = [character(len=200) :: lines, ln]
+               lines = [character(len=report_line_len) :: lines, ln]
             end if
          end associate
       end do
       ! (two lines: one was cut at the lines' length, the simulations' count with it)
-      lines = [character(len=200) :: lines, '', 'correct (the injected effect ranked first, or '// &
+      lines = [character(len=report_line_len) :: lines, '', 'correct (the injected effect ranked first, or '// &
                'named as explaining the gap equally well with a separating test proposed; '// &
                'clean data: no effect confirmed): '//str(correct())//' of '// &
                str(size(sc%injected)*sc%reps)//' ('//str(sc%failed)//' failed, not in the table);', &
                str(sc%nevals)//' simulations of the test set in '//real_str(sc%seconds, 'f0.1')//' s']
-      if (size(sc%misses) > 0) lines = [character(len=200) :: lines, '', &
+      if (size(sc%misses) > 0) lines = [character(len=report_line_len) :: lines, '', &
          'The reports of the wrong answers (and of right ones that remove less than '// &
          str(nint(100.0_dp*target_shrink))//' % of the '// &
          'held-out gap) follow.', sc%misses]

@@ -39,11 +39,21 @@ contains
       integer :: ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter, first
       integer :: a, b, next
       logical :: have_header, filtering, fixed
+      !> Of the filter values, those some row holds; the first values the filter column holds
+      logical, allocatable :: matched(:)
+      character(len=:), allocatable :: seen
+      integer :: nseen
       real(dp), allocatable :: buf(:, :)
       real(dp) :: row(max_fields)
 
       filtering = .false.
       if (present(filter_column)) filtering = len_trim(filter_column) > 0
+      if (filtering) then
+         allocate (matched(size(filter_values)))
+         matched = .false.
+         seen = ''
+         nseen = 0
+      end if
       fixed = .false.
       if (present(fmt)) fixed = len_trim(fmt) > 0
       ! The file in one read, then its lines as slices of it: a formatted read per line took
@@ -120,7 +130,12 @@ contains
          end if
          if (filtering) then
             if (ifilter > nfield) cycle
+            if (nseen < 12 .and. index(seen//'|', '|'//trim(fields(ifilter))//'|') == 0) then
+               seen = seen//'|'//trim(fields(ifilter))
+               nseen = nseen + 1
+            end if
             if (.not. any(trim(fields(ifilter)) == filter_values)) cycle
+            where (trim(fields(ifilter)) == filter_values) matched = .true.
          end if
          if (present(skip_missing)) then
             if (skip_missing .and. any([(missing(fields(min(icol(j), nfield))), j=1, size(columns))])) cycle
@@ -147,6 +162,16 @@ contains
          call append(row(:size(columns)))
       end do
       if (allocated(error)) return
+      if (filtering) then
+         ! A filter value no row holds is a typing error, not a request for fewer rows
+         do j = 1, size(filter_values)
+            if (matched(j)) cycle
+            call fatal_error(error, file//": filter: no row has '"//trim(filter_values(j))// &
+               "' in column "//trim(filter_column)//' (it holds: '// &
+               trim(replace_bars(seen(2:)))//trim(merge(', ...', '     ', nseen >= 12))//')')
+            return
+         end do
+      end if
       if (npt < 3) then
          call fatal_error(error, file//': needs at least 3 data rows, found '//str(npt))
          return
@@ -154,6 +179,21 @@ contains
       values = transpose(buf(:, :npt))
 
    contains
+
+      !> The values seen, '|'-separated, as a list
+      pure function replace_bars(t) result(r)
+         character(len=*), intent(in) :: t
+         character(len=:), allocatable :: r
+         integer :: i
+         r = ''
+         do i = 1, len(t)
+            if (t(i:i) == '|') then
+               r = r//', '
+            else
+               r = r//t(i:i)
+            end if
+         end do
+      end function replace_bars
 
       pure logical function missing(field)
          character(len=*), intent(in) :: field

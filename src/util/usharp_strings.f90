@@ -4,7 +4,11 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field, join
+   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field, join, add_line
+
+   !> Length of a line of the program's reports and summaries (Markdown tables keep a row on
+   !> one line; prose longer than this is wrapped)
+   integer, parameter, public :: report_line_len = 400
 
    !> Items joined into one line with a separator between them ('' for none)
    interface join
@@ -19,6 +23,22 @@ module usharp_strings
    end interface str
 
 contains
+
+   !> Append text to lines; text longer than a line is wrapped at a space, its continuation
+   !> lines indented by two spaces (a paragraph to Markdown)
+   pure recursive subroutine add_line(lines, text)
+      character(len=*), allocatable, intent(inout) :: lines(:)
+      character(len=*), intent(in) :: text
+      integer :: cut
+      if (len(text) <= len(lines)) then
+         lines = [character(len=len(lines)) :: lines, text]
+         return
+      end if
+      cut = index(text(1:len(lines)), ' ', back=.true.)
+      if (cut <= 1) cut = len(lines)
+      lines = [character(len=len(lines)) :: lines, text(1:cut)]
+      call add_line(lines, '  '//text(cut + 1:))
+   end subroutine add_line
 
    !> Lower-case copy of a string (ASCII)
    pure function lower(text) result(res)
