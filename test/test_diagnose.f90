@@ -27,7 +27,7 @@ module test_diagnose
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
-   use usharp_diagnose_verdict, only: conclude, joint_verdict
+   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of
    use usharp_diagnose_refit, only: judge, rate_undetermined
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
@@ -1340,6 +1340,23 @@ contains
       call check(error, held_fit_only(res) .and. joint_reason(res, .false.) == joint_held_fit, &
                  'fit tests quiet, the leader fitted to the held-out test')
       if (allocated(error)) return
+      ! The refit table says what its confirmation rests on
+      call check(error, index(verdict_of(res%effects(2), res), 'met the held-out tests by its values fitted '// &
+                 'to them: ') == 1, verdict_of(res%effects(2), res))
+      if (allocated(error)) return
+      res%effects(2)%held_fitted = .false.
+      call check(error, index(verdict_of(res%effects(2), res), 'confirmed: ') == 1, verdict_of(res%effects(2), res))
+      if (allocated(error)) return
+      res%held = .false.
+      call check(error, index(verdict_of(res%effects(2), res), 'fitted to every test: ') == 1, &
+                 verdict_of(res%effects(2), res))
+      if (allocated(error)) return
+      call held_out_middle(res, 0.109_dp, 0.172_dp, 0.410_dp, 0.070_dp)
+      res%effects%significant = .true.
+      res%effects%confirmed = [.false., .true.]
+      res%effects%shrink_fit = [1.0_dp, 0.126_dp]
+      res%effects(2)%held_fitted = .true.
+      res%leading = 2
       call check(error, .not. joint_wanted(res, .true.), 'the joint stage is not run twice')
       if (allocated(error)) return
       res%gap_fit = 0.323_dp

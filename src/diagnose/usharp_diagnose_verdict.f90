@@ -391,12 +391,22 @@ contains
    function verdict_of(e, res) result(text)
       type(effect_outcome), intent(in) :: e
       type(diagnose_result), intent(in) :: res
-      character(len=:), allocatable :: text
+      character(len=:), allocatable :: text, how
       integer :: i, j
+      ! What the confirmation rests on: a prediction of the held-out tests, values of a per-test
+      ! effect fitted to them, or (no test held out: every test fitted together) a fit
+      how = 'confirmed'
+      if (allocated(res%held)) then
+         if (.not. any(res%held)) then
+            how = 'fitted to every test'
+         else if (e%held_fitted) then
+            how = 'met the held-out tests by its values fitted to them'
+         end if
+      end if
       if (e%confirmed .and. explains_resolved(e, res)) then
-         text = 'confirmed: explains the gap'
+         text = how//': explains the gap'
       else if (e%confirmed) then
-         text = 'confirmed: partly explains the gap'
+         text = how//': partly explains the gap'
       else if (e%significant) then
          text = 'lowers BIC, but '//why_not(e, res)
          if (.not. e%plausible) text = text//': stands in for something else'
