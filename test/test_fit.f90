@@ -18,6 +18,7 @@ module test_fit
    use usharp_input, only: read_config
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, fit_deck
+   use usharp_strings, only: report_line_len
    implicit none
    private
    public :: collect_fit, rosenbrock
@@ -215,7 +216,7 @@ contains
    subroutine test_abort(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: deck
       ! rho = 0.99 steps H1 and n by 99 %: with max_failures = 1 the first bad point aborts
       deck = fit_deck('abort.nml', 'max_failures=1, rho=0.99', [character(len=200) :: &
@@ -233,7 +234,7 @@ contains
    subroutine test_merged_told(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: uerr
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: deck
       integer :: stat
       ! The thesis LCF data with its 10th and 20th lines written twice

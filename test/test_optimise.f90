@@ -19,7 +19,7 @@ module test_optimise
    use usharp_lapack, only: dgesv
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, read_text, scratch_dir
-   use usharp_strings, only: str
+   use usharp_strings, only: str, report_line_len
    use test_fit, only: rosenbrock
    implicit none
    private
@@ -338,7 +338,7 @@ contains
                  'determined: B, H1, H2, n')
       if (allocated(error)) return
       block
-         character(len=200), allocatable :: lines(:)
+         character(len=report_line_len), allocatable :: lines(:)
          lines = identify_report(res)
          ! Undetermined A1 gets no interval; determined B gets one
          call check(error, any(index(lines, '  A1 ') == 1 .and. index(lines, 'none') > 0) .and. &
@@ -358,7 +358,7 @@ contains
    subroutine test_threads(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=200), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:)
       character(len=:), allocatable :: path, j1, j2
       integer :: nthreads
       path = write_text('threads.nml', [character(len=200) :: &

@@ -39,7 +39,8 @@ contains
       integer :: ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter, first
       integer :: a, b, next
       logical :: have_header, filtering, fixed
-      !> Of the filter values, those some row holds; the first values the filter column holds
+      !> Of the filter values, those some row holds; the first values the filter column holds,
+      !> each after ', '
       logical, allocatable :: matched(:)
       character(len=:), allocatable :: seen
       integer :: nseen
@@ -130,8 +131,8 @@ contains
          end if
          if (filtering) then
             if (ifilter > nfield) cycle
-            if (nseen < 12 .and. index(seen//'|', '|'//trim(fields(ifilter))//'|') == 0) then
-               seen = seen//'|'//trim(fields(ifilter))
+            if (nseen < 12 .and. index(seen//', ', ', '//trim(fields(ifilter))//', ') == 0) then
+               seen = seen//', '//trim(fields(ifilter))
                nseen = nseen + 1
             end if
             if (.not. any(trim(fields(ifilter)) == filter_values)) cycle
@@ -168,7 +169,7 @@ contains
             if (matched(j)) cycle
             call fatal_error(error, file//": filter: no row has '"//trim(filter_values(j))// &
                "' in column "//trim(filter_column)//' (it holds: '// &
-               trim(replace_bars(seen(2:)))//trim(merge(', ...', '     ', nseen >= 12))//')')
+               seen(3:)//trim(merge(', ...', '     ', nseen >= 12))//')')
             return
          end do
       end if
@@ -179,21 +180,6 @@ contains
       values = transpose(buf(:, :npt))
 
    contains
-
-      !> The values seen, '|'-separated, as a list
-      pure function replace_bars(t) result(r)
-         character(len=*), intent(in) :: t
-         character(len=:), allocatable :: r
-         integer :: i
-         r = ''
-         do i = 1, len(t)
-            if (t(i:i) == '|') then
-               r = r//', '
-            else
-               r = r//t(i:i)
-            end if
-         end do
-      end function replace_bars
 
       pure logical function missing(field)
          character(len=*), intent(in) :: field
