@@ -4,7 +4,7 @@ module test_table
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_table, only: read_columns, merge_repeated_times
-   use usharp_strings, only: csv_field, split_fields
+   use usharp_strings, only: csv_field, split_fields, add_line, str
    use test_util, only: write_text, check_message
    implicit none
    private
@@ -25,7 +25,8 @@ contains
          new_unittest('repeated-times-merged', test_merge), &
          new_unittest('long-line-and-no-final-newline', test_long_line), &
          new_unittest('real-a617-files-load', test_realdata), &
-         new_unittest('csv-field-written-and-read-back', test_csv_field)]
+         new_unittest('csv-field-written-and-read-back', test_csv_field), &
+         new_unittest('report-lines-wrapped-and-long-words-cut', test_add_line)]
    end subroutine collect_table
 
    !> A field of the tables usharp writes, quoted when needed (a name with a comma would
@@ -42,6 +43,26 @@ contains
       call check(error, csv_field('baseline') == 'baseline' .and. csv_field('a "b"') == '"a ""b"""', &
                  'plain or quoted field written wrongly')
    end subroutine test_csv_field
+
+   !> Report lines: text longer than a line wrapped at a space, continuations indented by two
+   !> spaces; a word longer than a line cut rather than wrapped without end
+   subroutine test_add_line(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=20), allocatable :: lines(:)
+      allocate (lines(0))
+      call add_line(lines, 'a table row | that stays')
+      call check(error, size(lines) == 2 .and. lines(1) == 'a table row | that ' .and. &
+                 lines(2) == '  stays', 'wrapped at a space: '//lines(1)//'/'//lines(2))
+      if (allocated(error)) return
+      deallocate (lines)
+      allocate (lines(0))
+      call add_line(lines, 'x '//repeat('y', 45))
+      call check(error, size(lines), 4, 'lines of a long word after a space')
+      if (allocated(error)) return
+      call check(error, lines(1) == 'x' .and. lines(2) == '  '//repeat('y', 18) .and. &
+                 lines(3) == '  '//repeat('y', 18) .and. lines(4) == '  '//repeat('y', 9), &
+                 'a long word cut: '//lines(2)//'/'//lines(4))
+   end subroutine test_add_line
 
    subroutine test_csv(error)
       type(error_type), allocatable, intent(out) :: error

@@ -64,7 +64,7 @@ contains
          '  deck       write the ANSYS APDL input deck of a &test: <out_dir>/<test>.inp'//nl// &
          '  identify   identifiability of the &fit constants at the input''s constants'//nl// &
          '  design     rank candidate tests by how well they would determine the constants'//nl// &
-         '  diagnose   where a fit falls short, which unmodelled effect causes it, how far'//nl// &
+         '  diagnose   where a fit falls short, which unmodelled effect explains it, how far'//nl// &
          '             adding it closes the gap (also on held-out tests)'//nl//nl// &
          '`usharp <command> --help` tells what a command reads and writes.'//nl//nl// &
          'options:'//nl// &

@@ -60,7 +60,7 @@ contains
       journal_mode = 'start'
       if (present(mode)) journal_mode = mode
       call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
-                        ' units=2', journal_mode, error)
+                        ' units=3', journal_mode, error)
       if (allocated(error)) return
       call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
       call journal%close(e)

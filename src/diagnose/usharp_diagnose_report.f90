@@ -11,7 +11,7 @@ module usharp_diagnose_report
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, &
-                                    joint_form_beats, joint_loose, joint_form_open
+                                    joint_form_beats, joint_loose, fit_effects_shown, form_left_open
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -268,7 +268,7 @@ contains
       end if
       if (e%nstarts > 1) then
          what = ''
-         if (e%nstarts_failed > 0) what = '; '//str(e%nstarts_failed)//' of them failed to simulate'
+         if (e%nstarts_failed > 0) what = '; '//str(e%nstarts_failed)//' of them failed'
          call add_line(lines, '- refitted from '//str(e%nstarts)//' starts (its screening end '// &
             'point and further starts of the constants): objective '// &
             real_str(e%f_lo, 'es10.3')//' to '//real_str(e%f_hi, 'es10.3')//', the lowest is used'//what)
@@ -341,13 +341,17 @@ contains
          call add_line(lines, trim(res%effects(res%leading)%name)//' rests on its prediction of the held-out '// &
             'tests alone (the fit tests show no structured gap), while the baseline''s constants sit at a '// &
             'search bound: the prediction tests those constants as much as the effect.')
-      case (joint_form_open)
-         call add_line(lines, 'An effect takes the fit tests'' structured gap to its floor but does not carry '// &
-            'to the held-out tests: the fit tests leave its form open, so their prediction confirms nothing.')
       case default
-         call add_line(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
-            'tests show one against their noise, so nothing fitted to the fit tests alone can be '// &
-            'confirmed by the prediction.')
+         ! (as the verdict words it, see why_note)
+         if (fit_effects_shown(res) .or. form_left_open(res)) then
+            call add_line(lines, 'An effect takes the fit tests'' structured gap to its floor but does not '// &
+               'carry to the held-out tests: the fit tests leave its form open, so their prediction confirms '// &
+               'nothing.')
+         else
+            call add_line(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
+               'tests show one against their noise, so nothing fitted to the fit tests alone can be '// &
+               'confirmed by the prediction.')
+         end if
       end select
       call add_line(lines, 'The diagnosis again with every test '// &
          'fitted, from the baseline''s constants. An effect found here explains tests it was fitted to, '// &

@@ -313,9 +313,17 @@ contains
             ! Beyond its physical limit only when its 95 % interval is, as the held-out
             ! diagnosis judges it (the softening: by the share of the drag it takes away
             ! within the test, above)
+            ! (an open end is where the profile's walk stopped, not a bound: a value the data
+            ! leave undetermined is judged by itself)
             associate (grp => merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test))
-               if (k /= 7) se_out%plausible = se_out%plausible .and. ratio_beyond_doubt(abs(p(g))/ &
-                  cat(k)%plausible(grp), p(g), se_out%p_lo(g), se_out%p_hi(g)) <= 1.0_dp
+               if (k /= 7) then
+                  if (pr%lo_open .or. pr%hi_open) then
+                     se_out%plausible = se_out%plausible .and. abs(p(g)) <= cat(k)%plausible(grp)
+                  else
+                     se_out%plausible = se_out%plausible .and. ratio_beyond_doubt(abs(p(g))/ &
+                        cat(k)%plausible(grp), p(g), se_out%p_lo(g), se_out%p_hi(g)) <= 1.0_dp
+                  end if
+               end if
             end associate
          end do
       end subroutine fit_effect

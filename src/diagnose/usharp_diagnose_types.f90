@@ -127,7 +127,7 @@ module usharp_diagnose_types
       logical, allocatable :: worse(:)       !< fit tests it makes worse beyond their noise
       !> Objectives of the refit from its further starts (the best is kept): the spread
       real(dp) :: f_lo = 0.0_dp, f_hi = 0.0_dp
-      integer :: nstarts_failed = 0          !< of its starts, those that failed to simulate
+      integer :: nstarts_failed = 0          !< of its further starts, those that failed
       integer :: nstarts = 0
       integer :: nevals = 0
       type(region_stat), allocatable :: regions(:)

@@ -163,7 +163,7 @@ contains
          call append(row(:size(columns)))
       end do
       if (allocated(error)) return
-      if (filtering) then
+      if (filtering .and. .not. fixed) then
          ! A filter value no row holds is a typing error, not a request for fewer rows
          do j = 1, size(filter_values)
             if (matched(j)) cycle

@@ -35,7 +35,8 @@ contains
          return
       end if
       cut = index(text(1:len(lines)), ' ', back=.true.)
-      if (cut <= 1) cut = len(lines)
+      ! (no space after a continuation's indent: cut the word, or the next call gets the same)
+      if (cut <= 1 .or. (cut == 2 .and. text(1:2) == '  ')) cut = len(lines)
       lines = [character(len=len(lines)) :: lines, text(1:cut)]
       call add_line(lines, '  '//text(cut + 1:))
    end subroutine add_line
