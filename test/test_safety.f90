@@ -171,6 +171,12 @@ contains
       call check_message(error, e, '--resume continues the journal, --force overwrites it: give one')
       if (allocated(error)) return
       call check(error, e%stat, stat_usage, 'exit code 2')
+      if (allocated(error)) return
+      call parse_arguments([arg_string('run'), arg_string('--auto-resume'), arg_string('--force'), &
+                            arg_string('f.nml')], cmd, e)
+      call check_message(error, e, '--auto-resume continues a journal it finds, --force overwrites it: give one')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'exit code 2')
    end subroutine test_journal_kept
 
    !> A per-specimen diagnosis into a folder that holds a report of an earlier one is refused

@@ -183,6 +183,11 @@ contains
                           stat_usage)
          return
       end if
+      if (cmd%auto_resume .and. cmd%force) then
+         call fatal_error(error, '--auto-resume continues a journal it finds, --force overwrites it: '// &
+                          'give one', stat_usage)
+         return
+      end if
       ! deck takes an optional test name before the input file; the others one input file
       if (npos > 1 .and. .not. (cmd%name == 'deck' .and. npos == 2)) then
          call fatal_error(error, 'more than one input file', stat_usage)
