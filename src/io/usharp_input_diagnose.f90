@@ -115,7 +115,8 @@ contains
       type(error_type), allocatable, intent(out) :: error
       if (.not. any(diagnose%holdout)) then
          call group_error(error, path, 'diagnose', 'holdout: the held-out set is empty; '// &
-            'name the tests to predict (held out of the fit)')
+            'name the tests to predict (held out of the fit) with holdout, or one test to set '// &
+            "against the others with specimen = '<test>' (or 'all')")
       else if (all(diagnose%holdout)) then
          call group_error(error, path, 'diagnose', 'holdout: every test is held out; '// &
             'nothing is left to fit')
