@@ -166,17 +166,19 @@ contains
       call parse_arguments([arg_string('run'), arg_string('--force'), arg_string('f.nml')], cmd, e)
       call check(error, .not. allocated(e) .and. cmd%force, 'run --force parsed')
       if (allocated(error)) return
-      call parse_arguments([arg_string('run'), arg_string('--resume'), arg_string('--force'), &
-                            arg_string('f.nml')], cmd, e)
-      call check_message(error, e, '--resume continues the journal, --force overwrites it: give one')
+      call refused('--resume', '--resume continues the journal, --force overwrites it: give one')
       if (allocated(error)) return
-      call check(error, e%stat, stat_usage, 'exit code 2')
-      if (allocated(error)) return
-      call parse_arguments([arg_string('run'), arg_string('--auto-resume'), arg_string('--force'), &
-                            arg_string('f.nml')], cmd, e)
-      call check_message(error, e, '--auto-resume continues a journal it finds, --force overwrites it: give one')
-      if (allocated(error)) return
-      call check(error, e%stat, stat_usage, 'exit code 2')
+      call refused('--auto-resume', '--auto-resume continues a journal it finds, --force overwrites it: give one')
+   contains
+      !> run with option and --force: a usage error with this message, exit code 2
+      subroutine refused(option, message)
+         character(len=*), intent(in) :: option, message
+         call parse_arguments([arg_string('run'), arg_string(option), arg_string('--force'), &
+                               arg_string('f.nml')], cmd, e)
+         call check_message(error, e, message)
+         if (allocated(error)) return
+         call check(error, e%stat, stat_usage, 'exit code 2')
+      end subroutine refused
    end subroutine test_journal_kept
 
    !> A per-specimen diagnosis into a folder that holds a report of an earlier one is refused

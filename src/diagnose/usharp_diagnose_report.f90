@@ -11,7 +11,7 @@ module usharp_diagnose_report
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, &
-                                    joint_form_beats, joint_loose, fit_effects_shown, form_left_open
+                                    joint_form_beats, joint_loose, fit_effect_not_carried
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -343,7 +343,7 @@ contains
             'search bound: the prediction tests those constants as much as the effect.')
       case default
          ! (as the verdict words it, see why_note)
-         if (fit_effects_shown(res) .or. form_left_open(res)) then
+         if (fit_effect_not_carried(res)) then
             call add_line(lines, 'An effect takes the fit tests'' structured gap to its floor but does not '// &
                'carry to the held-out tests: the fit tests leave its form open, so their prediction confirms '// &
                'nothing.')

@@ -17,7 +17,7 @@ module usharp_diagnose_types
    public :: explains_resolved, rest_at_noise
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
-             partial_carry, joint_reason
+             partial_carry, joint_reason, fit_effect_not_carried
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -437,6 +437,14 @@ contains
          end do
       end associate
    end function form_beats_leader
+
+   !> True when the fit tests show an effect (see fit_effects_shown) or leave an effect's form
+   !> open (see form_left_open): why a prediction from them could not confirm one, as the
+   !> verdict and the report word it
+   pure logical function fit_effect_not_carried(res)
+      type(diagnose_result), intent(in) :: res
+      fit_effect_not_carried = fit_effects_shown(res) .or. form_left_open(res)
+   end function fit_effect_not_carried
 
    !> True when some effect leaves the fit tests' form open (see form_open)
    pure logical function form_left_open(res)

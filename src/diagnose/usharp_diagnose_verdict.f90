@@ -10,7 +10,7 @@ module usharp_diagnose_verdict
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, &
-                                    fit_effects_shown, form_left_open, form_beats_leader, joint_reason, &
+                                    fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
                                     joint_partial
    implicit none
@@ -209,7 +209,7 @@ contains
                 ' rests on constants the fit tests leave at a search bound, so it tests those constants '// &
                 'as much as the effect'
       case default
-         if (fit_effects_shown(res) .or. form_left_open(res)) then
+         if (fit_effect_not_carried(res)) then
             text = 'fitted to the fit tests alone, the effects that explain them do not carry to the '// &
                    'held-out tests, so their prediction cannot confirm it'
          else
