@@ -31,6 +31,7 @@ contains
          new_unittest('command-placeholders-quoted', test_placeholders), &
          new_unittest('external-run-failures-named', test_failures), &
          new_unittest('external-command-time-limit', test_time_limit), &
+         new_unittest('external-command-gets-the-environment', test_environment), &
          new_unittest('external-failures-stop-fit-logs-intact', test_fit_failures), &
          new_unittest('standin-fit-reproduces-internal-fit', test_standin_fit)]
    end subroutine collect_external
@@ -323,6 +324,34 @@ contains
       if (allocated(error)) return
       call check(error, real(c1 - c0, dp)/real(rate, dp) < 10.0_dp, 'stopped near the limit')
    end subroutine test_time_limit
+
+   !> The command runs with usharp's environment (an FE code needs its PATH and licence
+   !> variables), not an empty one
+   subroutine test_environment(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      character(len=180) :: value
+      character(len=:), allocatable :: name
+      integer :: length, status
+      name = 'HOME'
+      call get_environment_variable(name, value, length, status)
+      if (status /= 0 .or. length == 0) then
+         ! dash gives an unset PATH a default of its own: usharp's must differ from it
+         name = 'PATH'
+         call get_environment_variable(name, value, length, status)
+      end if
+      if (status /= 0 .or. length == 0) then
+         call skip_test(error, 'neither HOME nor PATH is set (or fits 180 characters) here')
+         return
+      end if
+      call external_config('ext-env', 'echo "'//name//' is [$'//name//']" >&2; exit 4', '', cfg, &
+                           error)
+      if (allocated(error)) return
+      call run_one(cfg, e)
+      call check_message(error, e, 'command failed with exit status 4: '//name//' is ['// &
+                         trim(value)//']')
+   end subroutine test_environment
 
    !> Failures are penalised and logged by evaluation; max_failures in a row stop the fit; the
    !> command's own writes (stdout, stderr, files named like the logs) never reach the logs

@@ -10,7 +10,8 @@
 !> glibc on 64-bit Linux, with room to spare.
 module usharp_process
    use, intrinsic :: iso_c_binding, only: c_int, c_short, c_char, c_ptr, c_null_ptr, &
-                                          c_null_char, c_loc, c_int64_t
+                                          c_null_char, c_loc, c_int64_t, c_f_pointer, &
+                                          c_associated
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_signal, only: stop_signal
@@ -44,8 +45,6 @@ module usharp_process
    type, bind(C) :: spawn_actions
       integer(c_int64_t) :: opaque(32) = 0
    end type spawn_actions
-
-   type(c_ptr), bind(C, name='environ') :: c_environ
 
    interface
       function c_posix_spawn(pid, path, actions, attr, argv, envp) bind(C, name='posix_spawn') result(r)
@@ -115,6 +114,13 @@ module usharp_process
          integer(c_int), value, intent(in) :: pid, sig
          integer(c_int) :: r
       end function c_kill
+      !> The address of a symbol; with the handle RTLD_DEFAULT (null) the one the program uses
+      function c_dlsym(handle, symbol) bind(C, name='dlsym') result(address)
+         import :: c_ptr, c_char
+         type(c_ptr), value, intent(in) :: handle
+         character(kind=c_char), intent(in) :: symbol(*)
+         type(c_ptr) :: address
+      end function c_dlsym
       function c_usleep(usec) bind(C, name='usleep') result(r)
          import :: c_int
          integer(c_int), value, intent(in) :: usec
@@ -166,7 +172,7 @@ contains
                              int(o'644', c_int))
       rc = c_actions_addopen(fa, 2_c_int, to_c(err), ior(ior(o_wronly, o_creat), o_trunc), &
                              int(o'644', c_int))
-      rc = c_posix_spawn(pid, to_c(trim(argv(1))), fa, attr, ptrs, c_environ)
+      rc = c_posix_spawn(pid, to_c(trim(argv(1))), fa, attr, ptrs, environment())
       r = c_actions_destroy(fa)
       r = c_attr_destroy(attr)
       if (rc /= 0) then
@@ -221,6 +227,21 @@ contains
          res%code = int(iand(status, 127_c_int))
       end if
    end subroutine run_process
+
+   !> The program's environment as it is now (C's environ), for the program it starts: an
+   !> FE code needs its PATH, licence and scratch variables. A Fortran variable bound to the
+   !> name environ would be a definition of its own, a null that shadows the C library's, and
+   !> every program started would get an empty environment; so the C library's is looked up.
+   function environment() result(envp)
+      type(c_ptr) :: envp
+      type(c_ptr), pointer :: environ
+      type(c_ptr) :: address
+      envp = c_null_ptr
+      address = c_dlsym(c_null_ptr, 'environ'//c_null_char)
+      if (.not. c_associated(address)) return
+      call c_f_pointer(address, environ)
+      envp = environ
+   end function environment
 
    pure function to_c(text) result(chars)
       character(len=*), intent(in) :: text
