@@ -31,7 +31,8 @@ module test_diagnose
    use usharp_diagnose_refit, only: judge, rate_undetermined
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
-   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt
+   use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
+                                       at_box_end, at_bound
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -95,6 +96,7 @@ contains
          new_unittest('form-left-open-below-the-floor-fits-every-test', test_open_below_floor), &
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('rate-held-where-undetermined', test_rate_held), &
+         new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -1415,6 +1417,23 @@ contains
       res%effects(1)%dbic = -310.0_dp
       call check(error, form_beats_leader(res) == 0, 'not better by the margin')
    end subroutine test_open_below_floor
+
+   !> An effect parameter is flagged at its search box's outer ends (a second back stress's H3
+   !> of 1000 times the peak, a temperature offset at its negative end), not at a lower end of
+   !> zero that a parameter which cannot be negative may reach (no lag); a constant at its
+   !> &fit bound is flagged within 1e-3 of its box in log10 units
+   subroutine test_box_end(error)
+      type(error_type), allocatable, intent(out) :: error
+      logical :: got(6)
+      got = at_box_end([1.7463e5_dp, 1.7462e5_dp, 0.0_dp, -50.0_dp, 3.0_dp, 0.07_dp], &
+                       [0.0_dp, 0.0_dp, 0.0_dp, -50.0_dp, -50.0_dp, 0.0_dp], &
+                       [1.7463e5_dp, 1.7463e5_dp, 70.0_dp, 50.0_dp, 50.0_dp, 70.0_dp])
+      call check(error, all(got .eqv. [.true., .false., .false., .true., .false., .false.]), &
+                 'effect parameters at the box''s end')
+      if (allocated(error)) return
+      got(1:3) = at_bound([2.0_dp, 2.9995_dp, 2.99_dp], [-3.0_dp, -3.0_dp, -3.0_dp], [3.0_dp, 3.0_dp, 3.0_dp])
+      call check(error, all(got(1:3) .eqv. [.false., .true., .false.]), 'constants at a bound of &fit')
+   end subroutine test_box_end
 
    !> A fitted magnitude is implausible only when its interval lies beyond the limit: a
    !> temperature offset fitted at 25.1 K [24.6, 25.6] against a limit of 25 K is at the

@@ -27,7 +27,7 @@ module usharp_diagnose_numerics
 
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
-   public :: free_params, effect_fit, at_bound, softening_starts, soften_rate0, softening_reached
+   public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
    public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate, ratio_beyond_doubt
 
@@ -614,4 +614,12 @@ contains
       logical :: mask(size(x))
       mask = x <= lo + 1.0e-3_dp*max(hi - lo, 1.0_dp) .or. x >= hi - 1.0e-3_dp*max(hi - lo, 1.0_dp)
    end function at_bound
+   !> Which effect parameters x lie at an outer end of their search box [lo, hi] (within 1e-6
+   !> of its width): at hi, or at lo where lo is negative. A lower end of zero is the physical
+   !> bound of a parameter that cannot be negative, a value there a finding, not a runaway.
+   pure function at_box_end(x, lo, hi) result(mask)
+      real(dp), intent(in) :: x(:), lo(:), hi(:)
+      logical :: mask(size(x))
+      mask = x >= hi - 1.0e-6_dp*(hi - lo) .or. (lo < 0.0_dp .and. x <= lo + 1.0e-6_dp*(hi - lo))
+   end function at_box_end
 end module usharp_diagnose_numerics

@@ -21,7 +21,7 @@ module usharp_diagnose_refit
                                     delay_precision
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, softening_reached, &
-                                       block_sums, deviance_change, held_rate, ratio_beyond_doubt
+                                       block_sums, deviance_change, held_rate, ratio_beyond_doubt, at_box_end
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -240,6 +240,7 @@ contains
       type(optimum_type) :: oh
       class(model_type), allocatable :: mh
       real(dp), allocatable :: ph(:), lo(:), hi(:), x0(:), x1(:, :)
+      real(dp) :: fs1(1)
       integer :: nc
       nc = size(ctx%prob%idx)
       call effect_fit(ctx, e%k, eh, .true.)
@@ -254,8 +255,10 @@ contains
       if (allocated(error)) return
       trial%nevals = trial%nevals + oh%nevals
       call starts_unit(ctx%journal, eh, x1, lo, hi, ctx%h, ctx%opts%max_evals, oh, trial%nevals, error, &
-                       over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
+                       fs1, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
       if (allocated(error)) return
+      ! Its start from the free refit's constants is one of the starts the report counts
+      trial%nstarts_failed = e%nstarts_failed + count(fs1 >= failed_objective)
       trial%held = .true.
       trial%rate_lo = e%p_lo(held_rate(ctx%cat(e%k)))
       trial%rate_hi = e%p_hi(held_rate(ctx%cat(e%k)))
@@ -373,10 +376,8 @@ contains
       e%c = [(mdl%get_constant(ctx%prob%idx(j)), j=1, nc)]
       pscale = pack(ep%pscale, ep%pfree)
       e%p = pack(p, ep%pfree)
-      ! At the search box's outer ends (1000 times the parameter's unit), not at zero, the
-      ! physical bound of a parameter that cannot be negative
-      e%p_bound = x(nc + 1:) >= hi(nc + 1:) - 1.0e-6_dp*(hi(nc + 1:) - lo(nc + 1:)) .or. &
-                  (lo(nc + 1:) < 0.0_dp .and. x(nc + 1:) <= lo(nc + 1:) + 1.0e-6_dp*(hi(nc + 1:) - lo(nc + 1:)))
+      ! At the search box's outer ends (1000 times the parameter's unit)
+      e%p_bound = at_box_end(x(nc + 1:), lo(nc + 1:), hi(nc + 1:))
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
       call name_params(ctx, res, ep, e)
