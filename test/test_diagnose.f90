@@ -14,7 +14,7 @@ module test_diagnose
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_effects, only: test_effects, lagged_value, lag_corners, effect_model, extended_rates, n_extended, &
-                             effect_catalogue, effect_index
+                             effect_catalogue, effect_index, effect_info, n_effects
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
@@ -32,7 +32,7 @@ module test_diagnose
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
-                                       at_box_end, at_bound
+                                       at_box_end, at_bound, beyond_limit
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -97,6 +97,7 @@ contains
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('rate-held-where-undetermined', test_rate_held), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
+         new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -1434,6 +1435,40 @@ contains
       got(1:3) = at_bound([2.0_dp, 2.9995_dp, 2.99_dp], [-3.0_dp, -3.0_dp, -3.0_dp], [3.0_dp, 3.0_dp, 3.0_dp])
       call check(error, all(got(1:3) .eqv. [.false., .true., .false.]), 'constants at a bound of &fit')
    end subroutine test_box_end
+
+   !> One rule of plausibility for both diagnoses: a temperature offset of 177 K [150, 204] is
+   !> beyond its 25 K limit, 25.1 K [24.6, 25.6] is not, 30 K with an open end is judged by
+   !> its value; a softening by its reach; a second back stress whose H3 has no limit by its
+   !> saturation against the peak (597 MPa against 176: beyond); a parameter without a limit
+   !> leaves the others to decide
+   subroutine test_beyond_limit(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_info) :: cat(n_effects)
+      real(dp) :: r
+      cat = effect_catalogue(176.0_dp)
+      associate (dt => cat(effect_index('temperature')), soft => cat(effect_index('softening')), &
+                 bs2 => cat(effect_index('backstress2')))
+         r = beyond_limit(dt, [1, 1], [177.0_dp, 25.1_dp], [150.0_dp, 24.6_dp], [204.0_dp, 25.6_dp], &
+                          [.false., .false.], 0.0_dp, 0.0_dp)
+         call check(error, abs(r - 6.0_dp) < 1.0e-12_dp, 'two tests, one beyond doubt: '//real_str(r, 'f0.4'))
+         if (allocated(error)) return
+         r = beyond_limit(dt, [1], [25.1_dp], [24.6_dp], [25.6_dp], [.false.], 0.0_dp, 0.0_dp)
+         call check(error, r < 1.0_dp, 'at the limit: '//real_str(r, 'f0.4'))
+         if (allocated(error)) return
+         r = beyond_limit(dt, [1], [30.0_dp], [28.0_dp], [32.0_dp], [.true.], 0.0_dp, 0.0_dp)
+         call check(error, abs(r - 1.2_dp) < 1.0e-12_dp, 'an open end: by its value: '//real_str(r, 'f0.4'))
+         if (allocated(error)) return
+         r = beyond_limit(soft, [1, 2], [0.9_dp, 50.0_dp], [0.8_dp, 40.0_dp], [1.0_dp, 60.0_dp], &
+                          [.false., .false.], 0.2_dp, 0.0_dp)
+         call check(error, abs(r - 0.2_dp/soft%plausible(1)) < 1.0e-12_dp, 'softening by its reach: '// &
+                    real_str(r, 'f0.4'))
+         if (allocated(error)) return
+         r = beyond_limit(bs2, [1, 2], [1.7463e5_dp, 292.0_dp], [1.0e5_dp, 200.0_dp], &
+                          [2.0e5_dp, 400.0_dp], [.false., .false.], 0.0_dp, 597.0_dp/176.0_dp)
+         call check(error, abs(r - 597.0_dp/176.0_dp) < 1.0e-12_dp, 'back stress by its saturation: '// &
+                    real_str(r, 'f0.4'))
+      end associate
+   end subroutine test_beyond_limit
 
    !> A fitted magnitude is implausible only when its interval lies beyond the limit: a
    !> temperature offset fitted at 25.1 K [24.6, 25.6] against a limit of 25 K is at the

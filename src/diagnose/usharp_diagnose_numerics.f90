@@ -29,7 +29,8 @@ module usharp_diagnose_numerics
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
-   public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate, ratio_beyond_doubt
+   public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate, ratio_beyond_doubt, &
+             beyond_limit
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
    !> gradient at zero softening) and where its fits start: saturated over the first 1 % of
@@ -345,6 +346,39 @@ contains
       if (p_lo*p_hi > 0.0_dp .and. ieee_is_finite(p_lo) .and. ieee_is_finite(p_hi)) &
          r = ratio*min(abs(p_lo), abs(p_hi))/abs(p)
    end function ratio_beyond_doubt
+
+   !> How far an effect's fitted magnitude lies beyond its physical limit beyond doubt (above 1:
+   !> implausible), as the held-out and the per-specimen diagnoses both judge it: a softening
+   !> by the share of the drag it takes away within the test (reach, see softening_reached);
+   !> any other effect by its largest free parameter against that parameter's limit, at the
+   !> end of its 95 % interval nearest zero where the data close the interval
+   !> (ratio_beyond_doubt), by its value where they leave an end open; a second back stress
+   !> also by its saturation H3/gamma3 against the peak stress (saturation, that ratio)
+   pure real(dp) function beyond_limit(info, grp, p, p_lo, p_hi, open, reach, saturation) result(sure)
+      type(effect_info), intent(in) :: info
+      !> Each free parameter's place in the catalogue's list of the effect's parameters
+      integer, intent(in) :: grp(:)
+      !> The free parameters and their 95 % intervals
+      real(dp), intent(in) :: p(:), p_lo(:), p_hi(:)
+      !> An end of the interval that the data do not bound
+      logical, intent(in) :: open(:)
+      !> The softening's reach over its limit's quantity, the back stress's |H3/gamma3|/peak
+      real(dp), intent(in) :: reach, saturation
+      real(dp) :: ratio
+      integer :: g
+      if (info%name == 'softening') then
+         sure = reach/info%plausible(1)
+         return
+      end if
+      sure = 0.0_dp
+      do g = 1, size(p)
+         if (info%plausible(grp(g)) >= huge(1.0_dp)) cycle
+         ratio = abs(p(g))/info%plausible(grp(g))
+         if (g <= size(p_lo) .and. .not. open(g)) ratio = ratio_beyond_doubt(ratio, p(g), p_lo(g), p_hi(g))
+         sure = max(sure, ratio)
+      end do
+      if (info%name == 'backstress2') sure = max(sure, saturation)
+   end function beyond_limit
 
    !> The parameter of a global effect that screening holds at its start (no gradient at
    !> zero: the second back stress's gamma3, the softening's b), when it is the last of its

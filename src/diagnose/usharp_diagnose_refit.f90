@@ -21,7 +21,7 @@ module usharp_diagnose_refit
                                     delay_precision
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, softening_reached, &
-                                       block_sums, deviance_change, held_rate, ratio_beyond_doubt, at_box_end
+                                       block_sums, deviance_change, held_rate, beyond_limit, at_box_end
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -421,37 +421,44 @@ contains
       type(effect_problem), intent(in) :: ep
       real(dp), intent(in) :: x(:), p(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp) :: sure
-      integer :: j, g, nt, free
+      real(dp) :: reach, saturation
+      integer :: j, g, nt
+      integer, allocatable :: grp(:)
       nt = size(ctx%prob%targets)
       e%worst = 0.0_dp
       e%worst_what = ''
-      sure = 0.0_dp
-      free = 0
+      reach = 0.0_dp
+      saturation = 0.0_dp
       associate (info => ctx%cat(e%k))
+         ! The largest magnitude against its limit, by value, for the report
          if (info%sharing == param_per_test) then
             do g = 1, info%nparam
                do j = 1, nt
-                  if (.not. ep%pfree((g - 1)*nt + j)) cycle
-                  free = free + 1
-                  call worse_of(abs(p((g - 1)*nt + j))/info%plausible(g), info%pname(g), free)
+                  if (ep%pfree((g - 1)*nt + j)) call worse_of(abs(p((g - 1)*nt + j))/info%plausible(g), &
+                                                              info%pname(g))
                end do
             end do
+            grp = pack([((g, j=1, nt), g=1, info%nparam)], ep%pfree)
          else
             if (info%name == 'softening' .and. size(p) >= 2) then
-               call worse_of(softening_reached(ep, x, p(1), p(2))/info%plausible(1), 'a(1 - exp(-b p))')
+               reach = softening_reached(ep, x, p(1), p(2))
+               call worse_of(reach/info%plausible(1), 'a(1 - exp(-b p))')
             else
                do j = 1, size(ep%p0)
-                  if (.not. ep%pfree(j)) cycle
-                  free = free + 1
-                  if (info%plausible(j) < huge(1.0_dp)) &
-                     call worse_of(abs(p(j))/info%plausible(j), info%pname(j), free)
+                  if (ep%pfree(j) .and. info%plausible(j) < huge(1.0_dp)) &
+                     call worse_of(abs(p(j))/info%plausible(j), info%pname(j))
                end do
             end if
             if (info%name == 'backstress2' .and. size(p) >= 2) then
-               if (p(2) > 0.0_dp) call worse_of(abs(p(1)/p(2))/ctx%peak, 'H3/gamma3')
+               if (p(2) > 0.0_dp) then
+                  saturation = abs(p(1)/p(2))/ctx%peak
+                  call worse_of(saturation, 'H3/gamma3')
+               end if
             end if
+            grp = pack([(j, j=1, size(ep%p0))], ep%pfree)
          end if
+         e%plausible = beyond_limit(info, grp, e%p, e%p_lo, e%p_hi, spread(.false., 1, size(e%p)), reach, &
+                                    saturation) <= 1.0_dp
          e%resolved = .true.
          e%measured = .false.
          if (info%name == 'shift' .or. info%name == 'lag') then
@@ -461,23 +468,15 @@ contains
                             e%p_hi(1) - e%p_lo(1) <= 2.0_dp*delay_precision*abs(e%p(1))
          end if
       end associate
-      e%plausible = sure <= 1.0_dp
    contains
-      !> ratio: |value|/limit; i: the parameter's place among e%p (its interval), if it has one
-      subroutine worse_of(ratio, what, i)
+      !> ratio: |value|/limit
+      subroutine worse_of(ratio, what)
          real(dp), intent(in) :: ratio
          character(len=*), intent(in) :: what
-         integer, intent(in), optional :: i
-         real(dp) :: least
          if (ratio > e%worst .or. len_trim(e%worst_what) == 0) then
             e%worst = ratio
             e%worst_what = what
          end if
-         least = ratio
-         if (present(i)) then
-            if (i <= size(e%p_lo)) least = ratio_beyond_doubt(ratio, e%p(i), e%p_lo(i), e%p_hi(i))
-         end if
-         sure = max(sure, least)
       end subroutine worse_of
    end subroutine judge_magnitude
 

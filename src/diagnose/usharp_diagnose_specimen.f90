@@ -27,7 +27,7 @@ module usharp_diagnose_specimen
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
                                        soften_rate0, softening_reached, low_end_deltas, bic_power, &
                                        tight_jacobian, sandwich_covariance, test_noise_variance, at_bound, &
-                                       ratio_beyond_doubt
+                                       beyond_limit
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most
    use usharp_diagnose_profile, only: profile_interval, profile_result
@@ -219,7 +219,8 @@ contains
          type(profile_result) :: pr
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
          real(dp), allocatable :: starts(:, :)
-         real(dp) :: scale, g3
+         real(dp) :: scale, g3, reach, saturation
+         integer, allocatable :: grp(:)
          real(dp), parameter :: sats(2) = [0.03_dp, 0.1_dp], rates(3) = [0.5_dp, 2.0_dp, 10.0_dp]
          integer :: jj, g, np
          logical :: okj
@@ -284,21 +285,14 @@ contains
          se_out%p = p
          allocate (se_out%p_lo(size(p)), se_out%p_hi(size(p)), se_out%lo_open(size(p)), &
                    se_out%hi_open(size(p)), se_out%pname(size(p)), se_out%punit(size(p)))
-         se_out%plausible = .true.
-         if (k == 7) se_out%plausible = softening_reached(ek, o%x, p(1), p(2)) <= cat(k)%plausible(1)
-         ! the second back stress: by its saturation H3/gamma3 against the peak stress, as the
-         ! held-out diagnosis judges it (a back stress beyond the stress it is part of is none)
-         if (k == 8 .and. size(p) >= 2) then
-            if (p(2) > 0.0_dp) se_out%plausible = abs(p(1)/p(2)) <= peak
-         end if
+         allocate (grp(size(p)))
          g = 0
          do jj = 1, np
             if (.not. ek%pfree(jj)) cycle
             g = g + 1
-            associate (grp => merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test))
-               se_out%pname(g) = cat(k)%pname(grp)
-               se_out%punit(g) = cat(k)%punit(grp)
-            end associate
+            grp(g) = merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test)
+            se_out%pname(g) = cat(k)%pname(grp(g))
+            se_out%punit(g) = cat(k)%punit(grp(g))
             ! The rise of the objective at the 95 % ends: the sandwich over the naive variance
             scale = o%f/max(sr%m - se_out%q, 1)
             if (naive(g, g) > 0.0_dp .and. cov(g, g) > 0.0_dp) scale = cov(g, g)/naive(g, g)
@@ -310,22 +304,16 @@ contains
             se_out%p_hi(g) = pr%hi*ek%pscale(jj)
             se_out%lo_open(g) = pr%lo_open
             se_out%hi_open(g) = pr%hi_open
-            ! Beyond its physical limit only when its 95 % interval is, as the held-out
-            ! diagnosis judges it (the softening: by the share of the drag it takes away
-            ! within the test, above)
-            ! (an open end is where the profile's walk stopped, not a bound: a value the data
-            ! leave undetermined is judged by itself)
-            associate (grp => merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test))
-               if (k /= 7) then
-                  if (pr%lo_open .or. pr%hi_open) then
-                     se_out%plausible = se_out%plausible .and. abs(p(g)) <= cat(k)%plausible(grp)
-                  else
-                     se_out%plausible = se_out%plausible .and. ratio_beyond_doubt(abs(p(g))/ &
-                        cat(k)%plausible(grp), p(g), se_out%p_lo(g), se_out%p_hi(g)) <= 1.0_dp
-                  end if
-               end if
-            end associate
          end do
+         ! Beyond its physical limit only as the held-out diagnosis judges it
+         reach = 0.0_dp
+         if (cat(k)%name == 'softening') reach = softening_reached(ek, o%x, p(1), p(2))
+         saturation = 0.0_dp
+         if (cat(k)%name == 'backstress2' .and. size(p) >= 2) then
+            if (p(2) > 0.0_dp) saturation = abs(p(1)/p(2))/peak
+         end if
+         se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
+                                         se_out%lo_open .or. se_out%hi_open, reach, saturation) <= 1.0_dp
       end subroutine fit_effect
 
       !> The power of the significance rule against effect ek%k at the low end of its range
