@@ -22,7 +22,7 @@ module test_diagnose_data
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type
    use usharp_effects, only: test_effects, effect_index
-   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_effect_problem, only: effect_problem, new_effect_problem, failed_objective
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report
    use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context, &
@@ -37,6 +37,8 @@ module test_diagnose_data
    !> y = a exp(-b t) + noise at fixed t: x = (a, b)
    type, extends(least_squares_type) :: decay_problem
       real(dp), allocatable :: t(:), y(:)
+      !> The model fails to simulate for b above this
+      real(dp) :: fail_above = huge(1.0_dp)
    contains
       procedure :: residuals => decay_residuals
       procedure :: nres => decay_nres
@@ -54,6 +56,7 @@ contains
          new_unittest('inelastic-from-the-model-rate', test_inelastic), &
          new_unittest('serration-signature-in-the-residual', test_serration), &
          new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
+         new_unittest('profile-left-open-where-the-model-fails', test_profile_failures), &
          new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift), &
          new_unittest('power-against-monte-carlo', test_power_monte_carlo), &
          new_unittest('independent-data-clean-modulus-temperature', test_independent), &
@@ -292,6 +295,45 @@ contains
       call check(error, abs(real(hits, dp)/nrep - 0.95_dp) <= 0.035_dp, 'profile coverage '// &
                  str(hits)//' of '//str(nrep))
    end subroutine test_profile_coverage
+
+   !> A profile walk into values at which the model fails to simulate: the end is left open at
+   !> the last value that simulated, not closed at the optimum as if the objective had risen
+   !> without bound (the failures' penalty, 2e10); the other end closes as before
+   subroutine test_profile_failures(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(decay_problem) :: dp_
+      type(optimum_type) :: opt
+      type(profile_result) :: pr, pr0
+      type(rng_type) :: rng
+      real(dp) :: se
+      integer :: i
+      call rng%seed(5)
+      dp_%t = [(4.0_dp*(i - 1)/11.0_dp, i=1, 12)]
+      dp_%y = [(exp(-0.8_dp*dp_%t(i)) + 0.15_dp*rng%normal(), i=1, 12)]
+      call levenberg_marquardt(dp_, [1.0_dp, 1.0_dp], [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                               1.0e-7_dp, 1.0e-12_dp, 200, 5000, opt, e)
+      call check(error, .not. allocated(e), 'fit failed')
+      if (allocated(error)) return
+      se = 0.3_dp*opt%x(2)
+      call profile_interval(dp_, opt%x, opt%f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                            1.0e-7_dp, se, opt%f/10.0_dp, .true., 2000, pr0, e)
+      call check(error, .not. allocated(e) .and. .not. pr0%hi_open, 'the profile without failures')
+      if (allocated(error)) return
+      ! The model fails above half-way to the interval's upper end
+      dp_%fail_above = opt%x(2) + 0.5_dp*(pr0%hi - opt%x(2))
+      call profile_interval(dp_, opt%x, opt%f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                            1.0e-7_dp, se, opt%f/10.0_dp, .true., 2000, pr, e)
+      call check(error, .not. allocated(e), 'profile failed')
+      if (allocated(error)) return
+      call check(error, pr%hi_open .and. pr%hi > opt%x(2) + 0.1_dp*(pr0%hi - opt%x(2)) .and. &
+                 pr%hi <= dp_%fail_above, 'upper end '//real_str(pr%hi, 'es12.5')//' open '// &
+                 merge('T', 'F', pr%hi_open)//' for a model failing above '//real_str(dp_%fail_above, 'es12.5')// &
+                 ' (optimum '//real_str(opt%x(2), 'es12.5')//')')
+      if (allocated(error)) return
+      call check(error, .not. pr%lo_open .and. abs(pr%lo - pr0%lo) <= 1.0e-9_dp*abs(pr0%lo), &
+                 'the lower end as before')
+   end subroutine test_profile_failures
 
    !> Three cyclic tests of the thesis model, the third with an extensometer drift of 8e-6/s
    !> (0.04 % over its 48 s) and 0.5 % noise: fitted alone against the constants of the two
@@ -763,7 +805,8 @@ contains
       do k = 1, size(xs, 2)
          rs(:, k) = self%y - xs(1, k)*exp(-xs(2, k)*self%t)
          fs(k) = sum(rs(:, k)**2)
-         ok(k) = .true.
+         ok(k) = xs(2, k) <= self%fail_above
+         if (.not. ok(k)) fs(k) = failed_objective
       end do
    end subroutine decay_residuals
 
@@ -778,5 +821,6 @@ contains
       real(dp), intent(out) :: f
       type(uerror), allocatable, intent(out) :: error
       f = sum((self%y - x(1)*exp(-x(2)*self%t))**2)
+      if (x(2) > self%fail_above) f = failed_objective
    end subroutine decay_eval
 end module test_diagnose_data

@@ -18,7 +18,7 @@ module usharp_diagnose_baseline
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, lm_ftol, lm_itermax, &
                                        jacobian, test_sizes, block_sums, tight_jacobian, sandwich_covariance, &
-                                      test_noise_variance
+                                      noise_variance
    implicit none
    private
 
@@ -90,7 +90,7 @@ contains
       end if
       call points_of(ctx%prob, res, eps, eps_in)
       res%y_base = yb
-      ctx%nv = noise_variance(ctx%prob, res%noise)
+      ctx%nv = noise_variance(ctx%prob, [(i, i=1, size(ctx%prob%targets))], res%noise)
       associate (nv => ctx%nv)
          res%per_test0 = per_test(ctx%prob, r0)
          res%regions = all_regions(ctx%prob, res, r0, yb, nv)
@@ -175,18 +175,6 @@ contains
          end associate
       end do
    end subroutine points_of
-
-   !> Noise variance of each weighted residual from the noise sd of its test's data
-   function noise_variance(prob, sd) result(nv)
-      type(fit_problem), intent(in) :: prob
-      real(dp), intent(in) :: sd(:)
-      real(dp), allocatable :: nv(:)
-      integer :: i
-      allocate (nv(0))
-      do i = 1, size(prob%targets)
-         nv = [nv, test_noise_variance(prob, i, sd(i))]
-      end do
-   end function noise_variance
 
    !> Objective per test from the residuals of all tests
    function per_test(prob, r) result(pt)

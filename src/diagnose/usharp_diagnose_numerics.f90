@@ -29,7 +29,7 @@ module usharp_diagnose_numerics
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
-   public :: tight_jacobian, sandwich_covariance, test_noise_variance, held_rate, ratio_beyond_doubt, &
+   public :: tight_jacobian, sandwich_covariance, noise_variance, held_rate, ratio_beyond_doubt, &
              beyond_limit
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
@@ -601,20 +601,24 @@ contains
       cov = mat_mul(ai, mat_mul(mat_mul(transpose(jn), jn), ai))
    end function sandwich_covariance
 
-   !> The noise variance of each residual of test i of prob (objective units) for a noise of
-   !> standard deviation sd in the test's response
-   pure function test_noise_variance(prob, i, sd) result(nv)
+   !> The noise variance of each residual of the tests tests of prob (objective units, test
+   !> after test in that order) for noises of standard deviation sd(k) in test tests(k)'s
+   !> response
+   pure function noise_variance(prob, tests, sd) result(nv)
       type(fit_problem), intent(in) :: prob
-      integer, intent(in) :: i
-      real(dp), intent(in) :: sd
+      integer, intent(in) :: tests(:)
+      real(dp), intent(in) :: sd(:)
       real(dp), allocatable :: nv(:)
-      integer :: n
-      associate (tg => prob%targets(i))
-         n = size(tg%t)
-         nv = (sd*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), spread(0.0_dp, 1, n), &
-                                 tg%w, tg%y_ex_max))**2
-      end associate
-   end function test_noise_variance
+      integer :: n, k
+      allocate (nv(0))
+      do k = 1, size(tests)
+         associate (tg => prob%targets(tests(k)))
+            n = size(tg%t)
+            nv = [nv, (sd(k)*test_residuals(prob%cfg%fit%objective, spread(1.0_dp, 1, n), &
+                                            spread(0.0_dp, 1, n), tg%w, tg%y_ex_max))**2]
+         end associate
+      end do
+   end function noise_variance
 
    !> Pseudo-inverse of a symmetric positive semi-definite matrix (directions below 1e-12 of
    !> the largest singular value dropped), after scaling to a unit diagonal

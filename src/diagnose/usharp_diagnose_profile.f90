@@ -15,7 +15,7 @@ module usharp_diagnose_profile
    use usharp_diagnose_journal, only: diagnose_journal
    use usharp_diagnose_units, only: lm_unit
    use usharp_identify, only: robust_covariance
-   use usharp_effect_problem, only: effect_problem
+   use usharp_effect_problem, only: effect_problem, failed_objective
    use usharp_diagnose_types, only: diagnose_context, diagnose_result
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, effect_fit
    implicit none
@@ -27,6 +27,9 @@ module usharp_diagnose_profile
    real(dp), parameter :: chi2_95 = 3.841459_dp
    !> Steps out from the optimum on each side before the interval is called open
    integer, parameter :: max_steps = 14
+   !> Steps a walk shortens (by 4 each) where the model fails to simulate before it leaves
+   !> that end open
+   integer, parameter :: max_failed = 8
    !> The leading effect's Wald interval is replaced by the profile when it crosses zero for
    !> a parameter that cannot, or its half-width exceeds this share of the value
    real(dp), parameter :: wald_rel_limit = 0.5_dp
@@ -119,7 +122,7 @@ contains
          type(optimum_type) :: opt
          real(dp), allocatable :: xr(:), lor(:), hir(:)
          real(dp) :: u0, u, un, step, rise, rise_prev, ubound
-         integer :: k
+         integer :: k, nfailed
          logical :: at_bound
          xr = [x_hat(:j - 1), x_hat(j + 1:)]
          lor = [lo(:j - 1), lo(j + 1:)]
@@ -139,7 +142,9 @@ contains
          rise_prev = 0.0_dp
          is_open = .true.
          endpoint = from_u(u0)
-         do k = 1, max_steps
+         k = 0
+         nfailed = 0
+         do while (k < max_steps)
             un = u + d*step
             at_bound = d*(un - ubound) >= 0.0_dp
             if (at_bound) un = ubound
@@ -154,6 +159,17 @@ contains
                opt%nevals = 1
             end if
             pr%nevals = pr%nevals + opt%nevals
+            if (.not. opt%f < failed_objective) then
+               ! A value at which the model fails to simulate says nothing of the likelihood
+               ! (taken as a rise, a first Wald step of 22 peak stresses into it gave an
+               ! initial back stress of 129 MPa the interval [129, 129]): a shorter step, and
+               ! where short ones fail too, the end left open at the last value that simulated
+               nfailed = nfailed + 1
+               if (nfailed > max_failed) return
+               step = 0.25_dp*step
+               cycle
+            end if
+            k = k + 1
             pr%f_min = min(pr%f_min, opt%f)
             rise = max(opt%f - f_hat, 0.0_dp)
             if (rise >= pr%threshold) then

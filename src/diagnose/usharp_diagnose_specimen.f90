@@ -26,7 +26,7 @@ module usharp_diagnose_specimen
    use usharp_diagnose_options, only: diagnose_options, bic_margin
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
                                        soften_rate0, softening_reached, low_end_deltas, bic_power, &
-                                       tight_jacobian, sandwich_covariance, test_noise_variance, at_bound, &
+                                       tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
                                        beyond_limit
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most
@@ -155,10 +155,7 @@ contains
          call tight_jacobian(ep, opt%x, cfg%fit%fd_step, rr, jr, ok)
          sr%nevals = sr%nevals + size(jr, 2) + 1
          if (ok) then
-            allocate (nvr(0))
-            do i = 1, size(reps)
-               nvr = [nvr, test_noise_variance(prob, reps(i), noise_sd(prob%targets(reps(i))%exp%y))]
-            end do
+            nvr = noise_variance(prob, reps, [(noise_sd(prob%targets(reps(i))%exp%y), i=1, size(reps))])
             cov = sandwich_covariance(jr, nvr)
          end if
       else
@@ -179,7 +176,7 @@ contains
       end if
       sr%f0 = sum(r0**2)
       sr%noise_sd = noise_sd(prob%targets(ispec)%exp%y)
-      sr%nv = test_noise_variance(prob, ispec, sr%noise_sd)
+      sr%nv = noise_variance(prob, [ispec], [sr%noise_sd])
       ! (data without noise leave no covariance to weigh by)
       if (allocated(cov) .and. .not. any(.not. sr%nv > 0.0_dp)) then
          ! The specimen's residuals in the constants (the same packing as the replicates')
