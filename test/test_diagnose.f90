@@ -18,7 +18,7 @@ module test_diagnose
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
-   use usharp_strings, only: real_str
+   use usharp_strings, only: real_str, interval_end
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading
@@ -1575,6 +1575,12 @@ contains
                  real_str(-0.2_dp, 'f0.0') == '0' .and. real_str(12.5_dp, 'f0.1') == '12.5' .and. &
                  real_str(0.5_dp, 'f6.2') == '0.50', 'real_str: '//real_str(0.55_dp, 'f0.2')//' '// &
                  real_str(6.0_dp, 'f0.0')//' '//real_str(-0.55_dp, 'f0.2'))
+      if (allocated(error)) return
+      ! An interval's end the data do not bound is 'open', but zero, a physical bound, a number
+      call check(error, interval_end(129.0_dp, .true., 'es9.2') == 'open' .and. &
+                 interval_end(0.0_dp, .true., 'es9.2') == '0.00E+00' .and. &
+                 interval_end(81.2_dp, .false., 'es9.2') == '8.12E+01', 'interval ends: '// &
+                 interval_end(129.0_dp, .true., 'es9.2')//' '//interval_end(0.0_dp, .true., 'es9.2'))
    end subroutine test_number_format
 
    !> One noisy repetition each of clean data, compliance, lag and shift on a small

@@ -225,8 +225,10 @@ contains
       if (res%leading == 0) return
       associate (e => res%effects(res%leading))
          if (.not. allocated(e%x_fit)) return
-         allocate (e%p_profiled(size(e%p)))
+         allocate (e%p_profiled(size(e%p)), e%p_lo_open(size(e%p)), e%p_hi_open(size(e%p)))
          e%p_profiled = .false.
+         e%p_lo_open = .false.
+         e%p_hi_open = .false.
          call effect_fit(ctx, e%k, ep, e%held)
          if (size(e%x_fit) /= ep%nx()) return
          nc = size(ctx%prob%idx)
@@ -252,6 +254,8 @@ contains
             e%p_lo(g) = pr%lo*pscale(g)
             e%p_hi(g) = pr%hi*pscale(g)
             e%p_profiled(g) = .true.
+            e%p_lo_open(g) = pr%lo_open
+            e%p_hi_open(g) = pr%hi_open
          end do
       end associate
    end subroutine profile_leading

@@ -3,7 +3,8 @@
 module usharp_diagnose_report
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_strings, only: str, real_str, gnuplot_string, csv_field, report_line_len, add_line
+   use usharp_strings, only: str, real_str, gnuplot_string, csv_field, report_line_len, add_line, &
+                             interval_end
    use usharp_process, only: run_process, process_result, proc_exited
    use usharp_regions, only: class_names
    use usharp_filesys, only: join_path, make_dir
@@ -212,6 +213,7 @@ contains
       integer, allocatable :: order(:)
       integer :: i, k, g
       character(len=:), allocatable :: what
+      logical :: lo_open, hi_open
       type(effect_info) :: cat(n_effects)
       order = top_regions(res%regions, 15)
       cat = effect_catalogue(1.0_dp)
@@ -233,8 +235,15 @@ contains
                   'from: its value is not determined and this interval does not hold'
             end if
          end if
+         lo_open = .false.
+         hi_open = .false.
+         if (allocated(e%p_lo_open)) then
+            lo_open = e%p_lo_open(k)
+            hi_open = e%p_hi_open(k)
+         end if
          call add_line(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
-            real_str(e%p_lo(k), 'es11.4')//', '//real_str(e%p_hi(k), 'es11.4')//']'//what)
+            interval_end(e%p_lo(k), lo_open, 'es11.4')//', '//interval_end(e%p_hi(k), hi_open, 'es11.4')// &
+            ']'//what)
       end do
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))

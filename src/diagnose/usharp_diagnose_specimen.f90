@@ -10,7 +10,7 @@ module usharp_diagnose_specimen
    use usharp_lapack, only: mat_mul, svd
    use usharp_math, only: log_dp, exp_dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: str, real_str, report_line_len, add_line
+   use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end
    use usharp_config, only: run_config
    use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, setup_problem
@@ -517,7 +517,8 @@ contains
             do g = 1, size(e%p)
                if (g > 1) ln = ln//'; '
                ln = ln//trim(e%pname(g))//' = '//real_str(e%p(g), 'es9.2')//' ['// &
-                    end_of(e%p_lo(g), e%lo_open(g))//', '//end_of(e%p_hi(g), e%hi_open(g))//'] '// &
+                    interval_end(e%p_lo(g), e%lo_open(g), 'es9.2')//', '// &
+                    interval_end(e%p_hi(g), e%hi_open(g), 'es9.2')//'] '// &
                     trim(unit_of(e%punit(g)))
             end do
             if (e%significant .and. e%plausible) then
@@ -585,16 +586,5 @@ contains
          text = trim(u)
          if (text == 'stress') text = trim(sr%stress_unit)
       end function unit_of
-
-      function end_of(v, open) result(text)
-         real(dp), intent(in) :: v
-         logical, intent(in) :: open
-         character(len=:), allocatable :: text
-         if (open .and. v /= 0.0_dp) then
-            text = 'open'
-         else
-            text = trim(adjustl(real_str(v, 'es9.2')))
-         end if
-      end function end_of
    end function specimen_report
 end module usharp_diagnose_specimen

@@ -99,6 +99,7 @@ module usharp_diagnose_types
       !> predicted: how well it meets them is no prediction
       logical :: held_fitted = .false.
       logical, allocatable :: p_profiled(:)  !< that interval from the profile likelihood
+      logical, allocatable :: p_lo_open(:), p_hi_open(:)  !< a profile's end the data do not bound
       real(dp), allocatable :: x(:)          !< search point after screening
       real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
       character(len=64), allocatable :: pname(:)

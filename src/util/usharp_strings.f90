@@ -4,7 +4,7 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field, join, add_line
+   public :: lower, str, real_str, interval_end, split_fields, shell_quote, gnuplot_string, pad, csv_field, join, add_line
 
    !> Length of a line of the program's reports and summaries (Markdown tables keep a row on
    !> one line; prose longer than this is wrapped)
@@ -113,6 +113,21 @@ contains
       if (res(len(res):len(res)) == '.') res = res(1:len(res) - 1)
       if (res == '-0') res = '0'
    end function real_str
+
+   !> An end of a 95 % interval as text: 'open' where the data do not bound it (but 0, where a
+   !> quantity that cannot be negative reaches its physical bound, as a number), else its value
+   !> in the edit descriptor fmt
+   pure function interval_end(val, open, fmt) result(res)
+      real(dp), intent(in) :: val
+      logical, intent(in) :: open
+      character(len=*), intent(in) :: fmt
+      character(len=:), allocatable :: res
+      if (open .and. val /= 0.0_dp) then
+         res = 'open'
+      else
+         res = trim(adjustl(real_str(val, fmt)))
+      end if
+   end function interval_end
 
    !> Split a line into fields: by commas when the line holds one, else by white space.
    !> Double quotes group a field (a comma inside quotes does not split); quotes are removed.
