@@ -18,7 +18,7 @@ module test_diagnose
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
-   use usharp_strings, only: real_str, interval_end
+   use usharp_strings, only: real_str, interval_end, interval_format
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading
@@ -1581,6 +1581,13 @@ contains
                  interval_end(0.0_dp, .true., 'es9.2') == '0.00E+00' .and. &
                  interval_end(81.2_dp, .false., 'es9.2') == '8.12E+01', 'interval ends: '// &
                  interval_end(129.0_dp, .true., 'es9.2')//' '//interval_end(0.0_dp, .true., 'es9.2'))
+      if (allocated(error)) return
+      ! Digits enough to tell a narrow interval's ends from the value
+      call check(error, interval_format(12.578_dp, 12.567_dp, 12.600_dp) == 'es11.4' .and. &
+                 interval_format(0.194_dp, 0.189_dp, 0.200_dp) == 'es9.2' .and. &
+                 interval_format(-0.27_dp, -0.29_dp, -0.26_dp) == 'es9.2' .and. &
+                 interval_format(0.0_dp, -1.0_dp, 1.0_dp) == 'es9.2', 'interval digits: '// &
+                 interval_format(12.578_dp, 12.567_dp, 12.600_dp)//' '//interval_format(0.194_dp, 0.189_dp, 0.200_dp))
    end subroutine test_number_format
 
    !> One noisy repetition each of clean data, compliance, lag and shift on a small

@@ -10,7 +10,7 @@ module usharp_diagnose_specimen
    use usharp_lapack, only: mat_mul, svd
    use usharp_math, only: log_dp, exp_dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end
+   use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end, interval_format
    use usharp_config, only: run_config
    use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, setup_problem
@@ -458,7 +458,7 @@ contains
       type(specimen_result), intent(in) :: sr
       character(len=report_line_len), allocatable :: lines(:)
       integer :: j, g, lead
-      character(len=:), allocatable :: ln, verdict
+      character(len=:), allocatable :: ln, verdict, fmt
       character(len=16), allocatable :: names(:)
       real(dp), allocatable :: power(:)
       allocate (lines(0))
@@ -516,9 +516,11 @@ contains
             ln = ''
             do g = 1, size(e%p)
                if (g > 1) ln = ln//'; '
-               ln = ln//trim(e%pname(g))//' = '//real_str(e%p(g), 'es9.2')//' ['// &
-                    interval_end(e%p_lo(g), e%lo_open(g), 'es9.2')//', '// &
-                    interval_end(e%p_hi(g), e%hi_open(g), 'es9.2')//'] '// &
+               fmt = interval_format(e%p(g), merge(e%p(g), e%p_lo(g), e%lo_open(g)), &
+                                     merge(e%p(g), e%p_hi(g), e%hi_open(g)))
+               ln = ln//trim(e%pname(g))//' = '//trim(adjustl(real_str(e%p(g), fmt)))//' ['// &
+                    interval_end(e%p_lo(g), e%lo_open(g), fmt)//', '// &
+                    interval_end(e%p_hi(g), e%hi_open(g), fmt)//'] '// &
                     trim(unit_of(e%punit(g)))
             end do
             if (e%significant .and. e%plausible) then

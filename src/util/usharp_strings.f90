@@ -4,7 +4,8 @@ module usharp_strings
    implicit none
    private
 
-   public :: lower, str, real_str, interval_end, split_fields, shell_quote, gnuplot_string, pad, csv_field, join, add_line
+   public :: interval_end, interval_format
+   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field, join, add_line
 
    !> Length of a line of the program's reports and summaries (Markdown tables keep a row on
    !> one line; prose longer than this is wrapped)
@@ -128,6 +129,23 @@ contains
          res = trim(adjustl(real_str(val, fmt)))
       end if
    end function interval_end
+
+   !> The edit descriptor for a value v and its interval [lo, hi]: three significant digits,
+   !> more (up to six) where three would print an end of the interval as the value itself (a
+   !> drag factor of 12.578 [12.567, 12.600] printed as 1.26E+01 [1.26E+01, 1.26E+01])
+   pure function interval_format(v, lo, hi) result(fmt)
+      real(dp), intent(in) :: v, lo, hi
+      character(len=:), allocatable :: fmt
+      real(dp) :: width
+      integer :: d
+      d = 3
+      width = huge(1.0_dp)
+      if (abs(v - lo) > 0.0_dp) width = min(width, abs(v - lo))
+      if (abs(hi - v) > 0.0_dp) width = min(width, abs(hi - v))
+      if (abs(v) > 0.0_dp .and. width < huge(1.0_dp)) &
+         d = min(6, max(3, ceiling(log10(abs(v)/width)) + 1))
+      fmt = 'es'//str(d + 6)//'.'//str(d - 1)
+   end function interval_format
 
    !> Split a line into fields: by commas when the line holds one, else by white space.
    !> Double quotes group a field (a comma inside quotes does not split); quotes are removed.
