@@ -1583,10 +1583,11 @@ contains
                  interval_end(129.0_dp, .true., 'es9.2')//' '//interval_end(0.0_dp, .true., 'es9.2'))
       if (allocated(error)) return
       ! Digits enough to tell a narrow interval's ends from the value
-      call check(error, interval_format(12.578_dp, 12.567_dp, 12.600_dp) == 'es11.4' .and. &
+      call check(error, interval_format(12.578_dp, 12.567_dp, 12.600_dp) == 'es10.3' .and. &
                  interval_format(0.194_dp, 0.189_dp, 0.200_dp) == 'es9.2' .and. &
                  interval_format(-0.27_dp, -0.29_dp, -0.26_dp) == 'es9.2' .and. &
-                 interval_format(0.0_dp, -1.0_dp, 1.0_dp) == 'es9.2', 'interval digits: '// &
+                 interval_format(0.0_dp, -1.0_dp, 1.0_dp) == 'es9.2' .and. &
+                 interval_format(12.578_dp, 12.578_dp, 12.592_dp) == 'es10.3', 'interval digits: '// &
                  interval_format(12.578_dp, 12.567_dp, 12.600_dp)//' '//interval_format(0.194_dp, 0.189_dp, 0.200_dp))
    end subroutine test_number_format
 

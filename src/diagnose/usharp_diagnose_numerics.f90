@@ -354,14 +354,14 @@ contains
    !> end of its 95 % interval nearest zero where the data close the interval
    !> (ratio_beyond_doubt), by its value where they leave an end open; a second back stress
    !> also by its saturation H3/gamma3 against the peak stress (saturation, that ratio)
-   pure real(dp) function beyond_limit(info, grp, p, p_lo, p_hi, open, reach, saturation) result(sure)
+   pure real(dp) function beyond_limit(info, grp, p, p_lo, p_hi, unbounded, reach, saturation) result(sure)
       type(effect_info), intent(in) :: info
       !> Each free parameter's place in the catalogue's list of the effect's parameters
       integer, intent(in) :: grp(:)
       !> The free parameters and their 95 % intervals
       real(dp), intent(in) :: p(:), p_lo(:), p_hi(:)
       !> An end of the interval that the data do not bound
-      logical, intent(in) :: open(:)
+      logical, intent(in) :: unbounded(:)
       !> The softening's reach over its limit's quantity, the back stress's |H3/gamma3|/peak
       real(dp), intent(in) :: reach, saturation
       real(dp) :: ratio
@@ -374,8 +374,9 @@ contains
       do g = 1, size(p)
          if (info%plausible(grp(g)) >= huge(1.0_dp)) cycle
          ratio = abs(p(g))/info%plausible(grp(g))
-         if (g <= size(p_lo) .and. .not. open(g)) ratio = ratio_beyond_doubt(ratio, p(g), p_lo(g), p_hi(g))
-         sure = max(sure, ratio)
+         if (g <= size(p_lo) .and. .not. unbounded(g)) ratio = ratio_beyond_doubt(ratio, p(g), p_lo(g), p_hi(g))
+         ! (a magnitude that is not a number is beyond its limit: max would drop it)
+         if (.not. ratio <= sure) sure = ratio
       end do
       if (info%name == 'backstress2') sure = max(sure, saturation)
    end function beyond_limit
@@ -652,6 +653,7 @@ contains
       logical :: mask(size(x))
       mask = x <= lo + 1.0e-3_dp*max(hi - lo, 1.0_dp) .or. x >= hi - 1.0e-3_dp*max(hi - lo, 1.0_dp)
    end function at_bound
+
    !> Which effect parameters x lie at an outer end of their search box [lo, hi] (within 1e-6
    !> of its width): at hi, or at lo where lo is negative. A lower end of zero is the physical
    !> bound of a parameter that cannot be negative, a value there a finding, not a runaway.

@@ -166,7 +166,8 @@ contains
                ! where short ones fail too, the end left open at the last value that simulated
                nfailed = nfailed + 1
                if (nfailed > max_failed) return
-               step = 0.25_dp*step
+               ! (of the step taken: one cut to the search bound is not taken again)
+               step = 0.25_dp*abs(un - u)
                cycle
             end if
             k = k + 1

@@ -238,6 +238,8 @@ contains
       type(c_ptr) :: address
       envp = c_null_ptr
       address = c_dlsym(c_null_ptr, 'environ'//c_null_char)
+      ! (the C library always defines it; were it not found, the program would start with an
+      ! empty environment, as with envp null)
       if (.not. c_associated(address)) return
       call c_f_pointer(address, environ)
       envp = environ

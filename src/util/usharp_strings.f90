@@ -118,12 +118,12 @@ contains
    !> An end of a 95 % interval as text: 'open' where the data do not bound it (but 0, where a
    !> quantity that cannot be negative reaches its physical bound, as a number), else its value
    !> in the edit descriptor fmt
-   pure function interval_end(val, open, fmt) result(res)
+   pure function interval_end(val, unbounded, fmt) result(res)
       real(dp), intent(in) :: val
-      logical, intent(in) :: open
+      logical, intent(in) :: unbounded
       character(len=*), intent(in) :: fmt
       character(len=:), allocatable :: res
-      if (open .and. val /= 0.0_dp) then
+      if (unbounded .and. abs(val) > 0.0_dp) then
          res = 'open'
       else
          res = trim(adjustl(real_str(val, fmt)))
@@ -132,19 +132,19 @@ contains
 
    !> The edit descriptor for a value v and its interval [lo, hi]: three significant digits,
    !> more (up to six) where three would print an end of the interval as the value itself (a
-   !> drag factor of 12.578 [12.567, 12.600] printed as 1.26E+01 [1.26E+01, 1.26E+01])
+   !> drag factor of 12.578 [12.567, 12.592] printed as 1.26E+01 [1.26E+01, 1.26E+01]); an
+   !> end equal to the value (an end not bounded, given as the value) does not count
    pure function interval_format(v, lo, hi) result(fmt)
       real(dp), intent(in) :: v, lo, hi
       character(len=:), allocatable :: fmt
-      real(dp) :: width
+      character(len=:), allocatable :: text
       integer :: d
-      d = 3
-      width = huge(1.0_dp)
-      if (abs(v - lo) > 0.0_dp) width = min(width, abs(v - lo))
-      if (abs(hi - v) > 0.0_dp) width = min(width, abs(hi - v))
-      if (abs(v) > 0.0_dp .and. width < huge(1.0_dp)) &
-         d = min(6, max(3, ceiling(log10(abs(v)/width)) + 1))
-      fmt = 'es'//str(d + 6)//'.'//str(d - 1)
+      do d = 3, 6
+         fmt = 'es'//str(d + 6)//'.'//str(d - 1)
+         text = real_str(v, fmt)
+         if ((real_str(lo, fmt) /= text .or. .not. abs(lo - v) > 0.0_dp) .and. &
+             (real_str(hi, fmt) /= text .or. .not. abs(hi - v) > 0.0_dp)) return
+      end do
    end function interval_format
 
    !> Split a line into fields: by commas when the line holds one, else by white space.
