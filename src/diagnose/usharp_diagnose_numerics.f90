@@ -28,6 +28,7 @@ module usharp_diagnose_numerics
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached
+   public :: limit_measures
    public :: low_end_deltas, bic_power, test_sizes, block_sums, deviance_change
    public :: tight_jacobian, sandwich_covariance, noise_variance, held_rate, ratio_beyond_doubt, &
              beyond_limit
@@ -335,6 +336,22 @@ contains
       end do
       share = abs(a)*(1.0_dp - exp_dp(-b*p_end))
    end function softening_reached
+
+   !> What beyond_limit judges a softening and a second back stress by, from the effect's
+   !> parameters p (a, b or H3, gamma3 first) at the search point x of ep: the softening's
+   !> reach (softening_reached) and the back stress's saturation |H3/gamma3| over the peak
+   !> stress; 0 where they do not apply
+   subroutine limit_measures(info, ep, x, p, peak, reach, saturation)
+      type(effect_info), intent(in) :: info
+      type(effect_problem), intent(in) :: ep
+      real(dp), intent(in) :: x(:), p(:), peak
+      real(dp), intent(out) :: reach, saturation
+      reach = 0.0_dp
+      saturation = 0.0_dp
+      if (size(p) < 2) return
+      if (info%name == 'softening') reach = softening_reached(ep, x, p(1), p(2))
+      if (info%name == 'backstress2' .and. p(2) > 0.0_dp) saturation = abs(p(1)/p(2))/peak
+   end subroutine limit_measures
 
    !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the
    !> end of the value's 95 % interval nearest zero where the interval is finite and of one

@@ -20,8 +20,8 @@ module usharp_diagnose_refit
                                     fit_structured, held_quiet, tell, explains_most, most, &
                                     delay_precision
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
-                                       free_params, effect_fit, at_bound, copy_constants, softening_reached, &
-                                       block_sums, deviance_change, held_rate, beyond_limit, at_box_end
+                                       free_params, effect_fit, at_bound, copy_constants, &
+                                       block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -427,9 +427,8 @@ contains
       nt = size(ctx%prob%targets)
       e%worst = 0.0_dp
       e%worst_what = ''
-      reach = 0.0_dp
-      saturation = 0.0_dp
       associate (info => ctx%cat(e%k))
+         call limit_measures(info, ep, x, p, ctx%peak, reach, saturation)
          ! The largest magnitude against its limit, by value, for the report
          if (info%sharing == param_per_test) then
             do g = 1, info%nparam
@@ -441,7 +440,6 @@ contains
             grp = pack([((g, j=1, nt), g=1, info%nparam)], ep%pfree)
          else
             if (info%name == 'softening' .and. size(p) >= 2) then
-               reach = softening_reached(ep, x, p(1), p(2))
                call worse_of(reach/info%plausible(1), 'a(1 - exp(-b p))')
             else
                do j = 1, size(ep%p0)
@@ -450,10 +448,7 @@ contains
                end do
             end if
             if (info%name == 'backstress2' .and. size(p) >= 2) then
-               if (p(2) > 0.0_dp) then
-                  saturation = abs(p(1)/p(2))/ctx%peak
-                  call worse_of(saturation, 'H3/gamma3')
-               end if
+               if (p(2) > 0.0_dp) call worse_of(saturation, 'H3/gamma3')
             end if
             grp = pack([(j, j=1, size(ep%p0))], ep%pfree)
          end if

@@ -25,9 +25,9 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
-                                       soften_rate0, softening_reached, low_end_deltas, bic_power, &
+                                       soften_rate0, low_end_deltas, bic_power, &
                                        tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
-                                       beyond_limit
+                                       beyond_limit, limit_measures
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most
    use usharp_diagnose_profile, only: profile_interval, profile_result
@@ -303,12 +303,7 @@ contains
             se_out%hi_open(g) = pr%hi_open
          end do
          ! Beyond its physical limit only as the held-out diagnosis judges it
-         reach = 0.0_dp
-         if (cat(k)%name == 'softening') reach = softening_reached(ek, o%x, p(1), p(2))
-         saturation = 0.0_dp
-         if (cat(k)%name == 'backstress2' .and. size(p) >= 2) then
-            if (p(2) > 0.0_dp) saturation = abs(p(1)/p(2))/peak
-         end if
+         call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
                                          se_out%lo_open .or. se_out%hi_open, reach, saturation) <= 1.0_dp
       end subroutine fit_effect

@@ -41,7 +41,7 @@ contains
       logical :: have_header, filtering, fixed
       !> Of the filter values, those some row holds; the first values the filter column holds,
       !> each after ', '
-      logical, allocatable :: matched(:)
+      logical, allocatable :: matched(:), hit(:)
       character(len=:), allocatable :: seen
       integer :: nseen
       real(dp), allocatable :: buf(:, :)
@@ -50,7 +50,7 @@ contains
       filtering = .false.
       if (present(filter_column)) filtering = len_trim(filter_column) > 0
       if (filtering) then
-         allocate (matched(size(filter_values)))
+         allocate (matched(size(filter_values)), hit(size(filter_values)))
          matched = .false.
          seen = ''
          nseen = 0
@@ -135,8 +135,9 @@ contains
                seen = seen//', '//trim(fields(ifilter))
                nseen = nseen + 1
             end if
-            if (.not. any(trim(fields(ifilter)) == filter_values)) cycle
-            where (trim(fields(ifilter)) == filter_values) matched = .true.
+            hit = trim(fields(ifilter)) == filter_values
+            if (.not. any(hit)) cycle
+            matched = matched .or. hit
          end if
          if (present(skip_missing)) then
             if (skip_missing .and. any([(missing(fields(min(icol(j), nfield))), j=1, size(columns))])) cycle
