@@ -17,6 +17,8 @@ module test_driver
    use usharp_simulate, only: simulate_test
    use usharp_forcing, only: measured_history
    use usharp_arkode_driver, only: simulate_arkode
+   use usharp_filesys, only: file_hash, read_whole_file, hash_hex
+   use, intrinsic :: iso_fortran_env, only: int64
    implicit none
    private
    public :: collect_driver, thesis_test
@@ -39,12 +41,41 @@ contains
          new_unittest('default-tolerances-per-integrator', test_default_tolerances), &
          new_unittest('smooth-forcing-vs-tight-reference', test_smooth_forcing), &
          new_unittest('smooth-forcing-with-effects', test_smooth_effects), &
-         new_unittest('arkode-vs-rodas4', test_arkode)]
+         new_unittest('arkode-vs-rodas4', test_arkode), &
+         new_unittest('rodas4-body-hash-recorded', test_body_hash)]
    end subroutine collect_driver
 
    !> Unset tolerances take the running integrator's defaults (RODAS4 1e-5, 1e-8; CVODE 1e-7,
    !> 1e-10), so the CVODE runs of a RODAS4 deck (effects, sensitivities) keep CVODE's
    !> accuracy; tolerances that are set apply to both; RODAS4 is the default integrator
+   !> The hash of the included RODAS4 body recorded in the file that includes it is the
+   !> body's: fpm rebuilds that file only when its own text changes, so an edit of the body
+   !> without the new hash there would leave a build with the old body
+   subroutine test_body_hash(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: body = 'src/driver/usharp_rodas4.inc', &
+                                     host = 'src/driver/usharp_rosenbrock_driver.f90', &
+                                     tag = 'usharp_rodas4.inc FNV-1a '
+      character(len=:), allocatable :: text, recorded
+      type(uerror), allocatable :: e
+      integer(int64) :: h
+      logical :: ok
+      integer :: k
+      call file_hash(body, h, ok)
+      call check(error, ok, body//' cannot be read')
+      if (allocated(error)) return
+      call read_whole_file(host, text, e)
+      call check(error, .not. allocated(e), host//' cannot be read')
+      if (allocated(error)) return
+      k = index(text, tag)
+      call check(error, k > 0, host//' records no hash of '//body//' ("'//tag//'...")')
+      if (allocated(error)) return
+      recorded = text(k + len(tag):min(len(text), k + len(tag) + 15))
+      call check(error, recorded == hash_hex(h), body//' has changed since its hash was '// &
+         'recorded in '//host//' ('//recorded//'; now '//hash_hex(h)//'): put the new hash '// &
+         'there, or the build keeps the old body')
+   end subroutine test_body_hash
+
    subroutine test_default_tolerances(error)
       type(error_type), allocatable, intent(out) :: error
       type(solver_options) :: opts
