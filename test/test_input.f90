@@ -31,6 +31,7 @@ contains
          new_unittest('constants-of-another-unit-refused', test_constants_units), &
          new_unittest('sizes-beyond-memory-refused', test_too_many_points), &
          new_unittest('unknown-jacobian', test_unknown_jacobian), &
+         new_unittest('fit-lists-checked', test_fit_lists), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -176,6 +177,27 @@ contains
          "&test name='x', history='thesis_lcf' /"], &
          "&fit: jacobian = 'exact' is not known (difference, sensitivity)")
    end subroutine test_unknown_jacobian
+
+   !> A constant named twice in fitted, a bound for a place fitted does not fill and a bad
+   !> &fit setting are refused, each naming its variable
+   subroutine test_fit_lists(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'twice.nml', [character(len=80) :: &
+         "&fit fitted='A1', 'A1', 'B', method='lm' /", &
+         "&test name='x', history='thesis_lcf' /"], &
+         "&fit: fitted names 'A1' twice")
+      if (allocated(error)) return
+      call expect_config_error(error, 'orphan.nml', [character(len=80) :: &
+         "&fit fitted='A1', 'B', method='lm', upper(3)=7e4, box_lower(3)=1.0 /", &
+         "&test name='x', history='thesis_lcf' /"], &
+         "&fit: a bound (upper(3), box_lower(3)) is given for fitted constant 3, but fitted "// &
+         "names 2 constants")
+      if (allocated(error)) return
+      call expect_config_error(error, 'starts.nml', [character(len=80) :: &
+         "&fit fitted='A1', method='lm', multistart=-1 /", &
+         "&test name='x', history='thesis_lcf' /"], &
+         "&fit: multistart = -1 must be >= 0")
+   end subroutine test_fit_lists
 
    subroutine test_backend_settings(error)
       type(error_type), allocatable, intent(out) :: error

@@ -221,6 +221,10 @@ contains
       character(len=report_line_len), allocatable :: summary(:)
       character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: input, dir, fit_summary, fit_curve
+      character(len=*), parameter :: own(10) = [character(len=12) :: 'best.nml', 'summary.txt', &
+         'identify.txt', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'fit.log', 'fit.cache', 'lcf.sim.txt', &
+         'lcf.fit.txt']
+      integer :: k
       input = deck('strangers.nml', 'max_evals=12', '')
       dir = scratch_dir//'/strangers-out'
       ! A folder of its own, as a user's: no journal from an earlier run of this test
@@ -236,6 +240,19 @@ contains
       if (allocated(error)) return
       call check(error, read_text(dir//'/summary.txt') == 'my notes'//new_line('a'), 'the notes are kept')
       if (allocated(error)) return
+      ! Every name a run writes is refused alike (identify.txt had been cut to 11 characters)
+      do k = 1, size(own)
+         call check(error, shell('rm -rf '//dir//'-one') == 0, 'clean folder')
+         if (allocated(error)) return
+         call make_dir(dir//'-one', e)
+         call write_lines(dir//'-one/'//trim(own(k)), [character(len=20) :: 'my notes'], e)
+         call run_command(input, dir//'-one', '', .false., summary, e)
+         call check_message(error, e, trim(own(k))//': a file of this name is there')
+         if (allocated(error)) return
+         call check(error, read_text(dir//'-one/'//trim(own(k))) == 'my notes'//new_line('a'), &
+                    trim(own(k))//' is kept')
+         if (allocated(error)) return
+      end do
       call run_command(input, dir, '', .false., summary, e, force=.true.)
       call check(error, .not. allocated(e), '--force overwrites them')
       if (allocated(error)) return

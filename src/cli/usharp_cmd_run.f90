@@ -24,7 +24,7 @@ module usharp_cmd_run
 
    !> The files a run writes in its output folder, and those it writes for each test (after
    !> the test's name)
-   character(len=*), parameter :: run_files(9) = [character(len=11) :: 'best.nml', 'summary.txt', &
+   character(len=*), parameter :: run_files(9) = [character(len=12) :: 'best.nml', 'summary.txt', &
       'identify.txt', 'GUESS.TXT', 'FOM.TXT', 'SUMS.TXT', 'fit.log', 'fit.journal', 'fit.cache']
    character(len=*), parameter :: test_files(3) = [character(len=10) :: '.sim.txt', '.fit.txt', &
       '.peaks.txt']

@@ -2,7 +2,7 @@
 module usharp_input_fit
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_strings, only: lower_text => lower
+   use usharp_strings, only: lower_text => lower, str
    use usharp_model, only: model_type, constant_index
    use usharp_units, only: stress_factor
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
@@ -92,7 +92,15 @@ contains
       call check_length(error, where, 'jacobian', given%jacobian)
       if (allocated(error)) return
       do i = 1, max_list
-         if (len_trim(given%fitted(i)) == 0) cycle
+         if (len_trim(given%fitted(i)) == 0) then
+            ! A bound is given for the i-th fitted constant: one the list does not name
+            if (any([given%lower(i), given%upper(i), given%box_lower(i), given%box_upper(i)] /= unset)) then
+               call fail('a bound ('//trim(bound_names(i))//') is given for fitted constant '// &
+                  str(i)//', but fitted names '//str(count(len_trim(given%fitted) > 0))//' constants')
+               return
+            end if
+            cycle
+         end if
          idx = constant_index(model, given%fitted(i))
          if (idx == 0) then
             names = model%constant_name(1)
@@ -100,6 +108,10 @@ contains
                names = trim(names)//', '//model%constant_name(k)
             end do
             call fail("fitted = '"//trim(given%fitted(i))//"' is not a constant ("//trim(names)//")")
+            return
+         end if
+         if (fit%fitted(idx)) then
+            call fail("fitted names '"//trim(model%constant_name(idx))//"' twice")
             return
          end if
          fit%fitted(idx) = .true.
@@ -126,9 +138,14 @@ contains
       end select
       if (jacobian /= 'difference' .and. jacobian /= 'sensitivity') then
          call fail("jacobian = '"//jacobian//"' is not known (difference, sensitivity)")
-      else if (fit%multistart < 0 .or. .not. (fit%fd_step > 0.0_dp .and. fit%fd_step < 0.1_dp) .or. &
-               .not. (fit%anneal_rt > 0.0_dp .and. fit%anneal_rt < 1.0_dp) .or. fit%anneal_t0 < 0.0_dp) then
-         call fail('needs multistart >= 0, 0 < fd_step < 0.1, 0 < anneal_rt < 1 and anneal_t0 >= 0')
+      else if (fit%multistart < 0) then
+         call fail('multistart = '//str(fit%multistart)//' must be >= 0')
+      else if (.not. (fit%fd_step > 0.0_dp .and. fit%fd_step < 0.1_dp)) then
+         call fail('fd_step must lie in (0, 0.1)')
+      else if (.not. (fit%anneal_rt > 0.0_dp .and. fit%anneal_rt < 1.0_dp)) then
+         call fail('anneal_rt must lie in (0, 1)')
+      else if (.not. (fit%anneal_t0 >= 0.0_dp)) then
+         call fail('anneal_t0 must be >= 0')
       else if (objective /= 'eq7' .and. objective /= 'eq13') then
          call fail("objective = '"//objective//"' is not known (eq7 or eq13)")
       else if (.not. (fit%rho > 0.0_dp .and. fit%rho < 1.0_dp)) then
@@ -148,6 +165,18 @@ contains
          character(len=*), intent(in) :: text
          call group_error(error, file%path, 'fit', text)
       end subroutine fail
+
+      !> The bounds given at position i of the lists, as the deck writes them
+      function bound_names(i) result(names)
+         integer, intent(in) :: i
+         character(len=:), allocatable :: names
+         names = ''
+         if (given%lower(i) /= unset) names = names//', lower('//str(i)//')'
+         if (given%upper(i) /= unset) names = names//', upper('//str(i)//')'
+         if (given%box_lower(i) /= unset) names = names//', box_lower('//str(i)//')'
+         if (given%box_upper(i) /= unset) names = names//', box_upper('//str(i)//')'
+         names = names(3:)
+      end function bound_names
 
       subroutine reread(lines, ios, msg)
          character(len=*), intent(in) :: lines(:)
