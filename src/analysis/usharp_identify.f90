@@ -23,6 +23,10 @@ module usharp_identify
    !> many decades: the direction is not weak, yet the tests bound the constant only to a
    !> factor of ten or worse (C2 within [1e-6, 1e4] was reported as determined)
    real(dp), parameter :: loose_decades = 1.0_dp
+   !> The constants are taken for an optimum of the tests while a Gauss-Newton step from them
+   !> (over the constants not at a bound) would lower the sum of squares by less than this
+   !> share: the report's s^2 and intervals assume one
+   real(dp), parameter :: optimum_fall = 0.01_dp
 
    type :: identify_result
       character(len=:), allocatable :: names(:)
@@ -41,6 +45,8 @@ module usharp_identify
       logical, allocatable :: loose(:)
       character(len=report_line_len), allocatable :: words(:)
       real(dp) :: s2 = 0.0_dp, ssr = 0.0_dp
+      !> The share of ssr a Gauss-Newton step would remove (see optimum_fall)
+      real(dp) :: gn_fall = 0.0_dp
       integer :: m = 0, nevals = 0
    end type identify_result
 
@@ -182,6 +188,7 @@ contains
                res%determined(j) = .false.
          end do
       end do
+      res%gn_fall = gauss_newton_fall(jac, r0, .not. res%at_bound)
       ! A constant tied to an undetermined one (|correlation| > 0.99) is not determined alone
       tied = .false.
       do j = 1, n
@@ -203,6 +210,27 @@ contains
             '): not determined on its own']
       end do
    end subroutine identify_at
+
+   !> The share of the sum of squares r'r that a Gauss-Newton step over the free columns of
+   !> jac would remove, in the directions that carry information (as the intervals take
+   !> them): about 0 at an optimum of the tests, up to 1 far from one
+   pure real(dp) function gauss_newton_fall(jac, r, free) result(share)
+      real(dp), intent(in) :: jac(:, :), r(:)
+      logical, intent(in) :: free(:)
+      real(dp), allocatable :: jf(:, :), g(:), sv(:), v(:, :)
+      integer :: i, k, info
+      share = 0.0_dp
+      if (.not. any(free) .or. .not. dot_product(r, r) > 0.0_dp) return
+      jf = jac(:, pack([(k, k=1, size(free))], free))
+      allocate (sv(size(jf, 2)), v(size(jf, 2), size(jf, 2)))
+      call svd(jf, sv, v, info)
+      if (info /= 0 .or. .not. sv(1) > 0.0_dp) return
+      g = mat_mul(transpose(jf), r)
+      do i = 1, size(sv)
+         if (sv(i) > weak_ratio*sv(1)) share = share + (dot_product(v(:, i), g)/sv(i))**2
+      end do
+      share = share/dot_product(r, r)
+   end function gauss_newton_fall
 
    !> Words for the weak directions and the bounds
    subroutine describe(res)
@@ -272,8 +300,15 @@ contains
       character(len=:), allocatable :: line
       integer :: i, j, n
       n = size(res%c)
-      lines = [character(len=report_line_len) :: 'identifiability at the optimum ('//str(res%m)// &
-         ' residuals, '//str(n)//' constants, s^2 = SSR/(m-p) = '//real_str(res%s2, 'es10.3')//')', &
+      lines = [character(len=report_line_len) :: 'identifiability at '// &
+         trim(merge('the optimum    ', 'these constants', res%gn_fall < optimum_fall))// &
+         ' ('//str(res%m)//' residuals, '//str(n)//' constants, s^2 = SSR/(m-p) = '// &
+         real_str(res%s2, 'es10.3')//')']
+      if (.not. res%gn_fall < optimum_fall) lines = [character(len=report_line_len) :: lines, &
+         '  - not an optimum of these tests: a Gauss-Newton step would lower the sum of squares by '// &
+         real_str(100.0_dp*res%gn_fall, 'f5.1')//' %; s^2 and the intervals below assume an optimum, '// &
+         'so they only indicate']
+      lines = [character(len=report_line_len) :: lines, &
          '  singular values of the scaled Jacobian (d residual / d log10 constant), relative:']
       line = '   '
       do i = 1, n
