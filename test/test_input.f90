@@ -32,6 +32,7 @@ contains
          new_unittest('sizes-beyond-memory-refused', test_too_many_points), &
          new_unittest('unknown-jacobian', test_unknown_jacobian), &
          new_unittest('fit-lists-checked', test_fit_lists), &
+         new_unittest('data-zero-throughout-refused', test_zero_data), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -198,6 +199,35 @@ contains
          "&test name='x', history='thesis_lcf' /"], &
          "&fit: multistart = -1 must be >= 0")
    end subroutine test_fit_lists
+
+   !> A data column that is 0 at every row (a wrong column, an unconnected channel) is an
+   !> input error naming the file and the column: the objective is relative to its peak, and
+   !> every evaluation had failed, the fit ending on an error about the drag stress
+   subroutine test_zero_data(error)
+      use usharp_objective, only: fit_problem, setup_problem
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: data
+      integer :: k
+      character(len=40) :: rows(12)
+      rows(1) = 'time,strain,stress'
+      do k = 0, 10
+         write (rows(k + 2), '(f6.1,a,es12.4,a)') real(k, dp), ',', 1.0e-4_dp*k, ',0.0'
+      end do
+      data = write_text('zero.csv', rows)
+      call read_config(write_text('zero.nml', deck_lines([character(len=120) :: &
+         "&fit fitted='B', method='lm' /", &
+         "&test name='pull', history='data', data_file='zero.csv', dt_out=0.0 /"])), cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      call check_message(error, uerr, "test 'pull': ")
+      if (allocated(error)) return
+      call check_message(error, uerr, "zero.csv: column 'stress' is 0 at every row: the "// &
+                         "objective is relative to its peak")
+      if (allocated(error)) return
+      call check(error, uerr%stat, stat_input, 'an input error')
+   end subroutine test_zero_data
 
    subroutine test_backend_settings(error)
       type(error_type), allocatable, intent(out) :: error

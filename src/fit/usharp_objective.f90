@@ -4,7 +4,7 @@ module usharp_objective
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_math, only: log_dp, log10_dp, pow10_dp
-   use usharp_error, only: error_type, fatal_error, prefix_error
+   use usharp_error, only: error_type, fatal_error, prefix_error, stat_input
    use usharp_model, only: model_type, model_at
    use usharp_history, only: control_stress
    use usharp_units, only: stress_factor
@@ -106,6 +106,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       logical, allocatable :: on_data(:)
       real(dp), allocatable :: td(:), yd(:), wd(:)
+      character(len=:), allocatable :: column
       integer :: n, nd
       tg%t = test%times()
       n = size(tg%t)
@@ -130,6 +131,18 @@ contains
       if (test%has_peaks()) then
          where (.not. on_data) tg%y_ex = test%peak_y*stress_factor(test%data%unit, units)
          tg%y_ex_max = max(tg%y_ex_max, maxval(abs(tg%y_ex), mask=.not. on_data))
+      end if
+      ! Eq. 7 and the weightings are relative to the measured peak: data that are 0 throughout
+      ! would make every evaluation fail, and the fit end on an error about something else
+      if (.not. tg%y_ex_max > 0.0_dp) then
+         if (fits_strain(test)) then
+            column = test%data%strain_col
+         else
+            column = test%data%stress_col
+         end if
+         call fatal_error(error, test%data%file//': column '''//column//''' is 0 at every row: '// &
+            'the objective is relative to its peak (is it the right column?)', stat_input)
+         return
       end if
       select case (test%weighting)
       case ('threshold')
