@@ -103,6 +103,13 @@ mk badname.nml "&fit fitted='H1','Z9', max_evals=8 /"
 row '`&fit` names an unknown constant' - u run badname.nml -o badname
 mk nofit.nml "&fit max_evals=8 /"
 row '`&fit` fits no constant' - u run nofit.nml -o nofit
+mk dupfit.nml "&fit fitted='H1','n','H1', max_evals=8 /"
+row '`&fit` names a constant twice' - u run dupfit.nml -o dupfit
+mk orphan.nml "&fit fitted='H1','n', upper(3)=7e4, max_evals=8 /"
+row '`&fit` bound for a constant it does not name' - u run orphan.nml -o orphan
+awk '/^#/ { print; next } { $3 = "0.0"; print }' lcf.txt > zero.txt
+mk zero.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='zero.txt' /"
+row 'data: stress 0 at every row' - u run zero.nml -o zero
 mk method.nml "&fit fitted='H1','n', method='newton' /"
 row 'unknown method' - u run method.nml -o method
 mk jac.nml "&fit fitted='H1','n', method='lm', jacobian='exact' /"
