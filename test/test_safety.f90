@@ -273,6 +273,16 @@ contains
       if (allocated(error)) return
       call identify_command(input, dir, '', summary, e)
       call check_message(error, e, 'whose identify.txt identify would replace')
+      if (allocated(error)) return
+      ! The user guide's workflow: simulate, then fit into the same folder; the curves that
+      ! simulate wrote are usharp's, and the fit replaces them
+      call check(error, shell('rm -rf '//dir//'-sim') == 0, 'clean folder')
+      if (allocated(error)) return
+      call simulate_command(input, dir//'-sim', written, e)
+      call check(error, .not. allocated(e), 'simulate into a new folder')
+      if (allocated(error)) return
+      call run_command(input, dir//'-sim', '', .false., summary, e)
+      call check(error, .not. allocated(e), 'a run after simulate into the same folder')
    end subroutine test_strangers_kept
 
    !> No run writes over its own inputs, --force or not: the constants given with -c that are

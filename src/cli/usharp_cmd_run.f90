@@ -12,7 +12,7 @@ module usharp_cmd_run
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines, result_file
-   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists
+   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists, read_line
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
@@ -212,7 +212,8 @@ contains
       lines = [character(len=report_line_len) :: &
          '! usharp '//usharp_version_string//' fit of '//path//': objective '// &
          real_str(out%opt%f, 'es12.5')//' after '//str(out%opt%nevals)//' evaluations', &
-         '! simulate with it: usharp simulate '//shell_word(path)//' --constants '//shell_word(file), &
+         '! simulate with it: usharp simulate '//shell_word(path)//' --constants '//shell_word(file)// &
+         ' -o '//shell_word(file(:len(file) - len('best.nml'))//'simulated'), &
          ! The model and unit the constants are for: -c checks them against the deck's
          "&model name = '"//best%name()//"', units = '"//units//"' /", '&constants']
       do j = 1, best%n_constants()
@@ -339,6 +340,7 @@ contains
       end if
       names = output_names(cfg, run_files, test_files)
       do i = 1, size(names)
+         if (simulated_by_usharp(join_path(dir, trim(names(i))))) cycle
          if (file_exists(join_path(dir, trim(names(i))))) then
             call fatal_error(error, join_path(dir, trim(names(i)))//': a file of this name '// &
                'is there, and no fit.journal says a run made it; overwrite it with --force, '// &
@@ -347,5 +349,22 @@ contains
          end if
       end do
    end subroutine check_no_strangers
+
+   !> Whether path is a test's curve that `usharp simulate` wrote (its first line says so): a
+   !> look at the model before the fit, into the folder the fit then writes (the user guide's
+   !> workflow), not a file of the user's
+   logical function simulated_by_usharp(path) result(yes)
+      character(len=*), intent(in) :: path
+      character(len=:), allocatable :: line
+      integer :: unit, ios
+      yes = .false.
+      if (.not. file_exists(path)) return
+      if (index(path, '.sim.txt', back=.true.) /= len(path) - len('.sim.txt') + 1) return
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      call read_line(unit, line, ios)
+      close (unit)
+      yes = ios == 0 .and. index(line, '# usharp ') == 1 .and. index(line, ' simulation of test ''') > 0
+   end function simulated_by_usharp
 
 end module usharp_cmd_run
