@@ -158,9 +158,9 @@ contains
       end do
    end subroutine check_inputs_kept
 
-   !> A command other than run does not write over a fit's results: in an output folder that
-   !> holds a fit (its fit.journal), a file the command writes that is there already (a
-   !> <test>.sim.txt of the fit, its identify.txt or summary.txt) is a usage error
+   !> A command other than run does not write into an output folder that holds a fit (its
+   !> fit.journal): the files it writes are the fit's too (a <test>.sim.txt, identify.txt,
+   !> summary.txt), there already or written by a fit still running at its end; a usage error
    subroutine check_not_a_fit(cfg, command, fixed, per_test, error)
       type(run_config), intent(in) :: cfg
       !> the command's name, for the message
@@ -173,6 +173,7 @@ contains
       if (len_trim(cfg%out_dir) == 0) return
       if (.not. file_exists(join_path(cfg%out_dir, 'fit.journal'))) return
       outputs = output_names(cfg, fixed, per_test)
+      if (size(outputs) == 0) return
       do j = 1, size(outputs)
          if (file_exists(join_path(cfg%out_dir, trim(outputs(j))))) then
             call fatal_error(error, cfg%out_dir//': holds a fit (fit.journal), whose '// &
@@ -181,6 +182,9 @@ contains
             return
          end if
       end do
+      ! None there yet: a fit still running writes them at its end, over this command's
+      call fatal_error(error, cfg%out_dir//': holds a fit (fit.journal), which writes '// &
+         trim(outputs(1))//' at its end; give '//command//' another output folder (-o)', stat_usage)
    end subroutine check_not_a_fit
 
    !> The names of the files a command writes in its output folder: fixed, then for each test
