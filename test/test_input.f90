@@ -33,6 +33,7 @@ contains
          new_unittest('unknown-jacobian', test_unknown_jacobian), &
          new_unittest('fit-lists-checked', test_fit_lists), &
          new_unittest('data-zero-throughout-refused', test_zero_data), &
+         new_unittest('strain-in-percent-refused', test_percent_strain), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -228,6 +229,24 @@ contains
       if (allocated(error)) return
       call check(error, uerr%stat, stat_input, 'an input error')
    end subroutine test_zero_data
+
+   !> A measured strain column in percent (a 1.5 % test reaching 1.5) driving a test is an
+   !> input error naming the file and the column; it had been simulated as 150 % strain
+   subroutine test_percent_strain(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: data
+      integer :: k
+      character(len=40) :: rows(12)
+      rows(1) = 'time,strain,stress'
+      do k = 0, 10
+         write (rows(k + 2), '(f6.1,a,es12.4,a)') real(k, dp), ',', 0.15_dp*k, ',100.0'
+      end do
+      data = write_text('percent.csv', rows)
+      call expect_config_error(error, 'percent.nml', [character(len=120) :: &
+         "&test name='pull', history='data', data_file='percent.csv', dt_out=0.0 /"], &
+         "percent.csv: column 'strain' reaches 1.500: strain is in mm/mm "// &
+         "(is it in percent?)")
+   end subroutine test_percent_strain
 
    subroutine test_backend_settings(error)
       type(error_type), allocatable, intent(out) :: error

@@ -22,6 +22,9 @@ module usharp_input_test
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
+   !> The largest measured strain (mm/mm) a test driven by it may reach: Alloy 617's tensile
+   !> test ends at 0.62; a column in percent of a 1.5 % test reaches 1.5
+   real(dp), parameter :: max_strain = 1.0_dp
 
    !> Where a test's measured data come from and how to read them
    type :: data_spec
@@ -729,6 +732,13 @@ contains
       if (allocated(error)) return
       call merge_repeated_times(vals, spec%file, nmerged, error)
       if (allocated(error)) return
+      ! A strain beyond 1 (100 %) is no test this model describes, but it is what a column in
+      ! percent gives: the loops would be simulated a hundred times too large
+      if (maxval(abs(vals(:, 2))) > max_strain) then
+         call fatal_error(error, spec%file//": column '"//spec%strain_col//"' reaches "// &
+            real_str(maxval(abs(vals(:, 2))), 'g0.4')//': strain is in mm/mm (is it in percent?)')
+         return
+      end if
       if (duration /= unset) then
          if (count(vals(:, 1) <= duration) < 2) then
             call fatal_error(error, 'duration: fewer than 2 samples of '//spec%file//' lie within it')
