@@ -110,8 +110,9 @@ row '`&fit` bound for a constant it does not name' - u run orphan.nml -o orphan
 awk '/^#/ { print; next } { $3 = "0.0"; print }' lcf.txt > zero.txt
 mk zero.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='zero.txt' /"
 row 'data: stress 0 at every row' - u run zero.nml -o zero
-awk '/^#/ { print; next } { $2 = 100 * $2; print }' lcf.txt > pct.txt
-mk pct.nml "$fitg" "&test name='lcf', history='data', data_file='pct.txt', time_column='time', strain_column='strain' /"
+awk -F, -v OFS=, '/^#/ || /^time/ { print; next } { $2 = 100 * $2; print }' \
+  "$root/data/tutorial/cyclic-fast.csv" > pct.csv
+mk pct.nml "$fitg" "&test name='fast', history='data', data_file='pct.csv' /"
 row 'data: measured strain in percent' - u run pct.nml -o pct
 mk method.nml "&fit fitted='H1','n', method='newton' /"
 row 'unknown method' - u run method.nml -o method
