@@ -34,6 +34,7 @@ contains
          new_unittest('fit-lists-checked', test_fit_lists), &
          new_unittest('data-zero-throughout-refused', test_zero_data), &
          new_unittest('strain-in-percent-refused', test_percent_strain), &
+         new_unittest('variable-without-equals-placed', test_no_equals), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -247,6 +248,15 @@ contains
          "percent.csv: column 'strain' reaches 1.500: strain is in mm/mm "// &
          "(is it in percent?)")
    end subroutine test_percent_strain
+
+   !> A variable without its '=' is named with the group's line and the form the read wants
+   subroutine test_no_equals(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'noequals.nml', [character(len=80) :: &
+         "&solver rtol 1.0e-7 /", "&test name='x', history='thesis_lcf' /"], &
+         "noequals.nml:3: &solver: Equal sign must follow namelist object name rtol; write each "// &
+         "variable as name = value")
+   end subroutine test_no_equals
 
    subroutine test_backend_settings(error)
       type(error_type), allocatable, intent(out) :: error

@@ -634,7 +634,7 @@ contains
       procedure(group_reader) :: reader
       type(nml_item), allocatable :: items(:)
       character(len=512) :: why
-      character(len=:), allocatable :: value, unknown
+      character(len=:), allocatable :: value, unknown, where, hint
       integer :: m, stat
       allocate (items(0))
       if (k > 0) call group_items(file, k, items)
@@ -661,7 +661,13 @@ contains
          end if
          return
       end do
-      call fatal_error(error, file%path//': &'//label//': '//trim(msg)//' (iostat '//str(ios)//')')
+      ! No assignment fails alone (a name without '=', a stray word): the group's line, and
+      ! for the first the form the read wants
+      where = file%path
+      if (k > 0) where = file%path//':'//str(file%groups(k)%line)
+      hint = ''
+      if (index(lower(msg), 'equal sign must follow') > 0) hint = '; write each variable as name = value'
+      call fatal_error(error, where//': &'//label//': '//trim(msg)//hint//' (iostat '//str(ios)//')')
    end subroutine read_error
 
    !> A value that fills its whole buffer may have been cut: an error naming the variable
