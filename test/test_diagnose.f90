@@ -387,8 +387,12 @@ contains
    end subroutine test_classes
 
    subroutine test_bad_inputs(error)
+      use usharp_cmd_diagnose, only: diagnose_command
+      use usharp_filesys, only: file_exists
+      use usharp_strings, only: report_line_len
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: lines(:)
       type(run_config) :: cfg
       type(diagnose_options) :: opts
       type(diagnose_result) :: res
@@ -426,6 +430,14 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
       call check_message(error, e, '&diagnose: holdout: the held-out set is empty')
+      if (allocated(error)) return
+      ! The command checks it before it makes its folder and journal: nothing is left behind
+      call execute_command_line('rm -rf '//scratch_dir//'/diag-empty-out')
+      call diagnose_command(scratch_dir//'/diag-empty.nml', scratch_dir//'/diag-empty-out', '', lines, e)
+      call check_message(error, e, '&diagnose: holdout: the held-out set is empty')
+      if (allocated(error)) return
+      call check(error, .not. file_exists(scratch_dir//'/diag-empty-out'), &
+                 'the refused diagnosis left no output folder (nor diagnose.journal)')
       if (allocated(error)) return
       call read_config(write_text('diag-all.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", "&diagnose holdout = 'a', 'b' /", tests]), cfg, e)

@@ -5,7 +5,8 @@ module usharp_cmd_diagnose
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, write_report, &
-                              diagnose_options_of, diagnose_progress, diagnose_journal
+                              diagnose_options_of, diagnose_progress, diagnose_journal, &
+                              check_diagnosable
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
@@ -52,6 +53,9 @@ contains
       ! Under MPI every rank runs the diagnosis, the starts of its global stages spread over
       ! them; rank 0 writes the report
       opts%over_ranks = n_ranks() > 1
+      ! An input it cannot diagnose leaves no folder or journal behind
+      call check_diagnosable(cfg, opts, error)
+      if (allocated(error)) return
       dir = join_path(cfg%out_dir, 'diagnose')
       call make_dir(dir, error)
       if (allocated(error)) return

@@ -54,6 +54,7 @@ module usharp_diagnose
    public :: fit_structured
    public :: joint_decides
    public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
+   public :: check_diagnosable
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict
    integer, parameter :: deciding_lhs = 2
@@ -293,6 +294,25 @@ contains
       call step_done(res, 'baseline regions')
    end subroutine diagnose_baseline
 
+   !> What keeps a diagnosis of cfg from starting (an input error), checked too before its
+   !> folder and journal are made: a test simulated otherwise than by an internal integrator
+   !> (the effects live in their extended model), a held-out set empty or of every test
+   subroutine check_diagnosable(cfg, opts, error)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i
+      do i = 1, size(cfg%tests)
+         if (cfg%tests(i)%ext%enabled .or. cfg%solver%integrator == 'umat') then
+            call fatal_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': diagnose "// &
+               'simulates with an internal integrator (no external backend, integrator '// &
+               '''cvode'' or ''rodas4'')', stat_input)
+            return
+         end if
+      end do
+      if (.not. opts%joint) call check_holdout(cfg%diagnose, cfg%path, error)
+   end subroutine check_diagnosable
+
    !> The context of a diagnosis: the fit problem of every test, the fit and held-out sets,
    !> each test's name, response, noise level and peak; errors for what it cannot diagnose
    subroutine prepare(cfg, opts, ctx, res, error, experiments)
@@ -307,16 +327,7 @@ contains
       call setup_problem(cfg, ctx%prob, error, experiments)
       if (allocated(error)) return
       nt = size(cfg%tests)
-      do i = 1, nt
-         ! The effects live in the internal integrators' extended model
-         if (cfg%tests(i)%ext%enabled .or. cfg%solver%integrator == 'umat') then
-            call fatal_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': diagnose "// &
-               'simulates with an internal integrator (no external backend, integrator '// &
-               '''cvode'' or ''rodas4'')', stat_input)
-            return
-         end if
-      end do
-      if (.not. opts%joint) call check_holdout(cfg%diagnose, cfg%path, error)
+      call check_diagnosable(cfg, opts, error)
       if (allocated(error)) return
       res%held = cfg%diagnose%holdout
       ctx%ifit = pack([(i, i=1, nt)], .not. res%held)
