@@ -159,6 +159,9 @@ echo "&model youngs=1 /" > noconst.nml
 row '`--constants` file without `&constants`' - u simulate fit.nml -c noconst.nml -o c2
 row '`simulate -t` names no test' - u simulate fit.nml -t nosuch -o t1
 row '`deck` names no test' - u deck nosuch fit.nml -o d1
+{ echo "$model"; echo "$consts"; echo "$fitg"; echo "$lcf"; } > noheld.nml
+row '`diagnose` with no held-out test' - u diagnose noheld.nml -o noheld
+put '... what it left' 0 "$([ -e noheld ] && echo "the folder noheld: $(find noheld | tr '\n' ' ')" || echo 'nothing: no folder noheld')"
 
 # --- output
 echo x > afile
@@ -188,6 +191,13 @@ row '... with `--force`' r1/best.nml u run -q --force fit.nml -o r1
 row '`--resume` of a finished run' r1/best.nml u run -q --resume fit.nml -o r1
 row '`simulate` into a fit'"'"'s folder' - u simulate fit.nml -o r1
 row '`predict` into a fit'"'"'s folder' - u predict fit.nml -c r1/best.nml -o r1
+mkdir -p mine; echo 'my notes' > mine/summary.txt
+row '`predict` over a file of the user'"'"'s' - u predict fit.nml -c r1/best.nml -o mine
+row '... with `--force`' mine/lcf.fit.txt u predict --force fit.nml -c r1/best.nml -o mine
+echo 'my notes' > mine/identify.txt
+row '`identify` over a file of the user'"'"'s' - u identify fit.nml -o mine
+echo '1.0' > mine/Constants.txt
+row '`deck` over a file of the user'"'"'s' - u deck fit.nml -o mine
 row '`--resume` without a journal' - u run -q --resume fit.nml -o r-none
 cp lcf.txt lcf.orig; echo '# changed' >> lcf.txt
 row '`--resume` after a data file changed' - u run -q --resume fit.nml -o r1

@@ -5,6 +5,7 @@ module test_cli
    use usharp_error, only: uerror => error_type, stat_usage
    use usharp_cli, only: cli_command, arg_string, parse_arguments, command_names, command_help, &
                          version_text
+   use usharp_cli_args, only: accepts_option
    use test_util, only: require_exe, read_text, scratch_dir
    use usharp_filesys, only: make_dir
    use usharp_kinds, only: dp
@@ -116,6 +117,10 @@ contains
          call check(error, index(command_help(trim(names(k))), 'usage: usharp '//trim(names(k))) == 1 &
                     .and. index(command_help(trim(names(k))), 'docs/reference/namelist.md') > 0, &
                     trim(names(k))//' help')
+         if (allocated(error)) return
+         ! The help names --force exactly where the command takes it
+         call check(error, accepts_option(trim(names(k)), '--force') .eqv. &
+                    index(command_help(trim(names(k))), '--force ') > 0, trim(names(k))//' help: --force')
          if (allocated(error)) return
       end do
    end subroutine test_help

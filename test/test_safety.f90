@@ -31,6 +31,7 @@ contains
          new_unittest('specimen-reports-kept-without-force', test_specimen_kept), &
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
          new_unittest('user-files-and-fits-kept', test_strangers_kept), &
+         new_unittest('user-files-kept-by-predict-identify-deck', test_own_files_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
@@ -291,6 +292,107 @@ contains
       call simulate_command(input, dir//'-run', written, e)
       call check_message(error, e, 'holds a fit (fit.journal), which writes lcf.sim.txt at its end')
    end subroutine test_strangers_kept
+
+   !> predict, identify and deck into a folder with no fit that holds a user's file of a name
+   !> they write are refused before writing anything, naming the file and --force, the file
+   !> kept; --force writes over it, and each command run again over its own earlier output
+   !> (or predict over the curves of simulate) needs no --force
+   subroutine test_own_files_kept(error)
+      use usharp_cmd_predict, only: predict_command
+      use usharp_cmd_identify, only: identify_command
+      use usharp_cmd_deck, only: deck_command
+      use usharp_cmd_simulate, only: simulate_command
+      use usharp_overwrite, only: begins_like, simulate_mark
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=4096), allocatable :: written(:)
+      character(len=:), allocatable :: input, dir
+      type(cli_command) :: cmd
+      character(len=*), parameter :: commands(3) = [character(len=8) :: 'predict', 'identify', 'deck']
+      character(len=*), parameter :: names(6) = [character(len=13) :: 'summary.txt', 'lcf.sim.txt', &
+         'lcf.fit.txt', 'identify.txt', 'lcf.inp', 'Constants.txt']
+      character(len=*), parameter :: writer(6) = [character(len=8) :: 'predict', 'predict', &
+         'predict', 'identify', 'deck', 'deck']
+      integer :: k
+      ! usharp's own first lines are told by a pattern, '*' standing for the version
+      call check(error, begins_like("# usharp 0.1.0 simulation of test 'lcf' (history", simulate_mark//"lcf'") &
+                 .and. .not. begins_like("# usharp 0.1.0 simulation of test 'lcf2'", simulate_mark//"lcf'") &
+                 .and. .not. begins_like("x # usharp 0.1.0 simulation of test 'lcf'", simulate_mark) &
+                 .and. .not. begins_like("# usharp simulation of test 'lcf'", simulate_mark), 'begins_like')
+      if (allocated(error)) return
+      ! The deck's own constants serve as the fitted ones for predict
+      input = deck('own-files.nml', 'max_evals=12', '')
+      dir = scratch_dir//'/own-files-out'
+      do k = 1, size(names)
+         call refused(trim(writer(k)), trim(names(k)))
+         if (allocated(error)) return
+         call run(trim(writer(k)), .true.)
+         call check(error, .not. allocated(e), trim(writer(k))//' --force writes over '//trim(names(k)))
+         if (allocated(error)) return
+         call check(error, read_text(dir//'/'//trim(names(k))) /= 'my notes'//new_line('a'), &
+                    trim(names(k))//' is written over with --force')
+         if (allocated(error)) return
+         call run(trim(writer(k)), .false.)
+         call check(error, .not. allocated(e), trim(writer(k))//' again over its own files')
+         if (allocated(error)) return
+      end do
+      ! Files of one command are another's strangers: a deck's files are not a prediction's
+      call run('deck', .false.)
+      call check(error, shell('mv '//dir//'/lcf.inp '//dir//'/lcf.sim.txt') == 0, 'a deck renamed')
+      if (allocated(error)) return
+      call run('predict', .false.)
+      call check_message(error, e, 'lcf.sim.txt: a file of this name is there that usharp predict')
+      if (allocated(error)) return
+      ! predict after simulate into the same folder: simulate's curves are usharp's look at
+      ! the model, which the prediction replaces (as a fit does)
+      call check(error, shell('rm -rf '//dir) == 0, 'clean folder')
+      if (allocated(error)) return
+      call simulate_command(input, dir, written, e)
+      call check(error, .not. allocated(e), 'simulate into a new folder')
+      if (allocated(error)) return
+      call run('predict', .false.)
+      call check(error, .not. allocated(e), 'predict after simulate into the same folder')
+      if (allocated(error)) return
+      ! On the command line --force is an option of each of them
+      do k = 1, size(commands)
+         call parse_arguments([arg_string(trim(commands(k))), arg_string('--force'), arg_string('-c'), &
+                               arg_string('b.nml'), arg_string('f.nml')], cmd, e)
+         call check(error, .not. allocated(e) .and. cmd%force, trim(commands(k))//' --force parsed')
+         if (allocated(error)) return
+      end do
+   contains
+      !> The command into a folder that holds the user's file name alone: refused, the file
+      !> kept
+      subroutine refused(command, name)
+         character(len=*), intent(in) :: command, name
+         call check(error, shell('rm -rf '//dir//' && mkdir -p '//dir) == 0, 'clean folder')
+         if (allocated(error)) return
+         call write_lines(dir//'/'//name, [character(len=20) :: 'my notes'], e)
+         call run(command, .false.)
+         call check_message(error, e, dir//'/'//name//': a file of this name is there that usharp '// &
+                            command//' did not write; overwrite it with --force')
+         if (allocated(error)) return
+         call check(error, e%stat, stat_usage, command//' over '//name//': exit code 2')
+         if (allocated(error)) return
+         call check(error, read_text(dir//'/'//name) == 'my notes'//new_line('a'), name//' is kept')
+         if (allocated(error)) return
+         call check(error, shell('test $(ls '//dir//' | wc -l) -eq 1') == 0, &
+                    command//' wrote nothing beside '//name)
+      end subroutine refused
+      subroutine run(command, force)
+         character(len=*), intent(in) :: command
+         logical, intent(in) :: force
+         select case (command)
+         case ('predict')
+            call predict_command(input, dir, input, summary, e, force)
+         case ('identify')
+            call identify_command(input, dir, '', summary, e, force)
+         case default
+            call deck_command(input, '', dir, '', written, e, force)
+         end select
+      end subroutine run
+   end subroutine test_own_files_kept
 
    !> No run writes over its own inputs, --force or not: the constants given with -c that are
    !> the output folder's best.nml, and a test 'lcf' whose data are lcf.sim.txt in the output

@@ -53,7 +53,8 @@ contains
          if (cmd%name == 'simulate') then
             call simulate_command(cmd%input, cmd%out_dir, written, error, cmd%constants, cmd%only_test)
          else
-            call deck_command(cmd%input, cmd%test_name, cmd%out_dir, cmd%constants, written, error)
+            call deck_command(cmd%input, cmd%test_name, cmd%out_dir, cmd%constants, written, error, &
+                              cmd%force)
          end if
          if (allocated(error)) return
          allocate (lines(0))
@@ -61,9 +62,9 @@ contains
          lines = [character(len=4200) :: ('wrote '//trim(written(k)), k=1, size(written))]
          return
       case ('predict')
-         call predict_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+         call predict_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, cmd%force)
       case ('identify')
-         call identify_command(cmd%input, cmd%out_dir, cmd%constants, summary, error)
+         call identify_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, cmd%force)
       case ('design')
          call design_command(cmd%input, cmd%out_dir, cmd%constants, summary, error, journal_mode(cmd))
       case ('diagnose')

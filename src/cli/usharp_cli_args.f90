@@ -33,7 +33,8 @@ module usharp_cli_args
       !> --resume: `run`, `design`, `diagnose` (and its --selfcheck) continue a stopped run from its
       !> journal
       logical :: resume = .false.
-      !> --force: start again over an earlier run's journal
+      !> --force: start again over an earlier run's journal; `predict`, `identify`, `deck`:
+      !> write over files of their output names that they did not write
       logical :: force = .false.
       !> --auto-resume: continue from the journal when the output folder holds one, else
       !> start (one command for a job script that may be stopped and started again)
@@ -67,8 +68,11 @@ contains
          ok = .true.
       case ('--test')
          ok = command == 'simulate'
-      case ('--resume', '--force', '--auto-resume')
+      case ('--resume', '--auto-resume')
          ok = command == 'run' .or. command == 'design' .or. command == 'diagnose'
+      case ('--force')
+         ok = command == 'run' .or. command == 'design' .or. command == 'diagnose' .or. &
+              command == 'predict' .or. command == 'identify' .or. command == 'deck'
       case ('--selfcheck')
          ok = command == 'diagnose'
       case default

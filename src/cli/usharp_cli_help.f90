@@ -32,6 +32,11 @@ module usharp_cli_help
       '  -h, --help            show this help'//nl// &
       '  -V, --version         show the version and the build'
 
+   !> --force of the commands that write over their own earlier output only
+   character(len=*), parameter :: force_option = &
+      '      --force           write over files of the names it writes that it did not'//nl// &
+      '                        write itself (without it such a file is an error, exit 2)'//nl
+
    !> Options of the commands that keep a journal of their tasks
    character(len=*), parameter :: journal_options = &
       '      --resume          continue a stopped run from its journal (on any number of'//nl// &
@@ -104,6 +109,7 @@ contains
             'Writes <out_dir>/identify.txt.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
+            force_option// &
             common_options
       case ('design')
          text = 'usage: usharp design [options] <design.nml>'//nl//nl// &
@@ -146,6 +152,7 @@ contains
             'The deck needs an ANSYS linked with the usharp USERMAT: docs/guide/fe-users.md.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
+            force_option// &
             '  -q, --quiet           do not list the files written'//nl// &
             common_options
       case ('predict')
@@ -157,6 +164,7 @@ contains
             'prediction) and summary.txt (the table), as run does for the tests it fits.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  the fitted constants (required)'//nl// &
+            force_option// &
             common_options
       case default
          text = 'usage: usharp simulate [options] <input.nml>'//nl//nl// &

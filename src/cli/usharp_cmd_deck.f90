@@ -8,6 +8,7 @@ module usharp_cmd_deck
    use usharp_external, only: write_constants_file
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
+   use usharp_overwrite, only: check_overwrite, made_by_usharp
    implicit none
    private
 
@@ -15,15 +16,22 @@ module usharp_cmd_deck
 
 contains
 
-   !> Write the decks. test_name '' means every test; out_dir '' means &output out_dir.
-   subroutine deck_command(path, test_name, out_dir, constants_file, written, error)
+   !> Write the decks. test_name '' means every test; out_dir '' means &output out_dir. A file
+   !> of a name it writes that an earlier `usharp deck` did not write is refused unless force
+   !> (--force).
+   subroutine deck_command(path, test_name, out_dir, constants_file, written, error, force)
       character(len=*), intent(in) :: path, test_name, out_dir, constants_file
       character(len=4096), allocatable, intent(out) :: written(:)
       type(error_type), allocatable, intent(out) :: error
+      !> write over files of the output names that usharp deck did not write
+      logical, intent(in), optional :: force
       type(run_config) :: cfg
       character(len=line_len), allocatable :: lines(:)
-      character(len=:), allocatable :: dir, command, file
+      character(len=:), allocatable :: dir, command, file, mark
       integer :: i, nmatch
+      logical :: overwrite
+      overwrite = .false.
+      if (present(force)) overwrite = force
       allocate (written(0))
       call read_config(path, cfg, error)
       if (allocated(error)) return
@@ -49,6 +57,18 @@ contains
          call fatal_error(error, path//": no &test named '"//test_name//"'", stat_input)
          return
       end if
+      ! Every file is checked before the first is written
+      do i = 1, size(cfg%tests)
+         if (len(test_name) > 0 .and. cfg%tests(i)%name /= test_name) cycle
+         mark = deck_mark(cfg%tests(i)%name)
+         call check_overwrite(dir, [cfg%tests(i)%name//'.inp'], [mark], 'deck', overwrite, error)
+         if (allocated(error)) return
+         ! The constants file is numbers alone, with no first line to know it by
+         if (.not. read_by_a_deck(cfg, dir, cfg%tests(i)%ext%constants_file)) &
+            call check_overwrite(dir, [cfg%tests(i)%ext%constants_file], [character(len=1) ::], &
+                                 'deck', overwrite, error)
+         if (allocated(error)) return
+      end do
       call make_dir(dir, error)
       if (allocated(error)) return
       do i = 1, size(cfg%tests)
@@ -66,4 +86,27 @@ contains
          if (.not. any(written == file)) written = [character(len=4096) :: written, file]
       end do
    end subroutine deck_command
+
+   !> How the first line of test name's deck begins ('*': the version)
+   pure function deck_mark(name) result(mark)
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: mark
+      mark = "! usharp * APDL deck for test '"//name//"'"
+   end function deck_mark
+
+   !> Whether a deck that usharp wrote in dir, of a test of cfg, reads the constants file
+   !> file: then the file is that deck's, written with it
+   logical function read_by_a_deck(cfg, dir, file) result(yes)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: dir, file
+      character(len=:), allocatable :: mark
+      integer :: j
+      yes = .false.
+      do j = 1, size(cfg%tests)
+         if (cfg%tests(j)%ext%constants_file /= file) cycle
+         mark = deck_mark(cfg%tests(j)%name)
+         yes = made_by_usharp(join_path(dir, cfg%tests(j)%name//'.inp'), [mark])
+         if (yes) return
+      end do
+   end function read_by_a_deck
 end module usharp_cmd_deck

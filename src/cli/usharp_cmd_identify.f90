@@ -10,6 +10,7 @@ module usharp_cmd_identify
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
    use usharp_strings, only: report_line_len
+   use usharp_overwrite, only: check_overwrite
    implicit none
    private
 
@@ -17,20 +18,32 @@ module usharp_cmd_identify
 
 contains
 
-   subroutine identify_command(path, out_dir, constants_file, lines, error)
+   !> The report at the constants of path (or of constants_file, a best.nml, when not ''),
+   !> written to identify.txt in out_dir (&output out_dir when ''), and returned in lines. An
+   !> identify.txt there that an earlier report did not write is refused unless force (--force).
+   subroutine identify_command(path, out_dir, constants_file, lines, error, force)
       character(len=*), intent(in) :: path, out_dir, constants_file
       character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
+      !> write over an identify.txt that usharp identify did not write
+      logical, intent(in), optional :: force
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(identify_result) :: res
       real(dp), allocatable :: c(:)
       integer :: j
+      logical :: overwrite
+      overwrite = .false.
+      if (present(force)) overwrite = force
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
       call check_inputs_kept(cfg, path, constants_file, ['identify.txt'], [character(len=1) ::], error)
       if (.not. allocated(error)) call check_not_a_fit(cfg, 'identify', ['identify.txt'], &
                                                        [character(len=1) ::], error)
+      if (allocated(error)) return
+      call check_overwrite(cfg%out_dir, ['identify.txt'], [character(len=36) :: &
+                           'identifiability at the optimum (', 'identifiability at these constants ('], &
+                           'identify', overwrite, error)
       if (allocated(error)) return
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return

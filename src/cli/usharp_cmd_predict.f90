@@ -11,6 +11,7 @@ module usharp_cmd_predict
    use usharp_output, only: write_lines
    use usharp_filesys, only: make_dir, join_path
    use usharp_cmd_run, only: write_curves
+   use usharp_overwrite, only: check_overwrite, simulate_mark
    implicit none
    private
 
@@ -21,11 +22,14 @@ contains
    !> Simulate every &test of path with the &constants of constants_file (required) and
    !> compare with the tests' data: RMS error, RMS error / peak of the data, largest error per
    !> test (the fitted response's unit). Writes <test>.sim.txt, <test>.fit.txt and summary.txt
-   !> into out_dir (&output out_dir when empty); summary returns the table.
-   subroutine predict_command(path, out_dir, constants_file, summary, error)
+   !> into out_dir (&output out_dir when empty); summary returns the table. Files of those
+   !> names that an earlier prediction did not write are refused unless force (--force).
+   subroutine predict_command(path, out_dir, constants_file, summary, error, force)
       character(len=*), intent(in) :: path, out_dir, constants_file
       character(len=report_line_len), allocatable, intent(out) :: summary(:)
       type(error_type), allocatable, intent(out) :: error
+      !> write over files of the output names that usharp predict did not write
+      logical, intent(in), optional :: force
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(sim_result), allocatable :: res(:)
@@ -36,6 +40,7 @@ contains
       real(dp), allocatable :: y(:)
       integer, allocatable :: kind(:)
       integer :: i, part
+      logical :: overwrite
       allocate (summary(0))
       if (len_trim(constants_file) == 0) then
          call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_input)
@@ -49,6 +54,10 @@ contains
       ! A fit's folder: its summary and curves have the names of a prediction's
       call check_not_a_fit(cfg, 'predict', ['summary.txt'], &
                            [character(len=10) :: '.sim.txt', '.fit.txt', '.peaks.txt'], error)
+      if (allocated(error)) return
+      overwrite = .false.
+      if (present(force)) overwrite = force
+      call check_predict_files(cfg, overwrite, error)
       if (allocated(error)) return
       ! Nothing is fitted; the problem's set-up asks for one fitted constant, unused here
       if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.
@@ -91,6 +100,31 @@ contains
       if (allocated(error)) return
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
    end subroutine predict_command
+
+   !> A prediction writes over its own earlier files (known by their first lines) and over
+   !> the curves of `usharp simulate` (a look at the model, as before a fit); over anything
+   !> else only when forced
+   subroutine check_predict_files(cfg, force, error)
+      type(run_config), intent(in) :: cfg
+      logical, intent(in) :: force
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: name
+      integer :: i
+      call check_overwrite(cfg%out_dir, ['summary.txt'], ['usharp predict '], 'predict', force, error)
+      do i = 1, size(cfg%tests)
+         if (allocated(error)) return
+         name = cfg%tests(i)%name
+         call check_overwrite(cfg%out_dir, [name//'.sim.txt'], [character(len=len(name) + 48) :: &
+            "# prediction with the constants of *, test '"//name//"'", simulate_mark//name//"'"], &
+            'predict', force, error)
+         if (allocated(error)) return
+         call check_overwrite(cfg%out_dir, [name//'.fit.txt'], &
+            ["# prediction with the constants of * of test '"//name//"' against "], 'predict', force, error)
+         if (allocated(error)) return
+         if (cfg%tests(i)%has_peaks()) call check_overwrite(cfg%out_dir, [name//'.peaks.txt'], &
+            ["# peak stresses of test '"//name//"' against "], 'predict', force, error)
+      end do
+   end subroutine check_predict_files
 
    !> RMS error, RMS error over the peak |measured| and the largest |error| of a prediction
    pure subroutine prediction_errors(y_ex, y_sim, rms, rel, worst)

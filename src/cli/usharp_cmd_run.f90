@@ -12,7 +12,8 @@ module usharp_cmd_run
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines, result_file
-   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists, read_line
+   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists
+   use usharp_overwrite, only: made_by_usharp, simulate_mark
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
@@ -355,16 +356,9 @@ contains
    !> workflow), not a file of the user's
    logical function simulated_by_usharp(path) result(yes)
       character(len=*), intent(in) :: path
-      character(len=:), allocatable :: line
-      integer :: unit, ios
       yes = .false.
-      if (.not. file_exists(path)) return
       if (index(path, '.sim.txt', back=.true.) /= len(path) - len('.sim.txt') + 1) return
-      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
-      if (ios /= 0) return
-      call read_line(unit, line, ios)
-      close (unit)
-      yes = ios == 0 .and. index(line, '# usharp ') == 1 .and. index(line, ' simulation of test ''') > 0
+      yes = made_by_usharp(path, [simulate_mark])
    end function simulated_by_usharp
 
 end module usharp_cmd_run

@@ -1,0 +1,101 @@
+!> Nothing a user made is overwritten unasked. Before a command writes, each file of its
+!> output names that is already there must be the command's own earlier output, known by its
+!> first line; any other file is refused (a usage error naming it) unless --force is given.
+module usharp_overwrite
+   use usharp_error, only: error_type, fatal_error, stat_usage
+   use usharp_filesys, only: file_exists, read_line, join_path
+   implicit none
+   private
+
+   public :: check_overwrite, made_by_usharp, begins_like, simulate_mark
+
+   !> How the first line of a <test>.sim.txt that `usharp simulate` wrote begins ('*': the
+   !> version)
+   character(len=*), parameter :: simulate_mark = "# usharp * simulation of test '"
+
+contains
+
+   !> Refuse to write over any of names (files in dir) that is there and was not made by
+   !> usharp for command: one whose first line begins like none of marks (see begins_like).
+   !> force allows it. The error names the first such file and says to add --force (exit 2).
+   subroutine check_overwrite(dir, names, marks, command, force, error)
+      !> the output folder
+      character(len=*), intent(in) :: dir
+      !> the files the command is about to write there
+      character(len=*), intent(in) :: names(:)
+      !> how the first line of each begins when usharp wrote it for the command (none: every
+      !> file there is refused)
+      character(len=*), intent(in) :: marks(:)
+      !> the command's name, for the message
+      character(len=*), intent(in) :: command
+      !> --force was given
+      logical, intent(in) :: force
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: file
+      integer :: i
+      if (force) return
+      do i = 1, size(names)
+         file = join_path(dir, trim(names(i)))
+         if (.not. file_exists(file)) cycle
+         if (made_by_usharp(file, marks)) cycle
+         call fatal_error(error, file//': a file of this name is there that usharp '// &
+            command//' did not write; overwrite it with --force, or give another output '// &
+            'folder (-o)', stat_usage)
+         return
+      end do
+   end subroutine check_overwrite
+
+   !> Whether the file at path is there and its first line begins like one of marks
+   logical function made_by_usharp(path, marks) result(yes)
+      !> the file
+      character(len=*), intent(in) :: path
+      !> patterns of the first line, as for begins_like
+      character(len=*), intent(in) :: marks(:)
+      character(len=:), allocatable :: line
+      integer :: unit, ios, k
+      yes = .false.
+      if (.not. file_exists(path)) return
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      call read_line(unit, line, ios)
+      close (unit)
+      if (ios /= 0) return
+      do k = 1, size(marks)
+         if (begins_like(line, trim(marks(k)))) then
+            yes = .true.
+            return
+         end if
+      end do
+   end function made_by_usharp
+
+   !> Whether line begins like pattern: its text, where each '*' stands for any text (a
+   !> version, a file name); what follows the pattern's end is free
+   pure logical function begins_like(line, pattern) result(yes)
+      !> the line
+      character(len=*), intent(in) :: line
+      !> the pattern
+      character(len=*), intent(in) :: pattern
+      integer :: pos, star, at
+      character(len=:), allocatable :: rest
+      logical :: first
+      yes = .false.
+      pos = 1
+      rest = pattern
+      first = .true.
+      do
+         star = index(rest, '*')
+         if (star == 0) star = len(rest) + 1
+         ! The first piece at the line's start, each further one anywhere after the last
+         if (star > 1) then
+            at = index(line(pos:), rest(:star - 1))
+            if (at == 0 .or. (first .and. at /= 1)) return
+            pos = pos + at - 1 + star - 1
+         end if
+         first = .false.
+         if (star > len(rest)) exit
+         rest = rest(star + 1:)
+      end do
+      yes = .true.
+   end function begins_like
+
+end module usharp_overwrite
