@@ -198,6 +198,8 @@ echo 'my notes' > mine/identify.txt
 row '`identify` over a file of the user'"'"'s' - u identify fit.nml -o mine
 echo '1.0' > mine/Constants.txt
 row '`deck` over a file of the user'"'"'s' - u deck fit.nml -o mine
+echo 'my notes' > mine/lcf.sim.txt
+row '`simulate` over a file of the user'"'"'s' - u simulate fit.nml -o mine
 row '`--resume` without a journal' - u run -q --resume fit.nml -o r-none
 cp lcf.txt lcf.orig; echo '# changed' >> lcf.txt
 row '`--resume` after a data file changed' - u run -q --resume fit.nml -o r1

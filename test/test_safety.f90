@@ -31,7 +31,7 @@ contains
          new_unittest('specimen-reports-kept-without-force', test_specimen_kept), &
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
          new_unittest('user-files-and-fits-kept', test_strangers_kept), &
-         new_unittest('user-files-kept-by-predict-identify-deck', test_own_files_kept), &
+         new_unittest('user-files-kept-by-predict-identify-deck-simulate', test_own_files_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
@@ -309,11 +309,12 @@ contains
       character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: input, dir
       type(cli_command) :: cmd
-      character(len=*), parameter :: commands(3) = [character(len=8) :: 'predict', 'identify', 'deck']
-      character(len=*), parameter :: names(6) = [character(len=13) :: 'summary.txt', 'lcf.sim.txt', &
-         'lcf.fit.txt', 'identify.txt', 'lcf.inp', 'Constants.txt']
-      character(len=*), parameter :: writer(6) = [character(len=8) :: 'predict', 'predict', &
-         'predict', 'identify', 'deck', 'deck']
+      character(len=*), parameter :: commands(4) = [character(len=8) :: 'predict', 'identify', 'deck', &
+         'simulate']
+      character(len=*), parameter :: names(7) = [character(len=13) :: 'summary.txt', 'lcf.sim.txt', &
+         'lcf.fit.txt', 'identify.txt', 'lcf.inp', 'Constants.txt', 'lcf.sim.txt']
+      character(len=*), parameter :: writer(7) = [character(len=8) :: 'predict', 'predict', &
+         'predict', 'identify', 'deck', 'deck', 'simulate']
       integer :: k
       ! usharp's own first lines are told by a pattern, '*' standing for the version
       call check(error, begins_like("# usharp 0.1.0 simulation of test 'lcf' (history", simulate_mark//"lcf'") &
@@ -388,6 +389,8 @@ contains
             call predict_command(input, dir, input, summary, e, force)
          case ('identify')
             call identify_command(input, dir, '', summary, e, force)
+         case ('simulate')
+            call simulate_command(input, dir, written, e, force=force)
          case default
             call deck_command(input, '', dir, '', written, e, force)
          end select

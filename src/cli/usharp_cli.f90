@@ -51,7 +51,8 @@ contains
       select case (cmd%name)
       case ('simulate', 'deck')
          if (cmd%name == 'simulate') then
-            call simulate_command(cmd%input, cmd%out_dir, written, error, cmd%constants, cmd%only_test)
+            call simulate_command(cmd%input, cmd%out_dir, written, error, cmd%constants, cmd%only_test, &
+                                  cmd%force)
          else
             call deck_command(cmd%input, cmd%test_name, cmd%out_dir, cmd%constants, written, error, &
                               cmd%force)

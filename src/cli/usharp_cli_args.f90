@@ -72,7 +72,8 @@ contains
          ok = command == 'run' .or. command == 'design' .or. command == 'diagnose'
       case ('--force')
          ok = command == 'run' .or. command == 'design' .or. command == 'diagnose' .or. &
-              command == 'predict' .or. command == 'identify' .or. command == 'deck'
+              command == 'predict' .or. command == 'identify' .or. command == 'deck' .or. &
+              command == 'simulate'
       case ('--selfcheck')
          ok = command == 'diagnose'
       case default

@@ -173,6 +173,7 @@ contains
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
             '  -t, --test NAME       simulate only the &test named NAME'//nl// &
+            force_option// &
             '  -q, --quiet           do not list the files written'//nl// &
             common_options
       end select

@@ -11,6 +11,7 @@ module usharp_cmd_simulate
    use usharp_output, only: write_sim_file
    use usharp_filesys, only: make_dir, join_path
    use usharp_version, only: usharp_version_string
+   use usharp_overwrite, only: check_overwrite, simulate_mark
    implicit none
    private
 
@@ -19,12 +20,14 @@ module usharp_cmd_simulate
 contains
 
    !> Run the simulate command. out_dir overrides the input file's &output out_dir when not
-   !> empty. Each written file is reported through the written list.
-   subroutine simulate_command(path, out_dir, written, error, constants_file, only_test)
+   !> empty. Each written file is reported through the written list. A file of a name it
+   !> writes that an earlier simulate did not write (a user's) is refused unless force.
+   subroutine simulate_command(path, out_dir, written, error, constants_file, only_test, force)
       character(len=*), intent(in) :: path
       character(len=*), intent(in) :: out_dir
       character(len=*), intent(in), optional :: constants_file  !< a best.nml to use
       character(len=*), intent(in), optional :: only_test       !< simulate only this test
+      logical, intent(in), optional :: force  !< write over files it did not write (--force)
       character(len=4096), allocatable, intent(out) :: written(:)
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
@@ -34,8 +37,10 @@ contains
       character(len=:), allocatable :: dnames(:)
       real(dp), allocatable :: dvals(:)
       integer :: i, k
-      logical :: one_test
+      logical :: one_test, overwrite
       one_test = .false.
+      overwrite = .false.
+      if (present(force)) overwrite = force
       allocate (written(0))
       call read_config(path, cfg, error)
       if (allocated(error)) return
@@ -76,6 +81,15 @@ contains
          call check_not_a_fit(cfg, 'simulate', [character(len=1) ::], ['.sim.txt'], error)
       end if
       if (allocated(error)) return
+      ! Every file checked before the first is written
+      do i = 1, size(cfg%tests)
+         if (one_test) then
+            if (cfg%tests(i)%name /= only_test) cycle
+         end if
+         call check_overwrite(dir, [cfg%tests(i)%name//'.sim.txt'], &
+            [simulate_mark//cfg%tests(i)%name//"'"], 'simulate', overwrite, error)
+         if (allocated(error)) return
+      end do
       call make_dir(dir, error)
       if (allocated(error)) return
       do i = 1, size(cfg%tests)
