@@ -643,7 +643,7 @@ contains
 
    !> Levenberg-Marquardt from 2 starts, stopped after 90 % of its evaluations and resumed:
    !> the resumed run simulates at most 15 % of the evaluations and ends bit for bit as the
-   !> uninterrupted one
+   !> uninterrupted one; without its fit.cache it simulates them all, and counts none replayed
    subroutine test_resume_cost(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -683,6 +683,21 @@ contains
       if (allocated(error)) return
       call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
                  'best.nml identical')
+      if (allocated(error)) return
+      ! Without fit.cache the journal gives no residual vector: every evaluation is simulated
+      ! again, and the summary does not count one as replayed
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n '//str(nkept + 1)//' '//full// &
+                   '/fit.journal > '//part//'/fit.journal')
+      call run_command(input, part, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resumed without fit.cache: '//e%message)
+         return
+      end if
+      call counts(summary(3), ntotal, nrep, nsim)
+      call check(error, nrep == 0 .and. nsim == ntotal, 'resumed without fit.cache: '//trim(summary(3)))
+      if (allocated(error)) return
+      call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
+                 'best.nml identical without fit.cache')
    end subroutine test_resume_cost
 
    !> An external Levenberg-Marquardt fit resumed at 90 %: the FE command runs again only for

@@ -69,6 +69,9 @@ module usharp_fit
       integer :: nevals = 0
       integer :: nsens = 0              !< sensitivity Jacobians (one simulation each)
       integer :: nsimulated = 0         !< evaluations simulated (not replayed) in this run
+      !> Evaluations taken from the journal in this run (those whose residual vectors a
+      !> least-squares search needs only where fit.cache holds them)
+      integer :: nreplayed = 0
       integer :: nfail_row = 0          !< failures in a row
       integer :: nfail_total = 0
       integer :: ninvalid_total = 0
@@ -155,6 +158,7 @@ contains
          per_test = self%replay(k)%per_test
          status = self%replay(k)%status
          message = replay_message(self, k)
+         self%nreplayed = self%nreplayed + 1
       else
          call may_simulate(self, error)
          if (allocated(error)) return
@@ -228,6 +232,7 @@ contains
          status(j) = self%replay(k0 + j)%status
          messages(j) = replay_message(self, k0 + j)
       end do
+      self%nreplayed = self%nreplayed + nr
       if (nr < size(xs, 2)) then
          call may_simulate(self, error)
          if (allocated(error)) return
@@ -563,6 +568,7 @@ contains
       integer(int64) :: now, rate
       character(len=:), allocatable :: fingerprint, old_fingerprint, changed, journal
       logical :: overwrite, resuming, parallel
+      integer :: k
       obj%prob = prob
       allocate (obj%replay(0), obj%replay_jac(0))
       overwrite = .false.
@@ -612,7 +618,9 @@ contains
       end if
       call catch_stop_signals()
       if (size(obj%replay) > 0 .and. .not. parallel) call obj%log%event('resumed: replaying '// &
-         str(size(obj%replay))//' evaluations from '//journal_name)
+         str(size(obj%replay))//' evaluations from '//journal_name//' ('// &
+         str(count([(allocated(obj%replay(k)%r), k=1, size(obj%replay))]))// &
+         ' with their residual vectors from '//cache_name//')')
       if (present(progress)) obj%progress => progress
       call system_clock(obj%clock0, rate)
       if (parallel) then
@@ -637,7 +645,13 @@ contains
       outcome%f_start = obj%first
       outcome%nfail = obj%nfail_total
       outcome%ninvalid = obj%ninvalid_total
-      outcome%nreplayed = min(obj%nresumed, obj%nevals)
+      ! Over ranks, the starts' replays as the journal's dry run found them; in one search,
+      ! those made (a journal without its fit.cache replays no residual vector)
+      if (parallel) then
+         outcome%nreplayed = min(obj%nresumed, obj%nevals)
+      else
+         outcome%nreplayed = obj%nreplayed
+      end if
       outcome%nsimulated = obj%nsimulated
       if (.not. allocated(error)) then
          outcome%opt%nevals = obj%nevals
