@@ -16,6 +16,7 @@ fpm build --profile release --flag "$FLAGS" > /dev/null
 exe=$(fpm run --profile release --flag "$FLAGS" --runner echo 2>/dev/null | tail -n 1)
 mpirun="mpirun --oversubscribe -np 2"
 [ "$(id -u)" -eq 0 ] && mpirun="mpirun --allow-run-as-root --oversubscribe -np 2"
+mpirun1=${mpirun/-np 2/-np 1}
 out=$(mktemp -d)
 # The one-start deck sits beside the deck, whose data paths are relative to its folder
 one=decks/.a617-950C-fit-one-start.$$.nml
@@ -35,8 +36,9 @@ wall() { # folder command...: wall seconds of the command
 compare() { # name file1 file2
   if cmp -s <(sed 's/ in [0-9.]* s$//' "$2") <(sed 's/ in [0-9.]* s$//' "$3"); then echo same; else echo DIFFERENT; fi
 }
-row() { # label t1 t2 same
-  printf '%-34s %8.2f %8.2f %8.2f   %s\n' "$1" "$2" "$3" "$(echo "scale=3; $2 / $3" | bc)" "$4"
+row() { # label t1 t1-under-mpirun t2 same
+  printf '%-34s %8.2f %8.2f %8.2f %8.2f %8.2f   %s\n' "$1" "$2" "$3" "$4" "$(echo "scale=3; $2 / $4" | bc)" \
+    "$(echo "scale=3; $3 / $4" | bc)" "$5"
 }
 
 cat > "$out/selfcheck.nml" <<'NML'
@@ -59,26 +61,34 @@ export OMPI_MCA_pml=${OMPI_MCA_pml:-ob1}
 launch_ob1=$(wall x $mpirun "$exe" --version)
 echo "machine: $(nproc --all) cores; load before: $(uptime | sed 's/.*load average: //')"
 printf 'launch of 2 ranks (usharp --version): %.2f s as Open MPI chooses, %.2f s with pml %s\n' "$launch_default" "$launch_ob1" "$OMPI_MCA_pml"
-printf '%-34s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "2 ranks" "ratio" "results"
+# 1 rank: the program started alone (a singleton, as a workstation user runs it) and under
+# mpirun -np 1 (the launch that 2 ranks pay too); the ratios of both to 2 ranks
+printf '%-34s %8s %8s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "mpirun 1" "2 ranks" \
+  "ratio" "ratio m" "results"
 if [ -d ../shared/realdata/a617-950C ]; then
   # Three pairs, each 1 rank then 2 ranks back to back (the ratio moves by a few hundredths
   # from pair to pair on this machine)
   for pair in 1 2 3; do
-    rm -rf "$out/fit1" "$out/fit2"
+    rm -rf "$out/fit1" "$out/fit1m" "$out/fit2"
     t1=$(wall x "$exe" run -q -o "$out/fit1" decks/a617-950C-fit.nml)
+    t1m=$(wall x $mpirun1 "$exe" run -q -o "$out/fit1m" decks/a617-950C-fit.nml)
     t2=$(wall x $mpirun "$exe" run -q -o "$out/fit2" decks/a617-950C-fit.nml)
     same=$(compare x "$out/fit1/fit.journal" "$out/fit2/fit.journal")
     cmp -s "$out/fit1/fit.cache" "$out/fit2/fit.cache" || same=DIFFERENT
-    row "Alloy 617 fit, 8 starts ($pair)" "$t1" "$t2" "$same"
+    row "Alloy 617 fit, 8 starts ($pair)" "$t1" "$t1m" "$t2" "$same"
   done
   sed 's/multistart = 8, //' decks/a617-950C-fit.nml > "$one"
   t1=$(wall x "$exe" run -q -o "$out/one1" "$one")
+  t1m=$(wall x $mpirun1 "$exe" run -q -o "$out/one1m" "$one")
   t2=$(wall x $mpirun "$exe" run -q -o "$out/one2" "$one")
-  row "Alloy 617 fit, 1 start (helped)" "$t1" "$t2" "$(compare x "$out/one1/fit.journal" "$out/one2/fit.journal")"
+  row "Alloy 617 fit, 1 start (helped)" "$t1" "$t1m" "$t2" \
+    "$(compare x "$out/one1/fit.journal" "$out/one2/fit.journal")"
 else
   echo "Alloy 617 fit: skipped (no ../shared/realdata/a617-950C)"
 fi
 t1=$(wall x "$exe" diagnose --selfcheck -q -o "$out/sc1" "$out/selfcheck.nml")
+t1m=$(wall x $mpirun1 "$exe" diagnose --selfcheck -q -o "$out/sc1m" "$out/selfcheck.nml")
 t2=$(wall x $mpirun "$exe" diagnose --selfcheck -q -o "$out/sc2" "$out/selfcheck.nml")
-row "self-check subset, 16 repetitions" "$t1" "$t2" "$(compare x "$out/sc1/selfcheck.md" "$out/sc2/selfcheck.md")"
+row "self-check subset, 16 repetitions" "$t1" "$t1m" "$t2" \
+  "$(compare x "$out/sc1/selfcheck.md" "$out/sc2/selfcheck.md")"
 echo "load after: $(uptime | sed 's/.*load average: //')"
