@@ -26,7 +26,8 @@ contains
          new_unittest('passive-wait-unless-chosen', test_wait_policy), &
          new_unittest('folders-import-only-downward', test_layers), &
          new_unittest('predict-with-the-constants-that-made-the-data', test_predict), &
-         new_unittest('predict-needs-constants', test_predict_needs_constants)]
+         new_unittest('predict-needs-constants', test_predict_needs_constants), &
+         new_unittest('predict-readme-a617-twice', test_predict_a617)]
    end subroutine collect_cli
 
    !> The argument list of a command line given as one string split at blanks
@@ -212,4 +213,41 @@ contains
       if (allocated(error)) return
       call check(error, e%stat == stat_input .and. index(e%message, '-c') > 0, e%message)
    end subroutine test_predict_needs_constants
+
+   !> The README's prediction of measured Alloy 617 tests (long test names, peak-stress targets,
+   !> creep), run twice into one folder: a row per test and per peak-stress target, and the
+   !> second run replaces the first's files as its own
+   subroutine test_predict_a617(error)
+      use usharp_cmd_predict, only: predict_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=*), parameter :: dir = scratch_dir//'/predict-a617'
+      integer :: run, k, rows, peaks
+      logical :: exists
+      inquire (file='../shared/realdata/a617-950C/lcf/HTM_A19_Cycles_J2.csv', exist=exists)
+      if (.not. exists) then
+         call skip_test(error, 'the measured Alloy 617 data are not at ../shared/realdata')
+         return
+      end if
+      do run = 1, 2
+         call predict_command('decks/a617-950C-predict.nml', dir, 'decks/a617-950C-best.nml', &
+                              summary, e)
+         if (allocated(e)) then
+            call test_failed(error, 'run '//achar(48 + run)//': '//e%message)
+            return
+         end if
+         rows = 0
+         peaks = 0
+         do k = 1, size(summary)
+            if (index(summary(k), ' %') > 0) rows = rows + 1
+            if (index(summary(k), ' peaks ') > 0) peaks = peaks + 1
+         end do
+         call check(error, rows == 18 .and. peaks == 7, 'run '//achar(48 + run)//': 11 tests and '// &
+                    '7 peak-stress rows in the table')
+         if (allocated(error)) return
+      end do
+      inquire (file=dir//'/J2-2.0pct-1e-4.peaks.txt', exist=exists)
+      call check(error, exists, 'J2-2.0pct-1e-4.peaks.txt written')
+   end subroutine test_predict_a617
 end module test_cli

@@ -114,9 +114,14 @@ contains
       do i = 1, size(cfg%tests)
          if (allocated(error)) return
          name = cfg%tests(i)%name
-         call check_overwrite(cfg%out_dir, [name//'.sim.txt'], [character(len=len(name) + 48) :: &
-            "# prediction with the constants of *, test '"//name//"'", simulate_mark//name//"'"], &
-            'predict', force, error)
+         ! Assigned one by one: gfortran 12 overran the heap building an array constructor of
+         ! a length taken from the deferred-length name
+         block
+            character(len=len(name) + 64) :: marks(2)
+            marks(1) = "# prediction with the constants of *, test '"//name//"'"
+            marks(2) = simulate_mark//name//"'"
+            call check_overwrite(cfg%out_dir, [name//'.sim.txt'], marks, 'predict', force, error)
+         end block
          if (allocated(error)) return
          call check_overwrite(cfg%out_dir, [name//'.fit.txt'], &
             ["# prediction with the constants of * of test '"//name//"' against "], 'predict', force, error)
