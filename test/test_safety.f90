@@ -39,6 +39,7 @@ contains
          new_unittest('external-ignores-term-and-leaves-a-child', test_external_term), &
          new_unittest('plot-script-hostile-folder-name', test_plot_script), &
          new_unittest('lm-resume-at-90-percent-replays', test_resume_cost), &
+         new_unittest('resumed-fit-log-names-every-penalty', test_resume_log), &
          new_unittest('external-resume-reruns-no-journalled-command', test_external_resume), &
          new_unittest('sigterm-stops-with-a-note', test_sigterm)]
    end subroutine collect_safety
@@ -241,6 +242,14 @@ contains
       if (allocated(error)) return
       call check(error, read_text(dir//'/summary.txt') == 'my notes'//new_line('a'), 'the notes are kept')
       if (allocated(error)) return
+      ! --auto-resume with no journal to continue starts afresh, and keeps out as a run does
+      call run_command(input, dir, '', .false., summary, e, auto_resume=.true.)
+      call check_message(error, e, 'summary.txt: a file of this name is there, and no '// &
+                         'fit.journal says a run made it')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/summary.txt') == 'my notes'//new_line('a'), &
+                 'the notes are kept by --auto-resume')
+      if (allocated(error)) return
       ! Every name a run writes is refused alike (identify.txt had been cut to 11 characters)
       do k = 1, size(own)
          call check(error, shell('rm -rf '//dir//'-one') == 0, 'clean folder')
@@ -399,12 +408,18 @@ contains
 
    !> No run writes over its own inputs, --force or not: the constants given with -c that are
    !> the output folder's best.nml, and a test 'lcf' whose data are lcf.sim.txt in the output
-   !> folder, are refused with an input error that names them, and stay as they were
+   !> folder, are refused with an input error that names them, and stay as they were; so too
+   !> by simulate (which with -t minds only that test's curve) and deck (its input deck)
    subroutine test_inputs_kept(error)
+      use usharp_cmd_simulate, only: simulate_command
+      use usharp_cmd_deck, only: deck_command
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=report_line_len), allocatable :: summary(:)
+      character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: input, dir, best, data
+      character(len=*), parameter :: deck_inputs(2) = [character(len=13) :: 'lcf.inp', 'Constants.txt']
+      integer :: k
       input = deck('kept.nml', 'max_evals=12', '')
       dir = scratch_dir//'/kept-out'
       call run_command(input, dir, '', .false., summary, e, force=.true.)
@@ -435,6 +450,38 @@ contains
       call check_message(error, e, 'lcf.sim.txt: an input of this run')
       if (allocated(error)) return
       call check(error, read_text(scratch_dir//'/kept-data/lcf.sim.txt') == data, 'the data are untouched')
+      if (allocated(error)) return
+      ! simulate -t writes only that test's curve: another test's data of a simulate name
+      ! there is no obstacle (and without -t it is)
+      input = write_text('kept-data/kept2.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&test name='lcf', history='thesis_lcf', data_file='lcf.sim.txt', weighting='threshold', sig=14 /", &
+         "&test name='relax', history='relaxation', levels=0.00075, ramp_time=1.0, holds=60.0, "// &
+         "dt_out=5.0 /"])
+      call simulate_command(input, scratch_dir//'/kept-data', written, e, only_test='relax', force=.true.)
+      call check(error, .not. allocated(e), 'simulate -t relax beside the data of lcf')
+      if (allocated(error)) return
+      call simulate_command(input, scratch_dir//'/kept-data', written, e, force=.true.)
+      call check_message(error, e, 'lcf.sim.txt: an input of this run')
+      if (allocated(error)) return
+      call check(error, read_text(scratch_dir//'/kept-data/lcf.sim.txt') == data, &
+                 'the data are untouched by simulate')
+      if (allocated(error)) return
+      ! Nor does deck --force write over the input deck, named as a deck or as the constants
+      ! file it writes
+      do k = 1, 2
+         call check(error, shell('cp '//scratch_dir//'/kept-data/kept2.nml '//scratch_dir// &
+                    '/kept-data/'//trim(deck_inputs(k))) == 0, 'copy of the deck')
+         if (allocated(error)) return
+         call deck_command(scratch_dir//'/kept-data/'//trim(deck_inputs(k)), 'lcf', &
+                           scratch_dir//'/kept-data', '', written, e, .true.)
+         call check_message(error, e, trim(deck_inputs(k))//': an input of this run')
+         if (allocated(error)) return
+         call check(error, read_text(scratch_dir//'/kept-data/'//trim(deck_inputs(k))) == &
+                    read_text(scratch_dir//'/kept-data/kept2.nml'), trim(deck_inputs(k))//' is untouched')
+         if (allocated(error)) return
+      end do
    end subroutine test_inputs_kept
 
    !> While another process holds the folder's lock a run exits 6; the lock file left behind
@@ -699,6 +746,35 @@ contains
       call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
                  'best.nml identical without fit.cache')
    end subroutine test_resume_cost
+
+   !> fit.log of a Hooke-Jeeves fit resumed half-way names every penalised evaluation with
+   !> its reason, as the uninterrupted run's does (it is written anew as the journal replays)
+   subroutine test_resume_log(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: full, part
+      integer :: stat
+      full = scratch_dir//'/penalty-full'
+      part = scratch_dir//'/penalty-part'
+      call run_command('decks/thesis-run2.nml', full, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'uninterrupted run: '//e%message)
+         return
+      end if
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n 500 '//full//'/fit.journal > '// &
+                   part//'/fit.journal && cp '//full//'/fit.log '//part//'/')
+      call run_command('decks/thesis-run2.nml', part, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resumed run: '//e%message)
+         return
+      end if
+      call check(error, shell('grep "^evaluation " '//full//'/fit.log > '//full//'/penalties && '// &
+                 'grep "^evaluation " '//part//'/fit.log > '//part//'/penalties && cmp -s '//full// &
+                 '/penalties '//part//'/penalties && grep -q "^evaluation 14: penalty 2.000E+10: '// &
+                 'constant A1 must be" '//part//'/penalties'), 0, &
+                 'the penalised evaluations in the resumed fit.log')
+   end subroutine test_resume_log
 
    !> An external Levenberg-Marquardt fit resumed at 90 %: the FE command runs again only for
    !> evaluations the journal does not hold (and once for the best fit's curves)

@@ -3,7 +3,7 @@
 module usharp_cmd_deck
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_config, only: run_config
-   use usharp_input, only: read_config, override_constants
+   use usharp_input, only: read_config, override_constants, check_inputs_kept
    use usharp_apdl, only: apdl_deck, line_len
    use usharp_external, only: write_constants_file
    use usharp_filesys, only: make_dir, join_path
@@ -28,6 +28,7 @@ contains
       type(run_config) :: cfg
       character(len=line_len), allocatable :: lines(:)
       character(len=:), allocatable :: dir, command, file, mark
+      character(len=512), allocatable :: consts(:)
       integer :: i, nmatch
       logical :: overwrite
       overwrite = .false.
@@ -57,6 +58,15 @@ contains
          call fatal_error(error, path//": no &test named '"//test_name//"'", stat_input)
          return
       end if
+      ! Never over one of its inputs (the deck, the -c file, a test's data), --force or not
+      allocate (consts(0))
+      do i = 1, size(cfg%tests)
+         if (len(test_name) > 0 .and. cfg%tests(i)%name /= test_name) cycle
+         consts = [character(len=512) :: consts, cfg%tests(i)%ext%constants_file]
+      end do
+      cfg%out_dir = dir
+      call check_inputs_kept(cfg, path, constants_file, consts, ['.inp'], error, test_name)
+      if (allocated(error)) return
       ! Every file is checked before the first is written
       do i = 1, size(cfg%tests)
          if (len(test_name) > 0 .and. cfg%tests(i)%name /= test_name) cycle

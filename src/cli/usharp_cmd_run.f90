@@ -81,7 +81,7 @@ contains
          call check_inputs_kept(cfg, path, constants_file, run_files, test_files, error)
          if (allocated(error)) return
          dir = cfg%out_dir
-         call check_no_strangers(cfg, dir, resume .or. overwrite, auto_resume, error)
+         call check_no_strangers(cfg, dir, resume .or. overwrite, error)
          if (allocated(error)) return
          if (len_trim(constants_file) > 0 .and. cfg%fit%multistart > 0) then
             ! The starts are drawn over the box: constants to start from would not be used
@@ -327,18 +327,15 @@ contains
    !> A run starts in a folder only where it overwrites nothing a user made: files of the
    !> names it writes, with no journal that says a run made them (a journal's own case, an
    !> earlier run, is run_fit's), are refused unless allowed (--force, or --resume)
-   subroutine check_no_strangers(cfg, dir, allowed, auto_resume, error)
+   subroutine check_no_strangers(cfg, dir, allowed, error)
       type(run_config), intent(in) :: cfg
       character(len=*), intent(in) :: dir
       logical, intent(in) :: allowed
-      logical, intent(in), optional :: auto_resume
       type(error_type), allocatable, intent(out) :: error
       character(len=:), allocatable :: names(:)
       integer :: i
+      ! (--auto-resume without a journal starts afresh, as a plain run does)
       if (allowed .or. file_exists(join_path(dir, 'fit.journal'))) return
-      if (present(auto_resume)) then
-         if (auto_resume) return
-      end if
       names = output_names(cfg, run_files, test_files)
       do i = 1, size(names)
          if (simulated_by_usharp(join_path(dir, trim(names(i))))) cycle

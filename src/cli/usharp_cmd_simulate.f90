@@ -58,12 +58,6 @@ contains
          command = command//' --out-dir '//trim(out_dir)
       end if
       cfg%out_dir = dir
-      if (present(constants_file)) then
-         call check_inputs_kept(cfg, path, constants_file, [character(len=1) ::], ['.sim.txt'], error)
-      else
-         call check_inputs_kept(cfg, path, '', [character(len=1) ::], ['.sim.txt'], error)
-      end if
-      if (allocated(error)) return
       if (present(only_test)) then
          if (len(only_test) > 0) then
             if (.not. any([(cfg%tests(i)%name == only_test, i=1, size(cfg%tests))])) then
@@ -74,6 +68,14 @@ contains
             one_test = .true.
          end if
       end if
+      ! (with -t, only that test's curve is written)
+      if (present(constants_file)) then
+         call check_inputs_kept(cfg, path, constants_file, [character(len=1) ::], ['.sim.txt'], &
+                                error, only_test)
+      else
+         call check_inputs_kept(cfg, path, '', [character(len=1) ::], ['.sim.txt'], error, only_test)
+      end if
+      if (allocated(error)) return
       ! Not over a fit's curves (the simulation at the deck's constants is not the fit's)
       if (one_test) then
          call check_not_a_fit(cfg, 'simulate', [only_test//'.sim.txt'], [character(len=1) ::], error)

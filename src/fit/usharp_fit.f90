@@ -18,7 +18,7 @@ module usharp_fit
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
                              journal_name, cache_name
    use usharp_journal, only: fingerprint_mismatch
-   use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text
+   use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text, read_line
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
    use usharp_config, only: run_config
@@ -497,8 +497,8 @@ contains
          self%nfail_row = self%nfail_row + 1
          self%nfail_total = self%nfail_total + 1
          if (status == eval_invalid) self%ninvalid_total = self%ninvalid_total + 1
-         if (k > self%nresumed) call self%log%event('evaluation '//str(k)//': penalty '// &
-            real_str(f, 'es10.3')//': '//message)
+         call self%log%event('evaluation '//str(k)//': penalty '//real_str(f, 'es10.3')//': '// &
+                             message)
          if (self%nfail_row >= self%prob%cfg%fit%max_failures) then
             call fatal_error(error, 'fit aborted: '//str(self%nfail_row)// &
                ' failed evaluations in a row (max_failures); last: '//message, stat_failure)
@@ -600,6 +600,9 @@ contains
             return
          end if
          call read_cache(join_path(dir, cache_name), prob%nres(), obj%replay, obj%replay_jac)
+         ! fit.log is written anew as the journal is replayed: the reasons of the penalised
+         ! evaluations come from the log it replaces
+         call carry_penalty_reasons(join_path(dir, 'fit.log'), obj%replay)
       else if (.not. overwrite .and. journal_has_records(journal)) then
          call fatal_error(error, journal//': holds the journal of an earlier run; continue it '// &
             'with --resume, or start again and overwrite it with --force', stat_usage)
@@ -617,10 +620,11 @@ contains
          return
       end if
       call catch_stop_signals()
-      if (size(obj%replay) > 0 .and. .not. parallel) call obj%log%event('resumed: replaying '// &
-         str(size(obj%replay))//' evaluations from '//journal_name//' ('// &
+      if (size(obj%replay) > 0 .and. .not. parallel) call obj%log%event('resumed: '// &
+         str(size(obj%replay))//' evaluations in '//journal_name//', '// &
          str(count([(allocated(obj%replay(k)%r), k=1, size(obj%replay))]))// &
-         ' with their residual vectors from '//cache_name//')')
+         ' of them with their residual vectors in '//cache_name// &
+         ' (a least-squares search replays only those)')
       if (present(progress)) obj%progress => progress
       call system_clock(obj%clock0, rate)
       if (parallel) then
@@ -663,6 +667,30 @@ contains
       call obj%log%close(close_error)
       if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
    end subroutine run_fit
+
+   !> The reasons that the fit.log at path gives for penalised evaluations ("evaluation k:
+   !> penalty f: reason"), into the journal's records that have none
+   subroutine carry_penalty_reasons(path, records)
+      character(len=*), intent(in) :: path
+      type(journal_record), intent(inout) :: records(:)
+      character(len=:), allocatable :: line
+      integer :: unit, ios, k, at, colon
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         call read_line(unit, line, ios)
+         if (ios /= 0) exit
+         if (index(line, 'evaluation ') /= 1) cycle
+         at = index(line, ': penalty ')
+         if (at == 0) cycle
+         read (line(12:at - 1), *, iostat=ios) k
+         if (ios /= 0 .or. k < 1 .or. k > size(records)) cycle
+         colon = index(line(at + 10:), ': ')
+         if (colon == 0) cycle
+         if (.not. allocated(records(k)%message)) records(k)%message = line(at + 10 + colon + 1:)
+      end do
+      close (unit)
+   end subroutine carry_penalty_reasons
 
    !> Whether a journal file holds at least one evaluation (a line besides the fingerprint)
    logical function journal_has_records(path) result(has)

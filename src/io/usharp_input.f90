@@ -119,7 +119,7 @@ contains
    !> No input of a command is a file it writes: an output folder that holds the deck, the
    !> constants given with -c or a test's data under a name the command writes there (a test
    !> 'lcf' with its data in lcf.sim.txt) would have them overwritten, even with --force
-   subroutine check_inputs_kept(cfg, path, constants_file, fixed, per_test, error)
+   subroutine check_inputs_kept(cfg, path, constants_file, fixed, per_test, error, only)
       type(run_config), intent(in) :: cfg
       !> the deck and the constants file given with -c ('' for none)
       character(len=*), intent(in) :: path, constants_file
@@ -127,6 +127,8 @@ contains
       !> it writes for each test (after the test's name)
       character(len=*), intent(in) :: fixed(:), per_test(:)
       type(error_type), allocatable, intent(out) :: error
+      !> the one test the command writes files of (blank or absent: every test)
+      character(len=*), intent(in), optional :: only
       character(len=:), allocatable :: inputs(:), outputs(:), here
       integer :: i, j, n
       if (len_trim(cfg%out_dir) == 0) return
@@ -142,7 +144,7 @@ contains
          if (allocated(cfg%tests(i)%data%file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%data%file]
          if (allocated(cfg%tests(i)%peak_file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%peak_file]
       end do
-      outputs = output_names(cfg, fixed, per_test)
+      outputs = output_names(cfg, fixed, per_test, only)
       do i = 1, size(inputs)
          if (len_trim(inputs(i)) == 0) cycle
          here = absolute_path(trim(inputs(i)))
@@ -188,20 +190,28 @@ contains
    end subroutine check_not_a_fit
 
    !> The names of the files a command writes in its output folder: fixed, then for each test
-   !> of cfg its name followed by each of per_test ('.sim.txt', ...)
-   pure function output_names(cfg, fixed, per_test) result(names)
+   !> of cfg (or only the test named only, when given and not blank) its name followed by each
+   !> of per_test ('.sim.txt', ...)
+   pure function output_names(cfg, fixed, per_test, only) result(names)
       type(run_config), intent(in) :: cfg
       character(len=*), intent(in) :: fixed(:), per_test(:)
+      character(len=*), intent(in), optional :: only
       character(len=:), allocatable :: names(:)
+      logical :: chosen(size(cfg%tests))
       integer :: i, j, k, n
+      chosen = .true.
+      if (present(only)) then
+         if (len_trim(only) > 0) chosen = [(cfg%tests(i)%name == only, i=1, size(cfg%tests))]
+      end if
       n = len(fixed)
       do i = 1, size(cfg%tests)
          n = max(n, len(cfg%tests(i)%name) + len(per_test))
       end do
-      allocate (character(len=n) :: names(size(fixed) + size(per_test)*size(cfg%tests)))
+      allocate (character(len=n) :: names(size(fixed) + size(per_test)*count(chosen)))
       names(:size(fixed)) = fixed
       k = size(fixed)
       do i = 1, size(cfg%tests)
+         if (.not. chosen(i)) cycle
          do j = 1, size(per_test)
             k = k + 1
             names(k) = cfg%tests(i)%name//trim(per_test(j))
