@@ -184,7 +184,8 @@ contains
       fingerprint = ''
       nrec = 0
       if (.not. file_exists(path)) then
-         call fatal_error(error, path//': no journal to resume from (run without --resume first)')
+         call fatal_error(error, path//': no journal to resume from: start the run afresh, '// &
+            'without --resume (with --force over files of an earlier run there)')
          allocate (records(0))
          return
       end if
