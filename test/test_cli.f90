@@ -83,12 +83,14 @@ contains
       character(len=*), parameter :: lines(*) = [character(len=40) :: &
          'frobnicate x.nml', 'run --resum x.nml', 'simulate --resume x.nml', 'run', &
          'run a.nml b.nml', 'deck a b c', 'run x.nml -o', 'identify --selfcheck x.nml', '-v', &
-         'predict x.nml']
+         'predict x.nml', 'simulate -t a -t b x.nml', 'run -o a x.nml --out-dir b', &
+         'deck -c a.nml -c b.nml x.nml']
       character(len=*), parameter :: expect(*) = [character(len=60) :: &
          "unknown command 'frobnicate'", 'unknown option --resum', 'unknown option --resume', &
          'no input file given', 'more than one input file', 'more than one input file', &
          '-o needs a value', 'unknown option --selfcheck', 'unknown option -v', &
-         'predict needs the constants of a fit: -c best.nml']
+         'predict needs the constants of a fit: -c best.nml', '-t is given twice', &
+         '--out-dir is given twice', '-c is given twice']
       type(cli_command) :: cmd
       type(uerror), allocatable :: e
       integer :: k

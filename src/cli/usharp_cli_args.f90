@@ -158,6 +158,11 @@ contains
                call fatal_error(error, arg//" has an empty value ('')", stat_usage)
                return
             end if
+            ! A second value would silently replace the first
+            if (given(long)) then
+               call fatal_error(error, arg//' is given twice', stat_usage)
+               return
+            end if
             select case (long)
             case ('--out-dir')
                cmd%out_dir = args(i)%s
@@ -206,6 +211,19 @@ contains
       end if
       if (.not. allocated(error) .and. cmd%name == 'predict' .and. len(cmd%constants) == 0) &
          call fatal_error(error, 'predict needs the constants of a fit: -c best.nml', stat_usage)
+   contains
+      !> Whether the option with a value (by its long name) has been given already
+      pure logical function given(long)
+         character(len=*), intent(in) :: long
+         select case (long)
+         case ('--out-dir')
+            given = len(cmd%out_dir) > 0
+         case ('--constants')
+            given = len(cmd%constants) > 0
+         case default
+            given = len(cmd%only_test) > 0
+         end select
+      end function given
    end subroutine parse_arguments
 
    !> The long name of an option given in its short or long form; empty when arg is none
