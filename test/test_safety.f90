@@ -364,6 +364,15 @@ contains
       call run('predict', .false.)
       call check(error, .not. allocated(e), 'predict after simulate into the same folder')
       if (allocated(error)) return
+      ! A folder of an output name cannot be written over even with --force: the reason is
+      ! told (it had been left out)
+      call check(error, shell('rm -rf '//dir//' && mkdir -p '//dir//'/lcf.sim.txt') == 0, 'a folder lcf.sim.txt')
+      if (allocated(error)) return
+      call simulate_command(input, dir, written, e, force=.true.)
+      call check_message(error, e, 'lcf.sim.txt: cannot move the finished file into place')
+      if (allocated(error)) return
+      call check(error, index(e%message, '(Is a directory)') > 0, 'the reason: '//e%message)
+      if (allocated(error)) return
       ! On the command line --force is an option of each of them
       do k = 1, size(commands)
          call parse_arguments([arg_string(trim(commands(k))), arg_string('--force'), arg_string('-c'), &

@@ -201,7 +201,8 @@ contains
       character(len=*), intent(in) :: old, new
       type(error_type), allocatable, intent(out) :: error
       if (c_rename(old//c_null_char, new//c_null_char) /= 0) &
-         call fatal_error(error, new//': cannot move the finished file into place from '//old, stat_io)
+         call fatal_error(error, new//': cannot move the finished file into place from '//old// &
+                          ' ('//errno_text()//')', stat_io)
    end subroutine rename_file
 
    !> Take an advisory lock (flock) on the file path, created if needed, without waiting.
