@@ -373,6 +373,14 @@ contains
       if (allocated(error)) return
       call check(error, index(e%message, '(Is a directory)') > 0, 'the reason: '//e%message)
       if (allocated(error)) return
+      ! The command that made a curve is given in its header as one can paste it: a folder
+      ! name with a blank in quotes
+      call simulate_command(input, dir//'/a b', written, e)
+      call check(error, .not. allocated(e), 'simulate into a folder with a blank')
+      if (allocated(error)) return
+      call check(error, index(read_text(dir//'/a b/lcf.sim.txt'), "--out-dir '"//dir//"/a b'") > 0, &
+                 'the folder quoted in the regenerate line')
+      if (allocated(error)) return
       ! On the command line --force is an option of each of them
       do k = 1, size(commands)
          call parse_arguments([arg_string(trim(commands(k))), arg_string('--force'), arg_string('-c'), &

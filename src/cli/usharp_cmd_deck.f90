@@ -8,6 +8,7 @@ module usharp_cmd_deck
    use usharp_external, only: write_constants_file
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
+   use usharp_strings, only: shell_word
    use usharp_overwrite, only: check_overwrite, made_by_usharp
    implicit none
    private
@@ -37,17 +38,17 @@ contains
       call read_config(path, cfg, error)
       if (allocated(error)) return
       command = 'usharp deck'
-      if (len(test_name) > 0) command = command//' '//test_name
-      command = command//' '//path
+      if (len(test_name) > 0) command = command//' '//shell_word(test_name)
+      command = command//' '//shell_word(path)
       if (len(constants_file) > 0) then
          call override_constants(cfg, constants_file, error)
          if (allocated(error)) return
-         command = command//' --constants '//constants_file
+         command = command//' --constants '//shell_word(constants_file)
       end if
       dir = cfg%out_dir
       if (len(out_dir) > 0) then
          dir = out_dir
-         command = command//' --out-dir '//out_dir
+         command = command//' --out-dir '//shell_word(out_dir)
       end if
       nmatch = 0
       do i = 1, size(cfg%tests)

@@ -3,7 +3,7 @@
 module usharp_cmd_run
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
-   use usharp_strings, only: str, real_str, pad, shell_quote, join, report_line_len
+   use usharp_strings, only: str, real_str, pad, shell_word, join, report_line_len
    use usharp_model, only: model_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
@@ -224,17 +224,6 @@ contains
       lines = [character(len=report_line_len) :: lines, '/']
       call write_lines(file, lines, error)
    contains
-      !> A path as one word of a shell command line: quoted when it holds more than letters,
-      !> digits and / . _ - + (a folder name with a blank)
-      pure function shell_word(text) result(word)
-         character(len=*), intent(in) :: text
-         character(len=:), allocatable :: word
-         if (verify(text, 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-+') == 0) then
-            word = text
-         else
-            word = shell_quote(text)
-         end if
-      end function shell_word
       pure function lower_name(name) result(low)
          character(len=*), intent(in) :: name
          character(len=len(name)) :: low

@@ -2,7 +2,7 @@
 module usharp_cmd_simulate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: str, real_str
+   use usharp_strings, only: str, real_str, shell_word
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants, check_inputs_kept, check_not_a_fit
    use usharp_simulation, only: sim_result
@@ -44,18 +44,18 @@ contains
       allocate (written(0))
       call read_config(path, cfg, error)
       if (allocated(error)) return
-      command = 'usharp simulate '//path
+      command = 'usharp simulate '//shell_word(path)
       if (present(constants_file)) then
          if (len_trim(constants_file) > 0) then
             call override_constants(cfg, constants_file, error)
             if (allocated(error)) return
-            command = command//' --constants '//trim(constants_file)
+            command = command//' --constants '//shell_word(trim(constants_file))
          end if
       end if
       dir = cfg%out_dir
       if (len_trim(out_dir) > 0) then
          dir = trim(out_dir)
-         command = command//' --out-dir '//trim(out_dir)
+         command = command//' --out-dir '//shell_word(trim(out_dir))
       end if
       cfg%out_dir = dir
       if (present(only_test)) then
@@ -64,7 +64,7 @@ contains
                call fatal_error(error, path//": no &test named '"//only_test//"'", stat_input)
                return
             end if
-            command = command//' --test '//only_test
+            command = command//' --test '//shell_word(only_test)
             one_test = .true.
          end if
       end if

@@ -5,7 +5,7 @@ module usharp_strings
    private
 
    public :: interval_end, interval_format
-   public :: lower, str, real_str, split_fields, shell_quote, gnuplot_string, pad, csv_field, join, add_line
+   public :: lower, str, real_str, split_fields, shell_quote, shell_word, gnuplot_string, pad, csv_field, join, add_line
 
    !> Length of a line of the program's reports and summaries (Markdown tables keep a row on
    !> one line; prose longer than this is wrapped)
@@ -254,6 +254,18 @@ contains
       character(len=:), allocatable :: quoted
       quoted = single_quoted(text, "'\''")
    end function shell_quote
+
+   !> A path as one word of a shell command line: quoted when it holds more than letters,
+   !> digits and / . _ - + (a folder name with a blank)
+   pure function shell_word(text) result(word)
+      character(len=*), intent(in) :: text
+      character(len=:), allocatable :: word
+      if (verify(text, 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-+') == 0) then
+         word = text
+      else
+         word = shell_quote(text)
+      end if
+   end function shell_word
 
    !> A text in single quotes, each quote inside it written as escaped
    pure function single_quoted(text, escaped) result(quoted)
