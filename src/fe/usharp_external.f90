@@ -23,7 +23,8 @@ module usharp_external
    use usharp_experiment, only: interpolate
    use usharp_output, only: write_lines
    use usharp_process, only: run_process, process_result, proc_exited, proc_timed_out, &
-                             proc_stopped, proc_spawn_failed, proc_signalled
+                             proc_stopped, proc_spawn_failed, proc_signalled, &
+                             proc_status_lost
    use usharp_signal, only: stop_signal
    use usharp_filesys, only: make_dir, join_path, file_exists, absolute_path, remove_file, &
                              remove_dir
@@ -185,6 +186,9 @@ contains
             call fatal_error(error, 'command stopped: usharp received signal '//str(stop_signal()))
          case (proc_spawn_failed)
             call fatal_error(error, 'cannot start /bin/sh (error '//str(proc%code)//')')
+         case (proc_status_lost)
+            call fatal_error(error, 'the command''s exit status was lost (waitpid failed with '// &
+               'error '//str(proc%code)//'); it was killed')
          case (proc_signalled)
             call fatal_error(error, 'command was killed by signal '//str(proc%code)// &
                stderr_tail())

@@ -19,7 +19,8 @@ module usharp_process
    private
 
    public :: process_result, run_process
-   public :: proc_exited, proc_signalled, proc_timed_out, proc_stopped, proc_spawn_failed
+   public :: proc_exited, proc_signalled, proc_timed_out, proc_stopped, proc_spawn_failed, &
+             proc_status_lost
 
    !> How a program ended
    integer, parameter :: proc_exited = 0       !< by itself, code = exit status
@@ -27,6 +28,7 @@ module usharp_process
    integer, parameter :: proc_timed_out = 2    !< stopped at its time limit
    integer, parameter :: proc_stopped = 3      !< stopped because usharp received a stop signal
    integer, parameter :: proc_spawn_failed = 4 !< could not be started, code = errno
+   integer, parameter :: proc_status_lost = 5  !< waitpid failed, code = errno; killed then
 
    type :: process_result
       integer :: how = proc_exited
@@ -126,6 +128,10 @@ module usharp_process
          integer(c_int), value, intent(in) :: usec
          integer(c_int) :: r
       end function c_usleep
+      function c_errno_location() bind(C, name='__errno_location') result(p)
+         import :: c_ptr
+         type(c_ptr) :: p
+      end function c_errno_location
    end interface
 
    !> A C string that stays in place while its address is used
@@ -153,6 +159,7 @@ contains
       integer(int64) :: t0, now, rate, t_term
       integer :: k, sleep_us
       logical :: terminating, may_stop
+      integer(c_int), pointer :: errno
 
       may_stop = .true.
       if (present(stoppable)) may_stop = stoppable
@@ -189,10 +196,11 @@ contains
          r = c_waitpid(pid, status, wnohang)
          if (r == pid) exit
          if (r < 0) then
-            ! The status is lost (reaped elsewhere): report the program as failed
+            ! The status is lost (reaped elsewhere): report the program as failed, with why
+            call c_f_pointer(c_errno_location(), errno)
+            res%code = int(errno)
             r = c_kill(-pid, sigkill)
-            res%how = proc_signalled
-            res%code = 0
+            res%how = proc_status_lost
             return
          end if
          call system_clock(now)
