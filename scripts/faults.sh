@@ -142,6 +142,9 @@ row 'data file: no column of that name' - u run col.nml -o col
 printf 'time stress\n0 0\n2 1\n1 2\n3 0\n' > back.txt
 mk back.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='back.txt' /"
 row 'data file: time going backwards' - u run back.nml -o back
+sed '4,$s/\./,/g' "$root/data/tutorial/cyclic-fast.csv" > comma.csv
+mk comma.nml "$fitg" "&test name='fast', history='data', data_file='comma.csv' /"
+row 'data file: decimal commas (rows longer than the header)' - u run comma.nml -o comma
 mk short.nml "$fitg" "&test name='r', history='relaxation', data_file='lcf.txt' /"
 row 'data shorter than the simulation' - u run short.nml -o short
 mk hist.nml "$fitg" "&test name='lcf', history='thesis_lfc', data_file='lcf.txt' /"

@@ -22,6 +22,7 @@ contains
          new_unittest('byte-order-mark-of-a-spreadsheet', test_bom), &
          new_unittest('fixed-format', test_fixed), &
          new_unittest('bad-tables-rejected', test_bad), &
+         new_unittest('row-of-other-field-count-rejected', test_field_count), &
          new_unittest('repeated-times-merged', test_merge), &
          new_unittest('long-line-and-no-final-newline', test_long_line), &
          new_unittest('real-a617-files-load', test_realdata), &
@@ -203,6 +204,39 @@ contains
       call check_message(error, uerr, 'time is not increasing at data row 3')
    contains
    end subroutine test_bad
+
+   !> A row of more or fewer fields than the header names is refused, naming its line: decimal
+   !> commas read as 1, 0, ... under the names time, strain, stress; empty last fields (a
+   !> spreadsheet's trailing commas, on the rows or the header) are no extra fields
+   subroutine test_field_count(error)
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), allocatable :: v(:, :)
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: path
+      path = write_text('decimal-comma.csv', [character(len=40) :: '# measured', &
+         'time,strain,stress', '0.0,0.0,0.0', '1,0,1,0e-4,2,25', '2,0,2,0e-4,4,5'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call check_message(error, uerr, 'decimal-comma.csv:4: row has 6 fields, the header names 3 '// &
+                         '(decimal commas?')
+      if (allocated(error)) return
+      path = write_text('short-row.txt', [character(len=40) :: '# time strain stress', &
+         '0 0 0', '1 2.25', '2 2e-4 4.5', '3 3e-4 6.75'])
+      call read_columns(path, [character(len=8) :: 'time', 'strain'], v, uerr)
+      call check_message(error, uerr, 'short-row.txt:3: row has 2 fields, the header names 3')
+      if (allocated(error)) return
+      path = write_text('no-header.txt', [character(len=40) :: '0 0 0', '1 1e-4 2.25 7', '2 2e-4 4.5'])
+      call read_columns(path, [character(len=8) :: '1', '3'], v, uerr)
+      call check_message(error, uerr, 'no-header.txt:2: row has 4 fields, the first row 3')
+      if (allocated(error)) return
+      path = write_text('trailing.csv', [character(len=40) :: 'time,strain,stress,temperature,', &
+         '0,0,0,950,', '1,1e-4,2.25,,', '2,2e-4,4.5,', '3,3e-4,6.75,,,'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, 'empty last fields refused: '//uerr%message)
+         return
+      end if
+      call check(error, v(4, 2), 6.75_dp, 'stress of the row with three empty last fields')
+   end subroutine test_field_count
 
    subroutine test_merge(error)
       type(error_type), allocatable, intent(out) :: error

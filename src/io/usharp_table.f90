@@ -38,6 +38,10 @@ contains
       character(len=line_len) :: last_comment
       integer :: ios, nfield, nheader, lineno, npt, j, icol(size(columns)), ifilter, first
       integer :: a, b, next
+      !> Field counts every row must have, from the header (or the first data row): at least
+      !> nlong less its empty last fields, at most nlong; nshort is nlong without them
+      integer :: nlong, nshort, nfull
+      character(len=:), allocatable :: counted_from
       logical :: have_header, filtering, fixed
       !> Of the filter values, those some row holds; the first values the filter column holds,
       !> each after ', '
@@ -65,6 +69,8 @@ contains
       nheader = 0
       icol = 0
       ifilter = 0
+      nlong = -1
+      nshort = -1
       npt = 0
       lineno = 0
       last_comment = ''
@@ -113,6 +119,7 @@ contains
                have_header = .true.
                nheader = nfield
                header(:nfield) = fields(:nfield)
+               call set_counts('the header names')
                call resolve_names()
                if (allocated(error)) exit
                cycle
@@ -123,11 +130,22 @@ contains
             if (nheader == nfield .and. .not. all_numeric(header(:nheader)) .and. &
                 .not. all_positions()) then
                call resolve_names()
+               call set_counts('the header names')
             else
                call resolve_positions(nfield)
+               call set_counts('the first row')
             end if
             if (allocated(error)) exit
             nheader = -1
+         end if
+         ! A row of more or fewer fields than the header names would be read with its values
+         ! under the wrong names (decimal commas split each number in two); empty last fields
+         ! (a spreadsheet's trailing commas) do not count
+         nfull = nfield - count_empty_tail()
+         if (nfull > nlong .or. nfield < nshort) then
+            call fatal_error(error, file//':'//str(lineno)//': row has '//str(nfull)// &
+               ' fields, '//counted_from//' '//str(nshort)//hint())
+            exit
          end if
          if (filtering) then
             if (ifilter > nfield) cycle
@@ -181,6 +199,33 @@ contains
       values = transpose(buf(:, :npt))
 
    contains
+
+      !> The field counts rows are held to, from the fields just split (the header row, or
+      !> the first data row of a file without one)
+      subroutine set_counts(what)
+         !> what the counts come from, for the message
+         character(len=*), intent(in) :: what
+         counted_from = what
+         nlong = nfield
+         nshort = nfield - count_empty_tail()
+      end subroutine set_counts
+
+      !> The likely cause of a row longer than the header in a comma separated file
+      function hint() result(advice)
+         character(len=:), allocatable :: advice
+         advice = ''
+         if (nfull > nlong .and. index(text(a:b), ',') > 0) &
+            advice = ' (decimal commas? a field holding a comma needs double quotes)'
+      end function hint
+
+      !> How many of the last fields just split are empty
+      integer function count_empty_tail() result(n)
+         n = 0
+         do while (n < nfield)
+            if (len_trim(fields(nfield - n)) > 0) exit
+            n = n + 1
+         end do
+      end function count_empty_tail
 
       pure logical function missing(field)
          character(len=*), intent(in) :: field
