@@ -201,6 +201,12 @@ echo 'my notes' > mine/identify.txt
 row '`identify` over a file of the user'"'"'s' - u identify fit.nml -o mine
 echo '1.0' > mine/Constants.txt
 row '`deck` over a file of the user'"'"'s' - u deck fit.nml -o mine
+echo 'my notes' > mine/design.txt
+row '`design` over a file of the user'"'"'s' - u design fit.nml -o mine
+mkdir -p mine/diagnose; echo 'my notes' > mine/diagnose/report.md
+mk held.nml "$fitg" "$lcf" "&test name='relax', history='relaxation', data_file='relax.txt' /" \
+  "&diagnose holdout='relax' /"
+row '`diagnose` over a file of the user'"'"'s' - u diagnose held.nml -o mine
 echo 'my notes' > mine/lcf.sim.txt
 row '`simulate` over a file of the user'"'"'s' - u simulate fit.nml -o mine
 row '`--resume` without a journal' - u run -q --resume fit.nml -o r-none

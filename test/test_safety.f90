@@ -32,6 +32,7 @@ contains
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
          new_unittest('user-files-and-fits-kept', test_strangers_kept), &
          new_unittest('user-files-kept-by-predict-identify-deck-simulate', test_own_files_kept), &
+         new_unittest('user-files-kept-by-design-and-diagnose', test_reports_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
@@ -183,8 +184,9 @@ contains
       end subroutine refused
    end subroutine test_journal_kept
 
-   !> A per-specimen diagnosis into a folder that holds a report of an earlier one is refused
-   !> before any work, the report kept, naming --force (as a run's journal is)
+   !> A per-specimen diagnosis into a folder that holds a report of an earlier one, or a file
+   !> of the user's of its name, is refused before any work, the file kept, naming --force
+   !> (as a run's journal is)
    subroutine test_specimen_kept(error)
       use usharp_cmd_diagnose, only: diagnose_command
       type(error_type), allocatable, intent(out) :: error
@@ -202,6 +204,18 @@ contains
       notes = read_text(mine)
       call check(error, index(notes, 'my notes') == 1, 'the report to keep was not written: '//mine)
       if (allocated(error)) return
+      call diagnose_command(input, dir, '', summary, e)
+      call check_message(error, e, 'specimen-lcf.md: a file of this name is there that usharp diagnose '// &
+                         'did not write; overwrite it with --force')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'exit code 2')
+      if (allocated(error)) return
+      call check(error, read_text(mine) == notes, 'the notes are untouched')
+      if (allocated(error)) return
+      ! A report of an earlier run (known by its first line) is kept alike
+      mine = write_text('specimen-kept-out/diagnose/specimen-lcf.md', [character(len=40) :: &
+         '# Per-specimen diagnosis: lcf', 'earlier findings'])
+      notes = read_text(mine)
       call diagnose_command(input, dir, '', summary, e)
       call check_message(error, e, 'specimen-lcf.md: holds the report of an earlier run; start again and '// &
                          'overwrite it with --force')
@@ -422,6 +436,73 @@ contains
          end select
       end subroutine run
    end subroutine test_own_files_kept
+
+   !> design and diagnose (held-out, per specimen, self-check) into a folder that holds a
+   !> user's file of a name they write are refused before any work, naming the file and
+   !> --force, the file kept; --force writes over it, and --resume over their own reports
+   subroutine test_reports_kept(error)
+      use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
+      use usharp_cmd_design, only: design_command
+      use usharp_diagnose_report, only: report_names
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir
+      integer :: k
+      input = fit_deck('reports-kept.nml', "method='lm'", [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', weighting='threshold', sig=14 /", &
+         "&test name='relax', history='relaxation', data_file='"//thesis//"relax.sim.txt', "// &
+         "weighting='relaxation', candidate=.true. /", &
+         "&diagnose holdout = 'relax', effects = 'lag', n_refit = 1 /"])
+      dir = scratch_dir//'/reports-kept-out'
+      do k = 1, size(report_names)
+         call refused('diagnose/'//trim(report_names(k)), 'diagnose')
+         if (allocated(error)) return
+         call check(error, .not. file_exists(dir//'/diagnose/diagnose.journal'), &
+                    'diagnose refused over '//trim(report_names(k))//' after it began its journal')
+         if (allocated(error)) return
+      end do
+      call diagnose_command(input, dir, '', summary, e, mode='force')
+      call check(error, .not. allocated(e), 'diagnose --force writes over the user''s file')
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', summary, e, mode='resume')
+      call check(error, .not. allocated(e), 'diagnose --resume over its own reports')
+      if (allocated(error)) return
+      call refused('design.txt', 'design')
+      if (allocated(error)) return
+      call design_command(input, dir, '', summary, e, 'force')
+      call check(error, .not. allocated(e), 'design --force writes over the user''s file')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/design.txt') /= 'my notes'//new_line('a'), 'design.txt written')
+      if (allocated(error)) return
+      call design_command(input, dir, '', summary, e, 'resume')
+      call check(error, .not. allocated(e), 'design --resume over its own report')
+      if (allocated(error)) return
+      call refused('selfcheck.md', 'diagnose')
+   contains
+      !> The command into a folder that holds the user's file name alone: refused, the file
+      !> kept
+      subroutine refused(name, command)
+         character(len=*), intent(in) :: name, command
+         call check(error, shell('rm -rf '//dir//' && mkdir -p '//dir//'/diagnose') == 0, 'clean folder')
+         if (allocated(error)) return
+         call write_lines(dir//'/'//name, [character(len=20) :: 'my notes'], e)
+         select case (name)
+         case ('design.txt')
+            call design_command(input, dir, '', summary, e, 'start')
+         case ('selfcheck.md')
+            call selfcheck_command('', dir, summary, e, 'start')
+         case default
+            call diagnose_command(input, dir, '', summary, e)
+         end select
+         call check_message(error, e, dir//'/'//name//': a file of this name is there that usharp '// &
+                            command//' did not write; overwrite it with --force')
+         if (allocated(error)) return
+         call check(error, e%stat, stat_usage, command//' over '//name//': exit code 2')
+         if (allocated(error)) return
+         call check(error, read_text(dir//'/'//name) == 'my notes'//new_line('a'), name//' is kept')
+      end subroutine refused
+   end subroutine test_reports_kept
 
    !> No run writes over its own inputs, --force or not: the constants given with -c that are
    !> the output folder's best.nml, and a test 'lcf' whose data are lcf.sim.txt in the output

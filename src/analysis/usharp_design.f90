@@ -28,7 +28,10 @@ module usharp_design
    private
 
    public :: design_result, design_combination, design_run, design_report, test_information, &
-             combination_of
+             combination_of, design_mark
+
+   !> How design.txt begins (an earlier design's report is known by it and replaced)
+   character(len=*), parameter :: design_mark = 'test-matrix design at the known constants'
 
    !> One test matrix: the tests (indices into the input's tests), its information and what
    !> it determines
@@ -323,7 +326,7 @@ contains
       type(design_result), intent(in) :: res
       character(len=report_line_len), allocatable :: lines(:)
       integer :: j
-      lines = [character(len=report_line_len) :: 'test-matrix design at the known constants: stress noise sd '// &
+      lines = [character(len=report_line_len) :: design_mark//': stress noise sd '// &
          real_str(100.0_dp*res%noise, 'f0.2')//' % of each test''s peak, determined = predicted '// &
          '95 % interval within '//real_str(100.0_dp*res%ci_target, 'f0.1')//' %', &
          '  (information in log10 of the constants; prior sd '//real_str(res%prior_decades, 'f0.1')// &

@@ -117,7 +117,8 @@ contains
             'candidate = .true.); simulates them with the known &constants (or those of'//nl// &
             '--constants FILE) and predicts, for a stress noise of &design noise, how well'//nl// &
             'each combination of up to max_tests tests determines the &fit constants.'//nl// &
-            'Writes <out_dir>/design.txt and design.journal (every test''s information).'//nl// &
+            'Writes <out_dir>/design.txt and design.journal (every test''s information); a'//nl// &
+            'design.txt it did not write is refused (exit 2) unless --force.'//nl// &
             'Under mpirun or srun the tests are spread over the ranks.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE as the known constants'//nl// &
@@ -137,7 +138,8 @@ contains
             'reports of an earlier run unless --force). With --selfcheck:'//nl// &
             'injects each effect into synthetic data (the built-in matrix, or the given'//nl// &
             'file), diagnoses it and writes <out_dir>/selfcheck.md and selfcheck.journal'//nl// &
-            '(every repetition; under mpirun or srun spread over the ranks).'//nl// &
+            '(every repetition; under mpirun or srun spread over the ranks). A file of the'//nl// &
+            'names it writes that it did not write is refused (exit 2) unless --force.'//nl// &
             'Guide: docs/guide/diagnosis.md.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &

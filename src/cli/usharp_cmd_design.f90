@@ -4,11 +4,12 @@ module usharp_cmd_design
    use usharp_error, only: error_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept
-   use usharp_design, only: design_result, design_run, design_report
+   use usharp_design, only: design_result, design_run, design_report, design_mark
    use usharp_filesys, only: make_dir, join_path
    use usharp_output, only: write_lines
    use usharp_mpi, only: is_root
    use usharp_strings, only: report_line_len
+   use usharp_overwrite, only: check_overwrite
    implicit none
    private
 
@@ -28,6 +29,10 @@ contains
       if (allocated(error)) return
       call check_inputs_kept(cfg, path, constants_file, [character(len=14) :: 'design.txt', &
                              'design.journal'], [character(len=1) ::], error)
+      if (allocated(error)) return
+      ! A design.txt of the user's is refused before any work; an earlier design's (--resume
+      ! too) is replaced
+      call check_overwrite(cfg%out_dir, ['design.txt'], [design_mark], 'design', mode == 'force', error)
       if (allocated(error)) return
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return

@@ -7,6 +7,8 @@ module usharp_cmd_diagnose
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, write_report, &
                               diagnose_options_of, diagnose_progress, diagnose_journal, &
                               check_diagnosable
+   use usharp_diagnose_report, only: report_names, report_marks
+   use usharp_overwrite, only: check_overwrite
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
@@ -57,12 +59,16 @@ contains
       call check_diagnosable(cfg, opts, error)
       if (allocated(error)) return
       dir = join_path(cfg%out_dir, 'diagnose')
+      journal_mode = 'start'
+      if (present(mode)) journal_mode = mode
+      ! A file of the user's among the report's names is refused before any work; the
+      ! report of an earlier diagnosis (--resume too) is replaced
+      call check_each(dir, report_names, report_marks, journal_mode == 'force', error)
+      if (allocated(error)) return
       call make_dir(dir, error)
       if (allocated(error)) return
       ! The journal's own format joins the fingerprint: a journal of another layout of the
       ! diagnosis's units is refused rather than misread
-      journal_mode = 'start'
-      if (present(mode)) journal_mode = mode
       call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
                         ' units=3', journal_mode, error)
       if (allocated(error)) return
@@ -87,6 +93,8 @@ contains
       character(len=:), allocatable :: report
       integer, allocatable :: which(:)
       integer :: i
+      !> a report's name and how its first line begins
+      character(len=256) :: own_name(1), own_mark(1)
       if (trim(cfg%diagnose%specimen) == 'all') then
          which = [(i, i=1, size(cfg%tests))]
       else
@@ -97,17 +105,23 @@ contains
             return
          end if
       end if
-      call make_dir(join_path(cfg%out_dir, 'diagnose'), error)
-      if (allocated(error)) return
-      ! An earlier run's reports are not overwritten unasked (before any work is done)
+      ! Neither an earlier run's reports nor a user's file of their names is overwritten
+      ! unasked (before any work is done)
       do i = 1, size(which)
          report = join_path(join_path(cfg%out_dir, 'diagnose'), 'specimen-'//trim(cfg%tests(which(i))%name)//'.md')
+         own_name(1) = 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'
+         own_mark(1) = '# Per-specimen diagnosis: '//trim(cfg%tests(which(i))%name)
+         call check_overwrite(join_path(cfg%out_dir, 'diagnose'), own_name, own_mark, 'diagnose', &
+                              force, error)
+         if (allocated(error)) return
          if (.not. force .and. file_exists(report)) then
             call fatal_error(error, report//': holds the report of an earlier run; start again and '// &
                'overwrite it with --force', stat_usage)
             return
          end if
       end do
+      call make_dir(join_path(cfg%out_dir, 'diagnose'), error)
+      if (allocated(error)) return
       allocate (lines(0))
       do i = 1, size(which)
          call specimen_run(cfg, which(i), opts, .true., sr, error)
@@ -119,6 +133,19 @@ contains
          lines = [character(len=report_line_len) :: lines, part, '']
       end do
    end subroutine specimen_command
+
+   !> check_overwrite for each of names with its own mark
+   subroutine check_each(dir, names, marks, force, error)
+      character(len=*), intent(in) :: dir
+      character(len=*), intent(in) :: names(:), marks(:)
+      logical, intent(in) :: force
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k
+      do k = 1, size(names)
+         call check_overwrite(dir, [names(k)], [marks(k)], 'diagnose', force, error)
+         if (allocated(error)) return
+      end do
+   end subroutine check_each
 
    !> Self-check of the diagnosis on synthetic data with each effect injected; its
    !> repetitions are kept in <out_dir>/selfcheck.journal (mode: see run_tasks)
@@ -133,6 +160,13 @@ contains
       dir = out_dir
       if (len(dir) == 0) dir = 'selfcheck'
       deck = path
+      call check_overwrite(dir, ['selfcheck.md'], ['# usharp diagnose --selfcheck'], 'diagnose', &
+                           mode == 'force', error)
+      if (allocated(error)) return
+      ! (the deck is written only when none is given)
+      if (len(deck) == 0) call check_overwrite(dir, ['selfcheck.nml'], &
+         ['! usharp diagnose --selfcheck'], 'diagnose', mode == 'force', error)
+      if (allocated(error)) return
       call make_dir(dir, error)
       if (allocated(error)) return
       if (len(deck) == 0) then

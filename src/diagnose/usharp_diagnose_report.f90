@@ -19,7 +19,15 @@ module usharp_diagnose_report
    implicit none
    private
 
-   public :: diagnose_report, write_report
+   public :: diagnose_report, write_report, report_names, report_marks
+
+   !> The files write_report writes in its folder, and how the first line of each begins
+   !> when it wrote it (the plots: any PNG image, as gnuplot draws them)
+   character(len=*), parameter :: report_names(8) = [character(len=13) :: 'report.md', &
+      'steps.csv', 'regions.csv', 'effects.csv', 'residuals.csv', 'plots.gp', 'residuals.png', 'fit.png']
+   character(len=*), parameter :: report_marks(8) = [character(len=28) :: '# usharp diagnose', &
+      'step,simulations,', 'test,region,points,', 'rank,effect,parameters,', 'test,held_out,t_s,', &
+      "set datafile separator ','", achar(137)//'PNG', achar(137)//'PNG']
 
 contains
 
