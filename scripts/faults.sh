@@ -220,6 +220,13 @@ head -c 300 r1/fit.journal > torn; cp torn r1/fit.journal
 row '`--resume` of a journal torn by a kill' r1/best.nml u run -q --resume fit.nml -o r1
 echo 'not a journal' > r1/fit.journal
 row '`--resume` of a file that is no journal' - u run -q --resume fit.nml -o r1
+mk sens.nml "&fit fitted='H1','n', method='lm', jacobian='sensitivity', identify=.false. /"
+u run -q sens.nml -o sens > /dev/null 2>&1
+# bytes of the first Jacobian's values damaged (after the header and the first residual vector)
+m=$(od -An -t d4 -j 8 -N 4 sens/fit.cache | tr -d ' ')
+printf 'garbage!' | dd of=sens/fit.cache bs=1 seek=$((16 + 8 + 8 * (2 + m) + 8 + 16 + 320)) conv=notrunc 2>/dev/null
+head -n 8 sens/fit.journal > torn; cp torn sens/fit.journal
+row '`--resume` with damaged bytes in `fit.cache`' - u run -q --resume sens.nml -o sens
 mkdir -p locked
 flock locked/.usharp.lock sleep 5 &
 sleep 0.3

@@ -2,6 +2,7 @@
 !> changed input under --resume, a failed report after a fit, failing external commands, the
 !> plot script and hostile folder names, what a resume costs, SIGTERM
 module test_safety
+   use, intrinsic :: iso_fortran_env, only: int32, int64
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type, stat_io, stat_usage, stat_input, stat_busy, &
@@ -41,6 +42,7 @@ contains
          new_unittest('plot-script-hostile-folder-name', test_plot_script), &
          new_unittest('lm-resume-at-90-percent-replays', test_resume_cost), &
          new_unittest('resumed-fit-log-names-every-penalty', test_resume_log), &
+         new_unittest('damaged-fit-cache-resimulated-or-named', test_damaged_cache), &
          new_unittest('external-resume-reruns-no-journalled-command', test_external_resume), &
          new_unittest('sigterm-stops-with-a-note', test_sigterm)]
    end subroutine collect_safety
@@ -873,6 +875,91 @@ contains
                  'constant A1 must be" '//part//'/penalties'), 0, &
                  'the penalised evaluations in the resumed fit.log')
    end subroutine test_resume_log
+
+   !> A fit.cache with damaged bytes: a residual vector that does not give its evaluation's
+   !> objective is simulated again (the resumed journal is the uninterrupted one); a damaged
+   !> sensitivity Jacobian, which nothing checks, stops the resume with an input error that
+   !> names fit.cache, not the journal
+   subroutine test_damaged_cache(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input, full, part
+      integer :: stat
+      input = deck('damaged-cache.nml', "method='lm', jacobian='sensitivity', identify=.false.", &
+                   ", dt_out=4.0")
+      full = scratch_dir//'/damaged-cache-full'
+      part = scratch_dir//'/damaged-cache-part'
+      call run_command(input, full, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'uninterrupted run: '//e%message)
+         return
+      end if
+      call check(error, line_count(full//'/fit.journal') > 12, 'too few evaluations to resume')
+      if (allocated(error)) return
+      call copy_part()
+      call damage(part//'/fit.cache', 1, 5)
+      call run_command(input, part, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resumed over a damaged residual vector: '//e%message)
+         return
+      end if
+      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), &
+                 'journal identical after a damaged residual vector')
+      if (allocated(error)) return
+      call copy_part()
+      call damage(part//'/fit.cache', 2, 2)
+      call run_command(input, part, '', .true., summary, e)
+      call check_message(error, e, part//'/fit.cache: cannot resume: the residuals or Jacobians '// &
+                         'replayed from this file led the search off fit.journal at evaluation')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_input, 'exit code 1')
+   contains
+      !> The journal's first 12 records and the whole cache, as a kill leaves them
+      subroutine copy_part()
+         stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n 13 '//full// &
+                      '/fit.journal > '//part//'/fit.journal && cp '//full//'/fit.cache '//part//'/')
+      end subroutine copy_part
+      integer function line_count(path) result(k)
+         character(len=*), intent(in) :: path
+         integer :: unit, ios
+         character(len=16) :: line
+         k = 0
+         open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+         if (ios /= 0) return
+         do
+            read (unit, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            k = k + 1
+         end do
+         close (unit)
+      end function line_count
+   end subroutine test_damaged_cache
+
+   !> Overwrite a value of the nth record of kind (1 residuals, 2 Jacobian) in fit.cache at
+   !> path, past its point x: 'USHARPC1', m, n; then records of kind, index, x, values
+   subroutine damage(path, kind, nth)
+      character(len=*), intent(in) :: path
+      integer, intent(in) :: kind, nth
+      character(len=8) :: magic
+      integer(int32) :: m, n, rk, idx
+      integer(int64) :: pos
+      integer :: unit, seen
+      open (newunit=unit, file=path, access='stream', form='unformatted', status='old', action='readwrite')
+      read (unit) magic, m, n
+      pos = 17
+      seen = 0
+      do
+         read (unit, pos=pos) rk, idx
+         if (rk == kind) seen = seen + 1
+         if (seen == nth) then
+            write (unit, pos=pos + 8 + 8*n + 8*min(m - 1, 40)) 12345.678_dp
+            exit
+         end if
+         pos = pos + 8 + 8*n + 8*merge(m, m*n, rk == 1)
+      end do
+      close (unit)
+   end subroutine damage
 
    !> An external Levenberg-Marquardt fit resumed at 90 %: the FE command runs again only for
    !> evaluations the journal does not hold (and once for the best fit's curves)

@@ -93,6 +93,9 @@ module usharp_fit
       integer, allocatable :: start_eval(:), start_sens(:)  !< first evaluation, Jacobian of each start
       integer :: start_now = 0  !< the start being searched
       character(len=:), allocatable :: fingerprint  !< of the inputs, for the logs' first line
+      character(len=:), allocatable :: journal  !< the journal's path, for messages
+      !> Residual vectors or Jacobians were replayed from fit.cache (beside the journal)
+      logical :: cache_used = .false.
       !> The deal of the run's starts over the ranks: ranks out of starts help with this
       !> search's batches (see shared_batch)
       type(task_deal), pointer :: deal => null()
@@ -187,6 +190,7 @@ contains
          if (all(self%replay_jac(i)%x == x)) then
             jac = self%replay_jac(i)%jac
             done = .true.
+            self%cache_used = .true.
          end if
       end if
       if (.not. done) then
@@ -233,6 +237,7 @@ contains
          messages(j) = replay_message(self, k0 + j)
       end do
       self%nreplayed = self%nreplayed + nr
+      if (nr > 0) self%cache_used = .true.
       if (nr < size(xs, 2)) then
          call may_simulate(self, error)
          if (allocated(error)) return
@@ -416,15 +421,34 @@ contains
       end do
    end subroutine help_others
 
-   !> When resuming, evaluation k must be at the journal's point (the search is deterministic)
+   !> When resuming, evaluation k must be at the journal's point (the search is deterministic).
+   !> Where the search replayed what fit.cache kept, a step off the journal is the cache's
+   !> (its residuals or Jacobians damaged) when the cache holds the journal's point k too,
+   !> and the message names it
    subroutine check_replay(self, k, x, error)
       class(fit_objective), intent(in) :: self
       integer, intent(in) :: k
       real(dp), intent(in) :: x(:)
       type(error_type), allocatable, intent(out) :: error
-      if (any(abs(x - self%replay(k)%x) > 1.0e-12_dp*max(1.0_dp, abs(x)))) then
-         call fatal_error(error, 'cannot resume: evaluation '//str(k)//' of '// &
-            journal_name//' was made at other constants (did the input change?)', stat_input)
+      character(len=:), allocatable :: journal, cache
+      if (all(abs(x - self%replay(k)%x) <= 1.0e-12_dp*max(1.0_dp, abs(x)))) return
+      journal = journal_name
+      if (allocated(self%journal)) journal = self%journal
+      cache = journal(:len(journal) - len(journal_name))//cache_name
+      if (self%cache_used .and. allocated(self%replay(k)%r)) then
+         ! The cache holds the journal's point too: the journal is not what is damaged
+         call fatal_error(error, cache//': cannot resume: the residuals or Jacobians replayed '// &
+            'from this file led the search off '//journal_name//' at evaluation '//str(k)// &
+            ' (the file is damaged); remove it to resume without it (its evaluations simulated '// &
+            'again), or start again with --force', stat_input)
+      else if (self%cache_used) then
+         call fatal_error(error, journal//': cannot resume: evaluation '//str(k)//' was made at '// &
+            'other constants than the search replaying '//cache_name//' reached: one of the two '// &
+            'files is damaged; remove '//cache_name//' to resume without it, or start again '// &
+            'with --force', stat_input)
+      else
+         call fatal_error(error, journal//': cannot resume: evaluation '//str(k)// &
+            ' was made at other constants (did the input change?)', stat_input)
       end if
    end subroutine check_replay
 
@@ -579,6 +603,7 @@ contains
          fingerprint = fit_fingerprint(prob%cfg, '')
       end if
       journal = join_path(dir, journal_name)
+      obj%journal = journal
       resuming = resume
       if (present(auto_resume)) then
          if (auto_resume) resuming = journal_has_records(journal)
@@ -1241,6 +1266,7 @@ contains
       type(fit_objective), intent(in) :: obj
       type(fit_objective) :: w
       w%prob = obj%prob
+      if (allocated(obj%journal)) w%journal = obj%journal
       w%capture = .true.
       allocate (w%replay(0), w%replay_jac(0), w%kept_jac(0))
       w%clock0 = obj%clock0

@@ -225,8 +225,9 @@ contains
 
 
    !> Attach the residuals kept in fit.cache to the journal's records (where the cache has
-   !> them at the record's point) and return its sensitivity Jacobians. A missing, foreign or
-   !> torn cache only means less is replayed.
+   !> them at the record's point, and their squares sum to the record's objective: damaged
+   !> bytes would steer the search off the journal) and return its sensitivity Jacobians. A
+   !> missing, foreign, torn or damaged cache only means less is replayed.
    subroutine read_cache(path, m, records, jacobians)
       character(len=*), intent(in) :: path
       integer, intent(in) :: m
@@ -256,7 +257,7 @@ contains
             read (unit, iostat=ios) x, r
             if (ios /= 0) exit
             if (k < 1 .or. k > size(records)) cycle
-            if (all(x == records(k)%x)) records(k)%r = r
+            if (all(x == records(k)%x) .and. agrees(r, records(k)%f)) records(k)%r = r
          case (cache_jacobian)
             read (unit, iostat=ios) x, jac
             if (ios /= 0) exit
@@ -267,6 +268,14 @@ contains
          end select
       end do
       close (unit)
+   contains
+      !> Whether residuals r give the objective f (a failed evaluation's are all 0, its f a
+      !> penalty); the journal keeps f to 17 digits, the sum's order may differ
+      pure logical function agrees(r, f)
+         real(dp), intent(in) :: r(:), f
+         agrees = all(r == 0.0_dp)
+         if (.not. agrees) agrees = abs(sum(r**2) - f) <= 1.0e-10_dp*abs(f)
+      end function agrees
    end subroutine read_cache
 
 end module usharp_fit_log
