@@ -218,6 +218,8 @@ cp fit.orig fit.nml
 row '`--resume` with another `--constants` file' - u run -q --resume fit.nml -o r1 -c fit.nml
 head -c 300 r1/fit.journal > torn; cp torn r1/fit.journal
 row '`--resume` of a journal torn by a kill' r1/best.nml u run -q --resume fit.nml -o r1
+truncate -s 100 r1/fit.journal
+row '`--resume` of a journal whose fingerprint line is cut short' - u run -q --resume fit.nml -o r1
 echo 'not a journal' > r1/fit.journal
 row '`--resume` of a file that is no journal' - u run -q --resume fit.nml -o r1
 mk sens.nml "&fit fitted='H1','n', method='lm', jacobian='sensitivity', identify=.false. /"

@@ -11,6 +11,7 @@ module test_safety
                              file_exists, make_dir, hash_text, hash_hex
    use usharp_output, only: write_lines
    use usharp_cmd_run, only: run_command
+   use usharp_cmd_design, only: design_command
    use usharp_strings, only: str, report_line_len
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message, fit_deck
@@ -36,6 +37,7 @@ contains
          new_unittest('user-files-kept-by-design-and-diagnose', test_reports_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
+         new_unittest('torn-fingerprint-line-a-damaged-journal', test_torn_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
          new_unittest('external-not-found-not-executable', test_external_127), &
          new_unittest('external-ignores-term-and-leaves-a-child', test_external_term), &
@@ -444,7 +446,6 @@ contains
    !> --force, the file kept; --force writes over it, and --resume over their own reports
    subroutine test_reports_kept(error)
       use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
-      use usharp_cmd_design, only: design_command
       use usharp_diagnose_report, only: report_names
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -670,6 +671,63 @@ contains
       call run_command(input, dir, '', .true., summary, e)
       call check_message(error, e, "cannot resume: the control history of test 'h' changed")
    end subroutine test_fingerprint
+
+   !> A journal whose fingerprint line is cut short (within an item, at an item's end without
+   !> its line end, or a whole line with a hash cut short) is reported as a damaged journal,
+   !> naming it and --force, not as data files that changed; a design journal alike
+   subroutine test_torn_fingerprint(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, head
+      character(len=*), parameter :: damaged = &
+         '/fit.journal: cannot resume: the journal is damaged (its fingerprint line is cut short); '// &
+         'start again with --force'
+      integer :: stat
+      input = deck('torn-fingerprint.nml', "max_evals=10, identify=.false.", '')
+      dir = scratch_dir//'/torn-fingerprint-out'
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'first run: '//e%message)
+         return
+      end if
+      stat = shell('cp '//dir//'/fit.journal '//dir//'.whole')
+      head = read_text(dir//'.whole')
+      head = head(:index(head, new_line('a')) - 1)
+      ! Cut within the data file's hash, as `truncate -s 100` does
+      call resume_cut('truncate -s 100 '//dir//'/fit.journal')
+      if (allocated(error)) return
+      ! Cut at the end of an item, without the line's end
+      call resume_cut('head -c '//str(index(head, ' data:') - 1)//' '//dir//'.whole > '//dir//'/fit.journal')
+      if (allocated(error)) return
+      ! A whole line with a hash cut short, the records after it
+      call resume_cut('{ head -c '//str(index(head, ' data:') - 3)//' '//dir//'.whole; echo; tail -n +2 '// &
+                      dir//'.whole; } > '//dir//'/fit.journal')
+      if (allocated(error)) return
+      ! The journal of design, through the task farm
+      dir = scratch_dir//'/torn-fingerprint-design'
+      stat = shell('rm -rf '//dir)
+      input = deck('torn-fingerprint-design.nml', '', ', candidate=.true.')
+      call design_command(input, dir, '', summary, e, 'start')
+      if (allocated(e)) then
+         call test_failed(error, 'design: '//e%message)
+         return
+      end if
+      stat = shell('truncate -s 60 '//dir//'/design.journal')
+      call design_command(input, dir, '', summary, e, 'resume')
+      call check_message(error, e, dir//'/design.journal: cannot resume: the journal is damaged')
+   contains
+      !> The journal damaged by a shell command, then --resume: refused as damaged
+      subroutine resume_cut(command)
+         character(len=*), intent(in) :: command
+         call check(error, shell(command) == 0, command)
+         if (allocated(error)) return
+         call run_command(input, dir, '', .true., summary, e)
+         call check_message(error, e, dir//damaged)
+         if (allocated(error)) return
+         call check(error, e%stat, stat_input, 'exit code 1 after: '//command)
+      end subroutine resume_cut
+   end subroutine test_torn_fingerprint
 
    !> A fit whose identifiability report fails: results written, warning in summary.txt and
    !> identify.txt, exit code 5. The report's simulations fail here because the stand-in FE

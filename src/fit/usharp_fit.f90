@@ -17,7 +17,7 @@ module usharp_fit
    use usharp_rng, only: rng_type
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
                              journal_name, cache_name
-   use usharp_journal, only: fingerprint_mismatch
+   use usharp_journal, only: fingerprint_mismatch, fingerprint_damaged
    use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text, read_line
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
    use usharp_version, only: usharp_version_string
@@ -615,6 +615,11 @@ contains
          if (len_trim(old_fingerprint) == 0) then
             call fatal_error(error, journal//': cannot resume: the file has no fingerprint line '// &
                '(it is not a fit.journal of this usharp); start again with --force', stat_input)
+            return
+         end if
+         if (fingerprint_damaged(journal, old_fingerprint, fingerprint)) then
+            call fatal_error(error, journal//': cannot resume: the journal is damaged (its '// &
+               'fingerprint line is cut short); start again with --force', stat_input)
             return
          end if
          changed = fingerprint_mismatch(old_fingerprint, fingerprint)

@@ -6,6 +6,7 @@
 !> `task <k> <n>`, the n lines of its result and a line `end <k>`; a block cut short by a
 !> kill is dropped when it is read, and the units are numbered 1, 2, ... without a gap.
 module usharp_journal
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
    use usharp_strings, only: str
    use usharp_filesys, only: raw_file, file_exists, read_line
@@ -13,7 +14,7 @@ module usharp_journal
    implicit none
    private
 
-   public :: task_text, journal_file, fingerprint_mismatch
+   public :: task_text, journal_file, fingerprint_mismatch, fingerprint_damaged
 
    !> One unit's result
    type :: task_text
@@ -55,6 +56,11 @@ contains
       if (mode == 'auto') resuming = has_results(path)
       if (resuming) then
          call read_journal(path, self%done, old_fingerprint, error)
+         if (.not. allocated(error)) then
+            if (fingerprint_damaged(path, old_fingerprint, fingerprint)) call fatal_error(error, &
+               path//': cannot resume: the journal is damaged (its fingerprint line is cut '// &
+               'short); start again with --force', stat_input)
+         end if
          if (.not. allocated(error) .and. old_fingerprint /= fingerprint) &
             call fatal_error(error, path//': cannot resume: '//changed_part(old_fingerprint, fingerprint)// &
                ' changed since the journal was written (start again with --force)', stat_input)
@@ -187,6 +193,84 @@ contains
       what = fingerprint_mismatch(old, new)
       if (len(what) == 0) what = 'the input'
    end function changed_part
+
+   !> Whether the fingerprint old, read from the first line of the journal at path, was cut
+   !> short (a damaged file, not a changed input): its line has no end (the file ends within
+   !> it, its last items missing), or an item is cut within its name or value (a file's hash
+   !> is 16 hex digits). Told apart from a change, which fingerprint_mismatch names as such;
+   !> a whole line of fewer items is another layout's (an earlier version's)
+   logical function fingerprint_damaged(path, old, new) result(damaged)
+      !> the journal
+      character(len=*), intent(in) :: path
+      !> its fingerprint (without the tag) and the run's
+      character(len=*), intent(in) :: old, new
+      integer(int64) :: bytes
+      integer :: k, nold
+      damaged = .true.
+      inquire (file=path, size=bytes)
+      if (bytes >= 0 .and. bytes <= len(fingerprint_tag) + len(old)) return
+      nold = count_items(old)
+      do k = 1, nold
+         if (.not. whole(item(old, k))) return
+         ! (a name cut short: the run's item there has a value)
+         if (index(item(old, k), '=') == 0 .and. index(item(new, k), '=') > 0) return
+      end do
+      damaged = .false.
+   contains
+      !> How many items a fingerprint has (separated by blanks)
+      pure integer function count_items(list) result(n)
+         character(len=*), intent(in) :: list
+         n = 0
+         do while (len(item(list, n + 1)) > 0)
+            n = n + 1
+         end do
+      end function count_items
+      !> The k-th item of a fingerprint ('' past its end)
+      pure function item(list, k) result(text)
+         character(len=*), intent(in) :: list
+         integer, intent(in) :: k
+         character(len=:), allocatable :: text
+         integer :: pos, next, n
+         text = ''
+         pos = 1
+         n = 0
+         do while (pos <= len_trim(list))
+            next = index(list(pos:)//' ', ' ') + pos - 1
+            if (next > pos) then
+               n = n + 1
+               if (n == k) then
+                  text = list(pos:next - 1)
+                  return
+               end if
+            end if
+            pos = next + 1
+         end do
+      end function item
+      pure function name_of(text) result(name)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: name
+         name = text(:max(0, index(text, '=') - 1))
+      end function name_of
+      !> No '=', or a name and a value; a file's hash of 16 hex digits (or 'unreadable')
+      pure logical function whole(text)
+         character(len=*), intent(in) :: text
+         character(len=:), allocatable :: name, val
+         integer :: eq
+         eq = index(text, '=')
+         whole = eq == 0
+         if (eq == 0) return
+         if (eq == 1) return
+         name = text(:eq - 1)
+         val = text(eq + 1:)
+         if (len(val) == 0) return
+         if (name == 'input' .or. name == 'constants' .or. index(name, 'data:') == 1 .or. &
+             index(name, 'history:') == 1) then
+            whole = val == 'unreadable' .or. (len(val) == 16 .and. verify(val, '0123456789ABCDEF') == 0)
+         else
+            whole = .true.
+         end if
+      end function whole
+   end function fingerprint_damaged
 
    !> '' when the fingerprints agree, else what changed (the fingerprint is a list of
    !> name=value items; see usharp_fit). old must not be empty.
