@@ -978,20 +978,6 @@ contains
          stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n 13 '//full// &
                       '/fit.journal > '//part//'/fit.journal && cp '//full//'/fit.cache '//part//'/')
       end subroutine copy_part
-      integer function line_count(path) result(k)
-         character(len=*), intent(in) :: path
-         integer :: unit, ios
-         character(len=16) :: line
-         k = 0
-         open (newunit=unit, file=path, status='old', action='read', iostat=ios)
-         if (ios /= 0) return
-         do
-            read (unit, '(a)', iostat=ios) line
-            if (ios /= 0) exit
-            k = k + 1
-         end do
-         close (unit)
-      end function line_count
    end subroutine test_damaged_cache
 
    !> Overwrite a value of the nth record of kind (1 residuals, 2 Jacobian) in fit.cache at
@@ -1069,22 +1055,23 @@ contains
                  str(ntotal)//': the command ran '//str(nruns)//' times')
       if (allocated(error)) return
       call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), 'journal identical')
-   contains
-      integer function line_count(path) result(k)
-         character(len=*), intent(in) :: path
-         integer :: unit, ios
-         character(len=16) :: line
-         k = 0
-         open (newunit=unit, file=path, status='old', action='read', iostat=ios)
-         if (ios /= 0) return
-         do
-            read (unit, '(a)', iostat=ios) line
-            if (ios /= 0) exit
-            k = k + 1
-         end do
-         close (unit)
-      end function line_count
    end subroutine test_external_resume
+
+   !> The number of lines of the file at path (0 if it cannot be read)
+   integer function line_count(path) result(k)
+      character(len=*), intent(in) :: path
+      integer :: unit, ios
+      character(len=16) :: line
+      k = 0
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         k = k + 1
+      end do
+      close (unit)
+   end function line_count
 
    !> Evaluations, replayed and simulated from the summary's line
    subroutine counts(line, n, nr, ns)
