@@ -35,6 +35,7 @@ contains
          new_unittest('data-zero-throughout-refused', test_zero_data), &
          new_unittest('strain-in-percent-refused', test_percent_strain), &
          new_unittest('variable-without-equals-placed', test_no_equals), &
+         new_unittest('namelist-read-reasons-in-plain-words', test_plain_reasons), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -254,9 +255,37 @@ contains
       type(error_type), allocatable, intent(out) :: error
       call expect_config_error(error, 'noequals.nml', [character(len=80) :: &
          "&solver rtol 1.0e-7 /", "&test name='x', history='thesis_lcf' /"], &
-         "noequals.nml:3: &solver: Equal sign must follow namelist object name rtol; write each "// &
-         "variable as name = value")
+         "noequals.nml:3: &solver: rtol has no '=' after it; write each variable as name = value")
+      if (allocated(error)) return
+      ! After a value, the name without '=' is placed itself (it had been read as part of the
+      ! value before it, and the message named that variable)
+      call expect_config_error(error, 'noequals2.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf',", "  dt_out = 1.0", "  sig 14.0 /"], &
+         "noequals2.nml:5:3: &test #1 'lcf': sig has no '=' after it; write each variable as "// &
+         "name = value")
    end subroutine test_no_equals
+
+   !> The namelist read's own words (gfortran's) put plainly: a number too large, more values
+   !> than a variable takes, quotes that do not pair up on a line (the column of the line's
+   !> first quote, not of the last, which the read found open, nor the rest of the group
+   !> quoted as the value)
+   subroutine test_plain_reasons(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'overflow.nml', [character(len=80) :: &
+         "&fit max_evals = 99999999999 /", "&test name='lcf', history='thesis_lcf' /"], &
+         "overflow.nml:3:6: &fit: max_evals = 99999999999 is not a value max_evals can take "// &
+         "(too large for a whole number, at most 2147483647)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'repeat.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 2*1.0 /"], &
+         "repeat.nml:3:41: &test #1 'lcf': dt_out = 2*1.0 is not a value dt_out can take "// &
+         "(more values than dt_out takes)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'pairs.nml', [character(len=80) :: &
+         "&test name='lcf, history='thesis_lcf', dt_out = 1.0", "  sig = 14.0 ! the thesis's", "/"], &
+         "pairs.nml:3:12: &test #1: name: the quotes here do not pair up on their line (a text "// &
+         "value is written in quotes on one line: name = 'text')")
+   end subroutine test_plain_reasons
 
    subroutine test_backend_settings(error)
       type(error_type), allocatable, intent(out) :: error

@@ -634,17 +634,32 @@ contains
       procedure(group_reader) :: reader
       type(nml_item), allocatable :: items(:)
       character(len=512) :: why
-      character(len=:), allocatable :: value, unknown, where, hint
-      integer :: m, stat
+      character(len=:), allocatable :: value, unknown, where, word
+      integer :: m, stat, q
       allocate (items(0))
       if (k > 0) call group_items(file, k, items)
       do m = 1, size(items)
          call reader(['&'//trim(file%groups(k)%name)//' '//items(m)%text//' /'], stat, why)
          if (stat == 0) cycle
-         value = trim(adjustl(items(m)%text(index(items(m)%text, '=') + 1:)))
-         ! (the comma that ends it is not part of the value)
-         if (len(value) > 1) then
-            if (value(len(value):) == ',') value = trim(value(:len(value) - 1))
+         value = shown_value(items(m))
+         ! A quote the value opens and leaves open at its line's end: the rest of the group
+         ! was read as text, so the read's words would name the wrong thing
+         q = open_quote(items(m))
+         if (q > 0) then
+            call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+               items(m)%name//': the quotes here do not pair up on their line (a text '// &
+               "value is written in quotes on one line: name = 'text')")
+            return
+         end if
+         ! A name without '=' after the value (it reads as part of the value)
+         word = after(why, 'equal sign must follow namelist object name ')
+         if (len(word) > 0) then
+            q = word_at(items(m)%text, word)
+            if (q > 0) then
+               call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                  word//" has no '=' after it; write each variable as name = value")
+               return
+            end if
          end if
          ! The read's words for a name it does not know (its words for a value it cannot read
          ! are often the same, naming the value: 'dt_out = abc' gives 'name abc')
@@ -657,7 +672,8 @@ contains
                ' = '//value//' is not a value '//items(m)%name//' can take')
          else
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '//items(m)%name// &
-               ' = '//value//' is not a value '//items(m)%name//' can take ('//trim(why)//')')
+               ' = '//value//' is not a value '//items(m)%name//' can take ('// &
+               plain_reason(trim(why), items(m)%name)//')')
          end if
          return
       end do
@@ -665,10 +681,151 @@ contains
       ! for the first the form the read wants
       where = file%path
       if (k > 0) where = file%path//':'//str(file%groups(k)%line)
-      hint = ''
-      if (index(lower(msg), 'equal sign must follow') > 0) hint = '; write each variable as name = value'
-      call fatal_error(error, where//': &'//label//': '//trim(msg)//hint//' (iostat '//str(ios)//')')
+      word = after(msg, 'equal sign must follow namelist object name ')
+      if (len(word) > 0) then
+         call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
+            'write each variable as name = value')
+      else
+         call fatal_error(error, where//': &'//label//': '//plain_reason(trim(msg), '')// &
+            ' (iostat '//str(ios)//')')
+      end if
+   contains
+      !> The text of message after phrase (compared in lower case), its first word; '' when
+      !> the message does not hold the phrase
+      pure function after(message, phrase) result(rest)
+         character(len=*), intent(in) :: message, phrase
+         character(len=:), allocatable :: rest
+         integer :: i
+         rest = ''
+         i = index(lower(message), phrase)
+         if (i == 0) return
+         rest = trim(adjustl(message(i + len(phrase):)))
+         i = scan(rest, ' ,')
+         if (i > 0) rest = rest(:i - 1)
+      end function after
    end subroutine read_error
+
+   !> An assignment's value for a message: its first line, at most 60 characters ('...' where
+   !> cut), without the comma that ends it
+   pure function shown_value(item) result(value)
+      type(nml_item), intent(in) :: item
+      character(len=:), allocatable :: value
+      integer :: a, b
+      logical :: cut
+      a = index(item%text, '=') + 1
+      b = len(item%text)
+      cut = .false.
+      if (any(item%at(a:b) == 0)) then
+         ! (the blank that stands for the first line break after the '=')
+         b = a - 2 + findloc(item%at(a:b), 0, 1)
+         cut = len_trim(item%text(b + 1:)) > 0
+      end if
+      if (b - a + 1 > 60) then
+         b = a + 59
+         cut = .true.
+      end if
+      value = trim(adjustl(item%text(a:b)))
+      if (len(value) > 1 .and. .not. cut) then
+         if (value(len(value):) == ',') value = trim(value(:len(value) - 1))
+      end if
+      if (cut) value = value//' ...'
+   end function shown_value
+
+   !> When a quote in item's text is still open at its line's end (or the text's): where the
+   !> first quote of that line's value is (the quotes pair up wrongly from there: 'a, b = 'c'
+   !> leaves the last open), else 0; a doubled quote inside is one character
+   pure integer function open_quote(item) result(q)
+      type(nml_item), intent(in) :: item
+      character(len=1) :: quote
+      integer :: i, a
+      q = 0
+      quote = ' '
+      a = index(item%text, '=') + 1
+      i = a
+      do while (i <= len(item%text))
+         if (quote == ' ') then
+            if (item%text(i:i) == "'" .or. item%text(i:i) == '"') then
+               quote = item%text(i:i)
+               q = i
+            end if
+         else if (item%at(i) == 0) then
+            q = first_quote(q)
+            return
+         else if (item%text(i:i) == quote) then
+            if (i < len(item%text)) then
+               if (item%text(i + 1:i + 1) == quote) then
+                  i = i + 2
+                  cycle
+               end if
+            end if
+            quote = ' '
+            q = 0
+         end if
+         i = i + 1
+      end do
+      if (q > 0) q = first_quote(q)
+   contains
+      !> The first quote of the value on the line of position p
+      pure integer function first_quote(p) result(f)
+         integer, intent(in) :: p
+         f = p
+         do while (f > a)
+            if (item%at(f - 1) == 0) exit
+            f = f - 1
+         end do
+         f = f - 1 + scan(item%text(f:p), '''"')
+      end function first_quote
+   end function open_quote
+
+   !> Where word (any case) stands alone in text after its first '=', 0 if nowhere
+   pure integer function word_at(text, word) result(q)
+      character(len=*), intent(in) :: text, word
+      integer :: from, i
+      from = index(text, '=') + 1
+      do
+         i = index(lower(text(from:)), lower(word))
+         if (i == 0) then
+            q = 0
+            return
+         end if
+         q = from + i - 1
+         if (alone(q - 1) .and. alone(q + len(word))) return
+         from = q + 1
+      end do
+   contains
+      pure logical function alone(p)
+         integer, intent(in) :: p
+         alone = .true.
+         if (p < 1 .or. p > len(text)) return
+         alone = verify(text(p:p), word_chars) /= 0
+      end function alone
+   end function word_at
+
+   !> The namelist read's reason in plain words, for a value of variable (gfortran's words
+   !> where it has none better)
+   pure function plain_reason(why, variable) result(text)
+      character(len=*), intent(in) :: why, variable
+      character(len=:), allocatable :: text
+      character(len=:), allocatable :: w
+      w = lower(why)
+      if (index(w, 'integer overflow') > 0) then
+         text = 'too large for a whole number, at most 2147483647'
+      else if (index(w, 'repeat count too large') > 0) then
+         text = 'more values than '//variable//' takes'
+      else if (index(w, 'bad integer') > 0) then
+         text = 'not a whole number'
+      else if (index(w, 'bad real') > 0 .or. index(w, 'bad complex') > 0) then
+         text = 'not a number'
+      else if (index(w, 'bad logical') > 0) then
+         text = 'not .true. or .false.'
+      else if (index(w, 'invalid string input') > 0) then
+         text = "a text value is written in quotes: name = 'text'"
+      else if (index(w, 'end of file') > 0) then
+         text = "the group ends before its values do (a quote not closed, or a '/' missing)"
+      else
+         text = why
+      end if
+   end function plain_reason
 
    !> A value that fills its whole buffer may have been cut: an error naming the variable
    !> and the limit. where: 'path: &group: '
