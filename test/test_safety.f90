@@ -471,6 +471,17 @@ contains
       call diagnose_command(input, dir, '', summary, e, mode='resume')
       call check(error, .not. allocated(e), 'diagnose --resume over its own reports')
       if (allocated(error)) return
+      ! A user's image of a plot's name is a PNG as usharp's are: known by the hash that
+      ! plots.gp records of usharp's, it is refused and kept
+      call check(error, shell("printf '\211PNG\r\n\032\nmine' > "//dir//'/diagnose/fit.png') == 0, &
+                 'a user''s PNG')
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', summary, e, mode='resume')
+      call check_message(error, e, dir//'/diagnose/fit.png: a file of this name is there that usharp '// &
+                         'diagnose did not write; overwrite it with --force')
+      if (allocated(error)) return
+      call check(error, index(read_text(dir//'/diagnose/fit.png'), 'mine') > 0, 'the user''s PNG is kept')
+      if (allocated(error)) return
       call refused('design.txt', 'design')
       if (allocated(error)) return
       call design_command(input, dir, '', summary, e, 'force')

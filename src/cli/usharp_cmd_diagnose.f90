@@ -8,7 +8,7 @@ module usharp_cmd_diagnose
                               diagnose_options_of, diagnose_progress, diagnose_journal, &
                               check_diagnosable
    use usharp_diagnose_report, only: report_names, report_marks
-   use usharp_overwrite, only: check_overwrite
+   use usharp_overwrite, only: check_overwrite, check_overwrite_each
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
@@ -63,7 +63,7 @@ contains
       if (present(mode)) journal_mode = mode
       ! A file of the user's among the report's names is refused before any work; the
       ! report of an earlier diagnosis (--resume too) is replaced
-      call check_each(dir, report_names, report_marks, journal_mode == 'force', error)
+      call check_overwrite_each(dir, report_names, report_marks, 'diagnose', journal_mode == 'force', error)
       if (allocated(error)) return
       call make_dir(dir, error)
       if (allocated(error)) return
@@ -133,19 +133,6 @@ contains
          lines = [character(len=report_line_len) :: lines, part, '']
       end do
    end subroutine specimen_command
-
-   !> check_overwrite for each of names with its own mark
-   subroutine check_each(dir, names, marks, force, error)
-      character(len=*), intent(in) :: dir
-      character(len=*), intent(in) :: names(:), marks(:)
-      logical, intent(in) :: force
-      type(error_type), allocatable, intent(out) :: error
-      integer :: k
-      do k = 1, size(names)
-         call check_overwrite(dir, [names(k)], [marks(k)], 'diagnose', force, error)
-         if (allocated(error)) return
-      end do
-   end subroutine check_each
 
    !> Self-check of the diagnosis on synthetic data with each effect injected; its
    !> repetitions are kept in <out_dir>/selfcheck.journal (mode: see run_tasks)

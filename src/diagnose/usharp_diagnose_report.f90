@@ -7,7 +7,8 @@ module usharp_diagnose_report
                              interval_end
    use usharp_process, only: run_process, process_result, proc_exited
    use usharp_regions, only: class_names
-   use usharp_filesys, only: join_path, make_dir
+   use usharp_filesys, only: join_path, make_dir, remove_file
+   use usharp_overwrite, only: drawn_line
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
@@ -22,12 +23,12 @@ module usharp_diagnose_report
    public :: diagnose_report, write_report, report_names, report_marks
 
    !> The files write_report writes in its folder, and how the first line of each begins
-   !> when it wrote it (the plots: any PNG image, as gnuplot draws them)
+   !> when it wrote it (the plots: by their hashes, which plots.gp records; see drawn_line)
    character(len=*), parameter :: report_names(8) = [character(len=13) :: 'report.md', &
       'steps.csv', 'regions.csv', 'effects.csv', 'residuals.csv', 'plots.gp', 'residuals.png', 'fit.png']
    character(len=*), parameter :: report_marks(8) = [character(len=28) :: '# usharp diagnose', &
       'step,simulations,', 'test,region,points,', 'rank,effect,parameters,', 'test,held_out,t_s,', &
-      "set datafile separator ','", achar(137)//'PNG', achar(137)//'PNG']
+      "set datafile separator ','", '@plots.gp', '@plots.gp']
 
 contains
 
@@ -575,6 +576,7 @@ contains
       character(len=:), allocatable :: base, csv
       character(len=max(16, len(dir) + 16)) :: argv(3)
       integer :: i, nt
+      logical :: gone
       nt = size(res%names)
       ! The folder reaches gnuplot only inside quoted strings, and never as a file name that
       ! begins with < or | (which gnuplot would run as a command)
@@ -611,6 +613,19 @@ contains
       argv(3) = join_path(base, 'plots.gp')
       call run_process(argv, '.', '/dev/null', '/dev/null', 600.0_dp, 5.0_dp, proc)
       plotted = proc%how == proc_exited .and. proc%code == 0
+      if (plotted) then
+         ! The script records what it drew, so that a later run knows these plots for its own
+         ! (and a user's file of their names for another's)
+         gp = [character(len=512) :: gp, drawn_line(dir, 'residuals.png'), drawn_line(dir, 'fit.png')]
+         plotted = all(len_trim(gp(size(gp) - 1:)) > 0)
+         if (plotted) call write_lines(join_path(dir, 'plots.gp'), gp, error)
+         plotted = plotted .and. .not. allocated(error)
+      end if
+      if (.not. plotted) then
+         ! Half-drawn plots are not left behind
+         gone = remove_file(join_path(dir, 'residuals.png'))
+         gone = remove_file(join_path(dir, 'fit.png'))
+      end if
    contains
       !> Time of test i's points only (other tests' undefined): each panel spans its own test
       function own_x(i) result(text)

@@ -1,13 +1,17 @@
 !> Nothing a user made is overwritten unasked. Before a command writes, each file of its
 !> output names that is already there must be the command's own earlier output, known by its
 !> first line; any other file is refused (a usage error naming it) unless --force is given.
+!> A file without text lines (a plot) is known instead by its hash, which usharp records on a
+!> line of a text file of its own beside it (see drawn_line).
 module usharp_overwrite
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_error, only: error_type, fatal_error, stat_usage
-   use usharp_filesys, only: file_exists, read_line, join_path
+   use usharp_filesys, only: file_exists, read_line, join_path, file_hash, hash_hex
    implicit none
    private
 
-   public :: check_overwrite, made_by_usharp, begins_like, simulate_mark
+   public :: check_overwrite, check_overwrite_each, made_by_usharp, begins_like, simulate_mark
+   public :: drawn_line
 
    !> How the first line of a <test>.sim.txt that `usharp simulate` wrote begins ('*': the
    !> version)
@@ -45,7 +49,44 @@ contains
       end do
    end subroutine check_overwrite
 
-   !> Whether the file at path is there and its first line begins like one of marks
+   !> check_overwrite of each of names with its own mark: marks(k) is names(k)'s
+   subroutine check_overwrite_each(dir, names, marks, command, force, error)
+      !> the output folder
+      character(len=*), intent(in) :: dir
+      !> the files the command is about to write there, and how the first line of each begins
+      !> when usharp wrote it (or '@' and the file beside it that records its hash)
+      character(len=*), intent(in) :: names(:), marks(:)
+      !> the command's name, for the message
+      character(len=*), intent(in) :: command
+      !> --force was given
+      logical, intent(in) :: force
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k
+      do k = 1, min(size(names), size(marks))
+         call check_overwrite(dir, names(k:k), marks(k:k), command, force, error)
+         if (allocated(error)) return
+      end do
+   end subroutine check_overwrite_each
+
+   !> The line that records, in a text file of usharp's beside it, that usharp drew the file
+   !> name as it is now (its FNV-1a hash): '# drew fit.png: FNV-1a 0123456789ABCDEF'; '' when
+   !> the file cannot be read
+   function drawn_line(dir, name) result(line)
+      !> the folder of the file
+      character(len=*), intent(in) :: dir
+      !> the file's name
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: line
+      integer(int64) :: hash
+      logical :: ok
+      line = ''
+      call file_hash(join_path(dir, name), hash, ok)
+      if (ok) line = '# drew '//name//': FNV-1a '//hash_hex(hash)
+   end function drawn_line
+
+   !> Whether the file at path is there and its first line begins like one of marks; a mark
+   !> '@<file>' asks instead whether <file> beside it holds the file's drawn_line (a file of
+   !> another's of the same name and kind has another hash)
    logical function made_by_usharp(path, marks) result(yes)
       !> the file
       character(len=*), intent(in) :: path
@@ -55,6 +96,12 @@ contains
       integer :: unit, ios, k
       yes = .false.
       if (.not. file_exists(path)) return
+      do k = 1, size(marks)
+         if (len_trim(marks(k)) < 2) cycle
+         if (marks(k)(1:1) /= '@') cycle
+         yes = recorded(path, trim(marks(k)(2:)))
+         if (yes) return
+      end do
       open (newunit=unit, file=path, status='old', action='read', iostat=ios)
       if (ios /= 0) return
       call read_line(unit, line, ios)
@@ -67,6 +114,30 @@ contains
          end if
       end do
    end function made_by_usharp
+
+   !> Whether the text file record beside the file at path holds path's drawn_line
+   logical function recorded(path, record) result(yes)
+      character(len=*), intent(in) :: path, record
+      character(len=:), allocatable :: dir, name, want, line
+      integer :: slash, unit, ios
+      yes = .false.
+      slash = index(path, '/', back=.true.)
+      dir = path(:max(slash - 1, 0))
+      name = path(slash + 1:)
+      want = drawn_line(dir, name)
+      if (len(want) == 0) return
+      open (newunit=unit, file=join_path(dir, record), status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         call read_line(unit, line, ios)
+         if (ios /= 0) exit
+         if (line == want) then
+            yes = .true.
+            exit
+         end if
+      end do
+      close (unit)
+   end function recorded
 
    !> Whether line begins like pattern: its text, where each '*' stands for any text (a
    !> version, a file name); what follows the pattern's end is free
