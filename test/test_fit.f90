@@ -5,7 +5,8 @@ module test_fit
    use usharp_error, only: uerror => error_type, stat_failure
    use usharp_experiment, only: interpolate
    use usharp_weighting, only: threshold_weights, relaxation_weights
-   use usharp_objective, only: test_objective, fit_problem, setup_problem, eval_ok
+   use usharp_objective, only: test_objective, fit_problem, setup_problem, eval_ok, eval_failed, &
+                               eval_invalid, penalty_failed
    use usharp_simulation, only: sim_result
    use usharp_simulate, only: simulate_test
    use usharp_history, only: cyclic_history, history_type
@@ -56,7 +57,8 @@ contains
          new_unittest('peaks-target-read-and-compared', test_peaks), &
          new_unittest('peaks-and-data-share-the-objective', test_peak_share), &
          new_unittest('creep-and-lcf-in-one-deck', test_mixed), &
-         new_unittest('real-a617-cycles-counted-through-gaps', test_real_life)]
+         new_unittest('real-a617-cycles-counted-through-gaps', test_real_life), &
+         new_unittest('test-shares-joined-as-one-rank-has-them', test_shares_merged)]
    end subroutine collect_fit
 
    subroutine rosen_eval(self, x, f, error)
@@ -487,4 +489,58 @@ contains
                     'maxima and minima of cycles 1 to 99 matched')
       end associate
    end subroutine test_real_life
+   !> An evaluation simulated in shares of its tests (ranks helping one search) and joined is
+   !> the evaluation one rank makes, bit for bit; of failed shares, the first failed test in
+   !> order decides the message, as it ends one rank's evaluation there
+   subroutine test_shares_merged(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: x(:), r(:), r_w(:, :), pt_w(:, :), per(:), pm(:), rm(:)
+      real(dp) :: f, fw(2), fm
+      integer :: status, st_w(2), fail_w(2), stm, k
+      integer, parameter :: owner(3) = [1, 2, 1]
+      character(len=:), allocatable :: msg, mm
+      character(len=64) :: msgs(2)
+      call read_config(fit_deck('shares.nml', '', [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='../../data/thesis/lcf.sim.txt' /", &
+         "&test name='relax', history='relaxation', data_file='../../data/thesis/relax.sim.txt' /", &
+         "&test name='ratchet', history='ratchet', data_file='../../data/thesis/ratchet.sim.txt' /"]), &
+         cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      x = prob%start_point()
+      allocate (r(prob%nres()), per(3), r_w(prob%nres(), 2), pt_w(3, 2), rm(prob%nres()), pm(3))
+      call prob%residuals(x, r, f, per, status, msg, 'one')
+      do k = 1, 2
+         call prob%residuals(x, r_w(:, k), fw(k), pt_w(:, k), st_w(k), msg, 'share', &
+                             only=owner == k, failed=fail_w(k))
+         msgs(k) = msg
+      end do
+      call prob%merge(owner, r_w, pt_w, st_w, fail_w, msgs, rm, fm, pm, stm, mm)
+      call check(error, status == eval_ok .and. stm == eval_ok, 'both evaluations succeed')
+      if (allocated(error)) return
+      call check(error, all(rm == r) .and. fm == f .and. all(pm == per), &
+                 'joined shares differ from one rank''s evaluation')
+      if (allocated(error)) return
+      ! Test 3 failed in one share, test 2 in the other: test 2's failure ends the evaluation
+      msgs = [character(len=64) :: "test 'ratchet': integration failed", "test 'relax': integration failed"]
+      call prob%merge(owner, r_w, pt_w, [eval_failed, eval_failed], [3, 2], msgs, rm, fm, pm, stm, mm)
+      call check(error, stm == eval_failed .and. mm == "test 'relax': integration failed" .and. &
+                 all(pm == penalty_failed) .and. all(rm == 0.0_dp), 'first failed test decides: '//mm)
+      if (allocated(error)) return
+      ! A share that failed beside one that did not
+      call prob%merge(owner, r_w, pt_w, [eval_ok, eval_failed], [0, 2], msgs, rm, fm, pm, stm, mm)
+      call check(error, stm == eval_failed .and. mm == "test 'relax': integration failed", &
+                 'a failed share fails the evaluation')
+      if (allocated(error)) return
+      ! Invalid constants: every share found them so
+      call prob%merge(owner, r_w, pt_w, [eval_invalid, eval_invalid], [0, 0], msgs, rm, fm, pm, stm, mm)
+      call check(error, stm == eval_invalid, 'invalid constants stay invalid')
+   end subroutine test_shares_merged
+
 end module test_fit

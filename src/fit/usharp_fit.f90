@@ -104,6 +104,9 @@ module usharp_fit
       !> and the helpers that have them
       real(dp), allocatable :: ahead(:, :)
       integer, allocatable :: ahead_helpers(:)
+      !> Each test's wall time per simulation as last measured (s), to share a batch's tests
+      !> out evenly (see shared_tests); before a measurement, its number of compared points
+      real(dp), allocatable :: test_cost(:)
    contains
       procedure :: eval => fit_eval
       procedure :: residuals => fit_residuals
@@ -285,7 +288,20 @@ contains
       else if (allocated(self%ahead)) then
          allocate (helpers(0))
       else
-         helpers = claim_helpers(self, n)
+         ! Shares of the tests, where they spread the batch more evenly than blocks of points
+         ! (a single trial point, or a difference Jacobian of few columns)
+         ! (a single point asks for helpers only once every start is dealt: ranks out of
+         ! starts are rare before, and each claim is a round trip to rank 0)
+         if (n > 1 .or. deal_done(self)) then
+            helpers = claim_helpers(self, max(n, size(self%prob%targets)))
+         else
+            helpers = claim_helpers(self, 1)
+         end if
+         if (shares_win(self, n, size(helpers))) then
+            call shared_tests(self, xs, k0, helpers, rs, fs, per_test, status, messages)
+            return
+         end if
+         helpers = helpers(:min(size(helpers), n - 1))
          call send_blocks(self, xs, k0, helpers)
       end if
       nw = 1 + size(helpers)
@@ -306,6 +322,8 @@ contains
       integer, allocatable :: helpers(:)
       if (.not. associated(self%deal) .or. allocated(self%ahead)) return
       if (any(self%prob%cfg%tests%ext%enabled)) return
+      ! With more than one test the helpers take shares of the trial's tests instead
+      if (size(self%prob%targets) > 1) return
       helpers = claim_helpers(self, size(xs, 2))
       if (size(helpers) == 0) return
       call send_blocks(self, xs, self%nevals + 1, helpers)
@@ -329,8 +347,8 @@ contains
       deallocate (self%ahead, self%ahead_helpers)
    end subroutine drop_ahead
 
-   !> The helpers to share a batch of n points with: those claimed now or before, at most
-   !> n - 1 (a block each beside this rank's own)
+   !> The helpers to share a batch of n points (or tests) with: those claimed now or before,
+   !> at most n - 1 (a block each beside this rank's own)
    function claim_helpers(self, n) result(helpers)
       class(fit_objective), intent(inout) :: self
       integer, intent(in) :: n
@@ -341,6 +359,111 @@ contains
       helpers = self%deal%helper_ranks()
       helpers = helpers(:min(size(helpers), n - 1))
    end function claim_helpers
+
+   !> Whether this search's rank knows every start to have been dealt (see task_deal)
+   logical function deal_done(self) result(yes)
+      class(fit_objective), intent(in) :: self
+      yes = .false.
+      if (associated(self%deal)) yes = self%deal%all_dealt()
+   end function deal_done
+
+   !> Whether shares of the tests spread a batch of n points over this rank and nh helpers
+   !> better than blocks of points do: the points' speed-up n/ceil(n/w) against the tests'
+   !> (their estimated time over the largest share's, see test_shares)
+   logical function shares_win(self, n, nh) result(yes)
+      class(fit_objective), intent(inout) :: self
+      integer, intent(in) :: n, nh
+      integer :: w
+      real(dp) :: load(min(1 + nh, size(self%prob%targets)))
+      integer :: owner(size(self%prob%targets))
+      yes = .false.
+      if (nh == 0 .or. size(self%prob%targets) < 2) return
+      call ensure_costs(self)
+      w = min(1 + nh, size(self%prob%targets))
+      call test_shares(self%test_cost, w, owner, load)
+      yes = sum(load)/maxval(load) > real(n, dp)/real((n + nh)/(1 + nh), dp)
+   end function shares_win
+
+   !> Each test's cost before any is measured: its number of compared points
+   subroutine ensure_costs(self)
+      class(fit_objective), intent(inout) :: self
+      integer :: i
+      if (allocated(self%test_cost)) return
+      allocate (self%test_cost(size(self%prob%targets)))
+      do i = 1, size(self%prob%targets)
+         self%test_cost(i) = real(size(self%prob%targets(i)%t), dp)
+      end do
+   end subroutine ensure_costs
+
+   !> The tests dealt into w shares of about equal cost: the costliest first, each to the
+   !> share least loaded so far (owner(i): test i's share; load: each share's cost)
+   pure subroutine test_shares(cost, w, owner, load)
+      real(dp), intent(in) :: cost(:)
+      integer, intent(in) :: w
+      integer, intent(out) :: owner(:)
+      real(dp), intent(out) :: load(:)
+      logical :: dealt(size(cost))
+      integer :: k, i
+      load = 0.0_dp
+      dealt = .false.
+      do k = 1, size(cost)
+         i = maxloc(cost, 1, mask=.not. dealt)
+         dealt(i) = .true.
+         owner(i) = minloc(load(:w), 1)
+         load(owner(i)) = load(owner(i)) + cost(i)
+      end do
+   end subroutine test_shares
+
+   !> The points xs (evaluations k0 + j) simulated in shares of the tests: each helper its
+   !> share of every point's tests, this rank the last share; the shares joined as one rank
+   !> simulating every test has them (see fit_problem's merge), bit for bit
+   subroutine shared_tests(self, xs, k0, helpers, rs, fs, per_test, status, messages)
+      class(fit_objective), intent(inout) :: self
+      real(dp), intent(in) :: xs(:, :)
+      integer, intent(in) :: k0, helpers(:)
+      real(dp), intent(out) :: rs(:, :), fs(:), per_test(:, :)
+      integer, intent(out) :: status(:)
+      character(len=message_len), intent(out) :: messages(:)
+      integer :: nt, n, m, w, ws, j, from
+      integer, allocatable :: owner(:), ints(:), stat_w(:, :), fail_w(:, :)
+      real(dp), allocatable :: load(:), r_w(:, :, :), pt_w(:, :, :), sec(:), reals(:)
+      character(len=message_len), allocatable :: msg_w(:, :)
+      character(len=:), allocatable :: text, message
+      nt = size(self%prob%targets)
+      n = size(xs, 2)
+      m = size(rs, 1)
+      ws = min(1 + size(helpers), nt)
+      allocate (owner(nt), load(ws), r_w(m, n, ws), pt_w(nt, n, ws), stat_w(n, ws), fail_w(n, ws), &
+                msg_w(n, ws), sec(nt))
+      call test_shares(self%test_cost, ws, owner, load)
+      do w = 1, ws - 1
+         call send_packet(helpers(w), tag_help, [2, k0, n, merge(1, 0, owner == w)], &
+                          reshape(xs, [size(xs)]), tag_of(self))
+      end do
+      sec = 0.0_dp
+      call self%prob%batch(xs, k0, r_w(:, :, ws), fs, pt_w(:, :, ws), stat_w(:, ws), msg_w(:, ws), &
+                           tag_of(self), only=owner == ws, failed=fail_w(:, ws), seconds=sec)
+      do w = 1, ws - 1
+         from = helpers(w)
+         call receive_packet(from, tag_help_result, ints, reals, text)
+         stat_w(:, w) = ints(1:n)
+         fail_w(:, w) = ints(n + 1:2*n)
+         r_w(:, :, w) = reshape(reals(1:m*n), [m, n])
+         pt_w(:, :, w) = reshape(reals(m*n + 1:(m + nt)*n), [nt, n])
+         where (owner == w) sec = reals((m + nt)*n + 1:)
+         do j = 1, n
+            msg_w(j, w) = text((j - 1)*message_len + 1:j*message_len)
+         end do
+      end do
+      do j = 1, n
+         call self%prob%merge(owner, r_w(:, j, :), pt_w(:, j, :), stat_w(j, :), fail_w(j, :), &
+                              msg_w(j, :), rs(:, j), fs(j), per_test(:, j), status(j), message)
+         messages(j) = message
+      end do
+      ! The next batch shared by the tests' times now (a test cut short by an earlier
+      ! failure in its share keeps its estimate)
+      where (sec > 0.0_dp) self%test_cost = sec/real(n, dp)
+   end subroutine shared_tests
 
    !> Send helper w its block w of the n = size(xs, 2) points (of 1 + size(helpers) blocks)
    subroutine send_blocks(self, xs, k0, helpers)
@@ -402,22 +525,39 @@ contains
       real(dp), allocatable :: reals(:), rs(:, :), fs(:), per_test(:, :)
       character(len=:), allocatable :: tag, text
       character(len=message_len), allocatable :: messages(:)
-      integer, allocatable :: status(:)
-      integer :: owner, n, nx, j
+      integer, allocatable :: status(:), failed(:)
+      real(dp), allocatable :: seconds(:)
+      integer :: owner, n, nx, j, nt
       if (.not. deal%offer()) return
       nx = size(prob%idx)
       do while (deal%await(owner, ints, reals, tag))
          n = ints(3)
          nhelped = nhelped + n
-         allocate (rs(prob%nres(), n), fs(n), per_test(size(prob%targets), n), status(n), messages(n))
-         call prob%batch(reshape(reals, [nx, n]), ints(2), rs, fs, per_test, status, messages, tag)
+         nt = size(prob%targets)
+         allocate (rs(prob%nres(), n), fs(n), per_test(nt, n), status(n), messages(n))
+         if (ints(1) == 2) then
+            ! A share of every point's tests (see shared_tests): the first failed test of
+            ! each point and the share's times go back too
+            allocate (failed(n), seconds(nt))
+            seconds = 0.0_dp
+            call prob%batch(reshape(reals, [nx, n]), ints(2), rs, fs, per_test, status, messages, &
+                            tag, only=ints(4:3 + nt) == 1, failed=failed, seconds=seconds)
+         else
+            allocate (failed(0), seconds(0))
+            call prob%batch(reshape(reals, [nx, n]), ints(2), rs, fs, per_test, status, messages, tag)
+         end if
          allocate (character(len=n*message_len) :: text)
          do j = 1, n
             text((j - 1)*message_len + 1:j*message_len) = messages(j)
          end do
-         call send_packet(owner, tag_help_result, status, [reshape(rs, [size(rs)]), fs, &
-                          reshape(per_test, [size(per_test)])], text)
-         deallocate (rs, fs, per_test, status, messages, text)
+         if (ints(1) == 2) then
+            call send_packet(owner, tag_help_result, [status, failed], [reshape(rs, [size(rs)]), &
+                             reshape(per_test, [size(per_test)]), seconds], text)
+         else
+            call send_packet(owner, tag_help_result, status, [reshape(rs, [size(rs)]), fs, &
+                             reshape(per_test, [size(per_test)])], text)
+         end if
+         deallocate (rs, fs, per_test, status, messages, text, failed, seconds)
       end do
    end subroutine help_others
 

@@ -2,6 +2,7 @@
 !> Eq. 8, or Eq. 13) and the original's penalties
 module usharp_objective
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_math, only: log_dp, log10_dp, pow10_dp
    use usharp_error, only: error_type, fatal_error, prefix_error, stat_input
@@ -55,6 +56,7 @@ module usharp_objective
       procedure :: residuals => problem_residuals
       procedure :: nres => problem_nres
       procedure :: batch => problem_batch
+      procedure :: merge => problem_merge
       procedure :: jacobian => problem_jacobian
    end type fit_problem
 
@@ -322,8 +324,11 @@ contains
    end subroutine problem_evaluate
 
    !> Residuals at x (test after test, see test_residuals), the per-test objectives and their
-   !> sum; on a failure status says why and r is 0
-   subroutine problem_residuals(self, x, r, total, per_test, status, message, tag)
+   !> sum; on a failure status says why and r is 0. With only, the tests i where only(i) is
+   !> true alone (the others' residuals and objectives 0, and the sum not checked): a share of
+   !> the tests that other ranks complete (see merge_shares).
+   subroutine problem_residuals(self, x, r, total, per_test, status, message, tag, only, failed, &
+                                seconds)
       class(fit_problem), intent(in) :: self
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: r(:)
@@ -332,13 +337,21 @@ contains
       integer, intent(out) :: status
       character(len=:), allocatable, intent(out) :: message
       character(len=*), intent(in) :: tag
+      logical, intent(in), optional :: only(:)
+      !> the first test whose simulation failed (0: none, or the constants are invalid)
+      integer, intent(out), optional :: failed
+      !> wall time of each test's simulation (s), added to
+      real(dp), intent(inout), optional :: seconds(:)
       class(model_type), allocatable :: model
       type(sim_result) :: res
       type(error_type), allocatable :: error
       integer :: i, k0, n
+      integer(int64) :: c0, c1, rate
       status = eval_ok
       message = ''
       r = 0.0_dp
+      per_test = 0.0_dp
+      if (present(failed)) failed = 0
       call self%model_of(x, model, error)
       if (allocated(error)) then
          status = eval_invalid
@@ -349,16 +362,26 @@ contains
       end if
       k0 = 0
       do i = 1, size(self%targets)
+         n = size(self%targets(i)%t)
+         if (present(only)) then
+            if (.not. only(i)) then
+               k0 = k0 + n
+               cycle
+            end if
+         end if
+         call system_clock(c0, rate)
          call self%response(i, model, tag, res, error)
+         call system_clock(c1)
+         if (present(seconds)) seconds(i) = seconds(i) + real(c1 - c0, dp)/real(rate, dp)
          if (allocated(error)) then
             status = eval_failed
             message = error%message
+            if (present(failed)) failed = i
             per_test = penalty_failed
             total = sum(per_test)
             r = 0.0_dp
             return
          end if
-         n = size(self%targets(i)%t)
          r(k0 + 1:k0 + n) = test_residuals(self%cfg%fit%objective, self%targets(i)%y_ex, &
                                            simulated(self%cfg%tests(i), res), &
                                            self%targets(i)%w, self%targets(i)%y_ex_max)
@@ -366,14 +389,78 @@ contains
          k0 = k0 + n
       end do
       total = sum(per_test)
-      if (.not. ieee_is_finite(total)) then
+      if (present(only)) return
+      call check_total(total, r, per_test, status, message)
+   end subroutine problem_residuals
+
+   !> A sum of the per-test objectives that is not finite is a failed evaluation
+   pure subroutine check_total(total, r, per_test, status, message)
+      real(dp), intent(inout) :: total, r(:), per_test(:)
+      integer, intent(inout) :: status
+      character(len=:), allocatable, intent(inout) :: message
+      if (ieee_is_finite(total)) return
+      status = eval_failed
+      message = 'objective is not finite'
+      per_test = penalty_failed
+      total = sum(per_test)
+      r = 0.0_dp
+   end subroutine check_total
+
+   !> One evaluation whose tests were simulated in shares (problem_residuals with only, a
+   !> share a rank): the shares' residuals and objectives joined, as one rank simulating
+   !> every test in order has them, bit for bit. The first failed test in order decides a
+   !> failure (its status and message), as it ends that rank's evaluation there.
+   subroutine problem_merge(self, owner, rs, per_tests, statuses, faileds, messages, r, total, &
+                            per_test, status, message)
+      class(fit_problem), intent(in) :: self
+      !> the share that simulated each test (an index of the last dimension below)
+      integer, intent(in) :: owner(:)
+      !> each share's residuals, per-test objectives, status, first failed test, message
+      real(dp), intent(in) :: rs(:, :), per_tests(:, :)
+      integer, intent(in) :: statuses(:), faileds(:)
+      character(len=*), intent(in) :: messages(:)
+      real(dp), intent(out) :: r(:), total, per_test(:)
+      integer, intent(out) :: status
+      character(len=:), allocatable, intent(out) :: message
+      integer :: i, k0, n, w, first
+      r = 0.0_dp
+      ! Invalid constants: every share found them so, alike
+      if (any(statuses == eval_invalid)) then
+         w = findloc(statuses, eval_invalid, 1)
+         status = eval_invalid
+         message = trim(messages(w))
+         per_test = penalty_invalid
+         total = sum(per_test)
+         return
+      end if
+      first = 0
+      do w = 1, size(statuses)
+         if (statuses(w) /= eval_failed .or. faileds(w) < 1) cycle
+         if (first == 0) then
+            first = w
+         else if (faileds(w) < faileds(first)) then
+            first = w
+         end if
+      end do
+      if (first > 0) then
          status = eval_failed
-         message = 'objective is not finite'
+         message = trim(messages(first))
          per_test = penalty_failed
          total = sum(per_test)
-         r = 0.0_dp
+         return
       end if
-   end subroutine problem_residuals
+      status = eval_ok
+      message = ''
+      k0 = 0
+      do i = 1, size(self%targets)
+         n = size(self%targets(i)%t)
+         r(k0 + 1:k0 + n) = rs(k0 + 1:k0 + n, owner(i))
+         per_test(i) = per_tests(i, owner(i))
+         k0 = k0 + n
+      end do
+      total = sum(per_test)
+      call check_total(total, r, per_test, status, message)
+   end subroutine problem_merge
    !> Jacobian of the residuals with respect to x from CVODES forward sensitivities (one
    !> simulation per test, tests in parallel); ok false where that is not available (the
    !> umat integrator, an external backend) or a simulation failed
@@ -455,7 +542,8 @@ contains
    !> external work folders: a batch outside the fit's evaluations gives a prefix of its own so
    !> that no two runs share a folder), simulated in parallel with OpenMP; each point is
    !> independent of the others
-   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages, prefix, spread)
+   subroutine problem_batch(self, xs, k0, rs, fs, per_test, status, messages, prefix, spread, &
+                            only, failed, seconds)
       class(fit_problem), intent(in) :: self
       real(dp), intent(in) :: xs(:, :)
       integer, intent(in) :: k0
@@ -467,9 +555,16 @@ contains
       !> block of the points (block_of) and every rank receives every result: the same as
       !> one rank, bit for bit, since each point is simulated the same wherever it is
       logical, intent(in), optional :: spread
+      !> A share of the tests alone (see problem_residuals), each point's first failed test,
+      !> and the wall time of each test's simulations (s), added to
+      logical, intent(in), optional :: only(:)
+      integer, intent(out), optional :: failed(:)
+      real(dp), intent(inout), optional :: seconds(:)
       character(len=:), allocatable :: tag0
       integer :: j, lo, hi
       logical :: split
+      real(dp) :: sec(size(per_test, 1), size(xs, 2))
+      integer :: fail(size(xs, 2))
       tag0 = ''
       if (present(prefix)) tag0 = prefix
       split = .false.
@@ -477,6 +572,8 @@ contains
       lo = 1
       hi = size(xs, 2)
       if (split) call block_of(size(xs, 2), this_rank(), n_ranks(), lo, hi)
+      sec = 0.0_dp
+      fail = 0
       !$omp parallel do schedule(dynamic)
       do j = lo, hi
          call one_point(j)
@@ -489,12 +586,19 @@ contains
          call share_blocks(status)
          call share_blocks(messages)
       end if
+      if (present(failed)) failed = fail
+      if (present(seconds)) seconds = seconds + sum(sec, 2)
    contains
       subroutine one_point(j)
          integer, intent(in) :: j
          character(len=:), allocatable :: msg
-         call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
-                             tag0//str(k0 + j))
+         if (present(only)) then
+            call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
+                                tag0//str(k0 + j), only, fail(j), sec(:, j))
+         else
+            call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
+                                tag0//str(k0 + j))
+         end if
          messages(j) = msg
       end subroutine one_point
    end subroutine problem_batch

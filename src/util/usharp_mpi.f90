@@ -45,6 +45,8 @@ module usharp_mpi
       private
       integer :: next = 0, last = 0
       logical :: shared = .false.
+      !> This rank took the last task, or found none left: every task has been dealt
+      logical :: dealt = .false.
       type(MPI_Win) :: win
       integer, allocatable :: helpers(:)  !< the ranks this rank holds
    contains
@@ -54,6 +56,7 @@ module usharp_mpi
       procedure :: claim => deal_claim
       procedure :: release => deal_release
       procedure :: helper_ranks => deal_helper_ranks
+      procedure :: all_dealt => deal_all_dealt
       procedure :: offer => deal_offer
       procedure :: await => deal_await
    end type task_deal
@@ -207,6 +210,7 @@ contains
       integer, allocatable :: start(:)
       self%next = first
       self%last = last
+      self%dealt = first > last
       self%helpers = [integer ::]
       self%shared = running()
       if (present(alone)) self%shared = self%shared .and. .not. alone
@@ -243,7 +247,16 @@ contains
          self%next = self%next + 1
       end if
       if (k > self%last) k = 0
+      self%dealt = k == 0 .or. k == self%last
    end function deal_take
+
+   !> Whether this rank knows every task to have been dealt (it took the last, or found
+   !> none left): only then may a rank out of tasks be free to help, so that a rank need not
+   !> ask rank 0 before every batch
+   pure logical function deal_all_dealt(self) result(yes)
+      class(task_deal), intent(in) :: self
+      yes = self%dealt
+   end function deal_all_dealt
 
    !> Stop dealing (every rank that opened it shared must call it, after its last task and,
    !> where it offered itself, after await said stop)
