@@ -202,16 +202,11 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(fit_problem) :: prob
-      type(uerror), allocatable :: uerr
       character(len=:), allocatable :: dfile
       dfile = write_text('mpa.csv', [character(len=40) :: 'time,stress', '0,0', '5,68.94757293168361', '10,0'])
-      call read_config(fit_deck('units.nml', '', [character(len=200) :: &
-         "&test name='t', history='file', file='mpa.csv', data_file='mpa.csv', data_unit='MPa' /"]), cfg, uerr)
-      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
-      if (allocated(uerr)) then
-         call test_failed(error, uerr%message)
-         return
-      end if
+      call problem_of('units.nml', [character(len=200) :: &
+         "&test name='t', history='file', file='mpa.csv', data_file='mpa.csv', data_unit='MPa' /"], cfg, prob, error)
+      if (allocated(error)) return
       call check(error, prob%targets(1)%y_ex_max, 10.0_dp, '68.95 MPa read as 10 ksi', thr=1e-12_dp)
    end subroutine test_units
 
@@ -321,14 +316,10 @@ contains
       type(sim_result) :: res, direct
       character(len=:), allocatable :: pf
       pf = peak_file()
-      call read_config(fit_deck('peaks.nml', '', [character(len=200) :: &
+      call problem_of('peaks.nml', [character(len=200) :: &
          "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
-         "target='peaks', peak_file='peaks.csv' /"]), cfg, uerr)
-      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
-      if (allocated(uerr)) then
-         call test_failed(error, uerr%message)
-         return
-      end if
+         "target='peaks', peak_file='peaks.csv' /"], cfg, prob, error)
+      if (allocated(error)) return
       associate (tg => prob%targets(1), test => cfg%tests(1))
          call check(error, all(abs(tg%t - [5.0_dp, 15.0_dp, 25.0_dp, 35.0_dp, 45.0_dp, 55.0_dp]) < 1e-12_dp), &
                     'points at the strain peaks of cycles 1 to 3')
@@ -356,21 +347,15 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(fit_problem) :: prob
-      type(uerror), allocatable :: uerr
       character(len=:), allocatable :: pf, df
       integer :: n, np
       real(dp) :: share
       pf = peak_file()
       df = write_text('loops.csv', [character(len=40) :: 'time,stress', '0,0', '30,10', '60,0'])
-      call read_config(fit_deck('both.nml', '', [character(len=200) :: &
+      call problem_of('both.nml', [character(len=200) :: &
          "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
-         "dt_out=2.0, target='both', peak_file='peaks.csv', data_file='loops.csv', peak_share=0.3 /"]), &
-         cfg, uerr)
-      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
-      if (allocated(uerr)) then
-         call test_failed(error, uerr%message)
-         return
-      end if
+         "dt_out=2.0, target='both', peak_file='peaks.csv', data_file='loops.csv', peak_share=0.3 /"], cfg, prob, error)
+      if (allocated(error)) return
       associate (tg => prob%targets(1), kind => cfg%tests(1)%point_kind)
          n = size(tg%t)
          np = count(kind /= 0)
@@ -496,23 +481,17 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(fit_problem) :: prob
-      type(uerror), allocatable :: uerr
       real(dp), allocatable :: x(:), r(:), r_w(:, :), pt_w(:, :), per(:), pm(:), rm(:)
       real(dp) :: f, fw(2), fm
       integer :: status, st_w(2), fail_w(2), stm, k
       integer, parameter :: owner(3) = [1, 2, 1]
       character(len=:), allocatable :: msg, mm
       character(len=64) :: msgs(2)
-      call read_config(fit_deck('shares.nml', '', [character(len=200) :: &
+      call problem_of('shares.nml', [character(len=200) :: &
          "&test name='lcf', history='thesis_lcf', data_file='../../data/thesis/lcf.sim.txt' /", &
          "&test name='relax', history='relaxation', data_file='../../data/thesis/relax.sim.txt' /", &
-         "&test name='ratchet', history='ratchet', data_file='../../data/thesis/ratchet.sim.txt' /"]), &
-         cfg, uerr)
-      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
-      if (allocated(uerr)) then
-         call test_failed(error, uerr%message)
-         return
-      end if
+         "&test name='ratchet', history='ratchet', data_file='../../data/thesis/ratchet.sim.txt' /"], cfg, prob, error)
+      if (allocated(error)) return
       x = prob%start_point()
       allocate (r(prob%nres()), per(3), r_w(prob%nres(), 2), pt_w(3, 2), rm(prob%nres()), pm(3))
       call prob%residuals(x, r, f, per, status, msg, 'one')
@@ -542,5 +521,18 @@ contains
       call prob%merge(owner, r_w, pt_w, [eval_invalid, eval_invalid], [0, 0], msgs, rm, fm, pm, stm, mm)
       call check(error, stm == eval_invalid, 'invalid constants stay invalid')
    end subroutine test_shares_merged
+
+   !> The configuration and fit problem of a deck (fit_deck) with the given &test lines; a
+   !> failed test when they cannot be set up
+   subroutine problem_of(name, tests, cfg, prob, error)
+      character(len=*), intent(in) :: name, tests(:)
+      type(run_config), intent(out) :: cfg
+      type(fit_problem), intent(out) :: prob
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      call read_config(fit_deck(name, '', tests), cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      if (allocated(uerr)) call test_failed(error, uerr%message)
+   end subroutine problem_of
 
 end module test_fit

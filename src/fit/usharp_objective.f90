@@ -426,11 +426,7 @@ contains
       r = 0.0_dp
       ! Invalid constants: every share found them so, alike
       if (any(statuses == eval_invalid)) then
-         w = findloc(statuses, eval_invalid, 1)
-         status = eval_invalid
-         message = trim(messages(w))
-         per_test = penalty_invalid
-         total = sum(per_test)
+         call penalise(findloc(statuses, eval_invalid, 1), penalty_invalid)
          return
       end if
       first = 0
@@ -443,10 +439,7 @@ contains
          end if
       end do
       if (first > 0) then
-         status = eval_failed
-         message = trim(messages(first))
-         per_test = penalty_failed
-         total = sum(per_test)
+         call penalise(first, penalty_failed)
          return
       end if
       status = eval_ok
@@ -460,6 +453,16 @@ contains
       end do
       total = sum(per_test)
       call check_total(total, r, per_test, status, message)
+   contains
+      !> The evaluation penalised as share w found it
+      subroutine penalise(w, penalty)
+         integer, intent(in) :: w
+         real(dp), intent(in) :: penalty
+         status = statuses(w)
+         message = trim(messages(w))
+         per_test = penalty
+         total = sum(per_test)
+      end subroutine penalise
    end subroutine problem_merge
    !> Jacobian of the residuals with respect to x from CVODES forward sensitivities (one
    !> simulation per test, tests in parallel); ok false where that is not available (the
