@@ -91,6 +91,12 @@ row 'unknown group `&tset`' - u simulate tset.nml
 row 'misspelt variable in `&model`' - u simulate misspelt.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs='abc' /"; echo "$consts"; echo "$lcf"; } > text.nml
 row 'text where a number belongs' - u simulate text.nml
+{ echo "$model"; echo "$consts"; echo "&test name='lcf', history='thesis_lcf', data_file='lcf.txt', npeaks=99999999999 /"; } > huge.nml
+row 'a whole number too large' - u simulate huge.nml
+{ echo "&model name='miller, units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 ! the thesis's"; echo "/"; echo "$consts"; echo "$lcf"; } > quotes.nml
+row 'quotes that do not pair up on a line' - u simulate quotes.nml
+{ echo "&model name='miller', units='ksi', temperature=866.15"; echo "  tm 1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > noeq.nml
+row "a name without '=' after a value" - u simulate noeq.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3, tm=1700.0 /"; echo "$consts"; echo "$lcf"; } > twice.nml
 row 'a variable given twice' - u simulate twice.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=-22.5e3 /"; echo "$consts"; echo "$lcf"; } > negE.nml

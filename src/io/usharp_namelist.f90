@@ -731,9 +731,10 @@ contains
       if (cut) value = value//' ...'
    end function shown_value
 
-   !> When a quote in item's text is still open at its line's end (or the text's): where the
-   !> first quote of that line's value is (the quotes pair up wrongly from there: 'a, b = 'c'
-   !> leaves the last open), else 0; a doubled quote inside is one character
+   !> When a quote in item's text is still open at its line's end (or the text's), or closes
+   !> before a character that cannot follow a text value: where the first quote of that
+   !> line's value is (the quotes pair up wrongly from there: 'a, b = 'c' leaves the last
+   !> open), else 0; a doubled quote inside is one character
    pure integer function open_quote(item) result(q)
       type(nml_item), intent(in) :: item
       character(len=1) :: quote
@@ -756,6 +757,13 @@ contains
                if (item%text(i + 1:i + 1) == quote) then
                   i = i + 2
                   cycle
+               end if
+            end if
+            ! A text value ends at a blank, comma or '/': 'a, b='c' closes a quote before c
+            if (i < len(item%text)) then
+               if (scan(item%text(i + 1:i + 1), ' ,/') == 0) then
+                  q = first_quote(q)
+                  return
                end if
             end if
             quote = ' '
