@@ -7,7 +7,7 @@ module usharp_diagnose_report
                              interval_end
    use usharp_process, only: run_process, process_result, proc_exited
    use usharp_regions, only: class_names
-   use usharp_filesys, only: join_path, make_dir, remove_file
+   use usharp_filesys, only: join_path, make_dir, remove_file, rename_file
    use usharp_overwrite, only: drawn_line
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
@@ -575,58 +575,78 @@ contains
       type(process_result) :: proc
       character(len=:), allocatable :: base, csv
       character(len=max(16, len(dir) + 16)) :: argv(3)
-      integer :: i, nt
+      character(len=*), parameter :: pngs(2) = [character(len=13) :: 'residuals.png', 'fit.png']
+      integer :: k
       logical :: gone
-      nt = size(res%names)
       ! The folder reaches gnuplot only inside quoted strings, and never as a file name that
       ! begins with < or | (which gnuplot would run as a command)
       base = dir
       if (len(base) == 0) base = '.'
       if (base(1:1) /= '/') base = './'//base
       csv = gnuplot_string(join_path(base, 'residuals.csv'))
-      allocate (gp(0))
-      gp = [character(len=512) :: gp, "set datafile separator ','", &
-            "set linetype 1 lc rgb '#c03030'", "set linetype 2 lc rgb '#3050c0'", &
-            "set linetype 3 lc rgb '#30a040'", "set linetype 4 lc rgb 'black'", 'set terminal pngcairo size 1200,'// &
-            str(300*nt)//' font ",9"', "set output "//gnuplot_string(join_path(base, 'residuals.png')), &
-            'set multiplot layout '//str(nt)//',1', 'set key off', 'set xlabel "time (s)"']
-      do i = 1, nt
-         gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
-               trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
-               "plot "//csv//" every ::1 using "//own_x(i)//":($5-$6):8 with points pt 7 ps 0.3 lc variable"]
-      end do
-      gp = [character(len=512) :: gp, 'unset multiplot', "set output "//gnuplot_string(join_path(base, 'fit.png')), &
-            'set multiplot layout '//str(nt)//',1', 'set key top right']
-      do i = 1, nt
-         gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
-               "plot "//csv//" every ::1 using "//own_x(i)//":5 with dots "// &
-               "lc rgb 'black' title 'data', '' every ::1 using "//own_x(i)//":6 with lines lc rgb 'blue' "// &
-               "title 'baseline', '' every ::1 using "//own_x(i)//":7 with lines lc rgb 'red' title 'with effect'"]
-      end do
-      gp = [character(len=512) :: gp, 'unset multiplot']
-      call write_lines(join_path(dir, 'plots.gp'), gp, error)
+      ! gnuplot draws under temporary names, renamed into place once both are whole: a run
+      ! stopped meanwhile leaves the earlier plots as plots.gp records them
+      call write_lines(join_path(dir, 'plots.gp.run'), script('.part'), error)
       plotted = .false.
-      if (allocated(error)) return
-      ! gnuplot found on the PATH by env, the script passed as an argument: no shell
-      argv(1) = '/usr/bin/env'
-      argv(2) = 'gnuplot'
-      argv(3) = join_path(base, 'plots.gp')
-      call run_process(argv, '.', '/dev/null', '/dev/null', 600.0_dp, 5.0_dp, proc)
-      plotted = proc%how == proc_exited .and. proc%code == 0
-      if (plotted) then
-         ! The script records what it drew, so that a later run knows these plots for its own
-         ! (and a user's file of their names for another's)
-         gp = [character(len=512) :: gp, drawn_line(dir, 'residuals.png'), drawn_line(dir, 'fit.png')]
-         plotted = all(len_trim(gp(size(gp) - 1:)) > 0)
-         if (plotted) call write_lines(join_path(dir, 'plots.gp'), gp, error)
-         plotted = plotted .and. .not. allocated(error)
+      if (.not. allocated(error)) then
+         ! gnuplot found on the PATH by env, the script passed as an argument: no shell
+         argv(1) = '/usr/bin/env'
+         argv(2) = 'gnuplot'
+         argv(3) = join_path(base, 'plots.gp.run')
+         call run_process(argv, '.', '/dev/null', '/dev/null', 600.0_dp, 5.0_dp, proc)
+         plotted = proc%how == proc_exited .and. proc%code == 0
       end if
+      gone = remove_file(join_path(dir, 'plots.gp.run'))
+      do k = 1, size(pngs)
+         if (plotted) then
+            call rename_file(join_path(dir, trim(pngs(k))//'.part'), join_path(dir, trim(pngs(k))), error)
+            plotted = .not. allocated(error)
+         end if
+      end do
+      gp = script('')
+      ! The script records what it drew, so that a later run knows these plots for its own
+      ! (and a user's file of their names for another's)
+      if (plotted) gp = [character(len=512) :: gp, drawn_line(dir, 'residuals.png'), drawn_line(dir, 'fit.png')]
+      if (plotted) plotted = all(len_trim(gp(size(gp) - 1:)) > 0)
+      call write_lines(join_path(dir, 'plots.gp'), gp, error)
+      plotted = plotted .and. .not. allocated(error)
       if (.not. plotted) then
-         ! Half-drawn plots are not left behind
-         gone = remove_file(join_path(dir, 'residuals.png'))
-         gone = remove_file(join_path(dir, 'fit.png'))
+         ! Neither half-drawn plots nor an earlier run's are left behind
+         do k = 1, size(pngs)
+            gone = remove_file(join_path(dir, trim(pngs(k))//'.part'))
+            gone = remove_file(join_path(dir, trim(pngs(k))))
+         end do
       end if
    contains
+      !> The gnuplot script, its plots named with suffix after .png
+      function script(suffix) result(gp)
+         character(len=*), intent(in) :: suffix
+         character(len=512), allocatable :: gp(:)
+         integer :: i, nt
+         nt = size(res%names)
+         allocate (gp(0))
+         gp = [character(len=512) :: gp, "set datafile separator ','", &
+               "set linetype 1 lc rgb '#c03030'", "set linetype 2 lc rgb '#3050c0'", &
+               "set linetype 3 lc rgb '#30a040'", "set linetype 4 lc rgb 'black'", 'set terminal pngcairo size 1200,'// &
+               str(300*nt)//' font ",9"', "set output "//gnuplot_string(join_path(base, 'residuals.png'//suffix)), &
+               'set multiplot layout '//str(nt)//',1', 'set key off', 'set xlabel "time (s)"']
+         do i = 1, nt
+            gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
+                  trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
+                  "plot "//csv//" every ::1 using "//own_x(i)//":($5-$6):8 with points pt 7 ps 0.3 lc variable"]
+         end do
+         gp = [character(len=512) :: gp, 'unset multiplot', "set output "// &
+               gnuplot_string(join_path(base, 'fit.png'//suffix)), 'set multiplot layout '//str(nt)//',1', &
+               'set key top right']
+         do i = 1, nt
+            gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
+                  "plot "//csv//" every ::1 using "//own_x(i)//":5 with dots "// &
+                  "lc rgb 'black' title 'data', '' every ::1 using "//own_x(i)//":6 with lines lc rgb 'blue' "// &
+                  "title 'baseline', '' every ::1 using "//own_x(i)//":7 with lines lc rgb 'red' title 'with effect'"]
+         end do
+         gp = [character(len=512) :: gp, 'unset multiplot']
+      end function script
+
       !> Time of test i's points only (other tests' undefined): each panel spans its own test
       function own_x(i) result(text)
          integer, intent(in) :: i

@@ -378,6 +378,9 @@ contains
       integer :: owner(size(self%prob%targets))
       yes = .false.
       if (nh == 0 .or. size(self%prob%targets) < 2) return
+      ! Not with an external backend: a share would run the FE jobs of tests that one rank
+      ! skips after an earlier test failed, and keep their failed work folders unnamed
+      if (any(self%prob%cfg%tests%ext%enabled)) return
       call ensure_costs(self)
       w = min(1 + nh, size(self%prob%targets))
       call test_shares(self%test_cost, w, owner, load)

@@ -108,6 +108,7 @@ contains
       close (unit)
       if (ios /= 0) return
       do k = 1, size(marks)
+         if (marks(k)(1:min(1, len(marks(k)))) == '@') cycle
          if (begins_like(line, trim(marks(k)))) then
             yes = .true.
             return
