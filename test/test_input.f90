@@ -274,7 +274,18 @@ contains
       call expect_config_error(error, 'overflow.nml', [character(len=80) :: &
          "&fit max_evals = 99999999999 /", "&test name='lcf', history='thesis_lcf' /"], &
          "overflow.nml:3:6: &fit: max_evals = 99999999999 is not a value max_evals can take "// &
-         "(too large for a whole number, at most 2147483647)")
+         "(beyond the range of a whole number, -2147483648 to 2147483647)")
+      if (allocated(error)) return
+      ! A number beyond the largest double, which the read takes as Infinity
+      call expect_config_error(error, 'infinite.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1e400 /"], &
+         "infinite.nml:3:50: &test: dt_out = 1e400 is not a number usharp can use")
+      if (allocated(error)) return
+      ! A stray word after a value is placed itself, not blamed on the variable before it
+      call expect_config_error(error, 'stray.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf',", "  dt_out = 1.0 foo /"], &
+         "stray.nml:4:16: &test #1 'lcf': foo is neither a value of dt_out nor a variable with "// &
+         "its '='; write each variable as name = value")
       if (allocated(error)) return
       call expect_config_error(error, 'repeat.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 2*1.0 /"], &

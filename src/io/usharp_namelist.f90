@@ -4,6 +4,7 @@
 !> missing), a group not closed by '/', an unknown group, a second copy of a group that a file
 !> holds once. Shared by the readers of the groups (usharp_input_*).
 module usharp_namelist
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower, str
@@ -502,7 +503,7 @@ contains
                   if (len(word) > 0) then
                      if (word(1:1) == '+' .or. word(1:1) == '-') word = word(2:)
                   end if
-                  if (word == 'nan' .or. word == 'inf' .or. word == 'infinity') then
+                  if (word == 'nan' .or. word == 'inf' .or. word == 'infinity' .or. overflows(word)) then
                      call fatal_error(error, place(file, items(m)%at(i))//': '//group_label(file, k)// &
                         ': '//items(m)%name//' = '//text(i:j)//' is not a number usharp can use')
                      return
@@ -512,6 +513,17 @@ contains
             end do
          end associate
       end do
+   contains
+      !> Whether word reads as a number beyond the largest double (1e400 reads as Infinity)
+      pure logical function overflows(word) result(yes)
+         character(len=*), intent(in) :: word
+         real(dp) :: x
+         integer :: ios
+         yes = .false.
+         if (verify(word, '0123456789.edqED+-') /= 0 .or. scan(word, '0123456789') == 0) return
+         read (word, *, iostat=ios) x
+         if (ios == 0) yes = .not. ieee_is_finite(x)
+      end function overflows
    end subroutine check_values
 
    !> The text value of variable (a quoted string) in the first group of that name, '' when
@@ -664,6 +676,20 @@ contains
          ! The read's words for a name it does not know (its words for a value it cannot read
          ! are often the same, naming the value: 'dt_out = abc' gives 'name abc')
          unknown = 'cannot match namelist object name '//lower(items(m)%name)
+         ! A word the read takes for a name, after the value: a stray word, or a name whose
+         ! '=' is missing (not the value itself, which the read names so too)
+         word = after(why, 'cannot match namelist object name ')
+         if (len(word) > 0 .and. lower(trim(why)) /= unknown) then
+            q = word_at(items(m)%text, word)
+            if (q > 0) then
+               if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
+                  call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                     word//" is neither a value of "//items(m)%name//" nor a variable with its '='; "// &
+                     'write each variable as name = value')
+                  return
+               end if
+            end if
+         end if
          if (lower(trim(why)) == unknown) then
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': no variable '// &
                items(m)%name//' in this group (see the input reference)')
@@ -673,7 +699,7 @@ contains
          else
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '//items(m)%name// &
                ' = '//value//' is not a value '//items(m)%name//' can take ('// &
-               plain_reason(trim(why), items(m)%name)//')')
+               plain_reason(trim(why), bare(items(m)%name))//')')
          end if
          return
       end do
@@ -683,6 +709,14 @@ contains
       if (k > 0) where = file%path//':'//str(file%groups(k)%line)
       word = after(msg, 'equal sign must follow namelist object name ')
       if (len(word) > 0) then
+         ! The name's own place where an assignment holds it
+         do m = 1, size(items)
+            q = word_at(items(m)%text, word)
+            if (q > 0) then
+               where = place(file, items(m)%at(q))
+               exit
+            end if
+         end do
          call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
             'write each variable as name = value')
       else
@@ -690,6 +724,14 @@ contains
             ' (iostat '//str(ios)//')')
       end if
    contains
+      !> A variable's name without its subscript
+      pure function bare(name) result(text)
+         character(len=*), intent(in) :: name
+         character(len=:), allocatable :: text
+         text = name
+         if (index(name, '(') > 1) text = name(:index(name, '(') - 1)
+      end function bare
+
       !> The text of message after phrase (compared in lower case), its first word; '' when
       !> the message does not hold the phrase
       pure function after(message, phrase) result(rest)
@@ -817,7 +859,19 @@ contains
       character(len=:), allocatable :: w
       w = lower(why)
       if (index(w, 'integer overflow') > 0) then
-         text = 'too large for a whole number, at most 2147483647'
+         text = 'beyond the range of a whole number, -2147483648 to 2147483647'
+      else if (index(w, 'repeat count overflow') > 0) then
+         text = 'a repeat count too large'
+      else if (index(w, 'zero repeat count') > 0) then
+         text = 'a repeat count of 0'
+      else if (index(w, 'misplaced = sign') > 0) then
+         text = "an '=' where a value belongs"
+      else if (index(w, 'qualifier for a scalar') > 0) then
+         text = variable//' takes no index'
+      else if (index(w, 'out of range') > 0) then
+         text = 'an index beyond the values '//variable//' holds'
+      else if (index(w, 'bad data for namelist object') > 0) then
+         text = 'a value of another type than '//variable//' holds'
       else if (index(w, 'repeat count too large') > 0) then
          text = 'more values than '//variable//' takes'
       else if (index(w, 'bad integer') > 0) then
