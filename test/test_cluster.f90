@@ -34,7 +34,8 @@ contains
          new_unittest('diagnose-resume-refused-after-input-changed', test_diagnose_changed), &
          new_unittest('mpi-diagnose-2-ranks-stopped-resume-on-1-rank', test_mpi_diagnose_resume), &
          new_unittest('mpi-unequal-starts-dealt-same-on-1-and-2-ranks', test_mpi_unequal_starts), &
-         new_unittest('mpi-one-start-lm-helped-same-on-1-and-2-ranks', test_mpi_helped)]
+         new_unittest('mpi-one-start-lm-helped-same-on-1-and-2-ranks', test_mpi_helped), &
+         new_unittest('mpi-external-command-not-told-the-job', test_mpi_external_env)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -527,4 +528,37 @@ contains
       if (allocated(error)) return
       call check_same_diagnosis(error, a, b)
    end subroutine test_mpi_diagnose_resume
+   !> An external command started from a rank is not given the variables by which mpirun
+   !> places a process in its job: a usharp started there (the ANSYS stand-in) would take them
+   !> for its own, fail to join, and leave the ranks waiting for it to the end
+   subroutine test_mpi_external_env(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, mpirun, deck, dir, envfile
+      character(len=4096) :: cwd
+      integer :: stat
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call require_mpirun(mpirun, error)
+      if (allocated(error)) return
+      call get_environment_variable('PWD', cwd)
+      dir = trim(cwd)//'/'//scratch_dir//'/mpi-ext-env'
+      envfile = dir//'.env'
+      call execute_command_line('rm -rf '//dir//' '//envfile)
+      deck = write_text('mpi-ext-env.nml', [character(len=600) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', max_evals=1, identify=.false. /", &
+         "&test name='lcf', history='thesis_lcf', data_file='"//trim(cwd)//"/data/thesis/lcf.sim.txt', "// &
+         "dt_out=4.0, backend='external', command='env > "//envfile//"; exit 1' /"])
+      ! (the start fails as the command does: exit 3, in a time limit that a hang would pass)
+      call execute_command_line('timeout 120 env '//mpirun//exe//' run -q -o '//dir//' '//deck// &
+                                ' > /dev/null 2>&1', exitstat=stat)
+      call check(error, stat, 3, 'the run ends as its start fails (124: it hung)')
+      if (allocated(error)) return
+      call check(error, index(read_text(envfile), 'PATH=') > 0, 'the command ran with an environment')
+      if (allocated(error)) return
+      call execute_command_line("grep -q -E '^(OMPI|PMIX|PMI|PRTE)_' "//envfile, exitstat=stat)
+      call check(error, stat /= 0, 'the command was given mpirun''s variables')
+   end subroutine test_mpi_external_env
+
 end module test_cluster

@@ -153,6 +153,8 @@ contains
       logical, intent(in), optional :: stoppable
       type(c_string), allocatable, target :: args(:)
       type(c_ptr), allocatable :: ptrs(:)
+      type(c_ptr), allocatable, target :: env_kept(:)
+      type(c_ptr) :: envp
       type(spawn_attr) :: attr
       type(spawn_actions) :: fa
       integer(c_int) :: pid, rc, status, r
@@ -179,7 +181,8 @@ contains
                              int(o'644', c_int))
       rc = c_actions_addopen(fa, 2_c_int, to_c(err), ior(ior(o_wronly, o_creat), o_trunc), &
                              int(o'644', c_int))
-      rc = c_posix_spawn(pid, to_c(trim(argv(1))), fa, attr, ptrs, environment())
+      call environment(env_kept, envp)
+      rc = c_posix_spawn(pid, to_c(trim(argv(1))), fa, attr, ptrs, envp)
       r = c_actions_destroy(fa)
       r = c_attr_destroy(attr)
       if (rc /= 0) then
@@ -240,18 +243,67 @@ contains
    !> FE code needs its PATH, licence and scratch variables. A Fortran variable bound to the
    !> name environ would be a definition of its own, a null that shadows the C library's, and
    !> every program started would get an empty environment; so the C library's is looked up.
-   function environment() result(envp)
-      type(c_ptr) :: envp
+   !> Left out: the variables by which an MPI launcher tells a process its place in the job
+   !> (launcher_variable). A program started from a rank would take them for its own: a usharp
+   !> there tried to join the job, failed, and left the ranks waiting for it to the end.
+   !> kept: the entries passed on (pointers into environ), null-terminated; envp points at them
+   subroutine environment(kept, envp)
+      type(c_ptr), allocatable, target, intent(out) :: kept(:)
+      type(c_ptr), intent(out) :: envp
       type(c_ptr), pointer :: environ
+      type(c_ptr), pointer :: entries(:)
       type(c_ptr) :: address
+      character(kind=c_char), pointer :: chars(:)
+      integer :: n, k, m
       envp = c_null_ptr
+      allocate (kept(1))
+      kept(1) = c_null_ptr
       address = c_dlsym(c_null_ptr, 'environ'//c_null_char)
       ! (the C library always defines it; were it not found, the program would start with an
       ! empty environment, as with envp null)
       if (.not. c_associated(address)) return
       call c_f_pointer(address, environ)
-      envp = environ
-   end function environment
+      if (.not. c_associated(environ)) return
+      ! The entries up to the null that ends them
+      n = 0
+      do
+         call c_f_pointer(environ, entries, [n + 1])
+         if (.not. c_associated(entries(n + 1))) exit
+         n = n + 1
+      end do
+      deallocate (kept)
+      allocate (kept(n + 1))
+      m = 0
+      do k = 1, n
+         ! The name: at most 32 characters are needed to know it
+         call c_f_pointer(entries(k), chars, [32])
+         if (launcher_variable(chars)) cycle
+         m = m + 1
+         kept(m) = entries(k)
+      end do
+      kept(m + 1) = c_null_ptr
+      envp = c_loc(kept(1))
+   end subroutine environment
+
+   !> Whether an environment entry (NAME=value, null-terminated; only its first characters
+   !> read) is one an MPI launcher sets to place a process in its job: Open MPI's (OMPI_,
+   !> OPAL_, PRTE_), PMI's and PMIx's (SLURM's srun, Hydra), MPICH's local rank counts
+   pure logical function launcher_variable(chars) result(yes)
+      character(kind=c_char), intent(in) :: chars(:)
+      character(len=*), parameter :: prefixes(8) = [character(len=16) :: 'OMPI_', 'OPAL_', &
+         'PRTE_', 'PMIX_', 'PMI_', 'HYDRA_', 'MPI_LOCALNRANKS=', 'MPI_LOCALRANKID=']
+      character(len=16) :: head
+      integer :: k
+      head = ''
+      do k = 1, min(16, size(chars))
+         if (chars(k) == c_null_char) exit
+         head(k:k) = chars(k)
+      end do
+      yes = .false.
+      do k = 1, size(prefixes)
+         if (head(:len_trim(prefixes(k))) == trim(prefixes(k))) yes = .true.
+      end do
+   end function launcher_variable
 
    pure function to_c(text) result(chars)
       character(len=*), intent(in) :: text
