@@ -719,6 +719,10 @@ contains
          end do
          call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
             'write each variable as name = value')
+      else if (len(after(msg, 'cannot match namelist object name ')) > 0) then
+         ! A word before the group's first assignment
+         call fatal_error(error, where//': &'//label//': '//after(msg, 'cannot match namelist object name ')// &
+            ' is no variable of this group with its value; write each variable as name = value')
       else
          call fatal_error(error, where//': &'//label//': '//plain_reason(trim(msg), '')// &
             ' (iostat '//str(ios)//')')
