@@ -870,11 +870,8 @@ contains
                    ", dt_out=4.0")
       full = scratch_dir//'/lmresume-full'
       part = scratch_dir//'/lmresume-part'
-      call run_command(input, full, '', .false., summary, e, force=.true.)
-      if (allocated(e)) then
-         call test_failed(error, 'uninterrupted run: '//e%message)
-         return
-      end if
+      call uninterrupted_run(input, full, summary, error)
+      if (allocated(error)) return
       call counts(summary(3), ntotal, nrep, nsim)
       call check(error, ntotal > 40 .and. nsim == ntotal, 'uninterrupted run: '//trim(summary(3)))
       if (allocated(error)) return
@@ -959,11 +956,8 @@ contains
                    ", dt_out=4.0")
       full = scratch_dir//'/damaged-cache-full'
       part = scratch_dir//'/damaged-cache-part'
-      call run_command(input, full, '', .false., summary, e, force=.true.)
-      if (allocated(e)) then
-         call test_failed(error, 'uninterrupted run: '//e%message)
-         return
-      end if
+      call uninterrupted_run(input, full, summary, error)
+      if (allocated(error)) return
       call check(error, line_count(full//'/fit.journal') > 12, 'too few evaluations to resume')
       if (allocated(error)) return
       call copy_part()
@@ -1041,11 +1035,8 @@ contains
       full = scratch_dir//'/extresume-full'
       part = scratch_dir//'/extresume-part'
       stat = shell('rm -f '//count)
-      call run_command(input, full, '', .false., summary, e, force=.true.)
-      if (allocated(e)) then
-         call test_failed(error, 'uninterrupted run: '//e%message)
-         return
-      end if
+      call uninterrupted_run(input, full, summary, error)
+      if (allocated(error)) return
       call counts(summary(3), ntotal, nrep, nsim)
       nruns = line_count(count)
       call check(error, ntotal > 10 .and. nruns == ntotal + 1, 'uninterrupted run: '//str(nruns)// &
@@ -1142,5 +1133,16 @@ contains
       stat = shell(exe//' run -q --resume '//input//' -o '//dir//' > /dev/null 2>&1')
       call check(error, stat, 0, 'resumed run')
    end subroutine test_sigterm
+
+   !> The fit of input into folder full (--force), the reference a resumed run is held to;
+   !> a failed test when it fails
+   subroutine uninterrupted_run(input, full, summary, error)
+      character(len=*), intent(in) :: input, full
+      character(len=report_line_len), allocatable, intent(out) :: summary(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      call run_command(input, full, '', .false., summary, e, force=.true.)
+      if (allocated(e)) call test_failed(error, 'uninterrupted run: '//e%message)
+   end subroutine uninterrupted_run
 
 end module test_safety

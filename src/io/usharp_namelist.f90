@@ -856,41 +856,31 @@ contains
    end function word_at
 
    !> The namelist read's reason in plain words, for a value of variable (gfortran's words
-   !> where it has none better)
+   !> where it has none better): the first of reasons whose phrase the words hold, '@'
+   !> standing for the variable
    pure function plain_reason(why, variable) result(text)
       character(len=*), intent(in) :: why, variable
       character(len=:), allocatable :: text
-      character(len=:), allocatable :: w
-      w = lower(why)
-      if (index(w, 'integer overflow') > 0) then
-         text = 'beyond the range of a whole number, -2147483648 to 2147483647'
-      else if (index(w, 'repeat count overflow') > 0) then
-         text = 'a repeat count too large'
-      else if (index(w, 'zero repeat count') > 0) then
-         text = 'a repeat count of 0'
-      else if (index(w, 'misplaced = sign') > 0) then
-         text = "an '=' where a value belongs"
-      else if (index(w, 'qualifier for a scalar') > 0) then
-         text = variable//' takes no index'
-      else if (index(w, 'out of range') > 0) then
-         text = 'an index beyond the values '//variable//' holds'
-      else if (index(w, 'bad data for namelist object') > 0) then
-         text = 'a value of another type than '//variable//' holds'
-      else if (index(w, 'repeat count too large') > 0) then
-         text = 'more values than '//variable//' takes'
-      else if (index(w, 'bad integer') > 0) then
-         text = 'not a whole number'
-      else if (index(w, 'bad real') > 0 .or. index(w, 'bad complex') > 0) then
-         text = 'not a number'
-      else if (index(w, 'bad logical') > 0) then
-         text = 'not .true. or .false.'
-      else if (index(w, 'invalid string input') > 0) then
-         text = "a text value is written in quotes: name = 'text'"
-      else if (index(w, 'end of file') > 0) then
-         text = "the group ends before its values do (a quote not closed, or a '/' missing)"
-      else
-         text = why
-      end if
+      character(len=*), parameter :: phrases(14) = [character(len=28) :: 'integer overflow', &
+         'repeat count overflow', 'zero repeat count', 'misplaced = sign', 'qualifier for a scalar', &
+         'out of range', 'bad data for namelist object', 'repeat count too large', 'bad integer', &
+         'bad real', 'bad complex', 'bad logical', 'invalid string input', 'end of file']
+      character(len=*), parameter :: reasons(14) = [character(len=76) :: &
+         'beyond the range of a whole number, -2147483648 to 2147483647', 'a repeat count too large', &
+         'a repeat count of 0', "an '=' where a value belongs", '@ takes no index', &
+         'an index beyond the values @ holds', 'a value of another type than @ holds', &
+         'more values than @ takes', 'not a whole number', 'not a number', 'not a number', &
+         'not .true. or .false.', "a text value is written in quotes: name = 'text'", &
+         "the group ends before its values do (a quote not closed, or a '/' missing)"]
+      integer :: k, at
+      text = why
+      do k = 1, size(phrases)
+         if (index(lower(why), trim(phrases(k))) == 0) cycle
+         text = trim(reasons(k))
+         at = index(text, '@')
+         if (at > 0) text = text(:at - 1)//variable//text(at + 1:)
+         return
+      end do
    end function plain_reason
 
    !> A value that fills its whole buffer may have been cut: an error naming the variable
