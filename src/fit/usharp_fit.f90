@@ -292,7 +292,9 @@ contains
          ! (a single trial point, or a difference Jacobian of few columns)
          ! (a single point asks for helpers only once every start is dealt: ranks out of
          ! starts are rare before, and each claim is a round trip to rank 0)
-         if (n > 1 .or. deal_done(self)) then
+         if (.not. shares_possible(self)) then
+            helpers = claim_helpers(self, n)
+         else if (n > 1 .or. deal_done(self)) then
             helpers = claim_helpers(self, max(n, size(self%prob%targets)))
          else
             helpers = claim_helpers(self, 1)
@@ -377,15 +379,20 @@ contains
       real(dp) :: load(min(1 + nh, size(self%prob%targets)))
       integer :: owner(size(self%prob%targets))
       yes = .false.
-      if (nh == 0 .or. size(self%prob%targets) < 2) return
-      ! Not with an external backend: a share would run the FE jobs of tests that one rank
-      ! skips after an earlier test failed, and keep their failed work folders unnamed
-      if (any(self%prob%cfg%tests%ext%enabled)) return
+      if (nh == 0 .or. .not. shares_possible(self)) return
       call ensure_costs(self)
       w = min(1 + nh, size(self%prob%targets))
       call test_shares(self%test_cost, w, owner, load)
       yes = sum(load)/maxval(load) > real(n, dp)/real((n + nh)/(1 + nh), dp)
    end function shares_win
+
+   !> Whether a batch may be shared by tests: more than one, and no external backend (a
+   !> share would run the FE jobs of tests that one rank skips after an earlier test failed,
+   !> and keep their failed work folders unnamed)
+   pure logical function shares_possible(self) result(yes)
+      class(fit_objective), intent(in) :: self
+      yes = size(self%prob%targets) > 1 .and. .not. any(self%prob%cfg%tests%ext%enabled)
+   end function shares_possible
 
    !> Each test's cost before any is measured: its number of compared points
    subroutine ensure_costs(self)
