@@ -35,7 +35,8 @@ contains
          new_unittest('mpi-diagnose-2-ranks-stopped-resume-on-1-rank', test_mpi_diagnose_resume), &
          new_unittest('mpi-unequal-starts-dealt-same-on-1-and-2-ranks', test_mpi_unequal_starts), &
          new_unittest('mpi-one-start-lm-helped-same-on-1-and-2-ranks', test_mpi_helped), &
-         new_unittest('mpi-external-command-not-told-the-job', test_mpi_external_env)]
+         new_unittest('mpi-external-command-not-told-the-job', test_mpi_external_env), &
+         new_unittest('usr1-outside-a-fit-ends-as-term', test_usr1_as_term)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -560,5 +561,30 @@ contains
       call execute_command_line("grep -q -E '^(OMPI|PMIX|PMI|PRTE)_' "//envfile, exitstat=stat)
       call check(error, stat /= 0, 'the command was given mpirun''s variables')
    end subroutine test_mpi_external_env
+
+   !> A job script stops ranks with SIGUSR1 (see usharp-job.sh). Outside a fit, which catches
+   !> it, the program ends as SIGTERM ends it (exit 143, not 138): here a long simulation,
+   !> signalled once it runs, writes no result
+   subroutine test_usr1_as_term(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, deck, dir
+      integer :: stat
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      dir = scratch_dir//'/usr1-simulate'
+      call execute_command_line('rm -rf '//dir//' '//dir//'.rc')
+      ! 200000 cycles: about 20 s in a release build, far longer than the wait below
+      deck = write_text('usr1-simulate.nml', [character(len=200) :: &
+         '&model temperature=866.15, tm=1800.0, youngs=22.5e3 /', &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /', &
+         "&test name='long', history='cyclic', dt_out=1000.0, strain_range=0.01, "// &
+         'strain_rate=1e-3, cycles=200000 /'])
+      call execute_command_line('bash -c '''//exe//' simulate -q -o '//dir//' '//deck// &
+         ' & p=$!; sleep 1; kill -0 $p && kill -USR1 $p; wait $p; echo $? > '//dir//'.rc''', exitstat=stat)
+      call check(error, number_in(dir//'.rc'), 143, 'exit status after SIGUSR1 (143: 128 + SIGTERM)')
+      if (allocated(error)) return
+      call execute_command_line('test -e '//dir//'/long.sim.txt', exitstat=stat)
+      call check(error, stat /= 0, 'a stopped simulation wrote its result')
+   end subroutine test_usr1_as_term
 
 end module test_cluster

@@ -15,6 +15,7 @@ module usharp_cli
    use usharp_cmd_design, only: design_command
    use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
    use usharp_mpi, only: is_root
+   use usharp_signal, only: release_stop_signals
    use usharp_strings, only: report_line_len
    implicit none
    private
@@ -42,6 +43,9 @@ contains
       character(len=report_line_len), allocatable :: summary(:)
       integer :: k
 
+      ! A job script's SIGUSR1 (its stop through mpirun or srun) ends any command as SIGTERM
+      ! would; a fit catches both and stops cleanly
+      call release_stop_signals()
       ! Under MPI, commands that spread no work over ranks run on rank 0 alone
       if (.not. is_root() .and. .not. (cmd%name == 'run' .or. cmd%name == 'design' .or. &
                                        cmd%name == 'diagnose')) then

@@ -28,6 +28,11 @@ module usharp_signal
          type(c_funptr), value, intent(in) :: handler
          type(c_funptr) :: previous
       end function c_signal
+      function c_raise(signum) bind(C, name='raise') result(rc)
+         import :: c_int
+         integer(c_int), value, intent(in) :: signum
+         integer(c_int) :: rc
+      end function c_raise
    end interface
 
 contains
@@ -40,18 +45,31 @@ contains
       previous = c_signal(sigusr1, c_funloc(on_signal))
    end subroutine catch_stop_signals
 
-   !> SIGTERM, SIGINT and SIGUSR1 end the process again (SIG_DFL), e.g. once a fit is over
+   !> SIGTERM and SIGINT end the process again (SIG_DFL), e.g. once a fit is over, and SIGUSR1
+   !> ends it as SIGTERM does (exit 128 + 15): a job script's stop that reaches the program
+   !> outside a fit (reading its input, the identifiability report after it) ends it as the
+   !> same stop within a fit does. Called once at the start of a command too.
    subroutine release_stop_signals()
       type(c_funptr) :: previous
       previous = c_signal(sigterm, c_null_funptr)
       previous = c_signal(sigint, c_null_funptr)
-      previous = c_signal(sigusr1, c_null_funptr)
+      previous = c_signal(sigusr1, c_funloc(end_as_term))
    end subroutine release_stop_signals
 
    !> The stop signal received since catch_stop_signals (0: none)
    integer function stop_signal()
       stop_signal = int(received)
    end function stop_signal
+
+   !> SIGUSR1 outside a fit: SIGTERM raised with its default action (signal and raise are
+   !> async-signal-safe)
+   subroutine end_as_term(signum) bind(C)
+      integer(c_int), value, intent(in) :: signum
+      type(c_funptr) :: previous
+      integer(c_int) :: rc
+      previous = c_signal(sigterm, c_null_funptr)
+      rc = c_raise(sigterm)
+   end subroutine end_as_term
 
    subroutine on_signal(signum) bind(C)
       integer(c_int), value, intent(in) :: signum
