@@ -97,6 +97,14 @@ row 'a whole number too large' - u simulate huge.nml
 row 'quotes that do not pair up on a line' - u simulate quotes.nml
 { echo "&model name='miller', units='ksi', temperature=866.15"; echo "  tm 1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > noeq.nml
 row "a name without '=' after a value" - u simulate noeq.nml
+{ echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3"; echo "  = 0.3 /"; echo "$consts"; echo "$lcf"; } > noname.nml
+row "an '=' without a name before it" - u simulate noname.nml
+{ echo "&model name='miller, units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > runon.nml
+row 'a quote left open before the next group' - u simulate runon.nml
+{ echo "&model"; echo "  miller units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > leading.nml
+row "a word before a group's first assignment" - u simulate leading.nml
+{ printf '\xef\xbb\xbf'; echo "$model"; echo "$consts"; echo "$lcf"; } > bom.nml
+row 'a UTF-8 byte-order mark (read as blanks)' bom/lcf.sim.txt u simulate -o bom bom.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3, tm=1700.0 /"; echo "$consts"; echo "$lcf"; } > twice.nml
 row 'a variable given twice' - u simulate twice.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=-22.5e3 /"; echo "$consts"; echo "$lcf"; } > negE.nml

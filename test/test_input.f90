@@ -36,6 +36,7 @@ contains
          new_unittest('strain-in-percent-refused', test_percent_strain), &
          new_unittest('variable-without-equals-placed', test_no_equals), &
          new_unittest('namelist-read-reasons-in-plain-words', test_plain_reasons), &
+         new_unittest('namelist-structure-placed', test_structure_placed), &
          new_unittest('external-backend-settings-checked', test_backend_settings), &
          new_unittest('unterminated-group', test_unterminated), &
          new_unittest('constant-not-positive', test_constant), &
@@ -535,6 +536,42 @@ contains
       end subroutine expect_exit
    end subroutine test_cli
 
+   !> What the file's scan finds before the namelist read, at its own line and column: an '='
+   !> with no name before it (not blamed on the variable before), a word before a group's
+   !> first assignment on a line of its own, a quote left open on its line and a group after
+   !> it (the quote had run on into that group, and the error named a '/' there); a UTF-8
+   !> byte-order mark and a name whose '=' is on the next line are read as they are meant
+   subroutine test_structure_placed(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: bom = achar(239)//achar(187)//achar(191)
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      call expect_config_error(error, 'equals.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1.0", "  = 0.3 /"], &
+         "equals.nml:4:3: &test: this '=' has no variable name before it (after dt_out); write each "// &
+         "variable as name = value")
+      if (allocated(error)) return
+      call expect_config_error(error, 'leading.nml', [character(len=80) :: &
+         "&test", "  lcf name='lcf', history='thesis_lcf' /"], &
+         "leading.nml:4:3: &test #1: lcf is no variable of this group with its value; write each "// &
+         "variable as name = value")
+      if (allocated(error)) return
+      call expect_config_error(error, 'runs-on.nml', [character(len=80) :: &
+         "&test name='lcf, history='thesis_lcf' /", "&test name='b', history='thesis_lcf' /"], &
+         "runs-on.nml: &test #1 is not terminated by '/' (it starts at line 3; the next group starts "// &
+         "at line 4; the quotes from 3:12 do not pair up on their line)")
+      if (allocated(error)) return
+      call read_config(write_text('next-line.nml', deck_lines([character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out", "  = 2.0 /"])), cfg, uerr)
+      call check(error, .not. allocated(uerr), 'a name with its = on the next line')
+      if (allocated(error)) return
+      call check(error, cfg%tests(1)%dt_out == 2.0_dp, 'dt_out read across the line')
+      if (allocated(error)) return
+      call read_config(write_text('bom.nml', [character(len=200) :: bom//base_model, base_constants, &
+         "&test name='lcf', history='thesis_lcf' /"]), cfg, uerr)
+      call check(error, .not. allocated(uerr), 'a byte-order mark before the first group')
+   end subroutine test_structure_placed
+
    !> A group whose '&' is missing, or any other text outside the groups, would be skipped by
    !> the namelist read (a test fewer, without a word): an error naming the line and column
    subroutine test_text_between(error)
@@ -560,7 +597,8 @@ contains
       if (allocated(error)) return
       call expect_config_error(error, 'quote.nml', [character(len=90) :: &
          "&test name='a, history='tensile', final_strain=0.002 /"], &
-         "quote.nml: &test #1 is not terminated by '/' (it starts at line 3; a quote opened on line 3 is not closed)")
+         "quote.nml: &test #1 is not terminated by '/' (it starts at line 3; the quotes from 3:12 do not pair "// &
+         "up on their line)")
    end subroutine test_text_between
 
    !> A second copy of a group the file holds once would be ignored: an error at its line

@@ -72,7 +72,7 @@ contains
       type(nml_file), intent(out) :: file
       type(error_type), allocatable, intent(out) :: error
       integer, allocatable :: counts(:), firsts(:)
-      integer :: nline, ngroup, l, a, b, col, k, open_line, quote_line
+      integer :: nline, ngroup, l, a, b, col, k, open_line, quote_at, q
       character(len=1) :: quote
       character(len=:), allocatable :: word
       type(nml_group), allocatable :: tmp(:)
@@ -84,6 +84,10 @@ contains
       end if
       call read_whole_file(path, file%text, error)
       if (allocated(error)) return
+      ! A UTF-8 byte-order mark (some editors write one) is no text: blanks keep the columns
+      if (len(file%text) >= 3) then
+         if (file%text(1:3) == achar(239)//achar(187)//achar(191)) file%text(1:3) = '   '
+      end if
       file%path = path
       file%base_dir = dirname(path)
       call line_starts(file%text, file%starts)
@@ -96,7 +100,7 @@ contains
       inside = .false.
       quote = ' '
       open_line = 0
-      quote_line = 0
+      quote_at = 0
       do l = 1, nline
          a = starts(l)
          b = starts(l + 1) - 2   ! without the newline
@@ -146,6 +150,7 @@ contains
             file%groups(ngroup)%number = counts(k)
             inside = .true.
             open_line = l
+            quote_at = 0
             col = col + 1 + len(word)
          else
             ! A line that starts a group inside a group: the group before lacks its '/'
@@ -160,10 +165,16 @@ contains
                end if
             end if
          end if
-         ! Inside a group: look for its end, '/' or &end outside quotes and comments
-         call group_end(text, col, b, quote, k)
-         if (quote /= ' ' .and. quote_line == 0) quote_line = l
-         if (quote == ' ') quote_line = 0
+         ! Inside a group: look for its end, '/' or &end outside quotes and comments. A text
+         ! value is written on one line: a quote left open ends with its line (carried on, it
+         ! would take the groups after it into this one, up to a quote of theirs)
+         call group_end(text, col, b, quote, k, q)
+         if (quote /= ' ') then
+            ! Placed at the line's first quote, from which they pair up wrongly ('a, b='c'
+            ! leaves the last open), as the read's error places them
+            if (quote_at == 0) quote_at = col - 1 + scan(text(col:b), '''"')
+            quote = ' '
+         end if
          if (k == 0) cycle
          ! The group ends on this line; what follows on it must be a comment
          col = first_nonblank(text, k + 1, b)
@@ -179,11 +190,7 @@ contains
          inside = .false.
       end do
       if (inside) then
-         if (quote /= ' ') then
-            call unterminated('; a quote opened on line '//str(quote_line)//' is not closed')
-         else
-            call unterminated('')
-         end if
+         call unterminated('')
          return
       end if
       end associate
@@ -210,11 +217,17 @@ contains
             ": text outside a namelist group, which starts with '&' and ends with '/'"//hint)
       end subroutine outside_error
 
+      !> The group begun at open_line has no end; a quote left open on one of its lines (a '/'
+      !> after it was taken as text) is named too
       subroutine unterminated(why)
          character(len=*), intent(in) :: why
+         character(len=:), allocatable :: quoted
+         quoted = ''
+         if (quote_at > 0) quoted = '; the quotes from '//place(file, quote_at, .false.)// &
+            ' do not pair up on their line'
          call fatal_error(error, path//': &'//trim(file%groups(ngroup)%name)//' #'// &
             str(file%groups(ngroup)%number)//" is not terminated by '/'"//' (it starts at line '// &
-            str(open_line)//why//')')
+            str(open_line)//why//quoted//')')
       end subroutine unterminated
    end subroutine scan_namelist_file
 
@@ -267,15 +280,17 @@ contains
       word = lower(text(a:e - 1))
    end function group_word
 
-   !> Scan text(a:b) of a group for its end, '/' or &end outside quotes and comments; quote
-   !> carries an open quote across lines. k: position of the end's last character, 0 if none.
-   pure subroutine group_end(text, a, b, quote, k)
+   !> Scan text(a:b) of a group for its end, '/' or &end outside quotes and comments; quote:
+   !> the quote open at the end (' ' if none), opened at position q. k: position of the
+   !> end's last character, 0 if none.
+   pure subroutine group_end(text, a, b, quote, k, q)
       character(len=*), intent(in) :: text
       integer, intent(in) :: a, b
       character(len=1), intent(inout) :: quote
-      integer, intent(out) :: k
+      integer, intent(out) :: k, q
       integer :: i
       k = 0
+      q = 0
       i = a
       do while (i <= b)
          if (quote /= ' ') then
@@ -284,6 +299,7 @@ contains
             select case (text(i:i))
             case ("'", '"')
                quote = text(i:i)
+               q = i
             case ('!')
                return
             case ('/')
@@ -320,6 +336,8 @@ contains
          b = file%starts(l + 1) - 2
          i = a
          if (l == file%groups(k)%line) i = index(file%text(a:max(a, b)), '&') + a + len_trim(file%groups(k)%name)
+         ! A quote ends with its line, as the scan of the file has it
+         quote = ' '
          do while (i <= b)
             c = file%text(i:i)
             if (quote /= ' ') then
@@ -490,6 +508,25 @@ contains
                   quote = text(i:i)
                   i = i + 1
                else if (scan(text(i:i), ' ,()') > 0) then
+                  i = i + 1
+               else if (text(i:i) == '=') then
+                  ! An '=' after a value, not after a name (a name on the line before its '='
+                  ! joins the value before it here): its variable's name is missing
+                  j = len_trim(text(:i - 1))
+                  if (j > 0) then
+                     if (scan(text(j:j), word_chars) > 0) then
+                        do while (j > 1)
+                           if (scan(text(j - 1:j - 1), word_chars) == 0) exit
+                           j = j - 1
+                        end do
+                     end if
+                     if (verify(text(j:j), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ)') /= 0) then
+                        call fatal_error(error, place(file, items(m)%at(i))//': '//group_label(file, k)// &
+                           ": this '=' has no variable name before it (after "//items(m)%name// &
+                           '); write each variable as name = value')
+                        return
+                     end if
+                  end if
                   i = i + 1
                else
                   ! A value: a number, a logical, or 'r*value'
@@ -720,8 +757,13 @@ contains
          call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
             'write each variable as name = value')
       else if (len(after(msg, 'cannot match namelist object name ')) > 0) then
-         ! A word before the group's first assignment
-         call fatal_error(error, where//': &'//label//': '//after(msg, 'cannot match namelist object name ')// &
+         ! A word before the group's first assignment, placed where it stands
+         word = after(msg, 'cannot match namelist object name ')
+         if (k > 0) then
+            q = leading_word(file, k, word)
+            if (q > 0) where = place(file, q)
+         end if
+         call fatal_error(error, where//': &'//label//': '//word// &
             ' is no variable of this group with its value; write each variable as name = value')
       else
          call fatal_error(error, where//': &'//label//': '//plain_reason(trim(msg), '')// &
@@ -830,6 +872,33 @@ contains
          f = f - 1 + scan(item%text(f:p), '''"')
       end function first_quote
    end function open_quote
+
+   !> Where word (any case) stands alone in group k before its first assignment (outside
+   !> comments), 0 if it does not
+   pure integer function leading_word(file, k, word) result(q)
+      type(nml_file), intent(in) :: file
+      integer, intent(in) :: k
+      character(len=*), intent(in) :: word
+      type(nml_item), allocatable :: items(:)
+      integer :: l, a, b, last, i
+      call group_items(file, k, items)
+      last = file%starts(file%groups(k)%last + 1) - 1
+      if (size(items) > 0) last = items(1)%at(1) - 1
+      q = 0
+      do l = file%groups(k)%line, file%groups(k)%last
+         a = file%starts(l)
+         if (l == file%groups(k)%line) a = index(file%text(a:), '&') + a + len_trim(file%groups(k)%name)
+         if (a > last) exit
+         b = min(file%starts(l + 1) - 2, last)
+         if (b < a) cycle
+         if (index(file%text(a:b), '!') > 0) b = a + index(file%text(a:b), '!') - 2
+         i = word_at('='//file%text(a:b), word)
+         if (i > 0) then
+            q = a + i - 2
+            return
+         end if
+      end do
+   end function leading_word
 
    !> Where word (any case) stands alone in text after its first '=', 0 if nowhere
    pure integer function word_at(text, word) result(q)
