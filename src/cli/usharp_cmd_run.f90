@@ -135,9 +135,13 @@ contains
             str(out%nsimulated)//' simulated), iterations '// &
             str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
             real_str(out%seconds, 'f10.2')//' s']
-         if (size(out%helped) > 1) summary = [character(len=report_line_len) :: summary, &
-            '  ranks '//str(size(out%helped))//'; simulated for another rank''s search: '// &
-            join(out%helped, ', ')]
+         if (size(out%helped) > 1) then
+            ! Points simulated whole, and points of which a share of the tests (the rest on
+            ! the rank whose search it is)
+            summary = [character(len=report_line_len) :: summary, &
+               '  ranks '//str(size(out%helped))//'; simulated for another rank''s search: '// &
+               join(out%helped, ', ')//' points'//shares_text(out%shared)]
+         end if
          do i = 1, size(cfg%tests)
             summary = [character(len=report_line_len) :: summary, '  test '//cfg%tests(i)%name//': '// &
                real_str(out%per_test(i), 'es12.5')//merged_note(prob%targets(i)%exp%nmerged)]
@@ -174,6 +178,14 @@ contains
          if (allocated(report_error)) call fatal_error(error, 'the fit is done and written, but its '// &
             'identifiability report failed: '//report_error%message, stat_report)
       end subroutine locked_run
+
+      !> '; a share of the tests of n1, n2 points' where any rank simulated such shares
+      pure function shares_text(shared) result(text)
+         integer, intent(in) :: shared(:)
+         character(len=:), allocatable :: text
+         text = ''
+         if (any(shared > 0)) text = '; a share of the tests of '//join(shared, ', ')//' points'
+      end function shares_text
    end subroutine run_command
 
    !> What a summary says of a test whose data repeat a time (a logger's two rows at one

@@ -100,6 +100,7 @@ module usharp_fit
       !> search's batches (see shared_batch)
       type(task_deal), pointer :: deal => null()
       integer :: nhelped = 0  !< points this rank simulated for another rank's search
+      integer :: nshared = 0  !< points of whose tests this rank simulated a share (shared_tests)
       !> Points sent ahead to helpers (see fit_prefetch) whose results are not taken yet,
       !> and the helpers that have them
       real(dp), allocatable :: ahead(:, :)
@@ -126,8 +127,9 @@ module usharp_fit
       integer :: nfail = 0, ninvalid = 0, nreplayed = 0
       integer :: nsimulated = 0  !< evaluations and sensitivity Jacobians simulated in this run
       integer :: nstarts = 1  !< local searches run (multi-start)
-      !> On each MPI rank, the points it simulated for another rank's search (see shared_batch)
-      integer, allocatable :: helped(:)
+      !> On each MPI rank, the points it simulated for another rank's search (see shared_batch),
+      !> and those of whose tests it simulated a share (see shared_tests)
+      integer, allocatable :: helped(:), shared(:)
       real(dp) :: seconds = 0.0_dp
    end type fit_outcome
 
@@ -526,11 +528,11 @@ contains
 
    !> A rank out of starts: simulate the blocks of points the ranks still at work send it
    !> (see shared_batch) until every rank is out of starts
-   subroutine help_others(prob, deal, nhelped)
+   subroutine help_others(prob, deal, nhelped, nshared)
       type(fit_problem), intent(in) :: prob
       type(task_deal), intent(inout) :: deal
-      !> points simulated, added to
-      integer, intent(inout) :: nhelped
+      !> points simulated whole, and points of which a share of the tests was simulated, added to
+      integer, intent(inout) :: nhelped, nshared
       integer, allocatable :: ints(:)
       real(dp), allocatable :: reals(:), rs(:, :), fs(:), per_test(:, :)
       character(len=:), allocatable :: tag, text
@@ -542,7 +544,11 @@ contains
       nx = size(prob%idx)
       do while (deal%await(owner, ints, reals, tag))
          n = ints(3)
-         nhelped = nhelped + n
+         if (ints(1) == 2) then
+            nshared = nshared + n
+         else
+            nhelped = nhelped + n
+         end if
          nt = size(prob%targets)
          allocate (rs(prob%nres(), n), fs(n), per_test(nt, n), status(n), messages(n))
          if (ints(1) == 2) then
@@ -813,6 +819,7 @@ contains
          call helped_search(obj, outcome%opt, outcome%nstarts, error)
       end if
       outcome%helped = counts_of_ranks(obj%nhelped)
+      outcome%shared = counts_of_ranks(obj%nshared)
       if (.not. is_root()) then
          call release_stop_signals()
          return
@@ -1012,7 +1019,7 @@ contains
          call search(obj, opt, nstarts, error)
          call end_helped(obj)
       end if
-      call help_others(obj%prob, deal, obj%nhelped)
+      call help_others(obj%prob, deal, obj%nhelped, obj%nshared)
       call deal%close()
    end subroutine helped_search
 
@@ -1120,7 +1127,7 @@ contains
             if (allocated(e)) exit
          end do
          ! Out of starts: help the ranks still at work with their batches until all are out
-         call help_others(obj%prob, deal, obj%nhelped)
+         call help_others(obj%prob, deal, obj%nhelped, obj%nshared)
          call deal%close()
          owner(s0:s1) = ranks_that_ran(logs(s0:s1)%stat /= stat_not_run)
          stopped = any(owner(s0:s1) < 0)
@@ -1167,6 +1174,7 @@ contains
       deallocate (live%replay, live%replay_jac)
       allocate (live%replay(0), live%replay_jac(0))
       live%nhelped = obj%nhelped
+      live%nshared = obj%nshared
       obj = live
       obj%replay_only = .false.
       opt = best
