@@ -9,6 +9,7 @@ program usharp_main
                          main_help, command_help, version_text
    use usharp_cli_threads, only: ensure_wait_policy
    use usharp_mpi, only: parallel_start, parallel_stop, is_root, this_rank
+   use usharp_signal, only: catch_stop_signals
    implicit none
    type(arg_string), allocatable :: args(:)
    type(cli_command) :: cmd
@@ -25,6 +26,9 @@ program usharp_main
    end interface
 
    call ensure_wait_policy()
+   ! A stop signal (SIGTERM, SIGINT, a job script's SIGUSR1) is noted from here on, through
+   ! the launch of MPI, and ends the command as it begins (see execute_command)
+   call catch_stop_signals()
    ! Under an MPI launcher every rank runs the command; rank 0 alone prints
    call parallel_start()
    allocate (args(command_argument_count()))

@@ -36,7 +36,8 @@ contains
          new_unittest('mpi-unequal-starts-dealt-same-on-1-and-2-ranks', test_mpi_unequal_starts), &
          new_unittest('mpi-one-start-lm-helped-same-on-1-and-2-ranks', test_mpi_helped), &
          new_unittest('mpi-external-command-not-told-the-job', test_mpi_external_env), &
-         new_unittest('usr1-outside-a-fit-ends-as-term', test_usr1_as_term)]
+         new_unittest('usr1-outside-a-fit-ends-as-term', test_usr1_as_term), &
+         new_unittest('usr1-after-a-fit-ends-the-run-resume-completes', test_usr1_after_fit)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -597,5 +598,50 @@ contains
       call execute_command_line('test -e '//dir//'/long.sim.txt', exitstat=stat)
       call check(error, stat /= 0, 'a stopped simulation wrote its result')
    end subroutine test_usr1_as_term
+
+   !> SIGUSR1 once a fit's best.nml is written (its curves being written, or its
+   !> identifiability report being made): the run ends with exit 143, without identify.txt
+   !> or summary.txt and without a part-written file; --resume makes them
+   subroutine test_usr1_after_fit(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, deck, dir
+      character(len=2000), allocatable :: lines(:)
+      character(len=4096) :: cwd
+      integer :: stat, k
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      call get_environment_variable('PWD', cwd)
+      dir = scratch_dir//'/usr1-after-fit'
+      call execute_command_line('rm -rf '//dir//' '//dir//'.rc')
+      ! 40 tests at a tight tolerance: writing their curves and the report takes seconds
+      allocate (lines(0))
+      lines = [character(len=2000) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=1.0, a2=1e-5, b=1e13, c2=0.1, h1=100, h2=100, n=1.0, q=91000 /', &
+         '&solver rtol=1e-9, atol_strain=1e-12 /', &
+         "&fit fitted='A1','A2','B','C2','H1','H2','n', method='hooke-jeeves', max_evals=3 /"]
+      do k = 1, 20
+         lines = [character(len=2000) :: lines, "&test name='lcf"//str(k)//"', history='thesis_lcf', "// &
+            "dt_out=1.0, data_file='"//trim(cwd)//"/data/thesis/lcf.sim.txt', weighting='threshold', sig=14 /", &
+            "&test name='relax"//str(k)//"', history='relaxation', dt_out=1.0, levels=0.00075, 0.001, "// &
+            "ramp_time=1.0, holds=600.0, 600.0, data_file='"//trim(cwd)//"/data/thesis/relax.sim.txt', "// &
+            "weighting='relaxation' /"]
+      end do
+      deck = write_text('usr1-after-fit.nml', lines)
+      call execute_command_line('bash -c '''//exe//' run -q -o '//dir//' '//deck//' > /dev/null 2>&1 & '// &
+         'p=$!; n=0; while [ ! -e '//dir//'/best.nml ] && [ $n -lt 2400 ]; do sleep 0.05; n=$((n+1)); done; '// &
+         'kill -USR1 $p; wait $p; echo $? > '//dir//'.rc''', exitstat=stat)
+      call check(error, number_in(dir//'.rc'), 143, 'exit status after SIGUSR1 past the fit')
+      if (allocated(error)) return
+      call execute_command_line('test -e '//dir//'/summary.txt -o -e '//dir//'/identify.txt || '// &
+                                'ls '//dir//' | grep -q "\.part$"', exitstat=stat)
+      call check(error, stat /= 0, 'a stopped run wrote its summary or report, or left a part-written file')
+      if (allocated(error)) return
+      call execute_command_line(exe//' run -q --resume -o '//dir//' '//deck//' > /dev/null 2>&1', exitstat=stat)
+      call check(error, stat == 0, '--resume after the stop')
+      if (allocated(error)) return
+      call execute_command_line('test -s '//dir//'/summary.txt -a -s '//dir//'/identify.txt', exitstat=stat)
+      call check(error, stat == 0, '--resume made no summary or report')
+   end subroutine test_usr1_after_fit
 
 end module test_cluster

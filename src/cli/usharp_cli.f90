@@ -2,7 +2,7 @@
 !> to show the user come back; the program prints them and exits with the error's code.
 module usharp_cli
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, stat_report
+   use usharp_error, only: error_type, stat_report, fatal_error
    use usharp_fit, only: progress_interface
    use usharp_diagnose, only: diagnose_progress
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments, command_names
@@ -14,9 +14,9 @@ module usharp_cli
    use usharp_cmd_identify, only: identify_command
    use usharp_cmd_design, only: design_command
    use usharp_cmd_diagnose, only: diagnose_command, selfcheck_command
-   use usharp_mpi, only: is_root
-   use usharp_signal, only: release_stop_signals
-   use usharp_strings, only: report_line_len
+   use usharp_mpi, only: is_root, any_rank
+   use usharp_signal, only: release_stop_signals, stop_signal, sigterm
+   use usharp_strings, only: report_line_len, str
    implicit none
    private
 
@@ -41,11 +41,20 @@ contains
       procedure(diagnose_progress), optional :: stage
       character(len=4096), allocatable :: written(:)
       character(len=report_line_len), allocatable :: summary(:)
-      integer :: k
+      integer :: k, sig
 
-      ! A job script's SIGUSR1 (its stop through mpirun or srun) ends any command as SIGTERM
-      ! would; a fit catches both and stops cleanly
+      ! A stop signal since the process began was noted (main catches them first): from here
+      ! it ends the process at once, SIGUSR1 (a job script's stop through mpirun or srun) as
+      ! SIGTERM does, and one noted before ends the command before it begins. A fit catches
+      ! them again and stops cleanly.
       call release_stop_signals()
+      if (any_rank(stop_signal() /= 0)) then
+         ! (another rank's signal: mpirun passes a stop on to every rank)
+         sig = merge(stop_signal(), sigterm, stop_signal() /= 0)
+         call fatal_error(error, 'stopped by signal '//str(sig)//' before the command began', 128 + sig)
+         allocate (lines(0))
+         return
+      end if
       ! Under MPI, commands that spread no work over ranks run on rank 0 alone
       if (.not. is_root() .and. .not. (cmd%name == 'run' .or. cmd%name == 'design' .or. &
                                        cmd%name == 'diagnose')) then

@@ -17,7 +17,7 @@ module usharp_cmd_run
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
-   use usharp_signal, only: release_stop_signals
+   use usharp_signal, only: release_stop_signals, stop_signal
    implicit none
    private
 
@@ -126,6 +126,16 @@ contains
          if (allocated(error)) return
          call write_curves(prob, best, dir, error)
          if (allocated(error)) return
+         ! The fit's results are whole: from here a stop signal ends the process at once (the
+         ! report and the summary are written whole or not at all), and one received while
+         ! the results were written ends the run now
+         call release_stop_signals()
+         if (stop_signal() /= 0) then
+            call fatal_error(error, 'stopped by signal '//str(stop_signal())//' after the fit was '// &
+               'written; its identifiability report and summary.txt were not made (--resume makes them)', &
+               128 + stop_signal())
+            return
+         end if
 
          summary = [character(len=report_line_len) :: &
             'usharp run '//path//': '//out%opt%reason, &
