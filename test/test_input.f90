@@ -544,7 +544,7 @@ contains
    subroutine test_structure_placed(error)
       type(error_type), allocatable, intent(out) :: error
       character(len=*), parameter :: bom = achar(239)//achar(187)//achar(191)
-      type(run_config) :: cfg
+      type(run_config) :: cfg, plain
       type(uerror), allocatable :: uerr
       call expect_config_error(error, 'equals.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0", "  = 0.3 /"], &
@@ -570,6 +570,23 @@ contains
       call read_config(write_text('bom.nml', [character(len=200) :: bom//base_model, base_constants, &
          "&test name='lcf', history='thesis_lcf' /"]), cfg, uerr)
       call check(error, .not. allocated(uerr), 'a byte-order mark before the first group')
+      if (allocated(error)) return
+      ! A comment after a list's comma, the list going on on the next line: the same history
+      ! as the list on one line (the namelist read had put an unset level between them)
+      call read_config(write_text('list-one-line.nml', deck_lines([character(len=80) :: &
+         "&test name='r', history='relaxation', levels = 0.00075, 0.001,", &
+         "  ramp_time = 1.0, holds = 600.0, 600.0 /"])), plain, uerr)
+      call check(error, .not. allocated(uerr), 'the list on one line')
+      if (allocated(error)) return
+      call read_config(write_text('list-comment.nml', deck_lines([character(len=80) :: &
+         "&test name='r', history='relaxation', levels = 0.00075,   ! first level", &
+         "  0.001, ramp_time = 1.0, holds = 600.0, ! the first hold", "  600.0 /"])), cfg, uerr)
+      call check(error, .not. allocated(uerr), 'a list with comments after its commas')
+      if (allocated(error)) return
+      call check(error, size(cfg%tests(1)%hist%t) == size(plain%tests(1)%hist%t), 'the same history')
+      if (allocated(error)) return
+      call check(error, all(cfg%tests(1)%hist%t == plain%tests(1)%hist%t) .and. &
+                 all(cfg%tests(1)%hist%v == plain%tests(1)%hist%v), 'the same history')
    end subroutine test_structure_placed
 
    !> A group whose '&' is missing, or any other text outside the groups, would be skipped by

@@ -606,12 +606,15 @@ contains
       end do
    end function string_value
 
-   !> The lines of group k, from its '&' to its '/', as an internal file for the namelist read
+   !> The lines of group k, from its '&' to its '/', as an internal file for the namelist read,
+   !> without comments: gfortran's read takes 'a = 1.0, ! note' and a value on the next line
+   !> for a null value between them (a list of three, the second unset)
    pure subroutine group_text(file, k, lines)
       type(nml_file), intent(in) :: file
       integer, intent(in) :: k
       character(len=:), allocatable, intent(out) :: lines(:)
-      integer :: l, w, first, last
+      integer :: l, w, first, last, i
+      character(len=1) :: quote
       first = file%groups(k)%line
       last = file%groups(k)%last
       w = 1
@@ -620,9 +623,23 @@ contains
       end do
       allocate (character(len=w) :: lines(last - first + 1))
       do l = first, last
-         lines(l - first + 1) = file%text(file%starts(l):min(file%starts(l + 1) - 2, len(file%text)))
-         ! Tabs and carriage returns read as blanks
-         call blank_controls(lines(l - first + 1))
+         associate (line => lines(l - first + 1))
+            line = file%text(file%starts(l):min(file%starts(l + 1) - 2, len(file%text)))
+            ! Tabs and carriage returns read as blanks
+            call blank_controls(line)
+            ! A comment, from '!' outside quotes (which end with their line) to the line's end
+            quote = ' '
+            do i = 1, len(line)
+               if (quote /= ' ') then
+                  if (line(i:i) == quote) quote = ' '
+               else if (line(i:i) == "'" .or. line(i:i) == '"') then
+                  quote = line(i:i)
+               else if (line(i:i) == '!') then
+                  line(i:) = ' '
+                  exit
+               end if
+            end do
+         end associate
       end do
    end subroutine group_text
 
