@@ -295,7 +295,7 @@ contains
       if (allocated(error)) return
       call expect_config_error(error, 'pairs.nml', [character(len=80) :: &
          "&test name='lcf, history='thesis_lcf', dt_out = 1.0", "  sig = 14.0 ! the thesis's", "/"], &
-         "pairs.nml:3:12: &test #1: name: the quotes here do not pair up on their line (a text "// &
+         "pairs.nml:3:12: &test: name: the quotes here do not pair up on their line (a text "// &
          "value is written in quotes on one line: name = 'text')")
    end subroutine test_plain_reasons
 
@@ -560,6 +560,26 @@ contains
          "&test name='lcf, history='thesis_lcf' /", "&test name='b', history='thesis_lcf' /"], &
          "runs-on.nml: &test #1 is not terminated by '/' (it starts at line 3; the next group starts "// &
          "at line 4; the quotes from 3:12 do not pair up on their line)")
+      if (allocated(error)) return
+      ! A text value over two lines (the read had taken the line break into the text)
+      call expect_config_error(error, 'two-lines.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_", "  lcf', dt_out = 1.0", "/"], &
+         "two-lines.nml:3:27: &test: history: the quotes here do not pair up on their line")
+      if (allocated(error)) return
+      call expect_config_error(error, 'two-lines-end.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_", "  lcf' /"], &
+         "two-lines-end.nml: &test #1 is not terminated by '/' (it starts at line 3; the quotes from 3:27 "// &
+         "do not pair up on their line)")
+      if (allocated(error)) return
+      ! A name whose '=' is on the next line is an assignment: given twice, and its value
+      ! checked under its own name (they had been taken for the variable before)
+      call expect_config_error(error, 'twice-next.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1.0", "  dt_out", "  = 2.0 /"], &
+         "twice-next.nml:4:3: &test: dt_out is given twice (also at line:column 3:41)")
+      if (allocated(error)) return
+      call expect_config_error(error, 'nan-next.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', sig = 14.0", "  dt_out", "  = nan /"], &
+         "nan-next.nml:5:5: &test: dt_out = nan is not a number usharp can use")
       if (allocated(error)) return
       call read_config(write_text('next-line.nml', deck_lines([character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out", "  = 2.0 /"])), cfg, uerr)

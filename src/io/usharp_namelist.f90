@@ -28,6 +28,8 @@ module usharp_namelist
       integer :: line = 0                          !< line of its '&'
       integer :: last = 0                          !< line of its end, '/'
       integer :: number = 0                        !< 1 for the first group of its name, 2 ...
+      !> Where the quote is that the first line leaving one open opened (0: none)
+      integer :: open_quote = 0
    end type nml_group
 
    abstract interface
@@ -84,9 +86,9 @@ contains
       end if
       call read_whole_file(path, file%text, error)
       if (allocated(error)) return
-      ! A UTF-8 byte-order mark (some editors write one) is no text: blanks keep the columns
+      ! A UTF-8 byte-order mark (some editors write one) is no text, nor a column
       if (len(file%text) >= 3) then
-         if (file%text(1:3) == achar(239)//achar(187)//achar(191)) file%text(1:3) = '   '
+         if (file%text(1:3) == achar(239)//achar(187)//achar(191)) file%text = file%text(4:)
       end if
       file%path = path
       file%base_dir = dirname(path)
@@ -159,7 +161,7 @@ contains
                if (text(k:k) == '&') then
                   word = group_word(text, k + 1, b)
                   if (len(word) > 0 .and. word /= 'end') then
-                     call unterminated('; the next group starts at line '//str(l))
+                     call unterminated('; the next group starts at line '//str(l), l - 1)
                      return
                   end if
                end if
@@ -173,6 +175,7 @@ contains
             ! Placed at the line's first quote, from which they pair up wrongly ('a, b='c'
             ! leaves the last open), as the read's error places them
             if (quote_at == 0) quote_at = col - 1 + scan(text(col:b), '''"')
+            if (file%groups(ngroup)%open_quote == 0) file%groups(ngroup)%open_quote = q
             quote = ' '
          end if
          if (k == 0) cycle
@@ -190,7 +193,7 @@ contains
          inside = .false.
       end do
       if (inside) then
-         call unterminated('')
+         call unterminated('', nline)
          return
       end if
       end associate
@@ -219,12 +222,27 @@ contains
 
       !> The group begun at open_line has no end; a quote left open on one of its lines (a '/'
       !> after it was taken as text) is named too
-      subroutine unterminated(why)
+      subroutine unterminated(why, last)
          character(len=*), intent(in) :: why
+         !> the group's last line
+         integer, intent(in) :: last
          character(len=:), allocatable :: quoted
+         type(nml_item), allocatable :: items(:)
+         integer :: m, p, pos
          quoted = ''
-         if (quote_at > 0) quoted = '; the quotes from '//place(file, quote_at, .false.)// &
-            ' do not pair up on their line'
+         if (quote_at > 0) then
+            ! Where the value's quotes begin to pair up wrongly, as for a group that ends
+            pos = quote_at
+            file%groups(ngroup)%last = last
+            call group_items(file, ngroup, items)
+            do m = 1, size(items)
+               if (.not. any(items(m)%at == file%groups(ngroup)%open_quote)) cycle
+               p = open_quote(items(m))
+               if (p > 0) pos = items(m)%at(p)
+               exit
+            end do
+            quoted = '; the quotes from '//place(file, pos, .false.)//' do not pair up on their line'
+         end if
          call fatal_error(error, path//': &'//trim(file%groups(ngroup)%name)//' #'// &
             str(file%groups(ngroup)%number)//" is not terminated by '/'"//' (it starts at line '// &
             str(open_line)//why//quoted//')')
@@ -321,16 +339,19 @@ contains
    !> The assignments of group k in the order written: each variable's name (with its
    !> subscript, as written) and its text 'name = values' without comments, every character
    !> with its place in the file (0 for the blank that stands for a line break)
-   pure subroutine group_items(file, k, items)
+   pure subroutine group_items(file, k, items, stray)
       type(nml_file), intent(in) :: file
       integer, intent(in) :: k
       type(nml_item), allocatable, intent(out) :: items(:)
+      !> where an '=' stands before the group's first assignment (0: none)
+      integer, intent(out), optional :: stray
       character(len=1) :: quote, c
       integer :: l, a, b, i, j, q, n
       type(nml_item), allocatable :: tmp(:)
       allocate (items(8))
       n = 0
       quote = ' '
+      if (present(stray)) stray = 0
       lines: do l = file%groups(k)%line, file%groups(k)%last
          a = file%starts(l)
          b = file%starts(l + 1) - 2
@@ -356,12 +377,38 @@ contains
             case ('/')
                exit lines
             case ('a':'z', 'A':'Z')
+               ! A letter inside a value (the exponent of 22.5e3, .true.) starts no name
+               if (i > a) then
+                  if (scan(file%text(i - 1:i - 1), word_chars//'.') > 0) then
+                     if (n > 0) call add(items(n), i, i)
+                     i = i + 1
+                     cycle
+                  end if
+               end if
                j = i
                do while (j < b)
                   if (verify(file%text(j + 1:j + 1), word_chars) /= 0) exit
                   j = j + 1
                end do
                q = assigned_at(j + 1, b)
+               if (q == 0 .and. ends_line(j + 1, b) .and. .not. logical_word(file%text(i:j))) then
+                  ! A name at the end of its line whose '=' starts a later line: an
+                  ! assignment too (the '=' joins it as the characters after it do)
+                  if (equals_next(l)) then
+                     n = n + 1
+                     if (n > size(items)) then
+                        allocate (tmp(2*size(items)))
+                        tmp(:n - 1) = items(:n - 1)
+                        call move_alloc(tmp, items)
+                     end if
+                     items(n)%name = file%text(i:j)
+                     items(n)%text = ''
+                     allocate (items(n)%at(0))
+                     call add(items(n), i, j)
+                     i = j + 1
+                     cycle
+                  end if
+               end if
                if (q > 0) then
                   ! A variable's name (and subscript) followed by '=': a new assignment
                   n = n + 1
@@ -380,7 +427,11 @@ contains
                   i = j + 1
                end if
             case default
-               if (n > 0) call add(items(n), i, i)
+               if (n > 0) then
+                  call add(items(n), i, i)
+               else if (c == '=' .and. present(stray)) then
+                  if (stray == 0) stray = i
+               end if
                i = i + 1
             end select
          end do
@@ -410,6 +461,31 @@ contains
          end do
          item%at = [item%at, [(p, p=a, b)]]
       end subroutine add
+
+      !> Whether the line holds nothing from p to last but blanks and a comment
+      pure logical function ends_line(p, last) result(yes)
+         integer, intent(in) :: p, last
+         integer :: q
+         q = first_nonblank(file%text, p, last)
+         yes = q > last
+         if (.not. yes) yes = file%text(q:q) == '!' .or. file%text(q:q) == achar(13)
+      end function ends_line
+
+      !> Whether the first character after line l, past blank and comment lines of the
+      !> group, is '='
+      pure logical function equals_next(l) result(yes)
+         integer, intent(in) :: l
+         integer :: m, q, e
+         yes = .false.
+         do m = l + 1, file%groups(k)%last
+            e = file%starts(m + 1) - 2
+            q = first_nonblank(file%text, file%starts(m), e)
+            if (q > e) cycle
+            if (file%text(q:q) == '!' .or. file%text(q:q) == achar(13)) cycle
+            yes = file%text(q:q) == '='
+            return
+         end do
+      end function equals_next
 
       !> Where the '=' is when a subscript (in parentheses) and blanks from p on lead to one
       !> on this line, else 0
@@ -484,8 +560,33 @@ contains
       type(nml_item), allocatable :: items(:)
       character(len=1) :: quote
       character(len=:), allocatable :: word
-      integer :: m, e, i, j
-      call group_items(file, k, items)
+      integer :: m, e, i, j, e2
+      call group_items(file, k, items, i)
+      if (i > 0) then
+         call fatal_error(error, place(file, i)//': '//group_label(file, k)// &
+            ": this '=' has no variable name before it; write each variable as name = value")
+         return
+      end if
+      ! A text value is written on one line: quotes left open at a line's end (the read would
+      ! take the line break and what follows into the text, or the '/' after it)
+      if (file%groups(k)%open_quote > 0) then
+         do m = 1, size(items)
+            if (any(items(m)%at == file%groups(k)%open_quote)) exit
+         end do
+         if (m <= size(items)) then
+            ! Placed where the value's quotes begin to pair up wrongly, as the read's error is
+            i = open_quote(items(m))
+            j = file%groups(k)%open_quote
+            if (i > 0) j = items(m)%at(i)
+            call fatal_error(error, place(file, j)//': '//group_label(file, k)// &
+               ': '//items(m)%name//': the quotes here do not pair up on their line (a text value is '// &
+               "written in quotes on one line: name = 'text')")
+         else
+            call fatal_error(error, place(file, file%groups(k)%open_quote)//': '//group_label(file, k)// &
+               ': the quotes here do not pair up on their line')
+         end if
+         return
+      end if
       do m = 1, size(items)
          do e = 1, m - 1
             if (lower(items(e)%name) == lower(items(m)%name)) then
@@ -520,7 +621,9 @@ contains
                            j = j - 1
                         end do
                      end if
-                     if (verify(text(j:j), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ)') /= 0) then
+                     e2 = len_trim(text(:i - 1))
+                     if (verify(text(j:j), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ)') /= 0 .or. &
+                         logical_word(text(j:e2))) then
                         call fatal_error(error, place(file, items(m)%at(i))//': '//group_label(file, k)// &
                            ": this '=' has no variable name before it (after "//items(m)%name// &
                            '); write each variable as name = value')
@@ -570,39 +673,27 @@ contains
       type(nml_file), intent(in) :: file
       character(len=*), intent(in) :: group, variable
       character(len=:), allocatable :: value
-      character(len=:), allocatable :: lines(:), low
-      integer :: k, l, i, q
+      type(nml_item), allocatable :: items(:)
+      integer :: k, m, q
       character(len=1) :: mark
       value = ''
       k = find_group(file, lower(group))
       if (k == 0) return
-      call group_text(file, k, lines)
-      do l = 1, size(lines)
-         low = lower(lines(l))
-         i = index(low, lower(variable))
-         do while (i > 0)
-            ! The name alone (not the end of a longer one), then '=' and a quoted value
-            if (i == 1) then
-               q = i + len(variable)
-            else if (scan(low(i - 1:i - 1), ' ,&') > 0) then
-               q = i + len(variable)
-            else
-               q = 0
+      ! The assignments as the read takes them: comments out, a name whose '=' is on the
+      ! next line in
+      call group_items(file, k, items)
+      do m = 1, size(items)
+         if (lower(items(m)%name) /= lower(variable)) cycle
+         associate (text => items(m)%text)
+            q = index(text, '=')
+            q = q + verify(text(q + 1:), ' ')
+            if (q <= index(text, '=')) return
+            mark = text(q:q)
+            if (mark == "'" .or. mark == '"') then
+               if (index(text(q + 1:), mark) > 0) value = text(q + 1:q + index(text(q + 1:), mark) - 1)
             end if
-            if (q > 0) then
-               q = q + verify(low(q:), ' ') - 1
-               if (low(q:q) == '=') then
-                  q = q + verify(low(q + 1:), ' ')
-                  mark = lines(l)(q:q)
-                  if (mark == "'" .or. mark == '"') then
-                     value = lines(l)(q + 1:q + index(lines(l)(q + 1:), mark) - 1)
-                     return
-                  end if
-               end if
-            end if
-            if (index(low(i + 1:), lower(variable)) == 0) exit
-            i = i + index(low(i + 1:), lower(variable))
-         end do
+         end associate
+         return
       end do
    end function string_value
 
@@ -889,6 +980,14 @@ contains
          f = f - 1 + scan(item%text(f:p), '''"')
       end function first_quote
    end function open_quote
+
+   !> Whether word is a logical value (T, F, true, false in any case), not a name
+   pure logical function logical_word(word) result(yes)
+      character(len=*), intent(in) :: word
+      character(len=len(word)) :: w
+      w = lower(word)
+      yes = w == 't' .or. w == 'f' .or. w == 'true' .or. w == 'false'
+   end function logical_word
 
    !> Where word (any case) stands alone in group k before its first assignment (outside
    !> comments), 0 if it does not
