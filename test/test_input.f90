@@ -607,6 +607,19 @@ contains
       if (allocated(error)) return
       call check(error, all(cfg%tests(1)%hist%t == plain%tests(1)%hist%t) .and. &
                  all(cfg%tests(1)%hist%v == plain%tests(1)%hist%v), 'the same history')
+      if (allocated(error)) return
+      ! A constants file's units as the read takes them: not from a comment, and with the
+      ! name's '=' on the next line
+      call read_config_as(write_text('units-deck.nml', deck_lines([character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf' /"])), write_text('units-comment.nml', &
+         [character(len=80) :: '&model', "  ! fitted before in MPa: units = 'MPa'", "  units = 'ksi' /", &
+         base_constants]), '', cfg, uerr)
+      call check(error, .not. allocated(uerr), 'a comment holding units = ''MPa'' in a ksi constants file')
+      if (allocated(error)) return
+      call read_config_as(write_text('units-deck.nml', deck_lines([character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf' /"])), write_text('units-next.nml', &
+         [character(len=80) :: '&model', '  units', "  = 'MPa' /", base_constants]), '', cfg, uerr)
+      call check(error, allocated(uerr), 'MPa constants (units, then = on the next line) for a ksi deck')
    end subroutine test_structure_placed
 
    !> A group whose '&' is missing, or any other text outside the groups, would be skipped by
