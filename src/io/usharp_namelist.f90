@@ -346,6 +346,7 @@ contains
       !> where an '=' stands before the group's first assignment (0: none)
       integer, intent(out), optional :: stray
       character(len=1) :: quote, c
+      character(len=:), allocatable :: name
       integer :: l, a, b, i, j, q, n
       type(nml_item), allocatable :: tmp(:)
       allocate (items(8))
@@ -391,36 +392,28 @@ contains
                   j = j + 1
                end do
                q = assigned_at(j + 1, b)
-               if (q == 0 .and. ends_line(j + 1, b) .and. .not. logical_word(file%text(i:j))) then
+               if (q > 0) then
+                  ! A variable's name (and subscript) followed by '=': a new assignment
+                  name = file%text(i:j)//compact(file%text(j + 1:q - 1))
+               else if (ends_line(j + 1, b) .and. .not. logical_word(file%text(i:j))) then
                   ! A name at the end of its line whose '=' starts a later line: an
                   ! assignment too (the '=' joins it as the characters after it do)
                   if (equals_next(l)) then
-                     n = n + 1
-                     if (n > size(items)) then
-                        allocate (tmp(2*size(items)))
-                        tmp(:n - 1) = items(:n - 1)
-                        call move_alloc(tmp, items)
-                     end if
-                     items(n)%name = file%text(i:j)
-                     items(n)%text = ''
-                     allocate (items(n)%at(0))
-                     call add(items(n), i, j)
-                     i = j + 1
-                     cycle
+                     q = j
+                     name = file%text(i:j)
                   end if
                end if
                if (q > 0) then
-                  ! A variable's name (and subscript) followed by '=': a new assignment
                   n = n + 1
                   if (n > size(items)) then
                      allocate (tmp(2*size(items)))
                      tmp(:n - 1) = items(:n - 1)
                      call move_alloc(tmp, items)
                   end if
-                  items(n)%name = file%text(i:j)//compact(file%text(j + 1:q - 1))
+                  items(n)%name = name
                   items(n)%text = ''
                   allocate (items(n)%at(0))
-                  if (n > 0) call add(items(n), i, q)
+                  call add(items(n), i, q)
                   i = q + 1
                else
                   if (n > 0) call add(items(n), i, j)
