@@ -103,6 +103,8 @@ row "an '=' without a name before it" - u simulate noname.nml
 row 'a quote left open before the next group' - u simulate runon.nml
 { echo "&model"; echo "  miller units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > leading.nml
 row "a word before a group's first assignment" - u simulate leading.nml
+{ echo "$model"; echo "$consts"; echo "&test name='lcf', history='thesis_lcf', data_file=../lcf.txt /"; } > path.nml
+row 'a path not in quotes' - u simulate path.nml
 { printf '\xef\xbb\xbf'; echo "$model"; echo "$consts"; echo "$lcf"; } > bom.nml
 row 'a UTF-8 byte-order mark (read as blanks)' bom/lcf.sim.txt u simulate -o bom bom.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3, tm=1700.0 /"; echo "$consts"; echo "$lcf"; } > twice.nml

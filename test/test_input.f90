@@ -561,6 +561,11 @@ contains
          "runs-on.nml: &test #1 is not terminated by '/' (it starts at line 3; the next group starts "// &
          "at line 4; the quotes from 3:12 do not pair up on their line)")
       if (allocated(error)) return
+      ! A path not in quotes: its '/' ends the group
+      call expect_config_error(error, 'path.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', data_file = ../lcf.txt /"], &
+         "path.nml:3:55: &test: this '/' ends the group: text with a '/' in it is a value in quotes")
+      if (allocated(error)) return
       ! A text value over two lines (the read had taken the line break into the text)
       call expect_config_error(error, 'two-lines.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_", "  lcf', dt_out = 1.0", "/"], &

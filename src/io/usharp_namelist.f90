@@ -183,6 +183,13 @@ contains
          col = first_nonblank(text, k + 1, b)
          if (col <= b) then
             if (text(col:col) /= '!') then
+               ! A '/' inside a value not in quotes (a path) ended the group there
+               if (k == col - 1 .and. text(k:k) == '/' .and. text(col:col) /= '&') then
+                  call fatal_error(error, path//':'//str(l)//':'//str(k - a + 1)//': &'// &
+                     trim(file%groups(ngroup)%name)//": this '/' ends the group: text with a '/' in "// &
+                     "it is a value in quotes (name = 'dir/file') or a comment after '!'")
+                  return
+               end if
                call fatal_error(error, path//':'//str(l)//':'//str(col - a + 1)// &
                   ': text after the end of &'//trim(file%groups(ngroup)%name)// &
                   " (one group per line, comments after '!')")
