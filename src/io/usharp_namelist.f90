@@ -854,7 +854,8 @@ contains
       if (k > 0) where = file%path//':'//str(file%groups(k)%line)
       word = after(msg, 'equal sign must follow namelist object name ')
       if (len(word) > 0) then
-         ! The name's own place where an assignment holds it
+         ! The name's own place where an assignment holds it, or before the first one
+         q = 0
          do m = 1, size(items)
             q = word_at(items(m)%text, word)
             if (q > 0) then
@@ -862,6 +863,10 @@ contains
                exit
             end if
          end do
+         if (q == 0 .and. k > 0) then
+            q = leading_word(file, k, word)
+            if (q > 0) where = place(file, q)
+         end if
          call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
             'write each variable as name = value')
       else if (len(after(msg, 'cannot match namelist object name ')) > 0) then
