@@ -251,12 +251,12 @@ contains
          "(is it in percent?)")
    end subroutine test_percent_strain
 
-   !> A variable without its '=' is named with the group's line and the form the read wants
+   !> A variable without its '=' is named at its line and column with the form the read wants
    subroutine test_no_equals(error)
       type(error_type), allocatable, intent(out) :: error
       call expect_config_error(error, 'noequals.nml', [character(len=80) :: &
          "&solver rtol 1.0e-7 /", "&test name='x', history='thesis_lcf' /"], &
-         "noequals.nml:3: &solver: rtol has no '=' after it; write each variable as name = value")
+         "noequals.nml:3:9: &solver: rtol has no '=' after it; write each variable as name = value")
       if (allocated(error)) return
       ! After a value, the name without '=' is placed itself (it had been read as part of the
       ! value before it, and the message named that variable)
