@@ -109,19 +109,19 @@ contains
    end function expand_command
 
    !> Run the external command of a test for a model and return its stress (model unit) at the
-   !> output times t_out. work_root holds the work folders; tag makes this one's name unique
-   !> (<work_root>/<test>.<tag>); input_dir is the namelist's folder. On success the work folder
+   !> output times t_out. The work folders are in out_dir/work; tag makes this one's name
+   !> unique (work/<test>.<tag>); input_dir is the namelist's folder. On success the work folder
    !> is removed, on failure it is kept and named in the message.
-   subroutine run_external(ext, model, units, hist, test, input_dir, work_root, tag, t_out, &
+   subroutine run_external(ext, model, units, hist, test, input_dir, out_dir, tag, t_out, &
                            stress, error)
       type(external_spec), intent(in) :: ext
       class(model_type), intent(in) :: model
-      character(len=*), intent(in) :: units, test, input_dir, work_root, tag
+      character(len=*), intent(in) :: units, test, input_dir, out_dir, tag
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: t_out(:)
       real(dp), intent(out) :: stress(:)
       type(error_type), allocatable, intent(out) :: error
-      character(len=:), allocatable :: work, cmd, output, constants, in_dir
+      character(len=:), allocatable :: work, cmd, output, constants, in_dir, work_root
       character(len=256) :: names(5)
       character(len=64) :: cols(2)
       real(dp), allocatable :: vals(:, :)
@@ -131,102 +131,124 @@ contains
       character(len=len(script_name) + 2) :: argv(2)
       logical :: gone
 
-      call make_dir(join_path(work_root, test//'.'//tag), error)
+      ! gfortran 12 keeps the length of a function's deferred-length character result in a
+      ! static variable at each call (join_path's, str's, ...): the threads that run
+      ! commands side by side build their paths, files and messages one at a time, and wait
+      ! for their commands together
+      !$omp critical (usharp_external_text)
+      call prepare()
+      !$omp end critical (usharp_external_text)
       if (allocated(error)) return
-      work = absolute_path(join_path(work_root, test//'.'//tag))
-      if (len_trim(input_dir) > 0) then
-         in_dir = absolute_path(input_dir)
-      else
-         in_dir = absolute_path('.')
-      end if
-      ! Never fall back on the current folder: the constants, script and output would be
-      ! written there, and the clean-up would remove files of those names
-      if (len(work) == 0) then
-         call fatal_error(error, join_path(work_root, test//'.'//tag)//': the work folder vanished '// &
-                          'as it was made (cannot resolve its path)')
-         return
-      end if
-      if (len(in_dir) == 0) then
-         call fatal_error(error, input_dir//': cannot resolve the input folder''s path')
-         return
-      end if
-      output = join_path(work, ext%output_file)
-      constants = join_path(work, ext%constants_file)
-      names(1) = ext%output_file
-      names(2) = ext%constants_file
-      names(3) = script_name
-      names(4) = stdout_name
-      names(5) = stderr_name
-      ! A stale output of an earlier run must never be read as this one's
-      gone = remove_file(output)
-      if (.not. gone) then
-         call fatal_error(error, output//': cannot remove an old output file')
-         return
-      end if
-      call write_constants_file(constants, model, ext%constants_format, error, sync=.false.)
-      if (allocated(error)) return
-      cmd = expand_command(ext%command, work, constants, output, in_dir, test)
-      ! Written whole (renamed into place): the shell never reads half a script
-      allocate (character(len=max(len(cmd), 200)) :: script(2))
-      script(1) = '# usharp external backend: test '//test//', evaluation '//tag
-      script(2) = cmd
-      call write_lines(join_path(work, script_name), script, error, sync=.false.)
-      if (allocated(error)) return
-      ! The script runs in a process group of its own: at the time limit (or when usharp is
-      ! asked to stop) the group gets TERM, then KILL 5 s later; what it leaves running is killed
-      argv(1) = '/bin/sh'
-      argv(2) = './'//script_name
       call run_process(argv, work, stdout_name, stderr_name, ext%time_limit, 5.0_dp, proc)
-      if (proc%how /= proc_exited .or. proc%code /= 0) then
-         select case (proc%how)
-         case (proc_timed_out)
-            call fatal_error(error, 'command ran past its time_limit of '// &
-               real_str(ext%time_limit, 'g0.6')//' s and was stopped')
-         case (proc_stopped)
-            call fatal_error(error, 'command stopped: usharp received signal '//str(stop_signal()))
-         case (proc_spawn_failed)
-            call fatal_error(error, 'cannot start /bin/sh (error '//str(proc%code)//')')
-         case (proc_status_lost)
-            call fatal_error(error, 'the command''s exit status was lost (waitpid failed with '// &
-               'error '//str(proc%code)//'); it was killed')
-         case (proc_signalled)
-            call fatal_error(error, 'command was killed by signal '//str(proc%code)// &
-               stderr_tail())
-         case default
-            select case (proc%code)
-            case (127)
-               call fatal_error(error, 'command not found (exit status 127): '// &
-                  last_line(join_path(work, stderr_name)))
-            case (126)
-               call fatal_error(error, 'command not executable (exit status 126): '// &
-                  last_line(join_path(work, stderr_name)))
-            case default
-               call fatal_error(error, 'command failed with exit status '//str(proc%code)// &
-                  stderr_tail())
-            end select
-         end select
-      else if (.not. file_exists(output)) then
-         call fatal_error(error, 'command did not write its output file '//ext%output_file)
-      else
-         ! (element by element: constructors of deferred-length components trip gfortran 12)
-         cols(1) = ext%time_title
-         cols(2) = ext%stress_title
-         if (ext%output_format == 'prvar') then
-            call read_prvar(output, cols, vals, error)
-         else
-            call read_columns(output, cols, vals, error)
-         end if
-         if (.not. allocated(error)) call to_output_times(vals, error)
-      end if
-      if (allocated(error)) then
-         ! A failing command is a failed simulation, as a failing integrator is (exit 3)
-         call prefix_error(error, 'external run (work folder '//work//'): ')
-         error%stat = stat_failure
-         return
-      end if
-      call remove_dir(work, names)
+      !$omp critical (usharp_external_text)
+      call finish()
+      !$omp end critical (usharp_external_text)
 
    contains
+
+      !> The work folder, the constants file and the command's script
+      subroutine prepare()
+         work_root = join_path(out_dir, 'work')
+         call make_dir(join_path(work_root, test//'.'//tag), error)
+         if (allocated(error)) return
+         work = absolute_path(join_path(work_root, test//'.'//tag))
+         if (len_trim(input_dir) > 0) then
+            in_dir = absolute_path(input_dir)
+         else
+            in_dir = absolute_path('.')
+         end if
+         ! Never fall back on the current folder: the constants, script and output would be
+         ! written there, and the clean-up would remove files of those names
+         if (len(work) == 0) then
+            call fatal_error(error, join_path(work_root, test//'.'//tag)//': the work folder vanished '// &
+                             'as it was made (cannot resolve its path)')
+            return
+         end if
+         if (len(in_dir) == 0) then
+            call fatal_error(error, input_dir//': cannot resolve the input folder''s path')
+            return
+         end if
+         output = join_path(work, ext%output_file)
+         constants = join_path(work, ext%constants_file)
+         names(1) = ext%output_file
+         names(2) = ext%constants_file
+         names(3) = script_name
+         names(4) = stdout_name
+         names(5) = stderr_name
+         ! A stale output of an earlier run must never be read as this one's
+         gone = remove_file(output)
+         if (.not. gone) then
+            call fatal_error(error, output//': cannot remove an old output file')
+            return
+         end if
+         call write_constants_file(constants, model, ext%constants_format, error, sync=.false.)
+         if (allocated(error)) return
+         cmd = expand_command(ext%command, work, constants, output, in_dir, test)
+         ! Written whole (renamed into place): the shell never reads half a script
+         allocate (character(len=max(len(cmd), 200)) :: script(2))
+         script(1) = '# usharp external backend: test '//test//', evaluation '//tag
+         script(2) = cmd
+         call write_lines(join_path(work, script_name), script, error, sync=.false.)
+         if (allocated(error)) return
+         ! The script runs in a process group of its own: at the time limit (or when usharp is
+         ! asked to stop) the group gets TERM, then KILL 5 s later; what it leaves running is killed
+         argv(1) = '/bin/sh'
+         argv(2) = './'//script_name
+      end subroutine prepare
+
+      !> The command's outcome: its output read into stress, or the error; the folder removed
+      !> after a success
+      subroutine finish()
+         if (proc%how /= proc_exited .or. proc%code /= 0) then
+            select case (proc%how)
+            case (proc_timed_out)
+               call fatal_error(error, 'command ran past its time_limit of '// &
+                  real_str(ext%time_limit, 'g0.6')//' s and was stopped')
+            case (proc_stopped)
+               call fatal_error(error, 'command stopped: usharp received signal '//str(stop_signal()))
+            case (proc_spawn_failed)
+               call fatal_error(error, 'cannot start /bin/sh (error '//str(proc%code)//')')
+            case (proc_status_lost)
+               call fatal_error(error, 'the command''s exit status was lost (waitpid failed with '// &
+                  'error '//str(proc%code)//'); it was killed')
+            case (proc_signalled)
+               call fatal_error(error, 'command was killed by signal '//str(proc%code)// &
+                  stderr_tail())
+            case default
+               select case (proc%code)
+               case (127)
+                  call fatal_error(error, 'command not found (exit status 127): '// &
+                     last_line(join_path(work, stderr_name)))
+               case (126)
+                  call fatal_error(error, 'command not executable (exit status 126): '// &
+                     last_line(join_path(work, stderr_name)))
+               case default
+                  call fatal_error(error, 'command failed with exit status '//str(proc%code)// &
+                     stderr_tail())
+               end select
+            end select
+         else if (.not. file_exists(output)) then
+            call fatal_error(error, 'command did not write its output file '//ext%output_file)
+         else
+            ! (element by element: constructors of deferred-length components trip gfortran 12)
+            cols(1) = ext%time_title
+            cols(2) = ext%stress_title
+            if (ext%output_format == 'prvar') then
+               call read_prvar(output, cols, vals, error)
+            else
+               call read_columns(output, cols, vals, error)
+            end if
+            if (.not. allocated(error)) call to_output_times(vals, error)
+         end if
+         if (allocated(error)) then
+            ! A failing command is a failed simulation, as a failing integrator is (exit 3)
+            call prefix_error(error, 'external run (work folder '//work//'): ')
+            error%stat = stat_failure
+            return
+         end if
+         call remove_dir(work, names)
+      end subroutine finish
+
 
       !> ': ' and the last line the command wrote to stderr ('' when it wrote none)
       function stderr_tail() result(text)

@@ -253,7 +253,7 @@ contains
          call res%allocate(size(self%targets(i)%t))
          res%t = self%targets(i)%t
          call run_external(test%ext, model, self%cfg%units, test%hist, test%name, &
-                           self%cfg%base_dir, join_path(self%cfg%out_dir, 'work'), tag, res%t, &
+                           self%cfg%base_dir, self%cfg%out_dir, tag, res%t, &
                            res%stress, error)
          if (allocated(error)) then
             call prefix_error(error, "test '"//test%name//"': ")
@@ -595,12 +595,17 @@ contains
       subroutine one_point(j)
          integer, intent(in) :: j
          character(len=:), allocatable :: msg
+         character(len=24) :: number
+         ! The point's number by an internal write: gfortran 12 keeps the length of a
+         ! function's deferred-length result (str's) in a static variable at each call, which
+         ! the threads of this loop share
+         write (number, '(i0)') k0 + j
          if (present(only)) then
             call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
-                                tag0//str(k0 + j), only, fail(j), sec(:, j))
+                                tag0//trim(number), only, fail(j), sec(:, j))
          else
             call self%residuals(xs(:, j), rs(:, j), fs(j), per_test(:, j), status(j), msg, &
-                                tag0//str(k0 + j))
+                                tag0//trim(number))
          end if
          messages(j) = msg
       end subroutine one_point
