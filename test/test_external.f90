@@ -253,7 +253,7 @@ contains
       t = output_times(cfg%tests(1)%hist, cfg%tests(1)%dt_out)
       allocate (s(size(t)))
       call run_external(cfg%tests(1)%ext, cfg%model, cfg%units, cfg%tests(1)%hist, 'relax', &
-                        cfg%base_dir, join_path(cfg%out_dir, 'work'), '1', t, s, e)
+                        cfg%base_dir, cfg%out_dir, '1', t, s, e)
    end subroutine run_one
 
    !> Non-zero exit, no output, short output, garbled output: each an error that says so
@@ -297,7 +297,7 @@ contains
          t = output_times(cfg%tests(1)%hist, cfg%tests(1)%dt_out)
          allocate (s(size(t)))
          call run_external(cfg%tests(1)%ext, cfg%model, cfg%units, cfg%tests(1)%hist, 'relax', &
-                           cfg%base_dir, join_path(cfg%out_dir, 'work'), '2', t, s, e)
+                           cfg%base_dir, cfg%out_dir, '2', t, s, e)
          if (allocated(e)) then
             call test_failed(error, e%message)
             return
