@@ -74,7 +74,7 @@ contains
       type(nml_file), intent(out) :: file
       type(error_type), allocatable, intent(out) :: error
       integer, allocatable :: counts(:), firsts(:)
-      integer :: nline, ngroup, l, a, b, col, k, open_line, quote_at, q
+      integer :: nline, ngroup, l, a, b, col, k, open_line, q
       character(len=1) :: quote
       character(len=:), allocatable :: word
       type(nml_group), allocatable :: tmp(:)
@@ -102,7 +102,6 @@ contains
       inside = .false.
       quote = ' '
       open_line = 0
-      quote_at = 0
       do l = 1, nline
          a = starts(l)
          b = starts(l + 1) - 2   ! without the newline
@@ -152,7 +151,6 @@ contains
             file%groups(ngroup)%number = counts(k)
             inside = .true.
             open_line = l
-            quote_at = 0
             col = col + 1 + len(word)
          else
             ! A line that starts a group inside a group: the group before lacks its '/'
@@ -172,9 +170,6 @@ contains
          ! would take the groups after it into this one, up to a quote of theirs)
          call group_end(text, col, b, quote, k, q)
          if (quote /= ' ') then
-            ! Placed at the line's first quote, from which they pair up wrongly ('a, b='c'
-            ! leaves the last open), as the read's error places them
-            if (quote_at == 0) quote_at = col - 1 + scan(text(col:b), '''"')
             if (file%groups(ngroup)%open_quote == 0) file%groups(ngroup)%open_quote = q
             quote = ' '
          end if
@@ -237,9 +232,9 @@ contains
          type(nml_item), allocatable :: items(:)
          integer :: m, p, pos
          quoted = ''
-         if (quote_at > 0) then
+         if (file%groups(ngroup)%open_quote > 0) then
             ! Where the value's quotes begin to pair up wrongly, as for a group that ends
-            pos = quote_at
+            pos = file%groups(ngroup)%open_quote
             file%groups(ngroup)%last = last
             call group_items(file, ngroup, items)
             do m = 1, size(items)
