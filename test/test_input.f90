@@ -561,6 +561,30 @@ contains
          "runs-on.nml: &test #1 is not terminated by '/' (it starts at line 3; the next group starts "// &
          "at line 4; the quotes from 3:12 do not pair up on their line)")
       if (allocated(error)) return
+      ! 'name: value' (YAML, INI) after a value, first in the group, with a blank before the
+      ! ':', and read as one word with a quoted value
+      call expect_config_error(error, 'colon-after.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf'", "  dt_out: 1.0 /"], &
+         "colon-after.nml:4:3: &test #1 'lcf': dt_out: a namelist gives a value with '=', not ':'; write "// &
+         "dt_out = value")
+      if (allocated(error)) return
+      call expect_config_error(error, 'colon-first.nml', [character(len=80) :: &
+         "&test", "  name: 'lcf', history='thesis_lcf' /"], &
+         "colon-first.nml:4:3: &test #1: name: a namelist gives a value with '=', not ':'")
+      if (allocated(error)) return
+      call expect_config_error(error, 'colon-blank.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf'", "  dt_out : 1.0 /"], &
+         "colon-blank.nml:4:3: &test #1 'lcf': dt_out: a namelist gives a value with '=', not ':'")
+      if (allocated(error)) return
+      call expect_config_error(error, 'colon-word.nml', [character(len=80) :: &
+         "&test name='lcf'", "  history:'thesis_lcf' /"], &
+         "colon-word.nml:4:3: &test #1 'lcf': history: a namelist gives a value with '=', not ':'")
+      if (allocated(error)) return
+      ! A misspelt name with a subscript is named as a misspelt name
+      call expect_config_error(error, 'subscript.nml', [character(len=80) :: &
+         "&fit fitted = 'H1', uper(1:2) = 1.0, 2.0 /"], &
+         "subscript.nml:3:21: &fit: no variable uper in this group")
+      if (allocated(error)) return
       ! A path not in quotes: its '/' ends the group
       call expect_config_error(error, 'path.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', data_file = ../lcf.txt /"], &

@@ -4,7 +4,8 @@ module test_math
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
    use usharp_kinds, only: dp
    use usharp_rng, only: rng_type
-   use usharp_strings, only: str, lower
+   use usharp_strings, only: str, lower, real_str
+   use usharp_filesys, only: join_path
    use usharp_math, only: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp, &
                           asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp
    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_is_finite
@@ -25,7 +26,8 @@ contains
          new_unittest('sin-and-cos-of-a-turn', test_sincos), &
          new_unittest('log-gamma', test_log_gamma), &
          new_unittest('special-values', test_special), &
-         new_unittest('no-intrinsic-transcendentals-in-src', test_no_intrinsics)]
+         new_unittest('no-intrinsic-transcendentals-in-src', test_no_intrinsics), &
+         new_unittest('text-of-numbers-on-threads-side-by-side', test_text_threads)]
    end subroutine collect_math
 
    !> Error of y against the reference in units of the last place of the reference
@@ -319,5 +321,44 @@ contains
          end do
       end function calls_one
    end subroutine test_no_intrinsics
+
+   !> str, real_str and join_path called from two threads at the same line at once, with
+   !> results of other lengths: gfortran 12 kept a deferred-length result's length in a
+   !> static variable at each call, shared by the threads (tens of thousands of torn texts in
+   !> 600000 on two cores)
+   subroutine test_text_threads(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer, parameter :: ncall = 200000
+      integer :: i, bad
+      bad = 0
+      ! (the texts are made in a procedure: a private deferred-length variable of the
+      ! parallel loop itself would share its length between the threads in gfortran 12 too)
+      !$omp parallel do num_threads(2) schedule(static, 1) reduction(+:bad)
+      do i = 1, ncall
+         bad = bad + torn(i)
+      end do
+      !$omp end parallel do
+      call check(error, bad == 0, str(bad)//' of '//str(3*ncall)//' texts made on two threads were torn')
+   contains
+      !> How many of call i's three texts are not what they should be
+      integer function torn(i) result(nbad)
+         integer, intent(in) :: i
+         character(len=:), allocatable :: a, b, c
+         character(len=24) :: want
+         integer :: k
+         logical :: even
+         ! The same lines on both threads, the one with long texts, the other short
+         even = mod(i, 2) == 0
+         k = merge(i*1000, mod(i, 10), even)
+         a = '<'//str(k)//'>'
+         b = '<'//real_str(real(k, dp), 'f0.1')//'>'
+         c = join_path(trim(merge('folder', 'a/    ', even)), 'file')
+         nbad = 0
+         write (want, '(i0)') k
+         if (a /= '<'//trim(want)//'>') nbad = nbad + 1
+         if (b /= '<'//trim(want)//'.0>') nbad = nbad + 1
+         if (c /= merge('folder/file', 'a/file     ', even)) nbad = nbad + 1
+      end function torn
+   end subroutine test_text_threads
 
 end module test_math

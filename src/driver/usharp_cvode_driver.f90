@@ -182,7 +182,7 @@ contains
             ierr = FCVode(cvode_mem, tnext, yvec, tret, CV_NORMAL)
             if (ierr < 0 .or. .not. all(ieee_is_finite(y))) then
                call fatal_error(error, 'integration failed at t = '//real_str(tret(1), 'es12.5')// &
-                  ' s (CVODE flag '//str(int(ierr))//': '//flag_text(ierr)//')', stat_failure)
+                  ' s (CVODE flag '//str(int(ierr))//': '//trim(flag_text(ierr))//')', stat_failure)
                call release()
                return
             end if
@@ -403,7 +403,9 @@ contains
 
    pure function flag_text(flag) result(text)
       integer(c_int), intent(in) :: flag
-      character(len=:), allocatable :: text
+      ! Fixed length: a deferred-length result is not thread-safe in gfortran 12 (the tests of
+      ! a sensitivity Jacobian run on threads side by side)
+      character(len=36) :: text
       select case (flag)
       case (CV_TOO_MUCH_WORK); text = 'too many steps'
       case (CV_TOO_MUCH_ACC); text = 'accuracy not reachable'

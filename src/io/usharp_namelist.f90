@@ -788,6 +788,7 @@ contains
       character(len=512) :: why
       character(len=:), allocatable :: value, unknown, where, word
       integer :: m, stat, q
+      logical :: colon
       allocate (items(0))
       if (k > 0) call group_items(file, k, items)
       do m = 1, size(items)
@@ -808,21 +809,30 @@ contains
          if (len(word) > 0) then
             q = word_at(items(m)%text, word)
             if (q > 0) then
-               call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
-                  word//" has no '=' after it; write each variable as name = value")
+               if (colon_assigns(items(m)%text, q, word)) then
+                  call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                                   colon_message(word))
+               else
+                  call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                     word//" has no '=' after it; write each variable as name = value")
+               end if
                return
             end if
          end if
          ! The read's words for a name it does not know (its words for a value it cannot read
          ! are often the same, naming the value: 'dt_out = abc' gives 'name abc')
-         unknown = 'cannot match namelist object name '//lower(items(m)%name)
+         unknown = 'cannot match namelist object name '//lower(bare(items(m)%name))
          ! A word the read takes for a name, after the value: a stray word, or a name whose
          ! '=' is missing (not the value itself, which the read names so too)
          word = after(why, 'cannot match namelist object name ')
          if (len(word) > 0 .and. lower(trim(why)) /= unknown) then
             q = word_at(items(m)%text, word)
             if (q > 0) then
-               if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
+               if (colon_assigns(items(m)%text, q, word)) then
+                  call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                                   colon_message(word))
+                  return
+               else if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
                   call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
                      word//" is neither a value of "//items(m)%name//" nor a variable with its '='; "// &
                      'write each variable as name = value')
@@ -832,7 +842,7 @@ contains
          end if
          if (lower(trim(why)) == unknown) then
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': no variable '// &
-               items(m)%name//' in this group (see the input reference)')
+               bare(items(m)%name)//' in this group (see the input reference)')
          else if (index(lower(why), 'cannot match namelist object name') > 0) then
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '//items(m)%name// &
                ' = '//value//' is not a value '//items(m)%name//' can take')
@@ -851,28 +861,45 @@ contains
       if (len(word) > 0) then
          ! The name's own place where an assignment holds it, or before the first one
          q = 0
+         colon = .false.
          do m = 1, size(items)
             q = word_at(items(m)%text, word)
             if (q > 0) then
                where = place(file, items(m)%at(q))
+               colon = colon_assigns(items(m)%text, q, word)
                exit
             end if
          end do
          if (q == 0 .and. k > 0) then
             q = leading_word(file, k, word)
-            if (q > 0) where = place(file, q)
+            if (q > 0) then
+               where = place(file, q)
+               colon = colon_assigns(file%text, q, word)
+            end if
          end if
-         call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
-            'write each variable as name = value')
+         if (colon) then
+            call fatal_error(error, where//': &'//label//': '//colon_message(word))
+         else
+            call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
+               'write each variable as name = value')
+         end if
       else if (len(after(msg, 'cannot match namelist object name ')) > 0) then
          ! A word before the group's first assignment, placed where it stands
          word = after(msg, 'cannot match namelist object name ')
+         colon = .false.
          if (k > 0) then
             q = leading_word(file, k, word)
-            if (q > 0) where = place(file, q)
+            if (q > 0) then
+               where = place(file, q)
+               colon = colon_assigns(file%text, q, word)
+            end if
          end if
-         call fatal_error(error, where//': &'//label//': '//word// &
-            ' is no variable of this group with its value; write each variable as name = value')
+         if (colon) then
+            call fatal_error(error, where//': &'//label//': '//colon_message(word))
+         else
+            call fatal_error(error, where//': &'//label//': '//word// &
+               ' is no variable of this group with its value; write each variable as name = value')
+         end if
       else
          call fatal_error(error, where//': &'//label//': '//plain_reason(trim(msg), '')// &
             ' (iostat '//str(ios)//')')
@@ -1015,6 +1042,33 @@ contains
          end if
       end do
    end function leading_word
+
+   !> Whether the word at q of text is a name given its value with ':' ('name: value', as
+   !> YAML and INI files write it): the word holds a ':', or a ':' is the next thing after it
+   pure logical function colon_assigns(text, q, word) result(yes)
+      character(len=*), intent(in) :: text, word
+      integer, intent(in) :: q
+      integer :: p, i
+      yes = .false.
+      if (len(word) == 0) return
+      ! (the read takes 'name:' or "name:'text'" for one word; not a subscript's 'a(1:2)')
+      i = index(word, ':')
+      if (i > 1) yes = verify(word(:i - 1), word_chars) == 0
+      p = q + len(word)
+      if (yes .or. p < 1 .or. p > len(text)) return
+      i = verify(text(p:), ' '//achar(9))
+      if (i > 0) yes = text(p + i - 1:p + i - 1) == ':'
+   end function colon_assigns
+
+   !> The message for a name given its value with ':' (see colon_assigns)
+   pure function colon_message(word) result(text)
+      character(len=*), intent(in) :: word
+      character(len=:), allocatable :: text
+      character(len=:), allocatable :: name
+      name = word
+      if (index(name, ':') > 1) name = name(:index(name, ':') - 1)
+      text = name//": a namelist gives a value with '=', not ':'; write "//name//' = value'
+   end function colon_message
 
    !> Where word (any case) stands alone in text after its first '=', 0 if nowhere
    pure integer function word_at(text, word) result(q)

@@ -157,12 +157,12 @@ contains
       integer :: i
       character(len=:), allocatable :: msg
       do i = 1, n_constants
-         msg = positive(get_constant(model%c, i), 'constant '//trim(constant_names(i)))
+         call check_positive(get_constant(model%c, i), 'constant '//trim(constant_names(i)), msg)
          if (len(msg) > 0) exit
       end do
-      if (len(msg) == 0) msg = positive(model%tm, 'Tm')
-      if (len(msg) == 0) msg = positive(model%temperature, 'temperature')
-      if (len(msg) == 0) msg = positive(model%youngs, "Young's modulus E")
+      if (len(msg) == 0) call check_positive(model%tm, 'Tm', msg)
+      if (len(msg) == 0) call check_positive(model%temperature, 'temperature', msg)
+      if (len(msg) == 0) call check_positive(model%youngs, "Young's modulus E", msg)
       if (len(msg) > 0) then
          call fatal_error(error, msg)
          return
@@ -183,18 +183,21 @@ contains
       end if
    end subroutine check_constants
 
-   !> Empty when val is finite and positive, else a message naming the quantity
-   pure function positive(val, name) result(msg)
+   !> Whether val is finite and positive: msg empty, else a message naming the quantity. (A
+   !> subroutine: gfortran 12's deferred-length function results are not thread-safe, see
+   !> usharp_strings, and the constants are checked in every simulation, side by side)
+   pure subroutine check_positive(val, name, msg)
       real(dp), intent(in) :: val
+      !> the quantity's name in the message
       character(len=*), intent(in) :: name
-      character(len=:), allocatable :: msg
+      character(len=:), allocatable, intent(out) :: msg
       msg = ''
       if (.not. ieee_is_finite(val)) then
          msg = name//' is not finite'
       else if (val <= 0.0_dp) then
          msg = name//' must be > 0, got '//str(val)
       end if
-   end function positive
+   end subroutine check_positive
 
    !> Initial drag stress from the constants (thesis Appendix A):
    !> D0 = (YS - 0.002*H1) / asinh((EE/(B*theta))**(1/n))**(2/3)

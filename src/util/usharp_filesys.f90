@@ -347,13 +347,23 @@ contains
       end function reason
    end subroutine make_dir
 
+   !> 1 where join_path puts a '/' after dir, else 0
+   pure integer function separator_width(dir) result(w)
+      character(len=*), intent(in) :: dir
+      w = 1
+      if (len(dir) == 0) then
+         w = 0
+      else if (dir(len(dir):len(dir)) == '/') then
+         w = 0
+      end if
+   end function separator_width
+
    !> dir/name
    pure function join_path(dir, name) result(path)
       character(len=*), intent(in) :: dir, name
-      character(len=:), allocatable :: path
-      if (len(dir) == 0) then
-         path = name
-      else if (dir(len(dir):len(dir)) == '/') then
+      ! A length of its own, not deferred (see usharp_strings: threads call this at once)
+      character(len=len(dir) + len(name) + separator_width(dir)) :: path
+      if (separator_width(dir) == 0) then
          path = dir//name
       else
          path = dir//'/'//name

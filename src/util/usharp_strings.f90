@@ -79,17 +79,66 @@ contains
       end do
    end function join_ints
 
-   pure function str_int(val) result(res)
+   ! The results below have their length given by a specification function, not deferred:
+   ! gfortran 12 keeps a deferred-length result's length in a static variable at each call,
+   ! which OpenMP threads calling the same line at once share (a wrong length, a torn text
+   ! or a heap overrun); a length the caller computes is its own.
+
+   !> Characters of an integer written with i0
+   pure integer function int_width(val) result(w)
       integer, intent(in) :: val
-      character(len=:), allocatable :: res
       character(len=24) :: buf
       write (buf, '(i0)') val
-      res = trim(buf)
+      w = len_trim(buf)
+   end function int_width
+
+   !> Characters of real_str(val, fmt)
+   pure integer function real_width(val, fmt) result(w)
+      real(dp), intent(in) :: val
+      character(len=*), intent(in) :: fmt
+      character(len=64) :: buf
+      call real_text(val, fmt, buf, w)
+   end function real_width
+
+   !> The text of real_str(val, fmt) in buf(:n)
+   pure subroutine real_text(val, fmt, buf, n)
+      real(dp), intent(in) :: val
+      character(len=*), intent(in) :: fmt
+      character(len=64), intent(out) :: buf
+      integer, intent(out) :: n
+      write (buf, '('//fmt//')') val
+      buf = adjustl(buf)
+      n = len_trim(buf)
+      if (len(fmt) < 2 .or. n == 0) return
+      if (.not. (scan(fmt(1:1), 'fF') == 1 .and. fmt(2:2) == '0')) return
+      if (buf(1:1) == '.') then
+         buf = '0'//buf(:n)
+         n = n + 1
+      else if (n > 1 .and. buf(1:2) == '-.') then
+         buf = '-0'//buf(2:n)
+         n = n + 1
+      end if
+      if (buf(n:n) == '.') then
+         buf(n:n) = ' '
+         n = n - 1
+      end if
+      if (buf(:n) == '-0') then
+         buf = '0'
+         n = 1
+      end if
+   end subroutine real_text
+
+   !> An integer as text (i0)
+   pure function str_int(val) result(res)
+      integer, intent(in) :: val
+      character(len=int_width(val)) :: res
+      write (res, '(i0)') val
    end function str_int
 
+   !> A real as text (g0.6, trimmed)
    pure function str_real(val) result(res)
       real(dp), intent(in) :: val
-      character(len=:), allocatable :: res
+      character(len=real_width(val, 'g0.6')) :: res
       res = real_str(val, 'g0.6')
    end function str_real
 
@@ -99,20 +148,11 @@ contains
    pure function real_str(val, fmt) result(res)
       real(dp), intent(in) :: val
       character(len=*), intent(in) :: fmt
-      character(len=:), allocatable :: res
+      character(len=real_width(val, fmt)) :: res
       character(len=64) :: buf
-      write (buf, '('//fmt//')') val
-      res = trim(adjustl(buf))
-      if (len(fmt) < 2) return
-      if (.not. (scan(fmt(1:1), 'fF') == 1 .and. fmt(2:2) == '0')) return
-      if (len(res) == 0) return
-      if (res(1:1) == '.') then
-         res = '0'//res
-      else if (len(res) > 1) then
-         if (res(1:2) == '-.') res = '-0'//res(2:)
-      end if
-      if (res(len(res):len(res)) == '.') res = res(1:len(res) - 1)
-      if (res == '-0') res = '0'
+      integer :: n
+      call real_text(val, fmt, buf, n)
+      res = buf(:n)
    end function real_str
 
    !> An end of a 95 % interval as text: 'open' where the data do not bound it (but 0, where a
