@@ -580,6 +580,11 @@ contains
          "&test name='lcf'", "  history:'thesis_lcf' /"], &
          "colon-word.nml:4:3: &test #1 'lcf': history: a namelist gives a value with '=', not ':'")
       if (allocated(error)) return
+      ! A '&' continuing a line, as in Fortran source (the read took it for '&end')
+      call expect_config_error(error, 'ampersand.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1.0, &", "  strain_rate = 1e-3 /"], &
+         "ampersand.nml:3:55: &test #1 'lcf': dt_out: a '&' does not continue a line in a namelist")
+      if (allocated(error)) return
       ! A misspelt name with a subscript is named as a misspelt name
       call expect_config_error(error, 'subscript.nml', [character(len=80) :: &
          "&fit fitted = 'H1', uper(1:2) = 1.0, 2.0 /"], &

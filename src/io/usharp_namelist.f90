@@ -840,6 +840,15 @@ contains
                end if
             end if
          end if
+         ! A '&' that continues a line, as in Fortran source: the read takes it for a group's
+         ! end ('&end')
+         q = continuation_at(items(m)%text)
+         if (q > 0) then
+            call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+               items(m)%name//": a '&' does not continue a line in a namelist (its values go on "// &
+               "over lines as they are): remove it")
+            return
+         end if
          if (lower(trim(why)) == unknown) then
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': no variable '// &
                bare(items(m)%name)//' in this group (see the input reference)')
@@ -1042,6 +1051,30 @@ contains
          end if
       end do
    end function leading_word
+
+   !> Where a '&' outside quotes is the last thing on its line of text (an assignment's
+   !> text, its lines joined by new_line), 0 if none is
+   pure integer function continuation_at(text) result(q)
+      character(len=*), intent(in) :: text
+      character(len=1) :: mark
+      integer :: i, rest
+      q = 0
+      mark = ' '
+      do i = 1, len(text)
+         if (mark /= ' ') then
+            if (text(i:i) == mark) mark = ' '
+         else if (text(i:i) == '"' .or. text(i:i) == "'") then
+            mark = text(i:i)
+         else if (text(i:i) == '&') then
+            rest = scan(text(i + 1:), new_line('a'))
+            if (rest == 0) rest = len(text) - i + 1
+            if (len_trim(text(i + 1:i + rest - 1)) == 0) then
+               q = i
+               return
+            end if
+         end if
+      end do
+   end function continuation_at
 
    !> Whether the word at q of text is a name given its value with ':' ('name: value', as
    !> YAML and INI files write it): the word holds a ':', or a ':' is the next thing after it
