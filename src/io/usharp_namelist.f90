@@ -879,13 +879,7 @@ contains
                exit
             end if
          end do
-         if (q == 0 .and. k > 0) then
-            q = leading_word(file, k, word)
-            if (q > 0) then
-               where = place(file, q)
-               colon = colon_assigns(file%text, q, word)
-            end if
-         end if
+         if (q == 0) call leading_place(word, where, colon)
          if (colon) then
             call fatal_error(error, where//': &'//label//': '//colon_message(word))
          else
@@ -896,13 +890,7 @@ contains
          ! A word before the group's first assignment, placed where it stands
          word = after(msg, 'cannot match namelist object name ')
          colon = .false.
-         if (k > 0) then
-            q = leading_word(file, k, word)
-            if (q > 0) then
-               where = place(file, q)
-               colon = colon_assigns(file%text, q, word)
-            end if
-         end if
+         call leading_place(word, where, colon)
          if (colon) then
             call fatal_error(error, where//': &'//label//': '//colon_message(word))
          else
@@ -914,6 +902,20 @@ contains
             ' (iostat '//str(ios)//')')
       end if
    contains
+      !> Where word stands before the group's first assignment (where unchanged if it does
+      !> not), and whether it is given its value with ':' there (colon unchanged if not)
+      subroutine leading_place(word, where, colon)
+         character(len=*), intent(in) :: word
+         character(len=:), allocatable, intent(inout) :: where
+         logical, intent(inout) :: colon
+         integer :: at
+         if (k == 0) return
+         at = leading_word(file, k, word)
+         if (at == 0) return
+         where = place(file, at)
+         colon = colon_assigns(file%text, at, word)
+      end subroutine leading_place
+
       !> A variable's name without its subscript
       pure function bare(name) result(text)
          character(len=*), intent(in) :: name
