@@ -18,7 +18,7 @@ module test_diagnose
    use usharp_regions, only: runs_z, noise_sd, gap_se, noise_var_rse, point_classes, &
                              class_loading, class_unloading, class_reversal, class_hold
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
-   use usharp_strings, only: real_str, interval_end, interval_format
+   use usharp_strings, only: real_str, interval_end, interval_format, str
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading
@@ -1582,11 +1582,18 @@ contains
    !> Zero-width F descriptors print a leading zero and no bare point
    subroutine test_number_format(error)
       type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: wide
       call check(error, real_str(0.55_dp, 'f0.2') == '0.55' .and. real_str(-0.55_dp, 'f0.2') == '-0.55' &
                  .and. real_str(6.0_dp, 'f0.0') == '6' .and. real_str(0.0_dp, 'f0.2') == '0.00' .and. &
                  real_str(-0.2_dp, 'f0.0') == '0' .and. real_str(12.5_dp, 'f0.1') == '12.5' .and. &
                  real_str(0.5_dp, 'f6.2') == '0.50', 'real_str: '//real_str(0.55_dp, 'f0.2')//' '// &
                  real_str(6.0_dp, 'f0.0')//' '//real_str(-0.55_dp, 'f0.2'))
+      if (allocated(error)) return
+      ! A number wider than a line (a runaway value in f0.1; the write had overrun its buffer
+      ! and stopped the program), and one that cannot be written in the descriptor
+      wide = real_str(1.0e100_dp, 'f0.1')
+      call check(error, len(wide) == 103 .and. wide(1:2) == '10' .and. real_str(1.5_dp, 'i5') == '*', &
+                 'wide numbers: '//str(len(wide))//' characters')
       if (allocated(error)) return
       ! An interval's end the data do not bound is 'open', but zero, a physical bound, a number
       call check(error, interval_end(129.0_dp, .true., 'es9.2') == 'open' .and. &

@@ -10,6 +10,9 @@ module usharp_strings
    !> Length of a line of the program's reports and summaries (Markdown tables keep a row on
    !> one line; prose longer than this is wrapped)
    integer, parameter, public :: report_line_len = 400
+   !> Characters enough for any real in any edit descriptor real_str is given (f0.d writes up
+   !> to 309 digits before the point)
+   integer, parameter :: real_buffer = 400
 
    !> Items joined into one line with a separator between them ('' for none)
    interface join
@@ -96,17 +99,23 @@ contains
    pure integer function real_width(val, fmt) result(w)
       real(dp), intent(in) :: val
       character(len=*), intent(in) :: fmt
-      character(len=64) :: buf
+      character(len=real_buffer) :: buf
       call real_text(val, fmt, buf, w)
    end function real_width
 
-   !> The text of real_str(val, fmt) in buf(:n)
+   !> The text of real_str(val, fmt) in buf(:n) ('*' where fmt cannot write val)
    pure subroutine real_text(val, fmt, buf, n)
       real(dp), intent(in) :: val
       character(len=*), intent(in) :: fmt
-      character(len=64), intent(out) :: buf
+      character(len=real_buffer), intent(out) :: buf
       integer, intent(out) :: n
-      write (buf, '('//fmt//')') val
+      integer :: ios
+      write (buf, '('//fmt//')', iostat=ios) val
+      if (ios /= 0) then
+         buf = '*'
+         n = 1
+         return
+      end if
       buf = adjustl(buf)
       n = len_trim(buf)
       if (len(fmt) < 2 .or. n == 0) return
@@ -149,7 +158,7 @@ contains
       real(dp), intent(in) :: val
       character(len=*), intent(in) :: fmt
       character(len=real_width(val, fmt)) :: res
-      character(len=64) :: buf
+      character(len=real_buffer) :: buf
       integer :: n
       call real_text(val, fmt, buf, n)
       res = buf(:n)
