@@ -585,6 +585,16 @@ contains
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, &", "  strain_rate = 1e-3 /"], &
          "ampersand.nml:3:55: &test #1 'lcf': dt_out: a '&' does not continue a line in a namelist")
       if (allocated(error)) return
+      call expect_config_error(error, 'ampersand-inside.nml', [character(len=80) :: &
+         "&test name='relax', history='thesis_relax', levels = 0.00075, &", &
+         "  0.001, dt_out = 1.0 /"], &
+         "ampersand-inside.nml:3:63: &test #1 'relax': levels: a '&' does not continue a line")
+      if (allocated(error)) return
+      ! A value holding a ':' (a path not in quotes) is no 'name: value'
+      call expect_config_error(error, 'drive.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &
+         "drive.nml:3:55: &test #1 'lcf': data_file = C:\x.txt is not a value data_file can take")
+      if (allocated(error)) return
       ! A misspelt name with a subscript is named as a misspelt name
       call expect_config_error(error, 'subscript.nml', [character(len=80) :: &
          "&fit fitted = 'H1', uper(1:2) = 1.0, 2.0 /"], &

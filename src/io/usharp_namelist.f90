@@ -828,21 +828,22 @@ contains
          if (len(word) > 0 .and. lower(trim(why)) /= unknown) then
             q = word_at(items(m)%text, word)
             if (q > 0) then
-               if (colon_assigns(items(m)%text, q, word)) then
-                  call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
-                                   colon_message(word))
-                  return
-               else if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
-                  call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
-                     word//" is neither a value of "//items(m)%name//" nor a variable with its '='; "// &
-                     'write each variable as name = value')
+               if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
+                  if (colon_assigns(items(m)%text, q, word)) then
+                     call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                                      colon_message(word))
+                  else
+                     call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                        word//" is neither a value of "//items(m)%name//" nor a variable with "// &
+                        "its '='; write each variable as name = value")
+                  end if
                   return
                end if
             end if
          end if
          ! A '&' that continues a line, as in Fortran source: the read takes it for a group's
          ! end ('&end')
-         q = continuation_at(items(m)%text)
+         q = continuation_at(items(m))
          if (q > 0) then
             call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
                items(m)%name//": a '&' does not continue a line in a namelist (its values go on "// &
@@ -1054,28 +1055,45 @@ contains
       end do
    end function leading_word
 
-   !> Where a '&' outside quotes is the last thing on its line of text (an assignment's
-   !> text, its lines joined by new_line), 0 if none is
-   pure integer function continuation_at(text) result(q)
-      character(len=*), intent(in) :: text
+   !> Where a '&' outside quotes is the first or the last thing on one of an assignment's
+   !> lines, 0 if none is (a Fortran source's continuation mark)
+   pure integer function continuation_at(item) result(q)
+      type(nml_item), intent(in) :: item
       character(len=1) :: mark
-      integer :: i, rest
+      integer :: i
       q = 0
       mark = ' '
-      do i = 1, len(text)
+      do i = 1, len(item%text)
          if (mark /= ' ') then
-            if (text(i:i) == mark) mark = ' '
-         else if (text(i:i) == '"' .or. text(i:i) == "'") then
-            mark = text(i:i)
-         else if (text(i:i) == '&') then
-            rest = scan(text(i + 1:), new_line('a'))
-            if (rest == 0) rest = len(text) - i + 1
-            if (len_trim(text(i + 1:i + rest - 1)) == 0) then
+            if (item%text(i:i) == mark) mark = ' '
+         else if (item%text(i:i) == '"' .or. item%text(i:i) == "'") then
+            mark = item%text(i:i)
+         else if (item%text(i:i) == '&') then
+            if (line_edge(i, 1) .or. line_edge(i, -1)) then
                q = i
                return
             end if
          end if
       end do
+   contains
+      !> Whether only blanks lie between i and its line's end (dir 1) or start (dir -1):
+      !> the assignment's text ends there, or a line break joined in (at 0) comes first
+      pure logical function line_edge(i, dir) result(yes)
+         integer, intent(in) :: i, dir
+         integer :: j
+         j = i + dir
+         do while (j >= 1 .and. j <= len(item%text))
+            if (item%at(j) == 0) exit
+            if (item%text(j:j) /= ' ') then
+               yes = .false.
+               return
+            end if
+            j = j + dir
+         end do
+         ! (the assignment's end is a line's end, or the next assignment follows; its
+         ! start, the name, is no line's start)
+         yes = dir > 0 .or. j >= 1
+      end function line_edge
    end function continuation_at
 
    !> Whether the word at q of text is a name given its value with ':' ('name: value', as
