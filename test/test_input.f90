@@ -590,6 +590,16 @@ contains
          "  0.001, dt_out = 1.0 /"], &
          "ampersand-inside.nml:3:63: &test #1 'relax': levels: a '&' does not continue a line")
       if (allocated(error)) return
+      ! ... after the values of a list (the read had named the list), and after a quoted
+      ! value that holds the same words (the place had been the quoted one)
+      call expect_config_error(error, 'colon-list.nml', [character(len=80) :: &
+         "&test name='relax', history='thesis_relax',", "  levels = 0.00075, 0.001, dt_out: 1.0 /"], &
+         "colon-list.nml:4:28: &test #1 'relax': dt_out: a namelist gives a value with '=', not ':'")
+      if (allocated(error)) return
+      call expect_config_error(error, 'colon-quoted.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', time_column = 'dt_out: x', dt_out: 1.0 /"], &
+         "colon-quoted.nml:3:68: &test #1 'lcf': dt_out: a namelist gives")
+      if (allocated(error)) return
       ! A value holding a ':' (a path not in quotes) is no 'name: value'
       call expect_config_error(error, 'drive.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &

@@ -48,9 +48,10 @@ module usharp_namelist
       integer, allocatable :: at(:)                !< each character's place in the file
    end type nml_item
 
-   !> The characters of a variable's name
+   !> The characters of a variable's name, and those it starts with
    character(len=*), parameter :: word_chars = &
       'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_%'
+   character(len=*), parameter :: letters = word_chars(:52)
 
    !> The file: its path, its folder (relative paths in it are relative to that) and groups
    type :: nml_file
@@ -850,6 +851,15 @@ contains
                "over lines as they are): remove it")
             return
          end if
+         ! 'name: value' after the values of the assignment before it (the read took it
+         ! for one of them)
+         q = colon_name_at(items(m))
+         if (q > 0) then
+            word = items(m)%text(q:q + verify(items(m)%text(q:), word_chars) - 2)
+            call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
+                             colon_message(word))
+            return
+         end if
          if (lower(trim(why)) == unknown) then
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': no variable '// &
                bare(items(m)%name)//' in this group (see the input reference)')
@@ -1096,6 +1106,39 @@ contains
       end function line_edge
    end function continuation_at
 
+   !> Where a name given its value with ':' stands among an assignment's values (outside
+   !> quotes, not the value's first word, which may hold a ':' itself, as C:\x does), 0 if
+   !> none does
+   pure integer function colon_name_at(item) result(q)
+      type(nml_item), intent(in) :: item
+      character(len=1) :: mark
+      integer :: i, first, w
+      q = 0
+      first = index(item%text, '=') + 1
+      if (first == 1) return
+      first = first + verify(item%text(first:)//'x', ' ') - 1
+      mark = ' '
+      i = first
+      do while (i <= len(item%text))
+         if (mark /= ' ') then
+            if (item%text(i:i) == mark) mark = ' '
+         else if (item%text(i:i) == '"' .or. item%text(i:i) == "'") then
+            mark = item%text(i:i)
+         else if (i > first .and. verify(item%text(i:i), letters) == 0 .and. &
+                  verify(item%text(i - 1:i - 1), word_chars//'.') /= 0) then
+            ! a word that starts with a letter: its end, then a ':'?
+            w = verify(item%text(i:)//' ', word_chars) - 1
+            if (colon_assigns(item%text, i, item%text(i:i + w - 1))) then
+               q = i
+               return
+            end if
+            i = i + w
+            cycle
+         end if
+         i = i + 1
+      end do
+   end function colon_name_at
+
    !> Whether the word at q of text is a name given its value with ':' ('name: value', as
    !> YAML and INI files write it): the word holds a ':', or a ':' is the next thing after it
    pure logical function colon_assigns(text, q, word) result(yes)
@@ -1123,7 +1166,8 @@ contains
       text = name//": a namelist gives a value with '=', not ':'; write "//name//' = value'
    end function colon_message
 
-   !> Where word (any case) stands alone in text after its first '=', 0 if nowhere
+   !> Where word (any case) stands alone in text after its first '=' and outside quotes, 0 if
+   !> nowhere
    pure integer function word_at(text, word) result(q)
       character(len=*), intent(in) :: text, word
       integer :: from, i
@@ -1135,7 +1179,7 @@ contains
             return
          end if
          q = from + i - 1
-         if (alone(q - 1) .and. alone(q + len(word))) return
+         if (alone(q - 1) .and. alone(q + len(word)) .and. .not. quoted(q)) return
          from = q + 1
       end do
    contains
@@ -1145,6 +1189,22 @@ contains
          if (p < 1 .or. p > len(text)) return
          alone = verify(text(p:p), word_chars) /= 0
       end function alone
+
+      !> Whether p lies inside a quoted value (a word there is text, not the read's word)
+      pure logical function quoted(p)
+         integer, intent(in) :: p
+         character(len=1) :: mark
+         integer :: j
+         mark = ' '
+         do j = 1, p - 1
+            if (mark /= ' ') then
+               if (text(j:j) == mark) mark = ' '
+            else if (text(j:j) == '"' .or. text(j:j) == "'") then
+               mark = text(j:j)
+            end if
+         end do
+         quoted = mark /= ' '
+      end function quoted
    end function word_at
 
    !> The namelist read's reason in plain words, for a value of variable (gfortran's words
