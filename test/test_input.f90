@@ -600,6 +600,10 @@ contains
          "&test name='lcf', history='thesis_lcf', time_column = 'dt_out: x', dt_out: 1.0 /"], &
          "colon-quoted.nml:3:68: &test #1 'lcf': dt_out: a namelist gives")
       if (allocated(error)) return
+      call expect_config_error(error, 'colon-subscript.nml', [character(len=80) :: &
+         "&test name='relax', history='thesis_relax',", "  levels(1:2): 0.00075, 0.001 /"], &
+         "colon-subscript.nml:4:3: &test #1 'relax': levels: a namelist gives a value with '='")
+      if (allocated(error)) return
       ! A value holding a ':' (a path not in quotes) is no 'name: value'
       call expect_config_error(error, 'drive.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &

@@ -1153,7 +1153,17 @@ contains
       p = q + len(word)
       if (yes .or. p < 1 .or. p > len(text)) return
       i = verify(text(p:), ' '//achar(9))
-      if (i > 0) yes = text(p + i - 1:p + i - 1) == ':'
+      if (i == 0) return
+      p = p + i - 1
+      ! past a subscript: 'levels(1:2): ...'
+      if (text(p:p) == '(' .and. index(text(p:), ')') > 0) then
+         p = p + index(text(p:), ')')
+         if (p > len(text)) return
+         i = verify(text(p:), ' '//achar(9))
+         if (i == 0) return
+         p = p + i - 1
+      end if
+      yes = text(p:p) == ':'
    end function colon_assigns
 
    !> The message for a name given its value with ':' (see colon_assigns)
