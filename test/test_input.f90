@@ -604,6 +604,10 @@ contains
          "&test name='relax', history='thesis_relax',", "  levels(1:2): 0.00075, 0.001 /"], &
          "colon-subscript.nml:4:3: &test #1 'relax': levels: a namelist gives a value with '='")
       if (allocated(error)) return
+      call expect_config_error(error, 'ampersand-group.nml', [character(len=80) :: &
+         "&test &", "  name='lcf', history='thesis_lcf' /"], &
+         "ampersand-group.nml:3:7: &test #1: a '&' does not continue a line")
+      if (allocated(error)) return
       ! A value holding a ':' (a path not in quotes) is no 'name: value'
       call expect_config_error(error, 'drive.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &

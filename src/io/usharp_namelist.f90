@@ -52,6 +52,9 @@ module usharp_namelist
    character(len=*), parameter :: word_chars = &
       'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_%'
    character(len=*), parameter :: letters = word_chars(:52)
+   !> What a Fortran source's continuation mark in a namelist is told
+   character(len=*), parameter :: ampersand_text = "a '&' does not continue a line in a "// &
+      'namelist (its values go on over lines as they are): remove it'
 
    !> The file: its path, its folder (relative paths in it are relative to that) and groups
    type :: nml_file
@@ -847,8 +850,7 @@ contains
          q = continuation_at(items(m))
          if (q > 0) then
             call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
-               items(m)%name//": a '&' does not continue a line in a namelist (its values go on "// &
-               "over lines as they are): remove it")
+                             items(m)%name//': '//ampersand_text)
             return
          end if
          ! 'name: value' after the values of the assignment before it (the read took it
@@ -909,8 +911,15 @@ contains
                ' is no variable of this group with its value; write each variable as name = value')
          end if
       else
-         call fatal_error(error, where//': &'//label//': '//plain_reason(trim(msg), '')// &
-            ' (iostat '//str(ios)//')')
+         ! A '&' before the first assignment: a continuation mark after the group's name
+         q = 0
+         if (k > 0) q = leading_word(file, k, '&')
+         if (q > 0) then
+            call fatal_error(error, place(file, q)//': &'//label//': '//ampersand_text)
+         else
+            call fatal_error(error, where//': &'//label//': '//plain_reason(trim(msg), '')// &
+               ' (iostat '//str(ios)//')')
+         end if
       end if
    contains
       !> Where word stands before the group's first assignment (where unchanged if it does
