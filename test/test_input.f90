@@ -608,10 +608,20 @@ contains
          "&test &", "  name='lcf', history='thesis_lcf' /"], &
          "ampersand-group.nml:3:7: &test #1: a '&' does not continue a line")
       if (allocated(error)) return
+      ! A group ended by '&end' on its own line: the '&' is no continuation mark, and the
+      ! last assignment's own fault is named
+      call expect_config_error(error, 'ampersand-end.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', dt_out = 1.0, sigx = 14.0", "&end"], &
+         "ampersand-end.nml:3:55: &test #1 'lcf': no variable sigx in this group")
+      if (allocated(error)) return
       ! A value holding a ':' (a path not in quotes) is no 'name: value'
       call expect_config_error(error, 'drive.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &
          "drive.nml:3:55: &test #1 'lcf': data_file = C:\x.txt is not a value data_file can take")
+      if (allocated(error)) return
+      call expect_config_error(error, 'drive-after.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf', data_file = 'a.txt' C:\x.txt /"], &
+         "drive-after.nml:3:61: &test #1 'lcf': c:\x.txt is neither a value of data_file")
       if (allocated(error)) return
       ! A misspelt name with a subscript is named as a misspelt name
       call expect_config_error(error, 'subscript.nml', [character(len=80) :: &

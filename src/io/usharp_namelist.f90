@@ -790,7 +790,7 @@ contains
       procedure(group_reader) :: reader
       type(nml_item), allocatable :: items(:)
       character(len=512) :: why
-      character(len=:), allocatable :: value, unknown, where, word
+      character(len=:), allocatable :: value, unknown, where, word, written
       integer :: m, stat, q
       logical :: colon
       allocate (items(0))
@@ -815,7 +815,7 @@ contains
             if (q > 0) then
                if (colon_assigns(items(m)%text, q, word)) then
                   call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
-                                   colon_message(word))
+                                   colon_message(items(m)%text(q:q + len(word) - 1)))
                else
                   call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
                      word//" has no '=' after it; write each variable as name = value")
@@ -835,7 +835,7 @@ contains
                if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
                   if (colon_assigns(items(m)%text, q, word)) then
                      call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
-                                      colon_message(word))
+                                      colon_message(items(m)%text(q:q + len(word) - 1)))
                   else
                      call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
                         word//" is neither a value of "//items(m)%name//" nor a variable with "// &
@@ -884,17 +884,19 @@ contains
          ! The name's own place where an assignment holds it, or before the first one
          q = 0
          colon = .false.
+         written = word
          do m = 1, size(items)
             q = word_at(items(m)%text, word)
             if (q > 0) then
                where = place(file, items(m)%at(q))
                colon = colon_assigns(items(m)%text, q, word)
+               written = items(m)%text(q:q + len(word) - 1)
                exit
             end if
          end do
-         if (q == 0) call leading_place(word, where, colon)
+         if (q == 0) call leading_place(word, where, colon, written)
          if (colon) then
-            call fatal_error(error, where//': &'//label//': '//colon_message(word))
+            call fatal_error(error, where//': &'//label//': '//colon_message(written))
          else
             call fatal_error(error, where//': &'//label//': '//word//" has no '=' after it; "// &
                'write each variable as name = value')
@@ -903,9 +905,10 @@ contains
          ! A word before the group's first assignment, placed where it stands
          word = after(msg, 'cannot match namelist object name ')
          colon = .false.
-         call leading_place(word, where, colon)
+         written = word
+         call leading_place(word, where, colon, written)
          if (colon) then
-            call fatal_error(error, where//': &'//label//': '//colon_message(word))
+            call fatal_error(error, where//': &'//label//': '//colon_message(written))
          else
             call fatal_error(error, where//': &'//label//': '//word// &
                ' is no variable of this group with its value; write each variable as name = value')
@@ -922,11 +925,12 @@ contains
          end if
       end if
    contains
-      !> Where word stands before the group's first assignment (where unchanged if it does
-      !> not), and whether it is given its value with ':' there (colon unchanged if not)
-      subroutine leading_place(word, where, colon)
+      !> Where word stands before the group's first assignment, whether it is given its value
+      !> with ':' there, and the word as written there (each unchanged if it does not stand
+      !> there)
+      subroutine leading_place(word, where, colon, written)
          character(len=*), intent(in) :: word
-         character(len=:), allocatable, intent(inout) :: where
+         character(len=:), allocatable, intent(inout) :: where, written
          logical, intent(inout) :: colon
          integer :: at
          if (k == 0) return
@@ -934,6 +938,7 @@ contains
          if (at == 0) return
          where = place(file, at)
          colon = colon_assigns(file%text, at, word)
+         written = file%text(at:at + len(word) - 1)
       end subroutine leading_place
 
       !> A variable's name without its subscript
@@ -1087,7 +1092,7 @@ contains
             if (item%text(i:i) == mark) mark = ' '
          else if (item%text(i:i) == '"' .or. item%text(i:i) == "'") then
             mark = item%text(i:i)
-         else if (item%text(i:i) == '&') then
+         else if (item%text(i:i) == '&' .and. .not. end_mark(i)) then
             if (line_edge(i, 1) .or. line_edge(i, -1)) then
                q = i
                return
@@ -1095,6 +1100,16 @@ contains
          end if
       end do
    contains
+      !> Whether the '&' at i is the group's end, '&end' (the scan keeps it in the group's
+      !> last assignment)
+      pure logical function end_mark(i) result(yes)
+         integer, intent(in) :: i
+         yes = .false.
+         if (i + 3 > len(item%text)) return
+         yes = lower(item%text(i:i + 3)) == '&end'
+         if (yes .and. i + 4 <= len(item%text)) yes = verify(item%text(i + 4:i + 4), word_chars) /= 0
+      end function end_mark
+
       !> Whether only blanks lie between i and its line's end (dir 1) or start (dir -1):
       !> the assignment's text ends there, or a line break joined in (at 0) comes first
       pure logical function line_edge(i, dir) result(yes)
@@ -1159,6 +1174,8 @@ contains
       ! (the read takes 'name:' or "name:'text'" for one word; not a subscript's 'a(1:2)')
       i = index(word, ':')
       if (i > 1) yes = verify(word(:i - 1), word_chars) == 0
+      ! (not a drive's 'c:\x' or a scheme's 'http://')
+      if (yes .and. i < len(word)) yes = scan(word(i + 1:i + 1), '\/') == 0
       p = q + len(word)
       if (yes .or. p < 1 .or. p > len(text)) return
       i = verify(text(p:), ' '//achar(9))
