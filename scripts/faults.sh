@@ -103,6 +103,8 @@ row "an '=' without a name before it" - u simulate noname.nml
 row "'name: value' (YAML, INI) for 'name = value'" - u simulate colon.nml
 { echo "&model name='miller', units='ksi', temperature=866.15, &"; echo "  tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > amp.nml
 row "a '&' continuing a line, as in Fortran source" - u simulate amp.nml
+{ echo "&model name='miller', units=ksi, temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > unquoted.nml
+row 'a text value without its quotes' - u simulate unquoted.nml
 { echo "&model name='miller, units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > runon.nml
 row 'a quote left open before the next group' - u simulate runon.nml
 { echo "&model"; echo "  miller units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /"; echo "$consts"; echo "$lcf"; } > leading.nml

@@ -617,7 +617,14 @@ contains
       ! A value holding a ':' (a path not in quotes) is no 'name: value'
       call expect_config_error(error, 'drive.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &
-         "drive.nml:3:55: &test #1 'lcf': data_file = C:\x.txt is not a value data_file can take")
+         "drive.nml:3:55: &test #1 'lcf': data_file = C:\x.txt: a text value is written in quotes: "// &
+         "data_file = 'C:\x.txt'")
+      if (allocated(error)) return
+      ! A text value without its quotes (the read had said only that it was no value)
+      call expect_config_error(error, 'unquoted.nml', [character(len=80) :: &
+         "&test name='lcf', history=thesis_lcf /"], &
+         "unquoted.nml:3:19: &test #1 'lcf': history = thesis_lcf: a text value is written in "// &
+         "quotes: history = 'thesis_lcf'")
       if (allocated(error)) return
       call expect_config_error(error, 'drive-after.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', data_file = 'a.txt' C:\x.txt /"], &

@@ -789,8 +789,8 @@ contains
       character(len=*), intent(in) :: label, msg
       procedure(group_reader) :: reader
       type(nml_item), allocatable :: items(:)
-      character(len=512) :: why
-      character(len=:), allocatable :: value, unknown, where, word, written
+      character(len=512) :: why, why_quoted
+      character(len=:), allocatable :: value, unknown, where, word, written, text
       integer :: m, stat, q
       logical :: colon
       allocate (items(0))
@@ -861,6 +861,21 @@ contains
             call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
                              colon_message(word))
             return
+         end if
+         ! A text value without its quotes: the read takes it quoted
+         text = trim(adjustl(items(m)%text(index(items(m)%text, '=') + 1:)))
+         if (len(text) > 1) then
+            if (text(len(text):) == ',') text = trim(text(:len(text) - 1))
+         end if
+         if (len(text) > 0 .and. scan(text, '''"') == 0) then
+            call reader(['&'//trim(file%groups(k)%name)//' '//items(m)%name//" = '"//text// &
+                         "' /"], stat, why_quoted)
+            if (stat == 0) then
+               call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '// &
+                  items(m)%name//' = '//text//": a text value is written in quotes: "// &
+                  items(m)%name//" = '"//text//"'")
+               return
+            end if
          end if
          if (lower(trim(why)) == unknown) then
             call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': no variable '// &
