@@ -1094,24 +1094,38 @@ contains
       end do
    end function leading_word
 
+   !> Which characters of text lie inside a quoted value, its quotes included
+   pure function quoted_mask(text) result(inside)
+      character(len=*), intent(in) :: text
+      logical :: inside(len(text))
+      character(len=1) :: mark
+      integer :: i
+      mark = ' '
+      do i = 1, len(text)
+         inside(i) = mark /= ' '
+         if (mark /= ' ') then
+            if (text(i:i) == mark) mark = ' '
+         else if (text(i:i) == '"' .or. text(i:i) == "'") then
+            mark = text(i:i)
+            inside(i) = .true.
+         end if
+      end do
+   end function quoted_mask
+
    !> Where a '&' outside quotes is the first or the last thing on one of an assignment's
    !> lines, 0 if none is (a Fortran source's continuation mark)
    pure integer function continuation_at(item) result(q)
       type(nml_item), intent(in) :: item
-      character(len=1) :: mark
+      logical :: inside(len(item%text))
       integer :: i
       q = 0
-      mark = ' '
+      inside = quoted_mask(item%text)
       do i = 1, len(item%text)
-         if (mark /= ' ') then
-            if (item%text(i:i) == mark) mark = ' '
-         else if (item%text(i:i) == '"' .or. item%text(i:i) == "'") then
-            mark = item%text(i:i)
-         else if (item%text(i:i) == '&' .and. .not. end_mark(i)) then
-            if (line_edge(i, 1) .or. line_edge(i, -1)) then
-               q = i
-               return
-            end if
+         if (inside(i) .or. item%text(i:i) /= '&') cycle
+         if (end_mark(i)) cycle
+         if (line_edge(i, 1) .or. line_edge(i, -1)) then
+            q = i
+            return
          end if
       end do
    contains
@@ -1150,21 +1164,17 @@ contains
    !> none does
    pure integer function colon_name_at(item) result(q)
       type(nml_item), intent(in) :: item
-      character(len=1) :: mark
+      logical :: inside(len(item%text))
       integer :: i, first, w
       q = 0
       first = index(item%text, '=') + 1
       if (first == 1) return
       first = first + verify(item%text(first:)//'x', ' ') - 1
-      mark = ' '
+      inside = quoted_mask(item%text)
       i = first
       do while (i <= len(item%text))
-         if (mark /= ' ') then
-            if (item%text(i:i) == mark) mark = ' '
-         else if (item%text(i:i) == '"' .or. item%text(i:i) == "'") then
-            mark = item%text(i:i)
-         else if (i > first .and. verify(item%text(i:i), letters) == 0 .and. &
-                  verify(item%text(i - 1:i - 1), word_chars//'.') /= 0) then
+         if (.not. inside(i) .and. i > first .and. verify(item%text(i:i), letters) == 0 .and. &
+             verify(item%text(i - 1:i - 1), word_chars//'.') /= 0) then
             ! a word that starts with a letter: its end, then a ':'?
             w = verify(item%text(i:)//' ', word_chars) - 1
             if (colon_assigns(item%text, i, item%text(i:i + w - 1))) then
@@ -1221,7 +1231,9 @@ contains
    !> nowhere
    pure integer function word_at(text, word) result(q)
       character(len=*), intent(in) :: text, word
+      logical :: inside(len(text))
       integer :: from, i
+      inside = quoted_mask(text)
       from = index(text, '=') + 1
       do
          i = index(lower(text(from:)), lower(word))
@@ -1230,7 +1242,7 @@ contains
             return
          end if
          q = from + i - 1
-         if (alone(q - 1) .and. alone(q + len(word)) .and. .not. quoted(q)) return
+         if (alone(q - 1) .and. alone(q + len(word)) .and. .not. inside(q)) return
          from = q + 1
       end do
    contains
@@ -1240,22 +1252,6 @@ contains
          if (p < 1 .or. p > len(text)) return
          alone = verify(text(p:p), word_chars) /= 0
       end function alone
-
-      !> Whether p lies inside a quoted value (a word there is text, not the read's word)
-      pure logical function quoted(p)
-         integer, intent(in) :: p
-         character(len=1) :: mark
-         integer :: j
-         mark = ' '
-         do j = 1, p - 1
-            if (mark /= ' ') then
-               if (text(j:j) == mark) mark = ' '
-            else if (text(j:j) == '"' .or. text(j:j) == "'") then
-               mark = text(j:j)
-            end if
-         end do
-         quoted = mark /= ' '
-      end function quoted
    end function word_at
 
    !> The namelist read's reason in plain words, for a value of variable (gfortran's words
