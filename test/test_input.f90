@@ -614,6 +614,12 @@ contains
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, sigx = 14.0", "&end"], &
          "ampersand-end.nml:3:55: &test #1 'lcf': no variable sigx in this group")
       if (allocated(error)) return
+      ! ... and '&end' after the last value on its line is no part of the value
+      call expect_config_error(error, 'end-after-value.nml', [character(len=80) :: &
+         "&test name='lcf', history = thesis_lcf &end"], &
+         "end-after-value.nml:3:19: &test #1 'lcf': history = thesis_lcf: a text value is written "// &
+         "in quotes: history = 'thesis_lcf'")
+      if (allocated(error)) return
       ! A value holding a ':' (a path not in quotes) is no 'name: value'
       call expect_config_error(error, 'drive.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0, data_file = C:\x.txt /"], &

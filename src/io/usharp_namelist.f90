@@ -374,6 +374,13 @@ contains
                i = i + 1
                cycle
             end if
+            ! '&end' ends the group as '/' does
+            if (c == '&' .and. i + 3 <= b) then
+               if (lower(file%text(i:i + 3)) == '&end') then
+                  if (i + 3 == b) exit lines
+                  if (verify(file%text(i + 4:i + 4), word_chars) /= 0) exit lines
+               end if
+            end if
             select case (c)
             case ("'", '"')
                quote = c
@@ -1122,23 +1129,12 @@ contains
       inside = quoted_mask(item%text)
       do i = 1, len(item%text)
          if (inside(i) .or. item%text(i:i) /= '&') cycle
-         if (end_mark(i)) cycle
          if (line_edge(i, 1) .or. line_edge(i, -1)) then
             q = i
             return
          end if
       end do
    contains
-      !> Whether the '&' at i is the group's end, '&end' (the scan keeps it in the group's
-      !> last assignment)
-      pure logical function end_mark(i) result(yes)
-         integer, intent(in) :: i
-         yes = .false.
-         if (i + 3 > len(item%text)) return
-         yes = lower(item%text(i:i + 3)) == '&end'
-         if (yes .and. i + 4 <= len(item%text)) yes = verify(item%text(i + 4:i + 4), word_chars) /= 0
-      end function end_mark
-
       !> Whether only blanks lie between i and its line's end (dir 1) or start (dir -1):
       !> the assignment's text ends there, or a line break joined in (at 0) comes first
       pure logical function line_edge(i, dir) result(yes)
