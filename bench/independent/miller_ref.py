@@ -66,7 +66,8 @@ def creep(stress=15.0, ramp=1.0, duration=600.0):
     return 'stress', np.array([0.0, ramp, duration]), np.array([0.0, stress, stress])
 
 
-def cyclic(strain_range, rate, cycles):
+def cyclic(strain_range, rate, cycles, hold=0.0):
+    """Triangular cycling from zero, each cycle 0 -> +a (held hold s) -> 0 -> -a -> 0"""
     a = 0.5 * strain_range
     q = a / rate
     t, v = [0.0], [0.0]
@@ -74,12 +75,17 @@ def cyclic(strain_range, rate, cycles):
         for val in (a, 0.0, -a, 0.0):
             t.append(t[-1] + q)
             v.append(val)
+            if val == a and hold > 0.0:
+                t.append(t[-1] + hold)
+                v.append(val)
     return 'strain', np.array(t), np.array(v)
 
 
 HISTORIES = dict(lcf=thesis_lcf, relax=relaxation, ratchet=ratchet, creep=creep,
                  c6=lambda: cyclic(0.006, 1.0e-3, 3), c8=lambda: cyclic(0.008, 1.0e-3, 3),
-                 c10=lambda: cyclic(0.010, 1.0e-3, 3))
+                 c10=lambda: cyclic(0.010, 1.0e-3, 3),
+                 h6=lambda: cyclic(0.006, 1.0e-3, 3, 60.0), h8=lambda: cyclic(0.008, 1.0e-3, 3, 60.0),
+                 h10=lambda: cyclic(0.010, 1.0e-3, 3, 60.0))
 
 
 def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):

@@ -34,6 +34,8 @@ MATRICES = {
     'thesis-hold-lcf': ([('lcf', 0.5), ('relax', 1.0), ('ratchet', 1.0)], 'lcf', 'holdout'),
     'creep': ([('lcf', 0.5), ('relax', 1.0), ('creep', 1.0)], 'creep', 'holdout'),
     'specimen': ([('c6', 0.1), ('c8', 0.1), ('c10', 0.1)], 'c8', 'specimen'),
+    # The same cycles with a hold of 60 s at each tensile peak (creep-fatigue tests)
+    'specimen-hold': ([('h6', 0.2), ('h8', 0.2), ('h10', 0.2)], 'h8', 'specimen'),
 }
 
 # Rows: the effect drawn at magnitude u in [0, 1] of its realistic range (0: the low end),
@@ -75,14 +77,17 @@ ACCEPT = {'clean': ['none'], 'modulus': ['compliance', 'scatter'], 'temperature'
 ROWS = list(ACCEPT)
 
 WEIGHTING = {'lcf': "weighting = 'threshold', sig = 14.0", 'relax': "weighting = 'relaxation'",
-             'ratchet': '', 'creep': '', 'c6': '', 'c8': '', 'c10': ''}
+             'ratchet': '', 'creep': '', 'c6': '', 'c8': '', 'c10': '', 'h6': '', 'h8': '', 'h10': ''}
 HIST = {'lcf': "history = 'thesis_lcf', amp_first = 0.0005, amp_last = 0.005, npeaks = 12, quarter_time = 10.0",
         'relax': "history = 'relaxation', levels = 0.00075, 0.001, ramp_time = 1.0, holds = 600.0, 600.0",
         'ratchet': "history = 'ratchet', up = 0.0005, down = 0.00025, repeats = 15, seg_time = 40.0",
         'creep': "history = 'creep', stress = 15.0, ramp_time = 1.0, duration = 600.0",
         'c6': "history = 'cyclic', strain_range = 0.006, strain_rate = 1.0e-3, cycles = 3",
         'c8': "history = 'cyclic', strain_range = 0.008, strain_rate = 1.0e-3, cycles = 3",
-        'c10': "history = 'cyclic', strain_range = 0.010, strain_rate = 1.0e-3, cycles = 3"}
+        'c10': "history = 'cyclic', strain_range = 0.010, strain_rate = 1.0e-3, cycles = 3",
+        'h6': "history = 'cyclic', strain_range = 0.006, strain_rate = 1.0e-3, cycles = 3, hold_max = 60.0",
+        'h8': "history = 'cyclic', strain_range = 0.008, strain_rate = 1.0e-3, cycles = 3, hold_max = 60.0",
+        'h10': "history = 'cyclic', strain_range = 0.010, strain_rate = 1.0e-3, cycles = 3, hold_max = 60.0"}
 
 
 def deck(tests, held, files, out_dir, mode='holdout'):
