@@ -28,7 +28,7 @@ module test_diagnose
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of
-   use usharp_diagnose_refit, only: judge, rate_undetermined
+   use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
@@ -96,6 +96,7 @@ contains
          new_unittest('form-left-open-below-the-floor-fits-every-test', test_open_below_floor), &
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('rate-held-where-undetermined', test_rate_held), &
+         new_unittest('refit-starts-in-both-signs-basins', test_both_signs), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
@@ -1501,6 +1502,41 @@ contains
       r = ratio_beyond_doubt(1.2_dp, 30.0_dp, ieee_value(1.0_dp, ieee_quiet_nan), 31.0_dp)
       call check(error, abs(r - 1.2_dp) < 1.0e-12_dp, 'no interval: the fitted ratio')
    end subroutine test_beyond_doubt
+
+   !> A refit starts from the lowest screening end point of the other sign too, and its
+   !> further starts of the constants take that end point's parameters as well as the
+   !> lowest's (the end points of the softening case in other_sign: the lowest a hardening,
+   !> the third a softening); an effect whose end points all have one sign, or no
+   !> parameter, starts as before
+   subroutine test_both_signs(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_outcome) :: e
+      real(dp) :: xc(2, 3)
+      real(dp), allocatable :: xs(:, :)
+      e%x = [0.1_dp, 0.2_dp, -0.874_dp, 0.340_dp]
+      e%x_alt = reshape([0.3_dp, 0.4_dp, -0.219_dp, 13.5_dp, 0.5_dp, 0.6_dp, -0.215_dp, 0.87_dp, &
+                         0.7_dp, 0.8_dp, 0.293_dp, 2.80_dp, 0.9_dp, 1.0_dp, 0.006_dp, 0.0_dp], [4, 4])
+      xc = reshape([1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp, 6.0_dp], [2, 3])
+      call check(error, other_sign(e, 2) == 3, 'the lowest softening end point not found: '// &
+                 str(other_sign(e, 2)))
+      if (allocated(error)) return
+      xs = with_params(e, xc)
+      call check(error, size(xs, 2) == 6, 'further starts of the constants not doubled: '//str(size(xs, 2)))
+      if (allocated(error)) return
+      call check(error, all(xs(1:2, 1:3) == xc) .and. all(xs(1:2, 4:6) == xc) .and. &
+                 all(xs(3, 1:3) == -0.874_dp) .and. all(xs(3:4, 4:6) == spread([0.293_dp, 2.80_dp], 2, 3)), &
+                 'further starts not the constants with each basin''s parameters')
+      if (allocated(error)) return
+      e%x_alt(3, 3) = -0.293_dp
+      e%x_alt(3, 4) = -0.006_dp
+      call check(error, other_sign(e, 2) == 0 .and. size(with_params(e, xc), 2) == 3, &
+                 'end points of one sign took another basin')
+      if (allocated(error)) return
+      ! No effect parameter in x (the constants alone)
+      e%x = [0.1_dp, 0.2_dp]
+      e%x_alt = reshape([0.3_dp, -0.4_dp], [2, 1])
+      call check(error, other_sign(e, 2) == 0, 'a constant''s sign taken for the effect''s')
+   end subroutine test_both_signs
 
    !> An effect judged beyond its limit is refitted with its rate held only where the rate
    !> is undetermined (the LCF-held-out case: a second back stress with gamma3 25 [-2.8,
