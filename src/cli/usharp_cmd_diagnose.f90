@@ -68,9 +68,10 @@ contains
       call make_dir(dir, error)
       if (allocated(error)) return
       ! The journal's own format joins the fingerprint: a journal of another layout of the
-      ! diagnosis's units is refused rather than misread
+      ! diagnosis's units, or of units that start from other points (4: a refit from each
+      ! sign's basin), is refused rather than misread
       call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
-                        ' units=3', journal_mode, error)
+                        ' units=4', journal_mode, error)
       if (allocated(error)) return
       call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
       call journal%close(e)
