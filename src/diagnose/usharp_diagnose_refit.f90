@@ -341,7 +341,9 @@ contains
    !> Search points of the constants' columns xc with e's screening parameters, and again
    !> with those of the other sign's basin where the screening found one (see other_sign)
    pure function with_params(e, xc) result(xs)
+      !> the refit's effect, with its screening end points
       type(effect_outcome), intent(in) :: e
+      !> starts of the constants (log10, one column each)
       real(dp), intent(in) :: xc(:, :)
       real(dp), allocatable :: xs(:, :)
       integer :: k, nc, j
@@ -363,6 +365,7 @@ contains
    !> the held-out gap), while a softening reaches 0.665 with constants near the data's; from
    !> the baseline's constants LM stops at 1.026 with a softening
    pure integer function other_sign(e, nc) result(k)
+      !> the refit's effect, with its screening end points
       type(effect_outcome), intent(in) :: e
       integer, intent(in) :: nc  !< fitted constants ahead of the parameters in x
       integer :: j
