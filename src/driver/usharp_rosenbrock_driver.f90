@@ -82,6 +82,9 @@ module usharp_rosenbrock_driver
 
    !> Step-size control: safety factor, bounds of the change, and the order of the estimate
    real(dp), parameter :: safety = 0.9_dp, fac_min = 0.2_dp, fac_max = 6.0_dp, elo = 4.0_dp
+   !> Under a smooth forcing, the share of the tolerance within which the continuous
+   !> extension and the Hermite interpolant must agree at mid-step (see usharp_rodas4.inc)
+   real(dp), parameter :: dense_share = 0.5_dp
    !> Step attempts a simulation may take in all, per branch of the history and per output
    !> time (see usharp_rodas4.inc)
    integer(int64), parameter :: steps_per_branch = 1000, steps_per_output = 20
@@ -205,7 +208,7 @@ contains
    ! fpm compiles a file again when its own text changes, not when a file it includes does.
    ! The body's hash stands here, checked by the test rodas4-body-hash-recorded, so that an
    ! edit of the body changes this file too and the build takes it:
-   ! usharp_rodas4.inc FNV-1a 176BACE79D5AEDA1
+   ! usharp_rodas4.inc FNV-1a 403A6A6CDBEED907
    subroutine integrate_3(sys, hist, tout, opts, y0, atol, rtol, res, error)
       integer, parameter :: n = 3
       include 'usharp_rodas4.inc'

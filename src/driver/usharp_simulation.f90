@@ -14,10 +14,12 @@ module usharp_simulation
    !> is required. At equal tolerances RODAS4 is some 20 times more accurate than CVODE.
    real(dp), parameter :: cvode_tol(2) = [1.0e-7_dp, 1.0e-10_dp]
    real(dp), parameter :: rodas4_tol(2) = [1.0e-5_dp, 1.0e-8_dp]
-   !> RODAS4's default rtol under a smooth (measured) forcing: its long steps in the viscous
-   !> flow of the slow Alloy 617 tests need it to stay within 1e-4 of the peak stress of a
-   !> tight reference (at 1e-5 they reach 1.4e-4; bench/measured.sh)
-   real(dp), parameter, public :: rodas4_smooth_rtol = 6.0e-6_dp
+   !> RODAS4's default rtol under a smooth (measured) forcing, where the inelastic strain's
+   !> error is weighed in the stress it makes (usharp_rodas4.inc): the seven Alloy 617 tests
+   !> within 1e-4 of the peak stress of a tight reference both at their fitted constants and
+   !> at the deck's start constants (at 3e-5 the slow ones reach 9e-5 and 1.3e-4;
+   !> bench/measured.sh)
+   real(dp), parameter, public :: rodas4_smooth_rtol = 2.0e-5_dp
 
    !> Integrator settings
    type :: solver_options
