@@ -432,8 +432,7 @@ contains
       call check(error, .not. allocated(uerr), 'histories built')
       if (allocated(error)) return
       tout = output_times(hs, 0.0_dp)
-      tight%rtol = 1.0e-10_dp
-      tight%atol_strain = 1.0e-14_dp
+      tight = tight_solver()
       call simulate_rosenbrock(m, hs, tout, def, r, uerr)
       if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, tight, ref, uerr)
       if (.not. allocated(uerr)) call simulate_rosenbrock(m, hr, tout, def, rr, uerr)
@@ -470,8 +469,7 @@ contains
       call check(error, .not. allocated(uerr), 'model and history built')
       if (allocated(error)) return
       tout = output_times(hs, 0.0_dp)
-      tight%rtol = 1.0e-10_dp
-      tight%atol_strain = 1.0e-14_dp
+      tight = tight_solver()
       call simulate_rosenbrock(m, hs, tout, def, r, uerr)
       call check(error, .not. allocated(uerr), 'simulated at the defaults')
       if (allocated(error)) return
@@ -512,8 +510,7 @@ contains
       call check(error, .not. allocated(uerr), 'histories built')
       if (allocated(error)) return
       tout = output_times(hs, 0.0_dp)
-      tight%rtol = 1.0e-10_dp
-      tight%atol_strain = 1.0e-14_dp
+      tight = tight_solver()
       eff%compliance = 0.05_dp
       eff%soften = 0.1_dp
       eff%soften_rate = 200.0_dp
@@ -561,6 +558,13 @@ contains
       call check(error, maxval(abs(lag_s%strain - lag_r%strain)) <= du, &
                  'the lag of the spline parts from the lag of the samples more than their forcings')
    end subroutine test_smooth_effects
+
+   !> The tolerances of the tight references (rtol 1e-10, atol 1e-14 on strain)
+   pure function tight_solver() result(opts)
+      type(solver_options) :: opts
+      opts%rtol = 1.0e-10_dp
+      opts%atol_strain = 1.0e-14_dp
+   end function tight_solver
 
    !> A measured-like strain: two triangular cycles of +-0.4 % at 1e-3/s sampled every 0.05 s,
    !> rounded to 1e-5, with a 5e-5 dip in the first ramp
