@@ -16,7 +16,7 @@ module usharp_diagnose_screen
    use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
                                        softening_starts, soften_rate0, low_end_deltas, bic_power, &
-                                       test_sizes, block_sums, deviance_change
+                                       test_sizes, block_sums, deviance_change, screening_steps
    implicit none
    private
 
@@ -83,7 +83,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(effect_problem) :: ep
       type(optimum_type) :: opt
-      real(dp), allocatable :: je(:, :), rr(:), x(:), step(:), lo(:), hi(:)
+      real(dp), allocatable :: je(:, :), rr(:), x(:), step(:), lo(:), hi(:), steps(:)
       real(dp), allocatable :: xs(:, :), xe(:, :), fe(:)
       integer, allocatable :: idx(:)
       real(dp) :: d1, s, dev_lin, dev_end
@@ -99,10 +99,11 @@ contains
       x = ep%start()
       ! With the effect at zero the constants' columns are the baseline's (the same numbers:
       ! the extended model at zero is the plain model); only the effect's are differenced
+      steps = screening_steps(ep, ctx%cat(k), ctx%ifit, ctx%h)
       if (jc_complete) then
-         call jacobian(ep, x, ctx%h, rr, je, ok, known_r=r0, known_jac=jc, complete=complete)
+         call jacobian(ep, x, ctx%h, rr, je, ok, known_r=r0, known_jac=jc, complete=complete, steps=steps)
       else
-         call jacobian(ep, x, ctx%h, rr, je, ok, complete=complete)
+         call jacobian(ep, x, ctx%h, rr, je, ok, complete=complete, steps=steps)
       end if
       nevals = nevals + ep%nevals
       e%k = k
