@@ -69,9 +69,10 @@ contains
       if (allocated(error)) return
       ! The journal's own format joins the fingerprint: a journal of another layout of the
       ! diagnosis's units, or of units that start from other points (4: a refit from each
-      ! sign's basin), is refused rather than misread
+      ! sign's basin; 5: the screening's first steps from columns over a tenth of each
+      ! effect's low end), is refused rather than misread
       call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
-                        ' units=4', journal_mode, error)
+                        ' units=5', journal_mode, error)
       if (allocated(error)) return
       call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
       call journal%close(e)
