@@ -623,12 +623,13 @@ contains
       call check(error, .not. allocated(e), 'run after the lock is released')
    end subroutine test_lock
 
-   !> --resume refuses when a data file, the input or the constants file changed
+   !> --resume refuses when a data file, a peak file, the input or the constants file changed
+   !> (given then and not now included), before it writes anything
    subroutine test_fingerprint(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=report_line_len), allocatable :: summary(:)
-      character(len=:), allocatable :: input, dir, data, hist
+      character(len=:), allocatable :: input, dir, data, hist, journal, peaks
       character(len=4000) :: edited(1)
       integer :: stat
       dir = scratch_dir//'/fingerprint-out'
@@ -681,6 +682,41 @@ contains
       hist = write_text('fingerprint-hist.csv', [character(len=20) :: '0 0', '120 0.006', '240 0'])
       call run_command(input, dir, '', .true., summary, e)
       call check_message(error, e, "cannot resume: the control history of test 'h' changed")
+      if (allocated(error)) return
+      ! A run made with -c and resumed without it is refused before anything is written:
+      ! the journal keeps its records, and the resume with -c goes on
+      call run_command(input, dir, 'decks/thesis-run2.nml', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'run with -c: '//e%message)
+         return
+      end if
+      journal = read_text(dir//'/fit.journal')
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, 'the constants file (--constants), given then and not now, changed')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/fit.journal') == journal, 'the refused resume leaves the journal')
+      if (allocated(error)) return
+      call run_command(input, dir, 'decks/thesis-run2.nml', .true., summary, e)
+      call check(error, .not. allocated(e), 'the resume with -c')
+      if (allocated(error)) return
+      ! A peak file (target 'peaks') is read by the fit as a data file is
+      peaks = write_text('fingerprint-peaks.csv', [character(len=40) :: 'cycle,time_max,max,time_min,min', &
+         '1,5.0,31.5,15.0,-30.5', '2,25.0,32.0,35.0,-31.0', '3,45.0,32.5,55.0,-31.5'])
+      input = write_text('fingerprint-peaks.nml', [character(len=4000) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&fit fitted='H1','n', max_evals=5, identify=.false. /", &
+         "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
+         "target='peaks', peak_file='fingerprint-peaks.csv' /"])
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'run on a peak file: '//e%message)
+         return
+      end if
+      peaks = write_text('fingerprint-peaks.csv', [character(len=40) :: 'cycle,time_max,max,time_min,min', &
+         '1,5.0,47.3,15.0,-45.8', '2,25.0,48.0,35.0,-46.5', '3,45.0,48.8,55.0,-47.3'])
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, "cannot resume: the peak file of test 'c' changed")
    end subroutine test_fingerprint
 
    !> A journal whose fingerprint line is cut short (within an item, at an item's end without

@@ -918,6 +918,11 @@ contains
             if (len_trim(cfg%tests(i)%data%file) > 0) &
                fp = fp//' data:'//trim(cfg%tests(i)%name)//'='//hashed(cfg%tests(i)%data%file)
          end if
+         ! The measured peaks (target 'peaks' or 'both') are read from a file of their own
+         if (allocated(cfg%tests(i)%peak_file)) then
+            if (len_trim(cfg%tests(i)%peak_file) > 0) &
+               fp = fp//' peaks:'//trim(cfg%tests(i)%name)//'='//hashed(cfg%tests(i)%peak_file)
+         end if
       end do
    contains
       pure function history_bytes(t, v) result(bytes)

@@ -264,7 +264,7 @@ contains
          val = text(eq + 1:)
          if (len(val) == 0) return
          if (name == 'input' .or. name == 'constants' .or. index(name, 'data:') == 1 .or. &
-             index(name, 'history:') == 1) then
+             index(name, 'history:') == 1 .or. index(name, 'peaks:') == 1) then
             whole = val == 'unreadable' .or. (len(val) == 16 .and. verify(val, '0123456789ABCDEF') == 0)
          else
             whole = .true.
@@ -280,27 +280,42 @@ contains
       character(len=:), allocatable :: item, name, old_value
       integer :: pos, next, eq
       what = ''
-      pos = 1
-      do while (pos <= len_trim(new))
-         next = index(new(pos:), ' ')
-         if (next == 0) then
-            item = new(pos:len_trim(new))
-            next = len_trim(new) + 1
-         else
-            item = new(pos:pos + next - 2)
-            next = pos + next
-         end if
-         pos = next
-         if (len(item) == 0) cycle
-         eq = index(item, '=')
-         name = item(:eq - 1)
-         old_value = value_of(old, name)
-         if (old_value /= item(eq + 1:)) then
-            if (len(what) > 0) what = what//', '
-            what = what//describe(name)
-         end if
-      end do
+      call compare(new, old, .false.)
+      ! An item the journal has and this run lacks (a file given then, such as -c, and not
+      ! now) is a change too
+      call compare(old, new, .true.)
    contains
+      !> Each item of list whose value differs in other (or, absent_only, that other lacks)
+      subroutine compare(list, other, absent_only)
+         character(len=*), intent(in) :: list, other
+         logical, intent(in) :: absent_only
+         pos = 1
+         do while (pos <= len_trim(list))
+            next = index(list(pos:), ' ')
+            if (next == 0) then
+               item = list(pos:len_trim(list))
+               next = len_trim(list) + 1
+            else
+               item = list(pos:pos + next - 2)
+               next = pos + next
+            end if
+            pos = next
+            if (len(item) == 0) cycle
+            eq = index(item, '=')
+            if (eq < 2) cycle
+            name = item(:eq - 1)
+            old_value = value_of(other, name)
+            if (absent_only) then
+               if (old_value /= '(none)') cycle
+               if (len(what) > 0) what = what//', '
+               what = what//describe(name)//', given then and not now,'
+            else if (old_value /= item(eq + 1:)) then
+               if (len(what) > 0) what = what//', '
+               what = what//describe(name)
+               if (old_value == '(none)') what = what//', not given then,'
+            end if
+         end do
+      end subroutine compare
       function value_of(list, name) result(val)
          character(len=*), intent(in) :: list, name
          character(len=:), allocatable :: val
@@ -324,6 +339,8 @@ contains
                text = "the data file of test '"//name(6:)//"'"
             else if (index(name, 'history:') == 1) then
                text = "the control history of test '"//name(9:)//"'"
+            else if (index(name, 'peaks:') == 1) then
+               text = "the peak file of test '"//name(7:)//"'"
             else
                text = name
             end if
