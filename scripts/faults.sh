@@ -136,6 +136,17 @@ awk -F, -v OFS=, '/^#/ || /^time/ { print; next } { $2 = 100 * $2; print }' \
   "$root/data/tutorial/cyclic-fast.csv" > pct.csv
 mk pct.nml "$fitg" "&test name='fast', history='data', data_file='pct.csv' /"
 row 'data: measured strain in percent' - u run pct.nml -o pct
+mk range.nml "$fitg" "&test name='c', history='cyclic', strain_range=3.0, strain_rate=1e-3, cycles=1 /"
+row 'strain range in percent (3 for 3 %)' - u run range.nml -o range
+awk '/^#/ { print; next } { $3 = $3 * 0.006894757; print }' lcf.txt > gpa.txt
+mk gpa.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='gpa.txt' /"
+row 'data: stress in GPa on a deck in ksi' - u run gpa.nml -o gpa
+awk '/^#/ { print; next } { $1 = 1000 * $1; print }' lcf.txt > ms.txt
+mk ms.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='ms.txt' /"
+row 'data: time in ms' - u run ms.nml -o ms
+tr ',' ';' < "$root/data/tutorial/cyclic-fast.csv" > semi.csv
+mk semi.nml "$fitg" "&test name='fast', history='data', data_file='semi.csv' /"
+row 'data: columns separated by semicolons' - u run semi.nml -o semi
 mk method.nml "&fit fitted='H1','n', method='newton' /"
 row 'unknown method' - u run method.nml -o method
 mk jac.nml "&fit fitted='H1','n', method='lm', jacobian='exact' /"

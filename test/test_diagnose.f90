@@ -1625,6 +1625,12 @@ contains
                  real_str(0.5_dp, 'f6.2') == '0.50', 'real_str: '//real_str(0.55_dp, 'f0.2')//' '// &
                  real_str(6.0_dp, 'f0.0')//' '//real_str(-0.55_dp, 'f0.2'))
       if (allocated(error)) return
+      ! An exponent of three digits keeps its letter (the processor writes 5.4329-167 in es11.4)
+      call check(error, real_str(5.4329e-167_dp, 'es11.4') == '5.4329E-167' .and. &
+                 real_str(-1.7749e159_dp, 'es11.4') == '-1.7749E+159' .and. &
+                 real_str(1.5e10_dp, 'es11.4') == '1.5000E+10', 'real_str: '// &
+                 real_str(5.4329e-167_dp, 'es11.4')//' '//real_str(-1.7749e159_dp, 'es11.4'))
+      if (allocated(error)) return
       ! A number wider than a line (a runaway value in f0.1; the write had overrun its buffer
       ! and stopped the program), and one that cannot be written in the descriptor
       wide = real_str(1.0e100_dp, 'f0.1')

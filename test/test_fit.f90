@@ -19,7 +19,7 @@ module test_fit
    use usharp_input, only: read_config
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, fit_deck
-   use usharp_strings, only: report_line_len
+   use usharp_strings, only: report_line_len, str
    implicit none
    private
    public :: collect_fit, rosenbrock
@@ -51,6 +51,7 @@ contains
          new_unittest('hooke-jeeves-honours-itermax-and-eps', test_hj_limits), &
          new_unittest('data-not-covering-span-rejected', test_coverage), &
          new_unittest('data-unit-converted', test_units), &
+         new_unittest('wrong-unit-or-column-refused', test_scale), &
          new_unittest('fit-aborts-after-failures-in-a-row', test_abort), &
          new_unittest('repeated-times-told-in-summary', test_merged_told), &
          new_unittest('kill-9-then-resume-same-result', test_resume), &
@@ -204,11 +205,67 @@ contains
       type(fit_problem) :: prob
       character(len=:), allocatable :: dfile
       dfile = write_text('mpa.csv', [character(len=40) :: 'time,stress', '0,0', '5,68.94757293168361', '10,0'])
+      dfile = write_text('mpa-strain.csv', [character(len=40) :: '0 0', '5 0.004', '10 0'])
       call problem_of('units.nml', [character(len=200) :: &
-         "&test name='t', history='file', file='mpa.csv', data_file='mpa.csv', data_unit='MPa' /"], cfg, prob, error)
+         "&test name='t', history='file', file='mpa-strain.csv', data_file='mpa.csv', data_unit='MPa' /"], &
+         cfg, prob, error)
       if (allocated(error)) return
       call check(error, prob%targets(1)%y_ex_max, 10.0_dp, '68.95 MPa read as 10 ksi', thr=1e-12_dp)
    end subroutine test_units
+
+   !> Data or a history in a wrong unit or column are refused in one line naming what: a
+   !> strain range or end in percent, a creep strain in percent, a stress in GPa or one
+   !> column for another, time in ms
+   subroutine test_scale(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: f
+      character(len=40) :: rows(22)
+      integer :: k
+      f = write_text('scale-gpa.csv', [character(len=40) :: 'time,stress', '0,0', '60,0.21', '120,0', &
+                                       '180,-0.21', '240,0'])
+      ! One cycle of 120 s with its time in ms: 1 of its 21 rows within the 120 s simulated
+      rows(1) = 'time,stress'
+      do k = 0, 20
+         rows(k + 2) = str(12000*k)//','//str(nint(30*sin(k*0.5236)))
+      end do
+      f = write_text('scale-ms.csv', rows)
+      f = write_text('scale-creep.csv', [character(len=40) :: 'time,strain', '0,0', '50,0.3', '100,1.2'])
+      call refused('scale-range.nml', "&test name='c', history='cyclic', strain_range=3.0, "// &
+         "strain_rate=0.1, cycles=1 /", "history 'cyclic' reaches a strain of 1.500: strain is in mm/mm "// &
+         "(is strain_range or mean_strain in percent?)")
+      if (allocated(error)) return
+      call refused('scale-tensile.nml', "&test name='t', history='tensile', strain_rate=1e-3, final_strain=20.0 /", &
+         "history 'tensile' reaches a strain of 20.00: strain is in mm/mm (is final_strain in percent?)")
+      if (allocated(error)) return
+      ! 0.21 ksi is 9.3e-6 of E = 22500 ksi: a stress of 1.45 MPa, given in GPa
+      call refused('scale-gpa.nml', "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1.667e-4, "// &
+         "cycles=1, data_file='scale-gpa.csv' /", "scale-gpa.csv: column 'stress' peaks at 2.100E-01 ksi, "// &
+         "9.3E-06 of Young's modulus (22500 ksi): is it a stress in GPa, or another column?")
+      if (allocated(error)) return
+      call refused('scale-ms.nml', "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1.667e-4, "// &
+         "cycles=1, data_file='scale-ms.csv' /", "scale-ms.csv: 4.8 % of its rows lie within the "// &
+         "simulated 0.000E+00 to 1.200E+02 s (its times run to 2.400E+05 s): is the time in ms?")
+      if (allocated(error)) return
+      call refused('scale-creep.nml', "&test name='cr', history='creep', stress=10.0, duration=100.0, "// &
+         "data_file='scale-creep.csv', strain_column='strain' /", &
+         "scale-creep.csv: column 'strain' reaches 1.200: strain is in mm/mm (is it in percent?)")
+   contains
+      subroutine refused(name, test_line, message)
+         character(len=*), intent(in) :: name, test_line, message
+         type(run_config) :: cfg
+         type(fit_problem) :: prob
+         type(uerror), allocatable :: uerr
+         character(len=300) :: lines(1)
+         lines(1) = test_line
+         call read_config(fit_deck(name, '', lines), cfg, uerr)
+         if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+         if (.not. allocated(uerr)) then
+            call test_failed(error, name//': accepted')
+            return
+         end if
+         call check(error, index(uerr%message, message) > 0, name//': '//uerr%message)
+      end subroutine refused
+   end subroutine test_scale
 
    subroutine test_abort(error)
       type(error_type), allocatable, intent(out) :: error

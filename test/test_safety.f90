@@ -8,7 +8,7 @@ module test_safety
    use usharp_error, only: uerror => error_type, stat_io, stat_usage, stat_input, stat_busy, &
                            stat_failure, stat_report
    use usharp_filesys, only: raw_file, lock_file, unlock_file, join_path, absolute_path, &
-                             file_exists, make_dir, hash_text, hash_hex
+                             file_exists, make_dir, hash_text, hash_hex, file_hash
    use usharp_output, only: write_lines
    use usharp_cmd_run, only: run_command
    use usharp_cmd_design, only: design_command
@@ -986,8 +986,10 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=report_line_len), allocatable :: summary(:)
-      character(len=:), allocatable :: input, full, part
+      character(len=:), allocatable :: input, full, part, journal
       integer :: stat
+      integer(int64) :: h0, h1
+      logical :: ok, ok1
       input = deck('damaged-cache.nml', "method='lm', jacobian='sensitivity', identify=.false.", &
                    ", dt_out=4.0")
       full = scratch_dir//'/damaged-cache-full'
@@ -1008,11 +1010,18 @@ contains
       if (allocated(error)) return
       call copy_part()
       call damage(part//'/fit.cache', 2, 2)
+      journal = read_text(part//'/fit.journal')
+      call file_hash(part//'/fit.cache', h0, ok)
       call run_command(input, part, '', .true., summary, e)
       call check_message(error, e, part//'/fit.cache: cannot resume: the residuals or Jacobians '// &
                          'replayed from this file led the search off fit.journal at evaluation')
       if (allocated(error)) return
       call check(error, e%stat, stat_input, 'exit code 1')
+      if (allocated(error)) return
+      ! Refused before the logs are started anew: the journal and the cache as they were
+      call file_hash(part//'/fit.cache', h1, ok1)
+      call check(error, read_text(part//'/fit.journal') == journal .and. ok .and. ok1 .and. h0 == h1, &
+                 'the refused resume leaves journal and cache')
    contains
       !> The journal's first 12 records and the whole cache, as a kill leaves them
       subroutine copy_part()

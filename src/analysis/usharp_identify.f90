@@ -237,7 +237,7 @@ contains
       type(identify_result), intent(inout) :: res
       integer :: i, j, k, n, big(size(res%c)), nbig
       character(len=:), allocatable :: line
-      real(dp) :: e
+      real(dp) :: e, span
       n = size(res%c)
       allocate (res%words(0))
       do j = 1, n
@@ -255,7 +255,19 @@ contains
             end if
          end do
          if (nbig == 1) then
-            line = trim(res%names(big(1)))//' has (almost) no effect on these tests'
+            ! Alone in the direction only if its own column is as weak: a constant of strong
+            ! effect that another makes up at a much larger scale (B against Q at one
+            ! temperature, Q/(R T) = 37 times) stands nearly alone in v but is tied to it
+            ! (its column, sum over l of (sv_l v_jl)**2, ten times v's singular value or more)
+            j = big(1)
+            k = partner(j, i)
+            if (k > 0 .and. sqrt(sum((res%sv*res%v(j, :))**2)) > 10.0_dp*res%sv(i)) then
+               line = 'only a combination of '//trim(res%names(j))//' and '//trim(res%names(k))// &
+                      ' is determined: a change of '//trim(res%names(j))//' is made up by one of '// &
+                      trim(res%names(k))
+            else
+               line = trim(res%names(j))//' has (almost) no effect on these tests'
+            end if
          else if (nbig == 2) then
             ! Invariant along v: only c_j * c_k**e with e = -v_j/v_k is determined
             j = big(1)
@@ -284,13 +296,33 @@ contains
       do j = 1, n
          if (.not. res%determined(j)) cycle
          if (.not. (res%lo95(j) > 0.0_dp .and. res%hi95(j) > 0.0_dp)) cycle
-         res%loose(j) = log10_dp(res%hi95(j)/res%lo95(j)) > loose_decades
+         ! The decades as a difference of logarithms: the ratio overflows for an interval
+         ! of 1e-167 to 1e159
+         span = log10_dp(res%hi95(j)) - log10_dp(res%lo95(j))
+         res%loose(j) = span > loose_decades
          if (res%loose(j)) res%words = [character(len=report_line_len) :: res%words, trim(res%names(j))// &
-            ': its 95 % interval spans '//real_str(log10_dp(res%hi95(j)/res%lo95(j)), 'f0.1')// &
+            ': its 95 % interval spans '//real_str(span, 'f0.1')// &
             ' decades; these tests bound it only loosely']
       end do
       if (size(res%words) == 0 .and. all(res%determined)) res%words = [character(len=report_line_len) :: &
          'every fitted constant is determined by these tests']
+   contains
+      !> The constant beside j with the largest share of singular vector i (0 if none has
+      !> a share above rounding)
+      pure integer function partner(j, i) result(k)
+         integer, intent(in) :: j, i
+         integer :: m
+         real(dp) :: vmax
+         k = 0
+         vmax = 1.0e-6_dp
+         do m = 1, size(res%c)
+            if (m == j) cycle
+            if (abs(res%v(m, i)) > vmax) then
+               vmax = abs(res%v(m, i))
+               k = m
+            end if
+         end do
+      end function partner
    end subroutine describe
 
    !> The report as lines of text

@@ -789,6 +789,11 @@ contains
          ! fit.log is written anew as the journal is replayed: the reasons of the penalised
          ! evaluations come from the log it replaces
          call carry_penalty_reasons(join_path(dir, 'fit.log'), obj%replay)
+         ! The search replayed alone first, before the logs are started anew: a journal it
+         ! cannot follow (damaged, or written from other inputs than its fingerprint names)
+         ! is refused with the run's files as they were
+         call dry_replay(obj, error)
+         if (allocated(error)) return
       else if (.not. overwrite .and. journal_has_records(journal)) then
          call fatal_error(error, journal//': holds the journal of an earlier run; continue it '// &
             'with --resume, or start again and overwrite it with --force', stat_usage)
@@ -854,6 +859,25 @@ contains
       call obj%log%close(close_error)
       if (.not. allocated(error) .and. allocated(close_error)) call move_alloc(close_error, error)
    end subroutine run_fit
+
+   !> The search replayed from the journal alone, nothing logged: the error of a replay that
+   !> leaves the journal (see check_replay), none where it runs out of records or ends
+   subroutine dry_replay(obj, error)
+      type(fit_objective), intent(in) :: obj
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_objective) :: dry
+      type(optimum_type) :: one
+      type(error_type), allocatable :: e
+      integer :: n
+      if (size(obj%replay) == 0) return
+      dry = worker(obj)
+      dry%replay = obj%replay
+      dry%replay_jac = obj%replay_jac
+      dry%replay_only = .true.
+      call search(dry, one, n, e)
+      if (.not. allocated(e)) return
+      if (e%stat == stat_input) call move_alloc(e, error)
+   end subroutine dry_replay
 
    !> The reasons that the fit.log at path gives for penalised evaluations ("evaluation k:
    !> penalty f: reason"), into the journal's records that have none

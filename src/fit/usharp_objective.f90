@@ -13,7 +13,7 @@ module usharp_objective
    use usharp_simulate, only: simulate_test
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_config, only: run_config, test_config
-   use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain
+   use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain, check_scale
    use usharp_weighting, only: threshold_weights, relaxation_weights
    use usharp_external, only: run_external
    use usharp_filesys, only: join_path
@@ -92,6 +92,13 @@ contains
          end if
          call set_target(cfg%tests(i), cfg%units, prob%targets(i), error)
          if (allocated(error)) exit
+         if (.not. present(experiments)) then
+            associate (tg => prob%targets(i))
+               call check_scale(cfg%tests(i), tg%exp, cfg%model%youngs, cfg%units, tg%t(1), &
+                                tg%t(size(tg%t)), error)
+            end associate
+            if (allocated(error)) exit
+         end if
       end do
       if (allocated(error)) call prefix_error(error, cfg%path//": test '"//cfg%tests(i)%name//"': ")
    end subroutine setup_problem

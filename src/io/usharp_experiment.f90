@@ -7,12 +7,21 @@ module usharp_experiment
    use usharp_config, only: test_config
    use usharp_history, only: control_stress
    use usharp_input, only: read_data_columns
+   use usharp_input_test, only: max_strain
    use usharp_table, only: merge_repeated_times
    use usharp_units, only: stress_factor
    implicit none
    private
 
-   public :: experiment_type, load_experiment, interpolate, fits_strain, response_name
+   public :: experiment_type, load_experiment, interpolate, fits_strain, response_name, check_scale
+
+   !> The stress a test's data may peak at, as a share of Young's modulus: below, a column in
+   !> GPa (0.35 for 350 MPa) or a strain column; above, one in Pa or kPa
+   real(dp), parameter :: min_stress_share = 1.0e-5_dp, max_stress_share = 0.05_dp
+   !> Time in ms: under this share of a data file's rows within the simulated time, and its
+   !> times running past this many times the simulated span (a part of a test simulated on
+   !> its own, the first 22 s of a 1202 s relaxation, is no slip of unit)
+   real(dp), parameter :: min_rows_within = 0.1_dp, ms_span = 300.0_dp
 
    !> One test's data: time (s), the measured response and optional user weights. The
    !> response is the stress (model unit), or the strain (-) of a stress-controlled test
@@ -35,7 +44,8 @@ contains
       real(dp), allocatable :: vals(:, :)
       character(len=128) :: cols(3)
       if (.not. test%has_data) then
-         call fatal_error(error, "test '"//test%name//"' has no data_file to fit")
+         call fatal_error(error, "test '"//test%name//"' has no data_file: nothing to compare "// &
+            'its simulation with (usharp simulate simulates it alone)')
          return
       end if
       if (test%target == 'peaks') then
@@ -69,6 +79,44 @@ contains
          exp%weight = vals(:, 3)
       end if
    end subroutine load_experiment
+
+   !> Data in a wrong unit or column, which a fit would take as they are: a measured strain
+   !> beyond 1 (in percent), a stress far from what a metal of Young's modulus youngs (model
+   !> unit) shows, or rows that lie mostly beyond the simulated times t0 to t1 (s) and far
+   !> beyond (time in ms)
+   pure subroutine check_scale(test, exp, youngs, model_units, t0, t1, error)
+      type(test_config), intent(in) :: test
+      type(experiment_type), intent(in) :: exp
+      real(dp), intent(in) :: youngs, t0, t1
+      character(len=*), intent(in) :: model_units
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: peak, share, tol
+      if (test%target == 'peaks' .or. size(exp%y) == 0) return
+      peak = maxval(abs(exp%y))
+      if (fits_strain(test)) then
+         if (peak > max_strain) call fatal_error(error, test%data%file//": column '"// &
+            test%data%strain_col//"' reaches "//real_str(peak, 'g0.4')// &
+            ': strain is in mm/mm (is it in percent?)')
+      else if (youngs > 0.0_dp .and. peak > 0.0_dp) then
+         if (peak < min_stress_share*youngs .or. peak > max_stress_share*youngs) &
+            call fatal_error(error, test%data%file//": column '"//test%data%stress_col// &
+            "' peaks at "//real_str(peak, 'es10.3')//' '//model_units//', '// &
+            real_str(peak/youngs, 'es8.1')//" of Young's modulus ("//real_str(youngs, 'f0.0')// &
+            ' '//model_units//'): '//trim(merge('is it a stress in GPa, or another column?', &
+                                                'is it a stress in Pa or kPa?             ', &
+                                                peak < min_stress_share*youngs))//' (data_unit = '''// &
+            test%data%unit//''')')
+      end if
+      if (allocated(error)) return
+      tol = 1.0e-9_dp*max(1.0_dp, abs(t1))
+      share = real(count(exp%t >= t0 - tol .and. exp%t <= t1 + tol), dp)/real(size(exp%t), dp)
+      if (share < min_rows_within .and. maxval(exp%t) - t0 > ms_span*(t1 - t0)) &
+         call fatal_error(error, test%data%file//': '// &
+         real_str(100.0_dp*share, 'f0.1')//' % of its rows lie within the simulated '// &
+         real_str(t0, 'es10.3')//' to '//real_str(t1, 'es10.3')//' s (its times run to '// &
+         real_str(maxval(exp%t), 'es10.3')//' s): is the time in ms? (a part of a longer test is '// &
+         'chosen with filter_column)')
+   end subroutine check_scale
 
    !> A stress-controlled test (creep) is fitted on its strain, the response it measures; an
    !> external command reports stress only

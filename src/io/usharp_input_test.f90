@@ -18,7 +18,7 @@ module usharp_input_test
    private
 
    public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
-   public :: read_data_columns
+   public :: read_data_columns, max_strain
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
@@ -380,6 +380,16 @@ contains
             'relaxation, ratchet, cyclic, tensile, rate_jump, creep, file, data)')
       end select
       if (allocated(error)) return
+      ! A strain beyond 1 (100 %) is what a range or end given in percent makes (3 for
+      ! 3 %): the test would be simulated a hundred times too large
+      if (t%hist%control == control_strain .and. t%history_kind /= 'data') then
+         if (maxval(abs(t%hist%v)) > max_strain) then
+            call fatal_error(error, "history '"//t%history_kind//"' reaches a strain of "// &
+               real_str(maxval(abs(t%hist%v)), 'g0.4')//': strain is in mm/mm (is '// &
+               strain_source(t%history_kind)//' in percent?)')
+            return
+         end if
+      end if
       ! Output times beyond what a simulation can hold overflow their count (a crash, not a
       ! message): dt_out = 1e-9 s over a 240 s test
       if (t%dt_out > 0.0_dp) then
@@ -777,4 +787,24 @@ contains
                         spec%format)
    end subroutine read_data_columns
 
+
+   !> The variables that set the strains of a history of this kind
+   pure function strain_source(kind) result(names)
+      character(len=*), intent(in) :: kind
+      character(len=:), allocatable :: names
+      select case (kind)
+      case ('cyclic')
+         names = 'strain_range or mean_strain'
+      case ('tensile', 'rate_jump')
+         names = 'final_strain'
+      case ('thesis_lcf')
+         names = 'amp_first or amp_last'
+      case ('relaxation')
+         names = 'levels'
+      case ('ratchet')
+         names = 'up or down'
+      case default
+         names = 'the history file'
+      end select
+   end function strain_source
 end module usharp_input_test

@@ -256,8 +256,17 @@ contains
             end do
             if (icol(k) == 0) icol(k) = position(columns(k), nheader)
             if (icol(k) == 0) then
-               call fatal_error(error, file//": no column '"//trim(columns(k))// &
-                  "' (columns: "//joined(header(:nheader))//')')
+               ! One header cell holding the others behind semicolons: a file of a locale
+               ! whose decimal mark is the comma
+               if (nheader == 1 .and. index(header(1), ';') > 0) then
+                  call fatal_error(error, file//": no column '"//trim(columns(k))// &
+                     "' (the header is one column, '"//trim(adjustl(header(1)))//"': the columns "// &
+                     'are separated by semicolons; usharp reads commas, spaces or tabs, and a '// &
+                     'point as the decimal mark)')
+               else
+                  call fatal_error(error, file//": no column '"//trim(columns(k))// &
+                     "' (columns: "//joined(header(:nheader))//')')
+               end if
                return
             end if
          end do

@@ -308,11 +308,13 @@ contains
             if (absent_only) then
                if (old_value /= '(none)') cycle
                if (len(what) > 0) what = what//', '
-               what = what//describe(name)//', given then and not now,'
+               what = what//describe(name)
+               ! The one file a run may be given or not (-c): say which way it changed
+               if (name == 'constants') what = what//', given then and not now,'
             else if (old_value /= item(eq + 1:)) then
                if (len(what) > 0) what = what//', '
                what = what//describe(name)
-               if (old_value == '(none)') what = what//', not given then,'
+               if (name == 'constants' .and. old_value == '(none)') what = what//', not given then,'
             end if
          end do
       end subroutine compare
