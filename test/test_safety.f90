@@ -37,6 +37,7 @@ contains
          new_unittest('user-files-kept-by-design-and-diagnose', test_reports_kept), &
          new_unittest('output-folder-locked', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
+         new_unittest('start-outside-its-bounds-told', test_start_outside), &
          new_unittest('torn-fingerprint-line-a-damaged-journal', test_torn_fingerprint), &
          new_unittest('fit-done-report-failed-exit-5', test_report_failed), &
          new_unittest('external-not-found-not-executable', test_external_127), &
@@ -622,6 +623,29 @@ contains
       call run_command(input, dir, '', .false., summary, e, force=.true.)
       call check(error, .not. allocated(e), 'run after the lock is released')
    end subroutine test_lock
+
+   !> A bounded search from a start outside its bounds begins at the bound: the summary says so
+   !> beside the start it shows
+   subroutine test_start_outside(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input
+      integer :: k
+      logical :: told
+      input = deck('start-outside.nml', "method='lm', max_evals=6, identify=.false., upper=150.0, 8.0", '')
+      call run_command(input, scratch_dir//'/start-outside-out', '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      told = .false.
+      do k = 1, size(summary)
+         if (index(summary(k), 'H1') > 0 .and. index(summary(k), '(above its upper bound 1.500E+02: '// &
+                                                      'searched from it)') > 0) told = .true.
+      end do
+      call check(error, told, 'H1 = 200 above its upper bound 150 not told in the summary')
+   end subroutine test_start_outside
 
    !> --resume refuses when a data file, a peak file, the input or the constants file changed
    !> (given then and not now included), before it writes anything

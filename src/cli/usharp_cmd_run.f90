@@ -5,7 +5,7 @@ module usharp_cmd_run
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
    use usharp_strings, only: str, real_str, pad, shell_word, join, report_line_len
    use usharp_model, only: model_type
-   use usharp_config, only: run_config
+   use usharp_config, only: run_config, fit_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_experiment, only: fits_strain, response_name
@@ -160,7 +160,7 @@ contains
          do j = 1, size(start)
             summary = [character(len=report_line_len) :: summary, '  '//pad(cfg%model%constant_name(j), w)//'  '// &
                real_str(start(j), 'es14.6')//'  '//real_str(best%get_constant(j), 'es14.6')// &
-               merge('         ', '  (fixed)', cfg%fit%fitted(j))]
+               merge('         ', '  (fixed)', cfg%fit%fitted(j))//start_note(cfg%fit, start(j), j)]
          end do
          call best%derived_values(dnames, dvals)
          do j = 1, size(dvals)
@@ -188,6 +188,22 @@ contains
          if (allocated(report_error)) call fatal_error(error, 'the fit is done and written, but its '// &
             'identifiability report failed: '//report_error%message, stat_report)
       end subroutine locked_run
+
+      !> A note on constant j's start where a bounded search (all but Hooke-Jeeves) from the
+      !> deck's constants began elsewhere: at the bound, the start lying outside its bounds
+      pure function start_note(fit, value, j) result(text)
+         type(fit_config), intent(in) :: fit
+         real(dp), intent(in) :: value
+         integer, intent(in) :: j
+         character(len=:), allocatable :: text
+         text = ''
+         if (.not. fit%fitted(j) .or. fit%multistart > 0 .or. fit%method == 'hooke-jeeves') return
+         if (value < fit%lower(j)) then
+            text = '  (below its lower bound '//real_str(fit%lower(j), 'es10.3')//': searched from it)'
+         else if (value > fit%upper(j)) then
+            text = '  (above its upper bound '//real_str(fit%upper(j), 'es10.3')//': searched from it)'
+         end if
+      end function start_note
 
       !> '; a share of the tests of n1, n2 points' where any rank simulated such shares
       pure function shares_text(shared) result(text)
