@@ -110,32 +110,18 @@ contains
       character(len=real_buffer), intent(out) :: buf
       integer, intent(out) :: n
       integer :: ios, k, dot, w
-      write (buf, '('//fmt//')', iostat=ios) val
-      if (ios /= 0) then
-         buf = '*'
-         n = 1
-         return
-      end if
-      buf = adjustl(buf)
-      n = len_trim(buf)
-      if (len(fmt) < 2 .or. n == 0) return
+      call put_real(val, fmt, buf, n, ios)
+      if (ios /= 0 .or. len(fmt) < 2 .or. n == 0) return
       ! An E or ES descriptor without an exponent width drops the letter for an exponent of
       ! three digits ('5.4329-167'): written again with one of three digits ('5.4329E-167')
       if (scan(fmt(1:1), 'eE') == 1 .and. scan(fmt(2:), 'eE') == 0 .and. scan(buf(:n), 'eE') == 0 &
           .and. scan(buf(:n), '0123456789') > 0) then
-         ! one place wider for the third digit (and the letter); the text is trimmed after
+         ! two places wider for the third digit and the letter; the text is trimmed after
          k = verify(fmt, 'eEsSnN')
          dot = index(fmt, '.')
          w = 0
          if (k > 0 .and. dot > k) read (fmt(k:dot - 1), *, iostat=ios) w
-         write (buf, '('//fmt(:k - 1)//str_int(w + 2)//fmt(dot:)//'e3)', iostat=ios) val
-         if (ios /= 0) then
-            buf = '*'
-            n = 1
-            return
-         end if
-         buf = adjustl(buf)
-         n = len_trim(buf)
+         call put_real(val, fmt(:k - 1)//str_int(w + 2)//fmt(dot:)//'e3', buf, n, ios)
          return
       end if
       if (.not. (scan(fmt(1:1), 'fF') == 1 .and. fmt(2:2) == '0')) return
@@ -155,6 +141,23 @@ contains
          n = 1
       end if
    end subroutine real_text
+
+   !> val in the descriptor f, left-adjusted, into buf(:n); '*' (and ios /= 0) where f cannot
+   !> write it
+   pure subroutine put_real(val, f, buf, n, ios)
+      real(dp), intent(in) :: val
+      character(len=*), intent(in) :: f
+      character(len=real_buffer), intent(out) :: buf
+      integer, intent(out) :: n, ios
+      write (buf, '('//f//')', iostat=ios) val
+      if (ios /= 0) then
+         buf = '*'
+         n = 1
+      else
+         buf = adjustl(buf)
+         n = len_trim(buf)
+      end if
+   end subroutine put_real
 
    !> An integer as text (i0)
    pure function str_int(val) result(res)
