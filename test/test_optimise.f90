@@ -73,7 +73,8 @@ contains
          new_unittest('simultaneous-intervals-cover-jointly', test_joint_intervals), &
          new_unittest('sensitivity-jacobian-vs-differences', test_sens_jacobian), &
          new_unittest('rng-skip-decorrelates-nearby-seeds', test_rng_skip), &
-         new_unittest('fit-independent-of-thread-count', test_threads)]
+         new_unittest('fit-independent-of-thread-count', test_threads), &
+         new_unittest('interval-wider-than-bounds-not-determined', test_wide_interval)]
    end subroutine collect_optimise
 
    pure integer function decay_nres(self)
@@ -583,4 +584,32 @@ contains
       end do
    end subroutine test_sens_jacobian
 
+   !> A constant whose 95 % interval spans more decades than its search bounds is not
+   !> determined (H2 within 99.9-100.1 on the LCF test with 1 % noise), one inside them is
+   subroutine test_wide_interval(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(identify_result) :: res
+      character(len=:), allocatable :: deck
+      deck = write_text('wide-interval.nml', [character(len=200) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /', &
+         "&fit fitted='H1','H2', lower=100.0, 99.9, upper=1000.0, 100.1 /", &
+         "&test name='lcf', history='thesis_lcf', data_file='../../data/thesis-noise1/lcf.sim.txt', "// &
+         "weighting='threshold', sig=14 /"])
+      call read_config(deck, cfg, e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      if (.not. allocated(e)) call identify_at(prob, [280.0_dp, 100.0_dp], 1.0e-3_dp, res, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      call check(error, res%determined(1) .and. .not. res%determined(2), 'H1 determined, H2 not')
+      if (allocated(error)) return
+      call check(error, any(index(res%words, 'H2: its 95 % interval spans') == 1 .and. &
+                            index(res%words, 'more than its search bounds (8.7E-04): not determined within them') > 0), &
+                 'the words name H2''s interval against its bounds')
+   end subroutine test_wide_interval
 end module test_optimise
