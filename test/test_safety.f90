@@ -31,6 +31,7 @@ contains
          new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
          new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
          new_unittest('specimen-reports-kept-without-force', test_specimen_kept), &
+         new_unittest('specimen-diagnosis-resumed-same-reports', test_specimen_resume), &
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
          new_unittest('user-files-and-fits-kept', test_strangers_kept), &
          new_unittest('user-files-kept-by-predict-identify-deck-simulate', test_own_files_kept), &
@@ -229,6 +230,46 @@ contains
       if (allocated(error)) return
       call check(error, read_text(mine) == notes, 'the report is untouched')
    end subroutine test_specimen_kept
+
+   !> A per-specimen diagnosis keeps each specimen's report in diagnose/specimen.journal: a
+   !> run resumed (or resumed by --auto-resume) replays them into the same reports
+   subroutine test_specimen_resume(error)
+      use usharp_cmd_diagnose, only: diagnose_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: first(:), again(:)
+      character(len=:), allocatable :: input, dir, lcf, relax
+      input = fit_deck('specimen-resume.nml', '', [character(len=200) :: &
+         "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', weighting='threshold', sig=14 /", &
+         "&test name='relax', history='relaxation', data_file='"//thesis//"relax.sim.txt', weighting='relaxation' /", &
+         "&diagnose specimen = 'all', effects = 'temperature', 'drift' /"])
+      dir = scratch_dir//'/specimen-resume-out'
+      call check(error, shell('rm -rf '//dir) == 0, 'clean folder')
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', first, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      lcf = read_text(dir//'/diagnose/specimen-lcf.md')
+      relax = read_text(dir//'/diagnose/specimen-relax.md')
+      call check(error, file_exists(dir//'/diagnose/specimen.journal') .and. len(lcf) > 0 .and. len(relax) > 0, &
+                 'reports and journal written')
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', again, e, mode='resume')
+      if (allocated(e)) then
+         call test_failed(error, 'resume: '//e%message)
+         return
+      end if
+      call check(error, all(first == again) .and. read_text(dir//'/diagnose/specimen-lcf.md') == lcf .and. &
+                 read_text(dir//'/diagnose/specimen-relax.md') == relax, 'the resumed reports are the same')
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', again, e, mode='auto')
+      call check(error, .not. allocated(e), '--auto-resume of a finished per-specimen diagnosis')
+      if (allocated(error)) return
+      call diagnose_command(input, dir, '', again, e)
+      call check_message(error, e, 'specimen.journal')
+   end subroutine test_specimen_resume
 
    !> A run into a folder that holds a summary.txt no run made (no journal) is refused, the
    !> file kept, unless --force; a prediction, a simulation or an identification into a fit's

@@ -12,6 +12,7 @@ module usharp_cmd_diagnose
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
+   use usharp_diagnose_journal, only: next_unit, record_unit, text_lines
    use usharp_error, only: fatal_error, stat_input, stat_usage
    use usharp_filesys, only: make_dir, join_path, file_exists
    use usharp_output, only: write_lines
@@ -28,7 +29,8 @@ contains
    !> or those of constants_file (a best.nml, only a start); progress, when given, is told of
    !> each step (app passes it on a terminal without --quiet). Its optimisations are kept in
    !> <out_dir>/diagnose/diagnose.journal (mode: see run_tasks), so that a diagnosis stopped
-   !> by a signal continues with --resume; the per-specimen mode runs whole.
+   !> by a signal continues with --resume; the per-specimen mode keeps each specimen's report
+   !> in <out_dir>/diagnose/specimen.journal alike.
    subroutine diagnose_command(path, out_dir, constants_file, lines, error, progress, mode)
       character(len=*), intent(in) :: path, out_dir, constants_file
       character(len=report_line_len), allocatable, intent(out) :: lines(:)
@@ -49,7 +51,7 @@ contains
          ! (on rank 0 alone under MPI)
          journal_mode = 'start'
          if (present(mode)) journal_mode = mode
-         if (is_root()) call specimen_command(cfg, opts, lines, error, journal_mode == 'force')
+         if (is_root()) call specimen_command(cfg, opts, constants_file, lines, error, journal_mode)
          return
       end if
       ! Under MPI every rank runs the diagnosis, the starts of its global stages spread over
@@ -82,19 +84,26 @@ contains
    end subroutine diagnose_command
 
    !> Per-specimen mode: each named specimen (or every test) against its replicates;
-   !> <out_dir>/diagnose/specimen-<name>.md
-   subroutine specimen_command(cfg, opts, lines, error, force)
+   !> <out_dir>/diagnose/specimen-<name>.md. Each specimen's report is a unit of
+   !> <out_dir>/diagnose/specimen.journal, so that a run stopped by a signal (a cluster job
+   !> at its wall time) continues with --resume from the specimen it had not finished
+   subroutine specimen_command(cfg, opts, constants_file, lines, error, mode)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
+      character(len=*), intent(in) :: constants_file
       character(len=report_line_len), allocatable, intent(out) :: lines(:)
       type(error_type), allocatable, intent(out) :: error
-      !> overwrite the reports of an earlier run (--force)
-      logical, intent(in) :: force
+      !> what to do with a journal there: 'start', 'resume', 'auto' or 'force'
+      character(len=*), intent(in) :: mode
       type(specimen_result) :: sr
+      type(diagnose_journal), target :: journal
+      type(diagnose_journal), pointer :: jr
+      type(error_type), allocatable :: e
       character(len=report_line_len), allocatable :: part(:)
-      character(len=:), allocatable :: report
+      character(len=:), allocatable :: report, dir, text
       integer, allocatable :: which(:)
-      integer :: i
+      integer :: i, k
+      logical :: replay
       !> a report's name and how its first line begins
       character(len=256) :: own_name(1), own_mark(1)
       if (trim(cfg%diagnose%specimen) == 'all') then
@@ -107,33 +116,51 @@ contains
             return
          end if
       end if
-      ! Neither an earlier run's reports nor a user's file of their names is overwritten
-      ! unasked (before any work is done)
+      dir = join_path(cfg%out_dir, 'diagnose')
+      ! Neither an earlier run's reports (but on --resume, whose journal holds them) nor a
+      ! user's file of their names is overwritten unasked (before any work is done)
       do i = 1, size(which)
-         report = join_path(join_path(cfg%out_dir, 'diagnose'), 'specimen-'//trim(cfg%tests(which(i))%name)//'.md')
+         report = join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name)//'.md')
          own_name(1) = 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'
          own_mark(1) = '# Per-specimen diagnosis: '//trim(cfg%tests(which(i))%name)
-         call check_overwrite(join_path(cfg%out_dir, 'diagnose'), own_name, own_mark, 'diagnose', &
-                              force, error)
+         call check_overwrite(dir, own_name, own_mark, 'diagnose', mode == 'force', error)
          if (allocated(error)) return
-         if (.not. force .and. file_exists(report)) then
+         if (mode == 'start' .and. file_exists(report) .and. &
+             .not. file_exists(join_path(dir, 'specimen.journal'))) then
             call fatal_error(error, report//': holds the report of an earlier run; start again and '// &
                'overwrite it with --force', stat_usage)
             return
          end if
       end do
-      call make_dir(join_path(cfg%out_dir, 'diagnose'), error)
+      call make_dir(dir, error)
       if (allocated(error)) return
+      call journal%open(join_path(dir, 'specimen.journal'), fit_fingerprint(cfg, constants_file)// &
+                        ' specimen='//trim(cfg%diagnose%specimen), mode, error)
+      if (allocated(error)) return
+      jr => journal
       allocate (lines(0))
       do i = 1, size(which)
-         call specimen_run(cfg, which(i), opts, .true., sr, error)
-         if (allocated(error)) return
-         part = specimen_report(sr)
-         call write_lines(join_path(join_path(cfg%out_dir, 'diagnose'), 'specimen-'// &
-                          trim(sr%name)//'.md'), part, error)
-         if (allocated(error)) return
+         call next_unit(jr, text, replay, error)
+         if (allocated(error)) exit
+         if (replay) then
+            part = text_lines(text)
+         else
+            call specimen_run(cfg, which(i), opts, .true., sr, error)
+            if (allocated(error)) exit
+            part = specimen_report(sr)
+            text = ''
+            do k = 1, size(part)
+               text = text//trim(part(k))//new_line('a')
+            end do
+            call record_unit(jr, text, error)
+            if (allocated(error)) exit
+         end if
+         call write_lines(join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'), part, error)
+         if (allocated(error)) exit
          lines = [character(len=report_line_len) :: lines, part, '']
       end do
+      call journal%close(e)
+      if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
    end subroutine specimen_command
 
    !> Self-check of the diagnosis on synthetic data with each effect injected; its

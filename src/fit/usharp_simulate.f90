@@ -1,7 +1,7 @@
 !> Simulating one configured test: output times, the integrator, error context
 module usharp_simulate
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, prefix_error, fatal_error
+   use usharp_error, only: error_type, prefix_error, fatal_error, stat_failure
    use usharp_model, only: model_type, model_at
    use usharp_simulation, only: solver_options, sim_result
    use usharp_cvode_driver, only: simulate_cvode
@@ -9,8 +9,14 @@ module usharp_simulate
    use usharp_umat_driver, only: simulate_umat
    use usharp_config, only: test_config
    use usharp_rng, only: rng_type
+   use usharp_strings, only: real_str
    implicit none
    private
+
+   !> The largest strain a simulation may reach (-): beyond 1 (100 %) a small-strain model
+   !> describes no test, and a creep test at a stress far above its range runs away to 1e38
+   !> in seconds, which the integrator follows with its error in control
+   real(dp), parameter :: runaway_strain = 1.0_dp
 
    public :: simulate_test, add_stress_noise
 
@@ -31,8 +37,20 @@ contains
       else
          call simulate_with(model)
       end if
+      if (.not. allocated(error)) call check_runaway()
       if (allocated(error)) call prefix_error(error, "test '"//test%name//"': ")
    contains
+      !> A response beyond runaway_strain is a failed simulation, not a result
+      subroutine check_runaway()
+         integer :: k
+         if (.not. allocated(res%strain)) return
+         if (size(res%strain) == 0) return
+         k = maxloc(abs(res%strain), 1)
+         if (abs(res%strain(k)) > runaway_strain) call fatal_error(error, 'the response ran away: '// &
+            'the strain reaches '//real_str(res%strain(k), 'es10.3')//' at t = '//real_str(res%t(k), 'es10.3')// &
+            ' s, beyond what this small-strain model describes (1, 100 %): the load or the constants '// &
+            'lie outside its range', stat_failure)
+      end subroutine check_runaway
       subroutine simulate_with(m)
          class(model_type), intent(in) :: m
          if (allocated(test%hist%temp) .and. solver%integrator /= 'rodas4') then
