@@ -418,6 +418,25 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       call check_message(error, e, "&diagnose: rows: no effect is named 'creep'")
       if (allocated(error)) return
+      ! An effect named twice, a row the effects do not list, a noise in percent, a slope of
+      ! ln E no metal has
+      call read_config(write_text('diag-twice.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose effects = 'softening', 'lag', 'Softening' /", tests]), cfg, e)
+      call check_message(error, e, "&diagnose: effects names 'Softening' twice")
+      if (allocated(error)) return
+      call read_config(write_text('diag-rowlist.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose effects = 'drift', rows = 'lag' /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      call check_message(error, e, "&diagnose: rows: 'lag' is injected but effects does not list it")
+      if (allocated(error)) return
+      call read_config(write_text('diag-noise.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose noise = 5.0 /", tests]), cfg, e)
+      call check_message(error, e, "&diagnose: noise = 5.000 is a share of the peak stress")
+      if (allocated(error)) return
+      call read_config(write_text('diag-dlne.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose dlnE_dT = 1e30 /", tests]), cfg, e)
+      call check_message(error, e, "&diagnose: dlnE_dT = 1.000E+30 1/K is no metal's")
+      if (allocated(error)) return
       call read_config(write_text('diag-holdout.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", "&diagnose holdout = 'c' /", tests]), cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)

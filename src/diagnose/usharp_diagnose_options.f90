@@ -57,6 +57,7 @@ contains
       !> Resolved settings
       type(diagnose_options), intent(out) :: opts
       type(error_type), allocatable, intent(out) :: error
+      type(effect_info) :: cat(n_effects)
       integer :: k
       call effect_numbers(cfg, cfg%diagnose%effects, 'effects', .false., opts%effects, error)
       if (allocated(error)) return
@@ -64,6 +65,17 @@ contains
       if (allocated(error)) return
       if (size(opts%effects) == 0) opts%effects = [(k, k=1, n_effects)]
       if (size(opts%rows) == 0) opts%rows = [0, opts%effects]
+      ! A row injects an effect that the diagnosis is to name: one it does not consider can
+      ! never be named
+      cat = effect_catalogue(1.0_dp)
+      do k = 1, size(opts%rows)
+         if (opts%rows(k) == 0) cycle
+         if (any(opts%effects == opts%rows(k))) cycle
+         call fatal_error(error, cfg%path//": &diagnose: rows: '"//trim(cat(opts%rows(k))%name)// &
+            "' is injected but effects does not list it, so the diagnosis cannot name it "// &
+            '(add it to effects)', stat_input)
+         return
+      end do
       opts%n_refit = cfg%diagnose%n_refit
       opts%refit_starts = cfg%diagnose%refit_starts
       opts%global_starts = cfg%diagnose%global_starts

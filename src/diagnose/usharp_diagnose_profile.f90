@@ -243,7 +243,8 @@ contains
          do g = 1, size(e%p)
             j = nc + g
             se = sqrt(max(cov(j, j), 0.0_dp))
-            if (.not. ((nonneg(g) .and. e%p_lo(g) < 0.0_dp) .or. &
+            ! (a Wald interval of a parameter that cannot be negative is cut at 0 there)
+            if (.not. ((nonneg(g) .and. e%p_lo(g) <= 0.0_dp) .or. &
                        1.959964_dp*se*pscale(g) > wald_rel_limit*abs(e%p(g)))) cycle
             scale = e%f_after/max(size(r) - size(e%x_fit), 1)
             if (naive(j, j) > 0.0_dp .and. cov(j, j) > 0.0_dp) scale = cov(j, j)/naive(j, j)

@@ -414,6 +414,9 @@ contains
       e%p_bound = at_box_end(x(nc + 1:), lo(nc + 1:), hi(nc + 1:))
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
+      ! A parameter that cannot be negative (a lag, a softening rate) ends its interval at 0
+      ! (the leading effect's such intervals are profiled, see profile_leading)
+      where (pack(ep%pnonneg, ep%pfree) .and. e%p_lo < 0.0_dp) e%p_lo = 0.0_dp
       call name_params(ctx, res, ep, e)
       call judge_magnitude(ctx, res, ep, x, p, e)
    end subroutine magnitudes

@@ -6,6 +6,7 @@ module usharp_input_diagnose
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
                               value_len, max_list
    use usharp_input_test, only: test_config
+   use usharp_strings, only: lower, real_str
    implicit none
    private
 
@@ -70,6 +71,19 @@ contains
       if (allocated(error)) return
       diagnose%effects = effects
       diagnose%rows = rows
+      ! An effect named twice would be fitted and reported twice
+      do i = 2, max_list
+         do j = 1, i - 1
+            if (len_trim(effects(i)) > 0 .and. lower(effects(j)) == lower(effects(i))) then
+               call fail("effects names '"//trim(effects(i))//"' twice")
+               return
+            end if
+            if (len_trim(rows(i)) > 0 .and. lower(rows(j)) == lower(rows(i))) then
+               call fail("rows names '"//trim(rows(i))//"' twice")
+               return
+            end if
+         end do
+      end do
       do i = 1, max_list
          if (len_trim(holdout(i)) == 0) cycle
          j = findloc([(tests(k)%name == trim(holdout(i)), k=1, size(tests))], .true., 1)
@@ -89,6 +103,15 @@ contains
          call fail('reps must be >= 1')
       else if (.not. (diagnose%gamma3 > 0.0_dp) .or. .not. (diagnose%noise > 0.0_dp)) then
          call fail('gamma3 and noise must be > 0')
+      else if (diagnose%noise >= 0.5_dp) then
+         ! A share of the peak stress: 5.0 is 500 % (is it in percent?)
+         call fail('noise = '//real_str(diagnose%noise, 'g0.4')//' is a share of the peak stress '// &
+                   '(0.01 for 1 %), below 0.5')
+      else if (.not. (abs(diagnose%dlne_dt) < 0.1_dp)) then
+         ! d ln E / dT of metals is some -1e-4 to -1e-3 /K; beyond 0.1 /K the temperature
+         ! effect's modulus change swamps every other
+         call fail('dlnE_dT = '//real_str(diagnose%dlne_dt, 'es10.3')//' 1/K is no metal''s '// &
+                   '(about -4e-4 1/K); |dlnE_dT| < 0.1')
       else if (.not. (diagnose%confirm_shrink > 0.0_dp .and. diagnose%confirm_shrink <= 1.0_dp)) then
          call fail('confirm_shrink must lie in (0, 1]')
       end if
