@@ -429,11 +429,15 @@ contains
          text = 'every fitted constant determined'
          return
       end if
-      text = 'determines'
-      do j = 1, size(comb%determined)
-         if (comb%determined(j)) text = text//' '//trim(res%names(j))
-      end do
-      text = text//'; not'
+      if (.not. any(comb%determined)) then
+         text = 'determines none of'
+      else
+         text = 'determines'
+         do j = 1, size(comb%determined)
+            if (comb%determined(j)) text = text//' '//trim(res%names(j))
+         end do
+         text = text//'; not'
+      end if
       do j = 1, size(comb%determined)
          if (.not. comb%determined(j)) text = text//' '//trim(res%names(j))
       end do

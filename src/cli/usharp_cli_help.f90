@@ -123,6 +123,7 @@ contains
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE as the known constants'//nl// &
             journal_options// &
+            '  -q, --quiet           no progress lines on stderr'//nl// &
             common_options
       case ('diagnose')
          text = 'usage: usharp diagnose [options] <fit.nml>'//nl// &
@@ -134,8 +135,8 @@ contains
             'Writes <out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv,'//nl// &
             'steps.csv (simulations and time of each step), plots and diagnose.journal'//nl// &
             '(each optimisation''s outcome: a diagnosis stopped by SIGTERM continues with'//nl// &
-            '--resume to the same report; the per-specimen mode runs whole and keeps the'//nl// &
-            'reports of an earlier run unless --force). With --selfcheck:'//nl// &
+            '--resume to the same report; the per-specimen mode keeps each specimen''s'//nl// &
+            'report in specimen.journal alike). With --selfcheck:'//nl// &
             'injects each effect into synthetic data (the built-in matrix, or the given'//nl// &
             'file), diagnoses it and writes <out_dir>/selfcheck.md and selfcheck.journal'//nl// &
             '(every repetition; under mpirun or srun spread over the ranks). A file of the'//nl// &
@@ -145,6 +146,7 @@ contains
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
             '      --selfcheck       the self-check on synthetic data'//nl// &
             journal_options// &
+            '  -q, --quiet           no progress lines on stderr'//nl// &
             common_options
       case ('deck')
          text = 'usage: usharp deck [options] [<test>] <input.nml>'//nl//nl// &

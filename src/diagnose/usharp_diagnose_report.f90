@@ -327,6 +327,13 @@ contains
 
    !> Section 5, when the prediction could not decide (see joint_reason): the
    !> diagnosis of every test fitted together (jres)
+   !> Whether the report has section 4 (a test that would tell alike effects apart)
+   pure logical function has_separation(res)
+      type(diagnose_result), intent(in) :: res
+      has_separation = .false.
+      if (allocated(res%seps)) has_separation = size(res%seps) > 0
+   end function has_separation
+
    subroutine joint_section(lines, res, opts)
       character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       !> the diagnosis of the fit tests, its joint stage in res%joint
@@ -335,7 +342,12 @@ contains
       integer :: i
       associate (jres => res%joint)
       call add_line(lines, '')
-      call add_line(lines, '## 5. Every test fitted together')
+      ! (section 4, the separating test, stands only where effects were alike)
+      if (has_separation(res)) then
+         call add_line(lines, '## 5. Every test fitted together')
+      else
+         call add_line(lines, '## 4. Every test fitted together')
+      end if
       call add_line(lines, '')
       select case (joint_reason(res, .false.))
       case (joint_partial)

@@ -103,7 +103,11 @@ contains
             text = trim(e%name)//' partly explains the gap'
          end if
          text = text//': BIC '//real_str(e%dbic, 'f0.1')
-         if (.not. any(res%held)) then
+         if (.not. any(res%held) .and. .not. fit_structured(res)) then
+            ! A share of a gap below its floor is no figure (0 % of 0): found by its own test
+            text = text//'; the structured gap of every test fitted together lies below its '// &
+                   'floor (the effect found by its own test, BIC)'
+         else if (.not. any(res%held)) then
             text = text//', structured gap of every test fitted together removed '// &
                    real_str(100.0_dp*e%shrink_fit, 'f0.1')//' %'
          else if (.not. fit_structured(res) .and. held_quiet(res)) then

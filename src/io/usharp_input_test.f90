@@ -395,7 +395,8 @@ contains
       if (t%dt_out > 0.0_dp) then
          if ((t%hist%end_time() - t%hist%t(1))/t%dt_out > real(max_points, dp)) then
             call fatal_error(error, 'dt_out = '//real_str(t%dt_out, 'es10.3')//' s gives '// &
-               real_str((t%hist%end_time() - t%hist%t(1))/t%dt_out, 'es10.3')//' output times over the '// &
+               real_str(aint((t%hist%end_time() - t%hist%t(1))/t%dt_out) + 1.0_dp, 'f0.0')// &
+               ' output times over the '// &
                real_str(t%hist%end_time() - t%hist%t(1), 'es10.3')//' s of the test; at most '// &
                str(max_points))
             return
