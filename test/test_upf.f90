@@ -39,7 +39,8 @@ contains
          new_unittest('adapters-reject-with-elastic-tangent', test_adapter_reject), &
          new_unittest('adapters-plane-elements-agree', test_adapters_plane), &
          new_unittest('openmp-threads-bit-for-bit', test_threads), &
-         new_unittest('single-file-sources-compile-as-vendors', test_single_files)]
+         new_unittest('single-file-sources-compile-as-vendors', test_single_files), &
+         new_unittest('property-14-gives-d0', test_d0_property)]
    end subroutine collect_upf
 
    !> Positions of the lateral normal strains solved for zero lateral stress
@@ -160,6 +161,33 @@ contains
          worst, '; s11 end ', p6%stress(1), ' ksi; ein11 ', p6%statev(1)
       call check(error, all(worst <= 1.0e-8_dp) .and. p6%statev(1) < -1.0e-3_dp, trim(buf))
    end subroutine test_ntens_agree
+
+   !> Property 14, D0, stands for state 7's start: an increment from state 7 = 0 with it is
+   !> the increment from state 7 = D0 without it, bit for bit; without either D0 is the
+   !> formula's (11.06 ksi here), and the stress differs
+   subroutine test_d0_property(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(upf_result) :: res
+      type(miller_model) :: mm
+      real(dp) :: d(6), s14(6), s13(6), sf(6), v(n_upf_state), c(6, 6)
+      d = [2.0e-3_dp, -1.0e-3_dp, -1.0e-3_dp, 0.0_dp, 0.0_dp, 0.0_dp]
+      s14 = 0.0_dp
+      v = 0.0_dp
+      call upf_update(mm, [props, 30.0_dp], temp, 1.0_dp, perm_abaqus, 6, spread(0.0_dp, 1, 6), d, s14, v, c, res)
+      call check(error, res%status == upf_ok .and. v(7) > 0.0_dp, 'with property 14')
+      if (allocated(error)) return
+      s13 = 0.0_dp
+      v = 0.0_dp
+      v(7) = 30.0_dp
+      call upf_update(mm, props, temp, 1.0_dp, perm_abaqus, 6, spread(0.0_dp, 1, 6), d, s13, v, c, res)
+      call check(error, res%status == upf_ok .and. all(s13 == s14), 'state 7 = 30 and property 14 = 30 agree')
+      if (allocated(error)) return
+      sf = 0.0_dp
+      v = 0.0_dp
+      call upf_update(mm, props, temp, 1.0_dp, perm_abaqus, 6, spread(0.0_dp, 1, 6), d, sf, v, c, res)
+      call check(error, res%status == upf_ok .and. abs(sf(1) - s14(1)) > 1.0e-3_dp*abs(s14(1)), &
+                 'the formula''s D0 gives another stress')
+   end subroutine test_d0_property
 
    !> Consistent tangent of one inelastic increment against central differences, for the
    !> elements of ntens components (code vectors, engineering shear)

@@ -720,6 +720,14 @@ contains
                                 h1=props(9), h2=props(10), n=props(11), &
                                 q=props(12)*gas_constant/props(8))
       self%tm = props(13)
+      ! Property 14, where given and positive, is the initial drag stress D0 (the fit's, as
+      ! usharp reports it): the formula's YS = 18 fits a model in ksi with the default d0
+      ! settings only (for Table 4 in MPa it gives 8.97 MPa against 76.27)
+      self%d0_fixed = 0.0_dp
+      if (size(props) >= n_props + 1) then
+         if (props(n_props + 1) > 0.0_dp .and. props(n_props + 1) < huge(1.0_dp)) &
+            self%d0_fixed = props(n_props + 1)
+      end if
       self%temperature = temp
       call model_setup(self, error)
       if (allocated(error)) message = error%message

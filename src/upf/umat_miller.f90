@@ -40,7 +40,7 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
    res%message = upf_call_problem(model, nprops, nstatv, ndi, nshr, trim(card), '*DEPVAR', 'NDI', &
                                   'NSHR')
    if (len_trim(res%message) == 0) then
-      call upf_update(model, props(1:model%n_props()), temp + dtemp, dtime, perm_abaqus, ntens, stran, &
+      call upf_update(model, props(1:nprops), temp + dtemp, dtime, perm_abaqus, ntens, stran, &
                       dstran, stress, statev(1:model%n_state()), ddsdde, res)
       if (res%status == upf_ok) then
          sse = res%sse

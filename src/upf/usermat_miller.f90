@@ -44,7 +44,7 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
    res%message = upf_call_problem(model, nProp, nStatev, nDirect, nShear, trim(cards(1)), &
                                   trim(cards(2)), 'nDirect', 'nShear')
    if (len_trim(res%message) == 0) then
-      call upf_update(model, prop(1:model%n_props()), Temp + dTemp, dTime, perm_ansys, ncomp, Strain, &
+      call upf_update(model, prop(1:nProp), Temp + dTemp, dTime, perm_ansys, ncomp, Strain, &
                       dStrain, stress, ustatev(1:model%n_state()), dsdePl, res)
       if (res%status == upf_ok) then
          sedEl = res%sse
