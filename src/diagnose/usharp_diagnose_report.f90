@@ -378,9 +378,12 @@ contains
                'carry to the held-out tests: the fit tests leave its form open, so their prediction confirms '// &
                'nothing.')
          else
+            ! Against their noise alone: their structured gap in section 1 is counted against a
+            ! floor that holds the fitted constants' uncertainty too, and can be 0 there
             call add_line(lines, 'The fit tests show no structured gap that an effect explains and the held-out '// &
-               'tests show one against their noise, so nothing fitted to the fit tests alone can be '// &
-               'confirmed by the prediction.')
+               'tests show one against their noise alone ('//real_str(res%gap_held_noise, 'es10.3')// &
+               ' against '//real_str(res%floor_held_noise, 'es10.3')//', without the fitted constants'' '// &
+               'uncertainty), so nothing fitted to the fit tests alone can be confirmed by the prediction.')
          end if
       end select
       call add_line(lines, 'The diagnosis again with every test '// &
