@@ -7,7 +7,7 @@ module usharp_experiment
    use usharp_config, only: test_config
    use usharp_history, only: control_stress
    use usharp_input, only: read_data_columns
-   use usharp_input_test, only: max_strain
+   use usharp_input_test, only: max_strain, percent_strain
    use usharp_table, only: merge_repeated_times
    use usharp_units, only: stress_factor
    implicit none
@@ -94,9 +94,8 @@ contains
       if (test%target == 'peaks' .or. size(exp%y) == 0) return
       peak = maxval(abs(exp%y))
       if (fits_strain(test)) then
-         if (peak > max_strain) call fatal_error(error, test%data%file//": column '"// &
-            test%data%strain_col//"' reaches "//real_str(peak, 'g0.4')// &
-            ': strain is in mm/mm (is it in percent?)')
+         if (peak > max_strain) call fatal_error(error, percent_strain(test%data%file, &
+                                                                     test%data%strain_col, peak))
       else if (youngs > 0.0_dp .and. peak > 0.0_dp) then
          if (peak < min_stress_share*youngs .or. peak > max_stress_share*youngs) &
             call fatal_error(error, test%data%file//": column '"//test%data%stress_col// &

@@ -18,7 +18,7 @@ module usharp_input_test
    private
 
    public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
-   public :: read_data_columns, max_strain
+   public :: read_data_columns, max_strain, percent_strain
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
@@ -746,8 +746,7 @@ contains
       ! A strain beyond 1 (100 %) is no test this model describes, but it is what a column in
       ! percent gives: the loops would be simulated a hundred times too large
       if (maxval(abs(vals(:, 2))) > max_strain) then
-         call fatal_error(error, spec%file//": column '"//spec%strain_col//"' reaches "// &
-            real_str(maxval(abs(vals(:, 2))), 'g0.4')//': strain is in mm/mm (is it in percent?)')
+         call fatal_error(error, percent_strain(spec%file, spec%strain_col, maxval(abs(vals(:, 2)))))
          return
       end if
       if (duration /= unset) then
@@ -788,6 +787,15 @@ contains
                         spec%format)
    end subroutine read_data_columns
 
+
+   !> The message for a measured strain column that reaches peak > max_strain (in percent)
+   pure function percent_strain(file, column, peak) result(text)
+      character(len=*), intent(in) :: file, column
+      real(dp), intent(in) :: peak
+      character(len=:), allocatable :: text
+      text = file//": column '"//column//"' reaches "//real_str(peak, 'g0.4')// &
+             ': strain is in mm/mm (is it in percent?)'
+   end function percent_strain
 
    !> The variables that set the strains of a history of this kind
    pure function strain_source(kind) result(names)
