@@ -777,6 +777,11 @@ contains
          "&test name='b', history='tensile', strain_rate=1e-4, final_strain=0.002 /", &
          "&test name='a', history='creep', stress=15.0, ramp_time=1, duration=100 /"], &
          "samename.nml:5: &test #3 'a': name: &test #1 (line 3) has this name")
+      if (allocated(error)) return
+      ! A name longer than reports hold is refused, not cut in them
+      call expect_config_error(error, 'longname.nml', [character(len=260) :: &
+         "&test name='"//repeat('n', 129)//"',", "history='tensile', strain_rate=1e-4, final_strain=0.002 /"], &
+         "a test name is at most 128 characters")
    end subroutine test_unique_names
 
    !> Paths and names are never cut: a long one is kept whole, one beyond the limit is refused

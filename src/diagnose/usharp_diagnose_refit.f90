@@ -427,18 +427,19 @@ contains
       type(diagnose_result), intent(in) :: res
       type(effect_problem), intent(in) :: ep
       type(effect_outcome), intent(inout) :: e
-      integer :: j, nt
+      integer :: j, nt, g
       nt = size(ctx%prob%targets)
       if (allocated(e%pname)) deallocate (e%pname)
-      allocate (e%pname(0))
+      allocate (e%pname(count(ep%pfree)))
+      g = 0
       associate (info => ctx%cat(e%k))
          do j = 1, size(ep%p0)
             if (.not. ep%pfree(j)) cycle
+            g = g + 1
             if (info%sharing == param_per_test) then
-               e%pname = [character(len=64) :: e%pname, trim(info%pname((j - 1)/nt + 1))//' '// &
-                          trim(res%names(mod(j - 1, nt) + 1))]
+               e%pname(g) = trim(info%pname((j - 1)/nt + 1))//' '//trim(res%names(mod(j - 1, nt) + 1))
             else
-               e%pname = [character(len=64) :: e%pname, info%pname(j)]
+               e%pname(g) = info%pname(j)
             end if
          end do
       end associate

@@ -119,9 +119,10 @@ contains
       call add_line(lines, 'estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &
                real_str(res%floor_fit, 'es10.3')//', held-out tests '//real_str(res%gap_held, 'es10.3')// &
                ' against '//real_str(res%floor_held, 'es10.3')//'.')
-      if (any(res%held)) call add_line(lines, 'The held-out tests'' noise part includes '// &
-         real_str(res%pred_held, 'es10.3')//' that the fitted constants'' own uncertainty explains (their '// &
-         'covariance from the fit tests'' noise), and their floor its scatter.')
+      if (any(res%held)) call add_line(lines, 'The table''s noise part is the noise alone. The held-out '// &
+         'tests'' gap here is set against a noise part that also holds '//real_str(res%pred_held, 'es10.3')// &
+         ', what the fitted constants'' own uncertainty explains (their covariance from the fit tests'' '// &
+         'noise, carried linearly to the held-out tests), and their floor its scatter.')
       call add_line(lines, '')
       call add_line(lines, 'Regions ranked by structured gap (share: of the objective of the test set the region')
       call add_line(lines, 'belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')

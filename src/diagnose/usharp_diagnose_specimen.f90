@@ -12,6 +12,7 @@ module usharp_diagnose_specimen
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end, interval_format
    use usharp_config, only: run_config
+   use usharp_input_test, only: name_len
    use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type, fits_strain
@@ -27,7 +28,8 @@ module usharp_diagnose_specimen
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
                                        soften_rate0, low_end_deltas, bic_power, &
                                        tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
-                                       beyond_limit, limit_measures
+                                       beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
+                                       block_sums, deviance_change
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most
    use usharp_diagnose_profile, only: profile_interval, profile_result
@@ -59,8 +61,8 @@ module usharp_diagnose_specimen
 
    !> The specimen against its replicates
    type :: specimen_result
-      character(len=40) :: name = ''
-      character(len=40), allocatable :: replicates(:)
+      character(len=name_len) :: name = ''
+      character(len=name_len), allocatable :: replicates(:)
       character(len=:), allocatable :: cnames(:)
       real(dp), allocatable :: c(:)          !< constants fitted to the replicates
       logical, allocatable :: c_bound(:)     !< of them, those at a search bound
@@ -76,6 +78,11 @@ module usharp_diagnose_specimen
       character(len=32) :: unit = ''
       character(len=8) :: stress_unit = ''   !< the model's stress unit
       type(specimen_effect), allocatable :: effects(:)   !< ranked by BIC
+      !> Without an effect, the constants fitted to the replicates and the specimen together:
+      !> the specimen's objective then (what no constants can take up of its prediction's
+      !> misfit), and the objective of each test (the problem's order)
+      real(dp) :: f_joint = -1.0_dp
+      real(dp), allocatable :: joint_tests(:)
       integer :: nevals = 0
       integer :: nevals_rep = 0              !< of them, simulations of the replicates' set
       !> The specimen's residual covariance s diag(nv) + Jc C Jc' (s profiled; C the constants'
@@ -110,8 +117,10 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
       type(fit_problem) :: prob
-      type(effect_problem) :: ep, es
-      type(optimum_type) :: opt
+      type(effect_problem) :: ep, es, ej0
+      type(optimum_type) :: opt, oj0
+      real(dp), allocatable :: x_rep(:), rj(:)
+      integer, allocatable :: alltests(:), npts(:)
       type(test_effects) :: base
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:), jc(:, :), cov(:, :)
@@ -178,15 +187,12 @@ contains
       sr%noise_sd = noise_sd(prob%targets(ispec)%exp%y)
       sr%nv = noise_variance(prob, [ispec], [sr%noise_sd])
       ! (data without noise leave no covariance to weigh by)
-      if (allocated(cov) .and. .not. any(.not. sr%nv > 0.0_dp)) then
+      if (allocated(cov) .and. any(sr%nv > 0.0_dp)) then
          ! The specimen's residuals in the constants (the same packing as the replicates')
          call new_effect_problem(prob, [ispec], 0, base, peak, es)
          call tight_jacobian(es, es%start(), cfg%fit%fd_step, rr, jc, ok)
          sr%nevals = sr%nevals + size(jc, 2) + 1
-         if (ok) then
-            sr%pred = sum(mat_mul(jc, cov)*jc)
-            call constants_directions(sr, jc, cov)
-         end if
+         if (ok) call constants_directions(sr, jc, cov)
       end if
       ! The prediction's -2 log-likelihood, against which each effect's is set
       if (allocated(sr%w)) call profiled_deviance(sr, r0, dev0, s0)
@@ -195,6 +201,34 @@ contains
       sr%stress_unit = prob%cfg%units
       sr%unit = merge('strain (-)     ', 'stress ('//prob%cfg%units//')   ', &
                       fits_strain(prob%cfg%tests(ispec)))
+      ! The specimen beside its replicates, no effect: the constants fitted to all of them.
+      ! Each effect's BIC is set against this fit, the effect's own refitting the constants
+      ! too, so that what the replicates leave open of the constants is open to both (the
+      ! nonlinear form of the covariance above, which a specimen predicted from replicates
+      ! that hardly bound it overstates: a cyclic test predicted from a relaxation test alone
+      ! took a second back stress, BIC -263, for the constants' own error)
+      if (refit_constants) then
+         alltests = [(i, i=1, nt)]
+         npts = test_sizes(prob, alltests)
+         call new_effect_problem(prob, alltests, 0, base, peak, ej0)
+         call ej0%bounds(lo, hi)
+         x_rep = ej0%start()
+         call levenberg_marquardt(ej0, x_rep, lo, hi, cfg%fit%fd_step, lm_ftol, lm_itermax, &
+                                  opts%max_evals, oj0, error, updates=lm_updates)
+         if (allocated(error)) return
+         sr%nevals = sr%nevals + oj0%nevals
+         allocate (rj(sum(npts)))
+         call ej0%residual_at(oj0%x, rj, ok)
+         if (.not. ok) then
+            call fatal_error(error, "the constants fitted to the replicates and specimen '"// &
+               trim(sr%name)//"' together fail to simulate them")
+            return
+         end if
+         sr%joint_tests = block_sums(npts, rj)
+         sr%f_joint = sr%joint_tests(ispec)
+         ! What no constants take up of the specimen, beyond its noise
+         sr%gap = max(sr%f_joint - sum(sr%nv), 0.0_dp)
+      end if
       ! Each effect on the specimen alone
       allocate (all(size(opts%effects)))
       do j = 1, size(opts%effects)
@@ -211,8 +245,9 @@ contains
          integer, intent(in) :: k
          type(specimen_effect), intent(out) :: se_out
          type(error_type), allocatable, intent(out) :: error
-         type(effect_problem) :: ek
-         type(optimum_type) :: o, o1
+         type(effect_problem) :: ek, ej
+         type(optimum_type) :: o, o1, oj
+         real(dp), allocatable :: xj(:, :), rjk(:), ptj(:)
          type(profile_result) :: pr
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
          real(dp), allocatable :: starts(:, :)
@@ -260,16 +295,64 @@ contains
                o = o1
             end if
          end do
+         if (refit_constants) then
+            ! The effect on the specimen with the constants refitted to all the tests: from
+            ! the joint fit without it (the effect off), and from the replicates' constants
+            ! with the effect as fitted above; BIC against the joint fit without it, each
+            ! test's residuals of a variance of their own (deviance_change)
+            call new_effect_problem(prob, alltests, k, base, peak, ej, p0=ek%p0)
+            ej%pfree = ek%pfree
+            ej%effect_test = ispec
+            call ej%bounds(lo, hi)
+            allocate (xj(size(x_rep) + size(o%x), 2))
+            xj(:, 1) = [x_rep, o%x]
+            xj(:, 2) = [oj0%x, min(max(0.0_dp*o%x, lo(size(x_rep) + 1:)), hi(size(x_rep) + 1:))]
+            do jj = 1, 2
+               call levenberg_marquardt(ej, xj(:, jj), lo, hi, cfg%fit%fd_step, lm_ftol, lm_itermax, &
+                                        opts%max_evals, o1, error, updates=lm_updates)
+               if (allocated(error)) return
+               se_out%nevals = se_out%nevals + o1%nevals
+               if (jj == 1) then
+                  oj = o1
+               else if (o1%f < oj%f) then
+                  oj = o1
+               end if
+               ! (the second start, the joint fit's own point with the effect off, only
+               ! where the first ended above that fit: it cannot end above it)
+               if (oj%f <= oj0%f) exit
+            end do
+            allocate (rjk(sum(npts)))
+            call ej%residual_at(oj%x, rjk, okj)
+            if (okj) then
+               ptj = block_sums(npts, rjk)
+               se_out%dbic = deviance_change(npts, sr%joint_tests, ptj) + se_out%q*log_dp(real(sr%m, dp))
+               ! The specimen alone from here on: its objective, magnitudes and intervals at
+               ! the joint fit's constants
+               call set_constants_at(ek%prob, oj%x(:size(x_rep)))
+               if (allocated(ek%x_last)) deallocate (ek%x_last, ek%r_last)
+               ! (the joint fit's stopping rule is on the objective of all the tests: the
+               ! effect's parameters are finished on the specimen's own, where the profile
+               ! starts)
+               call ek%bounds(lo, hi)
+               call levenberg_marquardt(ek, oj%x(size(x_rep) + 1:), lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, &
+                                        opts%max_evals, o, error, updates=lm_updates)
+               if (allocated(error)) return
+               se_out%nevals = se_out%nevals + o%nevals
+            else
+               se_out%dbic = huge(1.0_dp)
+            end if
+         end if
          se_out%f_after = o%f
-         if (sr%gap > 0.0_dp) se_out%removed = (sr%f0 - o%f)/sr%gap
+         if (sr%gap > 0.0_dp) se_out%removed = (merge(sr%f_joint, sr%f0, refit_constants) - o%f)/sr%gap
          call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
-         ! BIC in the residual's covariance: what the replicates leave open of the constants
-         ! is not the specimen's (a clean specimen took a temperature of -0.5 K, BIC -10.6,
-         ! for the constants' own error when they were held as exact)
-         if (okj .and. size(r) == sr%m .and. allocated(sr%w)) then
-            se_out%dbic = specimen_deviance(sr, r) - dev0 + se_out%q*log_dp(real(sr%m, dp))
-         else
-            se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
+         if (.not. refit_constants) then
+            ! BIC in the residual's covariance: what the given constants leave open is not
+            ! the specimen's
+            if (okj .and. size(r) == sr%m .and. allocated(sr%w)) then
+               se_out%dbic = specimen_deviance(sr, r) - dev0 + se_out%q*log_dp(real(sr%m, dp))
+            else
+               se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
+            end if
          end if
          se_out%significant = se_out%dbic < -bic_margin
          naive = pseudo_inverse(mat_mul(transpose(jac), jac))
@@ -344,22 +427,35 @@ contains
    end subroutine specimen_run
 
    !> The directions of the specimen's residual covariance that the constants' uncertainty
-   !> adds (see specimen_result): with C = V diag(c) V', Z = diag(nv)^-1/2 Jc V diag(c)^1/2 =
-   !> W diag(sig) U', kept where sig is above 1e-8 of its largest
+   !> adds (see specimen_result): with C = V diag(c) V', from Jc V diag(c)^1/2 (see
+   !> spread_directions)
    pure subroutine constants_directions(sr, jc, cov)
       type(specimen_result), intent(inout) :: sr
       real(dp), intent(in) :: jc(:, :), cov(:, :)
-      real(dp), allocatable :: c(:), v(:, :), z(:, :), sz(:), vz(:, :)
-      integer :: j, k, info
+      real(dp), allocatable :: c(:), v(:, :)
+      integer :: j, info
       allocate (c(size(cov, 1)), v(size(cov, 1), size(cov, 1)))
       call svd(cov, c, v, info)
       if (info /= 0) return
       do j = 1, size(c)
          v(:, j) = v(:, j)*sqrt(max(c(j), 0.0_dp))
       end do
-      z = mat_mul(jc, v)
+      call spread_directions(sr, mat_mul(jc, v))
+   end subroutine constants_directions
+
+   !> The same from d, whose d d' is the residuals' covariance from the constants (Jc V
+   !> diag(c)^1/2, or its secant form): Z = diag(nv)^-1/2 d = W diag(sig) U', kept where sig
+   !> is above 1e-8 of its largest; sr%pred the trace of d d'
+   pure subroutine spread_directions(sr, d)
+      type(specimen_result), intent(inout) :: sr
+      real(dp), intent(in) :: d(:, :)
+      real(dp), allocatable :: z(:, :), sz(:), vz(:, :)
+      integer :: j, k, info
+      sr%pred = sum(d**2)
+      if (size(d, 2) == 0) return
+      z = d
       do j = 1, size(z, 2)
-         z(:, j) = z(:, j)/sqrt(sr%nv)
+         z(:, j) = whitened(sr, z(:, j))
       end do
       allocate (sz(size(z, 2)), vz(size(z, 2), size(z, 2)))
       call svd(z, sz, vz, info)
@@ -371,7 +467,7 @@ contains
          sr%w(:, j) = sr%w(:, j)/sz(j)
       end do
       sr%sig2 = sz(:k)**2
-   end subroutine constants_directions
+   end subroutine spread_directions
 
    !> The specimen's residuals r as -2 log-likelihood (without constants) in the covariance
    !> s diag(nv) + Jc C Jc', minimised over the noise scale s: with x = diag(nv)^-1/2 r, its
@@ -396,8 +492,8 @@ contains
       real(dp) :: p, a, b, t1, t2, f1, f2
       real(dp), parameter :: golden = 0.6180339887498949_dp
       integer :: it, m
-      m = size(r)
-      x = r/sqrt(sr%nv)
+      m = count(sr%nv > 0.0_dp)
+      x = whitened(sr, r)
       g = mat_mul(transpose(sr%w), x)
       p = sum((x - mat_mul(sr%w, g))**2)
       ! ln s between what the rest alone and the whole residual give, widened
@@ -443,10 +539,21 @@ contains
       real(dp), intent(in) :: d(:)
       real(dp), intent(in) :: s   !< noise scale, > 0
       real(dp), allocatable :: x(:), g(:)
-      x = d/sqrt(sr%nv)
+      x = whitened(sr, d)
       g = mat_mul(transpose(sr%w), x)
       lambda = max(sum(x**2) - sum(g**2), 0.0_dp)/s + sum(g**2/(s + sr%sig2))
    end function specimen_noncentrality
+
+   !> diag(nv)^-1/2 r on the points that carry a weight; 0 on those that do not (a weight of
+   !> 0, as the relaxation weighting gives a test's first and last points, makes the
+   !> residual 0 whatever the constants: no information, and no noise to divide by)
+   pure function whitened(sr, r) result(x)
+      type(specimen_result), intent(in) :: sr
+      real(dp), intent(in) :: r(:)
+      real(dp) :: x(size(r))
+      x = 0.0_dp
+      where (sr%nv > 0.0_dp) x = r/sqrt(sr%nv)
+   end function whitened
 
    !> The per-specimen report (Markdown)
    function specimen_report(sr) result(lines)
@@ -482,22 +589,45 @@ contains
          end if
       end if
       call add('')
-      call add(trim(sr%name)//' predicted with them: objective '//real_str(sr%f0, 'es10.3')//' on '// &
-         str(sr%m)//' points, of which the noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '// &
-         trim(sr%unit)//') explains '//real_str(sr%noise, 'es10.3')//'; structured gap '// &
-         real_str(sr%gap, 'es10.3')//'.')
-      if (allocated(sr%w)) call add('The noise part includes '//real_str(sr%pred, 'es10.3')//' that the '// &
-         'constants'' own uncertainty explains (their covariance from the replicates'' noise), and each '// &
-         'BIC below is taken in the residual''s covariance with it beside the noise, whose scale is '// &
-         'fitted: what the replicates leave open of the constants is not the specimen''s.')
+      if (sr%f_joint >= 0.0_dp) then
+         ln = trim(sr%name)//' predicted with them: objective '//real_str(sr%f0, 'es10.3')//' on '// &
+              str(sr%m)//' points; its noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '//trim(sr%unit)// &
+              ') explains '//real_str(sum(sr%nv), 'es10.3')
+         if (allocated(sr%w)) ln = ln//', and the constants'' own uncertainty (their covariance from the '// &
+            'replicates'' noise, carried linearly to the specimen) '//real_str(sr%pred, 'es10.3')
+         call add(ln//'.')
+         call add('Fitted together with its replicates (no effect; the constants refitted to all the tests), '// &
+            'its objective is '//real_str(sr%f_joint, 'es10.3')//'; structured gap '//real_str(sr%gap, 'es10.3')// &
+            ' (what no constants take up, less the noise part).')
+      else
+         call add(trim(sr%name)//' predicted with them: objective '//real_str(sr%f0, 'es10.3')//' on '// &
+            str(sr%m)//' points, of which the noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '// &
+            trim(sr%unit)//') explains '//real_str(sr%noise, 'es10.3')//'; structured gap '// &
+            real_str(sr%gap, 'es10.3')//'.')
+         if (allocated(sr%w)) call add('The noise part includes '//real_str(sr%pred, 'es10.3')//' that the '// &
+            'constants'' own uncertainty explains (their covariance from the given constants'' noise, carried '// &
+            'linearly to the specimen).')
+      end if
       call add('')
-      call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
-         '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'); intervals 95 % '// &
-         'profile likelihood ("open": the data do not bound that end):')
+      if (sr%f_joint >= 0.0_dp) then
+         call add('Each effect fitted to '//trim(sr%name)//' alone, the constants refitted to it and its '// &
+            'replicates together; its BIC change against that joint fit without the effect, each test''s '// &
+            'residuals of a variance of their own, so that what the replicates leave open of the constants '// &
+            'is open to both. Ranked by BIC (significant: BIC falls by more than '// &
+            real_str(bic_margin, 'f0.0')//'); magnitudes and objectives at the joint fit''s constants; '// &
+            'intervals 95 % profile likelihood with those constants held ("open": the data do not bound '// &
+            'that end):')
+      else
+         call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
+            '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'), taken in the '// &
+            'residual''s covariance with the constants'' uncertainty beside the noise, whose scale is fitted; '// &
+            'intervals 95 % profile likelihood ("open": the data do not bound that end):')
+      end if
       call add('')
       if (allocated(sr%w)) then
          call add('Power: of that rule against the effect at the low end of its realistic range, from the '// &
-            'chi-square of its signal there (simulated) in the covariance the BIC change is taken in.')
+            'chi-square of its signal there (simulated) in the residual''s covariance with the constants'' '// &
+            'uncertainty beside the noise.')
       else
          call add('Power: of that rule against the effect at the low end of its realistic range, from the '// &
             'chi-square of its signal there (simulated) at the prediction''s residual.')
@@ -559,7 +689,13 @@ contains
          end do
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
       end if
-      if (sr%gap <= 0.0_dp .and. lead == 0) verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
+      if (sr%gap <= 0.0_dp .and. lead == 0) then
+         if (sr%f_joint >= 0.0_dp) then
+            verdict = 'one set of constants fits '//trim(sr%name)//' and its replicates to its noise level'
+         else
+            verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
+         end if
+      end if
       if (lead == 0) then
          ! (copied: a component of an array of derived type is not contiguous)
          names = sr%effects%name
@@ -568,8 +704,9 @@ contains
       end if
       call add('**Verdict:** '//verdict)
       call add('')
-      call add(str(sr%nevals_rep)//' simulations of the test set (the replicates'' fit), '// &
-               str(sr%nevals - sr%nevals_rep)//' of the specimen alone (its effects and their intervals).')
+      call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &
+               str(sr%nevals - sr%nevals_rep)//' of the specimen alone or with them (its effects, the joint '// &
+               'fits and the intervals).')
    contains
       subroutine add(text)
          character(len=*), intent(in) :: text

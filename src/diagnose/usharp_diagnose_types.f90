@@ -4,6 +4,7 @@ module usharp_diagnose_types
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_objective, only: fit_problem
+   use usharp_input_test, only: name_len
    use usharp_effects, only: test_effects, effect_info
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: diagnose_options, bic_margin
@@ -102,7 +103,8 @@ module usharp_diagnose_types
       logical, allocatable :: p_lo_open(:), p_hi_open(:)  !< a profile's end the data do not bound
       real(dp), allocatable :: x(:)          !< search point after screening
       real(dp), allocatable :: x_alt(:, :)   !< end points of its other screening starts, best first
-      character(len=64), allocatable :: pname(:)
+      !> parameter names, a per-test one with its test's name
+      character(len=name_len + 17), allocatable :: pname(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
       real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
       logical, allocatable :: c_bound(:)     !< its constants at a search bound
@@ -137,7 +139,7 @@ module usharp_diagnose_types
 
    !> The whole diagnosis
    type :: diagnose_result
-      character(len=64), allocatable :: names(:)
+      character(len=name_len), allocatable :: names(:)   !< of the tests
       character(len=32), allocatable :: unit(:)   !< response and unit per test
       logical, allocatable :: held(:)
       real(dp), allocatable :: noise(:)           !< noise sd per test, response unit

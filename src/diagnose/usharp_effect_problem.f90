@@ -36,6 +36,9 @@ module usharp_effect_problem
       real(dp), allocatable :: pscale(:)       !< unit of x for each parameter
       logical, allocatable :: pnonneg(:)
       type(test_effects) :: base               !< dlnE_dT, gamma3 held fixed
+      !> When > 0, the effect acts on this test (an index into prob's tests) alone, a global
+      !> effect's parameters included: one specimen's property beside its replicates
+      integer :: effect_test = 0
       integer :: nevals = 0
       !> The last point evaluated on its own and its residuals: a point that differs from it
       !> only in one test's own parameters (a difference step of a per-test parameter)
@@ -186,6 +189,11 @@ contains
       nt = size(self%prob%targets)
       if (self%k > 0) then
          eff = effects_of(self%k, p, nt, self%base)
+         if (self%effect_test > 0) then
+            do it = 1, nt
+               if (it /= self%effect_test) eff(it) = self%base
+            end do
+         end if
       else
          allocate (eff(nt))
          eff = self%base
@@ -365,9 +373,16 @@ contains
       allocate (owner(nc + count(self%pfree)))
       owner = 0
       if (self%k == 0) return
+      nt = size(self%prob%targets)
+      if (self%effect_test > 0) then
+         ! every effect parameter is that test's own
+         do it = 1, size(self%tests)
+            if (self%tests(it) == self%effect_test) owner(nc + 1:) = it
+         end do
+         return
+      end if
       cat = effect_catalogue(1.0_dp)
       if (cat(self%k)%sharing /= param_per_test) return
-      nt = size(self%prob%targets)
       jx = nc
       do j = 1, size(self%p0)
          if (.not. self%pfree(j)) cycle

@@ -54,6 +54,9 @@ module usharp_input_test
       real(dp) :: time_limit = 3600.0_dp               !< s, then the command is killed
    end type external_spec
 
+   !> The longest test name (reports hold names in fields of this length)
+   integer, parameter, public :: name_len = 128
+
    !> One test: its load history, output interval and (for fits) its data and weighting
    type :: test_config
       character(len=:), allocatable :: name
@@ -220,6 +223,11 @@ contains
       if (allocated(error)) return
       if (len_trim(v%name) == 0) then
          call fatal_error(error, 'name is not set')
+         return
+      end if
+      if (len_trim(v%name) > name_len) then
+         call fatal_error(error, "name = '"//v%name(:name_len)//"...': a test name is at most "//str(name_len)// &
+            ' characters (it names files and the rows of reports)')
          return
       end if
       if (verify(trim(v%name), 'abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.') /= 0) then
