@@ -17,7 +17,8 @@ module test_tmf
    use usharp_fit, only: fit_outcome
    use test_design, only: synthetic_problem
    use test_models, only: fit_b_q_from_offset
-   use test_util, only: write_text, check_message
+   use test_util, only: write_text, check_message, scratch_dir
+   use usharp_cmd_simulate, only: simulate_command
    use usharp_strings, only: real_str
    implicit none
    private
@@ -39,6 +40,7 @@ contains
          new_unittest('tmf-phase-sets-the-asymmetry', test_phase), &
          new_unittest('tmf-b-and-q-from-one-test', test_b_and_q), &
          new_unittest('tmf-input-checks', test_input), &
+         new_unittest('tmf-header-gives-the-starting-d0', test_header_d0), &
          new_unittest('tmf-chaboche-arrhenius-against-tight-reference', test_chaboche)]
    end subroutine collect_tmf
 
@@ -256,4 +258,37 @@ contains
       if (.not. allocated(e)) call simulate_test(cfg%model, cfg%solver, cfg%tests(1), res, e)
       call check_message(error, e, "needs integrator = 'rodas4'")
    end subroutine test_input
+   !> The header of a simulated temperature cycle gives D0 where the test starts (the model is
+   !> set up at its first temperature), the drag the file's first row holds, not the one at
+   !> the model's temperature
+   subroutine test_header_d0(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=4096), allocatable :: written(:)
+      character(len=1024) :: line
+      real(dp) :: d0, row(6)
+      integer :: unit, ios, k
+      call simulate_command(deck('tmf-header', 'tmf_temperatures = 811.15, 922.15'), scratch_dir//'/tmf-header', &
+                            written, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      d0 = -1.0_dp
+      row = -1.0_dp
+      open (newunit=unit, file=trim(written(1)), status='old', action='read')
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         k = index(line, 'D0 = ')
+         if (line(1:1) == '#' .and. k > 0) read (line(k + 5:), *) d0
+         if (line(1:1) /= '#') then
+            read (line, *) row
+            exit
+         end if
+      end do
+      close (unit)
+      call check(error, d0 > 0.0_dp .and. abs(d0 - row(6)) <= 1.0e-6_dp*row(6), 'header D0 '// &
+                 real_str(d0, 'es14.7')//', drag of the first row '//real_str(row(6), 'es14.7'))
+   end subroutine test_header_d0
 end module test_tmf

@@ -114,7 +114,8 @@ def verdict_of(text):
     m = re.search(r'\*\*Verdict:\*\*\s*(.*(?:\n  .*)*)', text)
     v = ' '.join(x.strip() for x in m.group(1).split('\n')) if m else ''
     if re.match(r'\s*no significant effect', v) or re.match(r'\s*no effect explains', v) or \
-            'predicted to its noise level by its replicates' in v:
+            'predicted to its noise level by its replicates' in v or \
+            re.match(r'\s*one set of constants fits .* to its noise level', v):
         lead = 'none'
     else:
         m2 = re.match(r'\s*`?([a-z0-9]+)`?', v)

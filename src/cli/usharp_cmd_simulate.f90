@@ -6,6 +6,7 @@ module usharp_cmd_simulate
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants, check_inputs_kept, check_not_a_fit
    use usharp_simulation, only: sim_result
+   use usharp_model, only: model_type, model_at
    use usharp_simulate, only: simulate_test, add_stress_noise
    use usharp_history, only: control_strain
    use usharp_output, only: write_sim_file
@@ -35,6 +36,7 @@ contains
       character(len=:), allocatable :: dir, command, file, line
       character(len=512), allocatable :: header(:)
       character(len=:), allocatable :: dnames(:)
+      class(model_type), allocatable :: mt
       real(dp), allocatable :: dvals(:)
       integer :: i, k
       logical :: one_test, overwrite
@@ -114,7 +116,15 @@ contains
          if (allocated(cfg%tests(i)%hist%temp)) header(3) = trim(header(3))//' (at the start; '// &
             'the temperature follows the command from '//real_str(minval(cfg%tests(i)%hist%temp), &
             'g0.8')//' to '//real_str(maxval(cfg%tests(i)%hist%temp), 'g0.8')//' K)'
-         call cfg%model%derived_values(dnames, dvals)
+         ! (the model as the test starts: a test at its own temperature, a temperature cycle
+         ! at its first, is set up there)
+         if (cfg%tests(i)%temperature > 0.0_dp) then
+            call model_at(cfg%model, cfg%tests(i)%temperature, mt, error)
+            if (allocated(error)) return
+            call mt%derived_values(dnames, dvals)
+         else
+            call cfg%model%derived_values(dnames, dvals)
+         end if
          do k = 1, size(dvals)
             header(3) = trim(header(3))//', '//trim(dnames(k))//' = '//real_str(dvals(k), 'g0.8')// &
                         ' '//cfg%units
