@@ -343,7 +343,9 @@ contains
             end if
          end if
          se_out%f_after = o%f
-         if (sr%gap > 0.0_dp) se_out%removed = (merge(sr%f_joint, sr%f0, refit_constants) - o%f)/sr%gap
+         ! (beyond the whole gap only by the noise: all of it)
+         if (sr%gap > 0.0_dp) se_out%removed = min((merge(sr%f_joint, sr%f0, refit_constants) - o%f)/sr%gap, &
+                                                   1.0_dp)
          call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
          if (.not. refit_constants) then
             ! BIC in the residual's covariance: what the given constants leave open is not
@@ -559,7 +561,7 @@ contains
    function specimen_report(sr) result(lines)
       type(specimen_result), intent(in) :: sr
       character(len=report_line_len), allocatable :: lines(:)
-      integer :: j, g, lead
+      integer :: j, g, lead, best
       character(len=:), allocatable :: ln, verdict, fmt
       character(len=16), allocatable :: names(:)
       real(dp), allocatable :: power(:)
@@ -666,6 +668,17 @@ contains
       do j = 1, size(sr%effects)
          if (lead == 0 .and. sr%effects(j)%significant .and. sr%effects(j)%plausible) lead = j
       end do
+      ! As in the held-out diagnosis, without strong evidence between them (BIC within
+      ! bic_margin) the simplest leads: fewer parameters, then the lower BIC (a temperature
+      ! offset of 5 K had been named scatter, two parameters, BIC 4 below it)
+      best = lead
+      if (best > 0) then
+         do j = best + 1, size(sr%effects)
+            if (sr%effects(j)%significant .and. sr%effects(j)%plausible .and. &
+                sr%effects(j)%dbic < sr%effects(best)%dbic + bic_margin .and. &
+                sr%effects(j)%q < sr%effects(lead)%q) lead = j
+         end do
+      end if
       if (lead > 0) then
          associate (e => sr%effects(lead))
             ! As in the held-out diagnosis: "explains" for most of the structured gap
@@ -681,13 +694,14 @@ contains
                          'the objective as a whole'
             end if
          end associate
-         ! Effects within bic_margin of it explain the difference as well
+         ! Effects within bic_margin of the best explain the difference as well
          ln = ''
-         do j = lead + 1, size(sr%effects)
-            if (sr%effects(j)%significant .and. sr%effects(j)%plausible .and. &
-                sr%effects(j)%dbic < sr%effects(lead)%dbic + bic_margin) ln = ln//', '//trim(sr%effects(j)%name)
+         do j = best, size(sr%effects)
+            if (j /= lead .and. sr%effects(j)%significant .and. sr%effects(j)%plausible .and. &
+                sr%effects(j)%dbic < sr%effects(best)%dbic + bic_margin) ln = ln//', '//trim(sr%effects(j)%name)
          end do
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
+         if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
       end if
       if (sr%gap <= 0.0_dp .and. lead == 0) then
          if (sr%f_joint >= 0.0_dp) then
