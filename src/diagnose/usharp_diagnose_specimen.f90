@@ -289,11 +289,7 @@ contains
                                      updates=lm_updates)
             if (allocated(error)) return
             se_out%nevals = se_out%nevals + o1%nevals
-            if (jj == 1) then
-               o = o1
-            else if (o1%f < o%f) then
-               o = o1
-            end if
+            call keep_lower(o, o1, jj == 1)
          end do
          if (refit_constants) then
             ! The effect on the specimen with the constants refitted to all the tests: from
@@ -312,11 +308,7 @@ contains
                                         opts%max_evals, o1, error, updates=lm_updates)
                if (allocated(error)) return
                se_out%nevals = se_out%nevals + o1%nevals
-               if (jj == 1) then
-                  oj = o1
-               else if (o1%f < oj%f) then
-                  oj = o1
-               end if
+               call keep_lower(oj, o1, jj == 1)
                ! (the second start, the joint fit's own point with the effect off, only
                ! where the first ended above that fit: it cannot end above it)
                if (oj%f <= oj0%f) exit
@@ -392,6 +384,18 @@ contains
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
                                          se_out%lo_open .or. se_out%hi_open, reach, saturation) <= 1.0_dp
       end subroutine fit_effect
+
+      !> best = new when first, or when new ends lower
+      subroutine keep_lower(best, new, first)
+         type(optimum_type), intent(inout) :: best
+         type(optimum_type), intent(in) :: new
+         logical, intent(in) :: first
+         if (first) then
+            best = new
+         else if (new%f < best%f) then
+            best = new
+         end if
+      end subroutine keep_lower
 
       !> The power of the significance rule against effect ek%k at the low end of its range
       !> on the specimen (low_end_deltas, bic_power): its signal simulated there against the
