@@ -39,6 +39,9 @@ module usharp_effect_problem
       !> When > 0, the effect acts on this test (an index into prob's tests) alone, a global
       !> effect's parameters included: one specimen's property beside its replicates
       integer :: effect_test = 0
+      !> When allocated, a factor on each test's residuals (prob's tests): a weighting of the
+      !> tests against one another
+      real(dp), allocatable :: test_scale(:)
       integer :: nevals = 0
       !> The last point evaluated on its own and its residuals: a point that differs from it
       !> only in one test's own parameters (a difference step of a per-test parameter)
@@ -263,6 +266,7 @@ contains
             ysim = simulated(test, res)
             r(k0(it) + 1:k0(it) + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
                                                       tg%y_ex_max)
+            if (allocated(self%test_scale)) r(k0(it) + 1:k0(it) + n) = self%test_scale(i)*r(k0(it) + 1:k0(it) + n)
             if (present(fitted)) fitted(k0(it) + 1:k0(it) + n) = ysim
             if (present(strain)) strain(k0(it) + 1:k0(it) + n) = res%strain
             if (present(eps_in)) eps_in(k0(it) + 1:k0(it) + n) = res%eps_in
