@@ -431,7 +431,7 @@ contains
       type(specimen_result) :: sr
       character(len=100), allocatable :: deck(:)
       character(len=*), parameter :: d = '../../data/thesis-noise1/'
-      integer :: pass, j
+      integer :: pass
       do pass = 1, 2
          deck = [character(len=100) :: &
             "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
@@ -458,11 +458,8 @@ contains
          write (*, '(4x,a)') trim(sr%name)//': leading '//trim(sr%effects(1)%name)//', BIC '// &
             real_str(sr%effects(1)%dbic, 'f0.1')//'; predicted '//real_str(sr%f0, 'es9.2')//', jointly '// &
             real_str(sr%f_joint, 'es9.2')
-         do j = 1, size(sr%effects)
-            call check(error, .not. sr%effects(j)%significant, trim(sr%name)//': '//trim(sr%effects(j)%name)// &
-                       ' significant in clean data, BIC '//real_str(sr%effects(j)%dbic, 'f0.1'))
-            if (allocated(error)) return
-         end do
+         call check_none_significant(sr, trim(sr%name), error)
+         if (allocated(error)) return
       end do
    end subroutine test_specimen_clean
 
@@ -479,7 +476,7 @@ contains
       type(specimen_result) :: sr
       type(rng_type) :: rng
       real(dp) :: peak
-      integer :: seed, i, j
+      integer :: seed, i
       do seed = 1, 3
          call drift_case("'compliance', 'temperature', 'scatter', 'drift', 'softening'", 0.0_dp, 40 + seed, &
                          cfg, opts, exps, error)
@@ -494,14 +491,23 @@ contains
          if (allocated(error)) return
          write (*, '(4x,a)') 'seed '//str(seed)//': leading '//trim(sr%effects(1)%name)//', BIC '// &
             real_str(sr%effects(1)%dbic, 'f0.1')
-         do j = 1, size(sr%effects)
-            call check(error, .not. sr%effects(j)%significant, 'seed '//str(seed)//': '// &
-                       trim(sr%effects(j)%name)//' significant in clean data, BIC '// &
-                       real_str(sr%effects(j)%dbic, 'f0.1'))
-            if (allocated(error)) return
-         end do
+         call check_none_significant(sr, 'seed '//str(seed), error)
+         if (allocated(error)) return
       end do
    end subroutine test_specimen_noisier
+
+   !> No effect of a per-specimen diagnosis of clean data is significant (label: the case)
+   subroutine check_none_significant(sr, label, error)
+      type(specimen_result), intent(in) :: sr
+      character(len=*), intent(in) :: label
+      type(error_type), allocatable, intent(out) :: error
+      integer :: j
+      do j = 1, size(sr%effects)
+         call check(error, .not. sr%effects(j)%significant, label//': '//trim(sr%effects(j)%name)// &
+                    ' significant in clean data, BIC '//real_str(sr%effects(j)%dbic, 'f0.1'))
+         if (allocated(error)) return
+      end do
+   end subroutine check_none_significant
 
    !> Three cyclic tests (1, 0.6, 0.8 % at 1e-3/s, 3 cycles; the model's own constants) of
    !> which the third, c3, carries an extensometer drift d (1/s), 0.5 % noise (seed), and the

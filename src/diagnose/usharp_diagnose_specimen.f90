@@ -305,8 +305,7 @@ contains
             if (.not. allocated(all(j)%joint_tests)) cycle
             all(j)%dbic = sum(all(j)%joint_tests - sr%joint_tests) + all(j)%q*log_dp(real(sr%m, dp))
             all(j)%significant = all(j)%dbic < -bic_margin
-            all(j)%removed = 0.0_dp
-            if (sr%gap > 0.0_dp) all(j)%removed = min((sr%f_joint - all(j)%f_after)/sr%gap, 1.0_dp)
+            all(j)%removed = gap_share(sr%f_joint, all(j)%f_after)
          end do
       end subroutine joint_restart
 
@@ -411,9 +410,7 @@ contains
             end if
          end if
          se_out%f_after = o%f
-         ! (beyond the whole gap only by the noise: all of it)
-         if (sr%gap > 0.0_dp) se_out%removed = min((merge(sr%f_joint, sr%f0, refit_constants) - o%f)/sr%gap, &
-                                                   1.0_dp)
+         se_out%removed = gap_share(merge(sr%f_joint, sr%f0, refit_constants), o%f)
          call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
          if (.not. refit_constants) then
             ! BIC in the residual's covariance: what the given constants leave open is not
@@ -460,6 +457,14 @@ contains
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
                                          se_out%lo_open .or. se_out%hi_open, reach, saturation) <= 1.0_dp
       end subroutine fit_effect
+
+      !> The share of the specimen's structured gap that going from objective f_from to
+      !> f_to removes (beyond the whole gap only by the noise: all of it)
+      pure real(dp) function gap_share(f_from, f_to) result(share)
+         real(dp), intent(in) :: f_from, f_to
+         share = 0.0_dp
+         if (sr%gap > 0.0_dp) share = min((f_from - f_to)/sr%gap, 1.0_dp)
+      end function gap_share
 
       !> best = new when first, or when new ends lower
       subroutine keep_lower(best, new, first)
