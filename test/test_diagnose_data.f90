@@ -28,7 +28,7 @@ module test_diagnose_data
    use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context, &
                               named_effect, joint_decides
    use usharp_diagnose_verdict, only: conclude
-   use usharp_diagnose_numerics, only: bic_power
+   use usharp_diagnose_numerics, only: bic_power, power_lambda
    use test_util, only: write_text
    implicit none
    private
@@ -373,7 +373,6 @@ contains
       if (allocated(error)) return
       ! The power statement: the drift's chi-square at the low end of its range (2e-5 strain
       ! over the test), scaled to the injected drift (the signal is linear in it), is the fall
-      ! of the specimen's chi-square that fitting the drift gives (expected: lambda + 1)
       ! of the specimen's chi-square that fitting the drift gives (expected: lambda + 1, within
       ! 3 sd of a noncentral chi-square), and the signal simulated at the injected drift
       block
@@ -402,6 +401,26 @@ contains
          call check(error, abs(scaled/direct - 1.0_dp) < 0.02_dp, 'drift chi-square at the injected drift: '// &
                     real_str(scaled, 'es10.3')//' from the low end, '//real_str(direct, 'es10.3')//' simulated')
          if (allocated(error)) return
+         ! What the specimen could hide: the drift at the stated multiple of its low end,
+         ! simulated, has the chi-square at which the rule's power is 0.95; a test is named
+         ! that finds that much with power 0.95 or more
+         associate (h => sr%effects(1)%hidden, q => sr%effects(1)%q)
+            call check(error, h%times > 1.0_dp, 'drift: no bound of what the specimen could hide')
+            if (allocated(error)) return
+            e3%p0 = [0.0_dp, 0.0_dp, h%times*2.0e-5_dp/duration]
+            call e3%residual_at(e3%start(), r1, ok)
+            call check(error, ok, 'simulation of the specimen failed')
+            if (allocated(error)) return
+            direct = sum((r1 - r0)**2)/(sr%f0/sr%m)
+            call check(error, abs(direct/power_lambda(0.95_dp, q, sr%m) - 1.0_dp) < 0.05_dp .and. &
+                       abs(bic_power(direct, q, sr%m) - 0.95_dp) < 0.02_dp, 'drift of '// &
+                       real_str(h%times, 'f0.2')//' times the low end: chi-square '//real_str(direct, 'es10.3')// &
+                       ', power '//real_str(bic_power(direct, q, sr%m), 'f0.3')//' (stated 0.95)')
+            if (allocated(error)) return
+            call check(error, len_trim(h%test) > 0 .and. h%power >= 0.95_dp, 'no test named that finds '// &
+                       'the hidden drift: '''//trim(h%test)//''', power '//real_str(h%power, 'f0.2'))
+            if (allocated(error)) return
+         end associate
       end block
       call check(error, all(sr%effects%power_low >= 0.0_dp), 'power not computed for every effect')
       if (allocated(error)) return

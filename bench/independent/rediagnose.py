@@ -52,9 +52,13 @@ def main():
         list(pool.map(lambda p: diagnose(exe, p[1]), sorted(pairs, key=first)))
     before = after = changed = 0
     for old, new in pairs:
-        row = open(os.path.join(new, 'truth.txt')).read().split(':')[0]
+        txt = open(os.path.join(new, 'truth.txt')).read()
+        row = txt.split(':')[0]
+        label = txt.split('\n')[0].split(': ', 1)[1]
+        name = os.path.basename(new)
+        mname = name[:name.index('-' + row + '-')]
         vo, vn = cases_of.verdict(old), cases_of.verdict(new)
-        ro, rn = cases_of.right(row, vo), cases_of.right(row, vn)
+        ro, rn = cases_of.right(row, vo, mname, label), cases_of.right(row, vn, mname, label)
         before += ro
         after += rn
         if ro != rn or vo[0] != vn[0]:

@@ -128,6 +128,50 @@ def verdict_of(text):
     return lead, (float(m3.group(1)) if m3 else float('nan')), v, alike
 
 
+# Rows whose injected form is the catalogue effect's own (one parameter): a miss counts as
+# right when the verdict states that the tests could miss that effect up to a magnitude at
+# or above the injected one (the significance rule's power 0.95 there) and names a test that
+# would find that much with power 0.95 or more
+HIDE = {'drift': 'drift', 'lag': 'lag', 'temperature': 'temperature'}
+LOW_END = {'drift': 2e-5, 'lag': 0.1, 'temperature': 5.0}  # the catalogue's low ends (drift: over a test)
+
+
+def hidden_of(v):
+    """The verdict's "could miss" entries: effect -> (times the low end, value or None, the
+    test named, its power)"""
+    out = {}
+    for m in re.finditer(r'([a-z0-9]+) \(power [0-9.]+ there; found with power 0\.95 from ([0-9.]+) times it'
+                         r'(?:, [A-Za-z0-9/]+ = ([-+0-9.Ee]+) [^,)]*)?(?:, which an? (.+?) would find with power '
+                         r'([0-9.]+))?\)', v):
+        out[m.group(1)] = (float(m.group(2)), float(m.group(3)) if m.group(3) else None, m.group(4) or '',
+                           float(m.group(5)) if m.group(5) else -1.0)
+    return out
+
+
+def hidden_right(row, mname, label, v):
+    """A miss stated as such: the injected effect (its exact form) among those the verdict says
+    the tests could miss, up to a magnitude at or above the injected one, with a test named
+    that would find that much (power 0.95 or more)"""
+    if row not in HIDE:
+        return False
+    h = hidden_of(v).get(HIDE[row])
+    if not h or not h[2] or h[3] < 0.95:
+        return False
+    tests, held, mode = MATRICES[mname]
+    names = [t for t, _ in tests]
+    nums = [float(x) for x in re.findall(r'[-+]?[0-9.]+(?:e[-+]?[0-9]+)?', label.split(' on ')[0])]
+    if row == 'drift':
+        # per test: its rate (1/s) and, as a multiple of the low end, its total over the test
+        carriers = [names.index(held)] if mode == 'specimen' else range(len(names))
+        for i in carriers:
+            tot = abs(nums[i]) * ref.HISTORIES[names[i]]()[1][-1]
+            if (h[1] is not None and abs(nums[i]) > abs(h[1])) or (h[1] is None and tot / LOW_END[row] > h[0]):
+                return False
+        return True
+    mag = abs(nums[0])
+    return (abs(h[1]) if h[1] is not None else h[0] * LOW_END[row]) >= mag
+
+
 CATALOGUE = ['compliance', 'lag', 'temperature', 'scatter', 'initial', 'shift', 'softening', 'backstress2',
              'drift']
 
@@ -195,11 +239,13 @@ def main():
                 # with a separating test proposed
                 if lead not in ACCEPT[row] and any(x in ACCEPT[row] for x in alike):
                     lead = lead + '~' + next(x for x in alike if x in ACCEPT[row])
+                elif lead not in ACCEPT[row] and hidden_right(row, mname, label, v):
+                    lead = lead + '~' + HIDE[row] + '(could miss)'
                 answers.append(lead)
                 removed.append(rem)
                 with open(os.path.join(case, 'truth.txt'), 'w') as f:
                     f.write(f'{row}: {label}\nverdict: {v}\n')
-            ok = sum(x.split('~')[-1] in ACCEPT[row] for x in answers)
+            ok = sum(x.split('~')[-1].split('(')[0] in ACCEPT[row] for x in answers)
             total_ok += ok
             total += len(answers)
             med = np.nanmedian(removed) if np.any(np.isfinite(removed)) else float('nan')

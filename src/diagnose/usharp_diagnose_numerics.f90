@@ -29,7 +29,7 @@ module usharp_diagnose_numerics
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached
    public :: limit_measures
-   public :: low_end_deltas, screening_steps, bic_power, test_sizes, block_sums, deviance_change
+   public :: low_end_deltas, screening_steps, bic_power, power_lambda, test_sizes, block_sums, deviance_change
    public :: tight_jacobian, sandwich_covariance, noise_variance, held_rate, ratio_beyond_doubt, &
              beyond_limit
 
@@ -320,6 +320,26 @@ contains
       integer, intent(in) :: df, nres
       p = ncx2_sf(df*log_dp(real(max(nres, 2), dp)) + bic_margin, real(max(df, 1), dp), lambda)
    end function bic_power
+
+   !> The expected chi-square (noncentrality) at which the rule of bic_power (df parameters,
+   !> nres residuals) has the given power (0 < power < 1), by bisection on its logarithm
+   pure real(dp) function power_lambda(power, df, nres) result(lambda)
+      real(dp), intent(in) :: power
+      integer, intent(in) :: df, nres
+      real(dp) :: lo, hi
+      integer :: it
+      lo = 1.0e-6_dp
+      hi = 1.0e6_dp
+      do it = 1, 80
+         lambda = sqrt(lo*hi)
+         if (bic_power(lambda, df, nres) < power) then
+            lo = lambda
+         else
+            hi = lambda
+         end if
+      end do
+      lambda = sqrt(lo*hi)
+   end function power_lambda
 
    !> Starts (a, b: columns) of a fit of the saturating softening: zero at the rate
    !> soften_rate0, then a tenth of the physical limit of a with either sign (softening,

@@ -7,16 +7,17 @@ module usharp_diagnose_screen
    use usharp_lapack, only: mat_mul
    use usharp_math, only: log_dp
    use usharp_error, only: error_type, fatal_error, stat_failure
-   use usharp_effects, only: effect_info, param_global
+   use usharp_effects, only: effect_info, param_global, param_per_test, effect_nparams
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_optimiser, only: optimum_type
    use usharp_sort, only: order_of
-   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, magnitude_text
    use usharp_diagnose_units, only: lm_unit
    use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
                                        softening_starts, soften_rate0, low_end_deltas, bic_power, &
-                                       test_sizes, block_sums, deviance_change, screening_steps
+                                       test_sizes, block_sums, deviance_change, screening_steps, power_lambda
+   use usharp_diagnose_separate, only: finding_test, fit_amplitude, fit_rel_noise
    implicit none
    private
 
@@ -111,7 +112,7 @@ contains
       q = count(ep%pfree)
       e%q = q
       if (.not. ok) return
-      call low_end_power(ctx, ep, r0, jc, je(:, nc + 1:), npts, e)
+      call low_end_power(ctx, ep, r0, jc, je(:, nc + 1:), npts, e, nevals)
       allocate (step(nc + q))
       call gn_decrease(reshape([jc, je(:, nc + 1:)], [size(r0), nc + q]), r0, d1, step)
       ! The linear prediction per test (each test's residuals of a variance of their own)
@@ -182,13 +183,15 @@ contains
    !> constants take up (its projection on jc), each test's rows over the residual variance
    !> that BIC sees there (that test's baseline mean square); the refit's parameters are the
    !> degrees of freedom
-   subroutine low_end_power(ctx, ep, r0, jc, jp, npts, e)
+   subroutine low_end_power(ctx, ep, r0, jc, jp, npts, e, nevals)
       type(diagnose_context), intent(in) :: ctx
       type(effect_problem), intent(in) :: ep
       real(dp), intent(in) :: r0(:), jc(:, :), jp(:, :)
       !> Points of each fit test (consecutive blocks of r0)
       integer, intent(in) :: npts(:)
       type(effect_outcome), intent(inout) :: e
+      !> simulations made (the candidate tests' added)
+      integer, intent(inout) :: nevals
       real(dp), allocatable :: d(:, :), sig(:), w(:), var(:)
       real(dp) :: proj
       integer :: g, i
@@ -204,6 +207,45 @@ contains
          e%lambda_low = min(e%lambda_low, max(sum(sig**2) - proj, 0.0_dp))
       end do
       e%power_low = bic_power(e%lambda_low, count(free_params(ep, ctx%ifit, .false.)), size(r0))
+      if (e%power_low < 0.95_dp) call hidden_bound()
+   contains
+      !> How much of the effect the fit tests could hide: the multiple of its low end (the
+      !> weakest of them, d) at which the rule's power is 0.95 (its signal linear in the
+      !> magnitude, as above), that magnitude where it is one number (a global parameter),
+      !> and the candidate test that would find it (a per-test parameter at the fit tests'
+      !> mean)
+      subroutine hidden_bound()
+         real(dp), allocatable :: dg(:), p(:), p1(:)
+         real(dp) :: lam
+         integer :: q, nt, j, gp, i
+         q = count(free_params(ep, ctx%ifit, .false.))
+         if (.not. e%lambda_low > 0.0_dp) return
+         ! the weakest low end: the column of the least chi-square
+         dg = d(:, 1)
+         do g = 1, size(d, 2)
+            sig = w*mat_mul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
+            call gn_decrease(jc*spread(w, 2, size(jc, 2)), sig, proj)
+            lam = max(sum(sig**2) - proj, 0.0_dp)
+            if (lam <= e%lambda_low) dg = d(:, g)
+         end do
+         e%hidden%times = min(sqrt(power_lambda(0.95_dp, q, size(r0))/e%lambda_low), 1.0e4_dp)
+         p = ep%p0 + e%hidden%times*dg
+         nt = size(ctx%prob%targets)
+         associate (info => ctx%cat(ep%k))
+            if (info%sharing == param_per_test) then
+               allocate (p1(info%nparam))
+               do gp = 1, info%nparam
+                  p1(gp) = sum([(p((gp - 1)*nt + ctx%ifit(i)), i=1, size(ctx%ifit))])/size(ctx%ifit)
+               end do
+            else
+               p1 = p(:effect_nparams(info, 1))
+               j = maxloc(abs(dg), 1)
+               e%hidden%magnitude = magnitude_text(info%pname(j), p(j), info%punit(j), ctx%prob%cfg%units)
+            end if
+         end associate
+         call finding_test(ep%prob%cfg%model, ep%k, p1, ctx%eff_base, ctx%prob%cfg%solver, fit_amplitude(ctx), &
+                           fit_rel_noise(ctx), q, e%hidden%test, e%hidden%power, nevals)
+      end subroutine hidden_bound
    end subroutine low_end_power
 
    !> Starts of the screening runs of a global effect with a physical limit: zero, then every

@@ -15,15 +15,17 @@ module usharp_diagnose_separate
    use usharp_history, only: history_type, control_strain, tensile_history, relaxation_history, &
                              cyclic_history, output_times
    use usharp_simulation, only: sim_result
-   use usharp_cvode_driver, only: simulate_cvode
-   use usharp_rosenbrock_driver, only: simulate_rosenbrock
-   use usharp_effects, only: test_effects, effects_of, effect_model, param_per_test, effect_nparams
+   use usharp_simulation, only: solver_options
+   use usharp_effects, only: test_effects, effects_of, param_per_test, effect_nparams
+   use usharp_effect_problem, only: simulate_effect
+   use usharp_regions, only: noise_sd
+   use usharp_diagnose_numerics, only: bic_power
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, &
                                     separation_type, n_candidates
    implicit none
    private
 
-   public :: separate
+   public :: separate, candidates, fit_amplitude, fit_rel_noise, finding_test
 
 
 contains
@@ -44,9 +46,8 @@ contains
       na = min(size(res%alike), 3)
       if (na < 2) return
       call tell(ctx, 'which test would separate the effects', res%nevals)
-      call candidates(ctx, hist, names)
-      ! Relative noise of the fit tests' data
-      rel_noise = sum(res%noise/res%peak, .not. res%held)/max(count(.not. res%held), 1)
+      call candidates(fit_amplitude(ctx), hist, names)
+      rel_noise = fit_rel_noise(ctx)
       npair = 0
       do i = 1, na - 1
          do j = i + 1, na
@@ -77,22 +78,14 @@ contains
       end associate
    end subroutine separate
 
-   !> The standard candidates scaled to the fit tests: their largest strain amplitude emax
-   !> (strain-controlled tests; 0.5 % when none)
-   subroutine candidates(ctx, hist, names)
-      type(diagnose_context), intent(in) :: ctx
+   !> The standard candidates scaled to a strain amplitude emax: tension at two rates to
+   !> twice it, relaxation holds at half and whole of it, cycling with holds over it and
+   !> three times it
+   subroutine candidates(emax, hist, names)
+      real(dp), intent(in) :: emax
       type(history_type), intent(out) :: hist(:)
       character(len=80), intent(out) :: names(:)
       type(error_type), allocatable :: error
-      real(dp) :: emax
-      integer :: i
-      emax = 0.0_dp
-      do i = 1, size(ctx%ifit)
-         associate (h => ctx%prob%cfg%tests(ctx%ifit(i))%hist)
-            if (h%control == control_strain) emax = max(emax, maxval(abs(h%v)))
-         end associate
-      end do
-      if (emax <= 0.0_dp) emax = 0.005_dp
       call tensile_history(1.0e-3_dp, 2.0_dp*emax, hist(1), error)
       names(1) = 'tension at 1e-3 /s to '//real_str(200.0_dp*emax, 'f0.2')//' % strain'
       call tensile_history(1.0e-5_dp, 2.0_dp*emax, hist(2), error)
@@ -139,7 +132,7 @@ contains
       type(effect_outcome), intent(in) :: e
       real(dp), allocatable, intent(out) :: y(:)
       logical, intent(out) :: ok
-      class(model_type), allocatable :: model, mt
+      class(model_type), allocatable :: model
       type(test_effects) :: eff(1)
       type(error_type), allocatable :: error
       type(sim_result) :: sim
@@ -167,17 +160,79 @@ contains
          end if
       end associate
       eff = effects_of(e%k, p, 1, ctx%eff_base)
-      call effect_model(model, eff(1), mt, error)
-      if (allocated(error)) return
-      if (ctx%prob%cfg%solver%integrator == 'cvode') then
-         call simulate_cvode(mt, hist, min(max(tout - eff(1)%shift, hist%t(1)), hist%end_time()), &
-                             ctx%prob%cfg%solver, sim, error, eff(1))
-      else
-         call simulate_rosenbrock(mt, hist, min(max(tout - eff(1)%shift, hist%t(1)), hist%end_time()), &
-                                  ctx%prob%cfg%solver, sim, error, eff(1))
-      end if
+      call simulate_effect(model, eff(1), hist, tout, ctx%prob%cfg%solver, sim, error)
       if (allocated(error)) return
       y = sim%stress
       ok = all(abs(y) < huge(1.0_dp))
    end subroutine response
+   !> The fit tests' largest strain amplitude (strain-controlled tests; 0.5 % when none)
+   real(dp) function fit_amplitude(ctx) result(emax)
+      type(diagnose_context), intent(in) :: ctx
+      integer :: i
+      emax = 0.0_dp
+      do i = 1, size(ctx%ifit)
+         associate (h => ctx%prob%cfg%tests(ctx%ifit(i))%hist)
+            if (h%control == control_strain) emax = max(emax, maxval(abs(h%v)))
+         end associate
+      end do
+      if (emax <= 0.0_dp) emax = 0.005_dp
+   end function fit_amplitude
+
+   !> The fit tests' noise relative to their peak, their mean
+   real(dp) function fit_rel_noise(ctx) result(rel)
+      type(diagnose_context), intent(in) :: ctx
+      integer :: i
+      rel = 0.0_dp
+      do i = 1, size(ctx%ifit)
+         associate (tg => ctx%prob%targets(ctx%ifit(i)))
+            rel = rel + noise_sd(tg%exp%y)/tg%y_ex_max
+         end associate
+      end do
+      rel = rel/max(size(ctx%ifit), 1)
+   end function fit_rel_noise
+
+   !> Of the standard candidates scaled to emax (see candidates), the one that would find
+   !> effect k with parameters p (one test's, physical units) with the highest power of the
+   !> significance rule (q parameters, bic_power): the chi-square of its signal, the response
+   !> with the effect less the response without, at rel_noise times the candidate's peak,
+   !> sampled at about 400 points. model: its constants as fitted; temperature (K, when > 0)
+   !> the candidates' in place of the model's. name '' when no candidate simulates.
+   subroutine finding_test(model, k, p, base, solver, emax, rel_noise, q, name, power, nevals, temperature)
+      class(model_type), intent(in) :: model
+      integer, intent(in) :: k, q
+      real(dp), intent(in) :: p(:), emax, rel_noise
+      type(test_effects), intent(in) :: base
+      type(solver_options), intent(in) :: solver
+      character(len=80), intent(out) :: name
+      real(dp), intent(out) :: power
+      integer, intent(inout) :: nevals
+      real(dp), intent(in), optional :: temperature
+      type(history_type) :: hist(n_candidates)
+      character(len=80) :: names(n_candidates)
+      type(test_effects) :: eff(1)
+      type(sim_result) :: s0, s1
+      type(error_type), allocatable :: error
+      real(dp), allocatable :: tout(:)
+      real(dp) :: lambda, pc
+      integer :: c
+      name = ''
+      power = -1.0_dp
+      call candidates(emax, hist, names)
+      eff = effects_of(k, p, 1, base)
+      do c = 1, n_candidates
+         tout = output_times(hist(c), max(hist(c)%end_time()/400.0_dp, 0.1_dp))
+         call simulate_effect(model, base, hist(c), tout, solver, s0, error, temperature)
+         if (allocated(error)) cycle
+         call simulate_effect(model, eff(1), hist(c), tout, solver, s1, error, temperature)
+         nevals = nevals + 2
+         if (allocated(error)) cycle
+         if (.not. all(abs(s1%stress) < huge(1.0_dp))) cycle
+         lambda = sum((s1%stress - s0%stress)**2)/(rel_noise*max(maxval(abs(s0%stress)), tiny(1.0_dp)))**2
+         pc = bic_power(lambda, q, size(tout))
+         if (pc > power) then
+            power = pc
+            name = names(c)
+         end if
+      end do
+   end subroutine finding_test
 end module usharp_diagnose_separate

@@ -12,6 +12,7 @@ module usharp_diagnose_specimen
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end, interval_format
    use usharp_config, only: run_config
+   use usharp_history, only: control_strain
    use usharp_input_test, only: name_len
    use usharp_model, only: constant_names
    use usharp_objective, only: fit_problem, setup_problem
@@ -26,12 +27,13 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
-                                       soften_rate0, low_end_deltas, bic_power, &
+                                       soften_rate0, low_end_deltas, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums
    use usharp_diagnose_verdict, only: power_cells, missed_note
-   use usharp_diagnose_types, only: most
+   use usharp_diagnose_types, only: most, hidden_effect, magnitude_text
+   use usharp_diagnose_separate, only: finding_test
    use usharp_diagnose_profile, only: profile_interval, profile_result
    implicit none
    private
@@ -56,6 +58,7 @@ module usharp_diagnose_specimen
       !> the power of the significance rule against it (negative: not computed)
       real(dp) :: lambda_low = 0.0_dp, power_low = -1.0_dp
       character(len=40) :: low_what = ''
+      type(hidden_effect) :: hidden                      !< what of it the specimen could hide
       integer :: nevals = 0
       !> Its joint fit: the constants (log10) and each test's weighted sum of squares
       real(dp), allocatable :: xc(:), joint_tests(:)
@@ -485,8 +488,9 @@ contains
       subroutine low_end_power(ek, se_out)
          type(effect_problem), intent(inout) :: ek
          type(specimen_effect), intent(inout) :: se_out
-         real(dp), allocatable :: d(:, :), pz(:), r(:)
-         integer :: g
+         real(dp), allocatable :: d(:, :), pz(:)
+         real(dp) :: lambda
+         integer :: g, gmin
          logical :: okr
          se_out%low_what = cat(ek%k)%low_what
          ! The effect off: every parameter with a low end at zero; a held rate (softening,
@@ -497,20 +501,82 @@ contains
          end if
          d = low_end_deltas(ek, cat(ek%k), [ispec])
          if (sr%f0 <= 0.0_dp .or. size(d, 2) == 0) return
-         allocate (r(sr%m))
          se_out%lambda_low = huge(1.0_dp)
+         gmin = 1
          do g = 1, size(d, 2)
-            call ek%residual_at(pack((pz + d(:, g))/ek%pscale, ek%pfree), r, okr)
-            se_out%nevals = se_out%nevals + 1
+            call signal_at(ek, pz + d(:, g), se_out, lambda, okr)
             if (.not. okr) return
-            if (allocated(sr%w)) then
-               se_out%lambda_low = min(se_out%lambda_low, specimen_noncentrality(sr, r - r0, s0))
-            else
-               se_out%lambda_low = min(se_out%lambda_low, sum((r - r0)**2)/(sr%f0/sr%m))
-            end if
+            if (lambda < se_out%lambda_low) gmin = g
+            se_out%lambda_low = min(se_out%lambda_low, lambda)
          end do
          se_out%power_low = bic_power(se_out%lambda_low, se_out%q, sr%m)
+         if (se_out%power_low < 0.95_dp) call hidden_bound(ek, pz, d(:, gmin), se_out)
       end subroutine low_end_power
+
+      !> The chi-square of effect ek%k's signal on the specimen at parameters p (all tests',
+      !> physical), as low_end_power takes it
+      subroutine signal_at(ek, p, se_out, lambda, ok)
+         type(effect_problem), intent(inout) :: ek
+         real(dp), intent(in) :: p(:)
+         type(specimen_effect), intent(inout) :: se_out
+         real(dp), intent(out) :: lambda
+         logical, intent(out) :: ok
+         real(dp), allocatable :: r(:)
+         allocate (r(ek%nres()))
+            call ek%residual_at(pack(p/ek%pscale, ek%pfree), r, ok)
+            se_out%nevals = se_out%nevals + 1
+            lambda = 0.0_dp
+            if (.not. ok) return
+            if (allocated(sr%w)) then
+               lambda = specimen_noncentrality(sr, r - r0, s0)
+            else
+               lambda = sum((r - r0)**2)/(sr%f0/sr%m)
+            end if
+      end subroutine signal_at
+
+         !> How much of the effect the specimen could hide: the multiple of its low end (along
+         !> the weakest of them, d) at which the rule's power is 0.95, the signal's chi-square
+         !> simulated there (from its low end's, as if linear in the magnitude, then corrected
+         !> twice); and the candidate test that would find that much
+         subroutine hidden_bound(ek, pz, d, se_out)
+            type(effect_problem), intent(inout) :: ek
+            real(dp), intent(in) :: pz(:), d(:)
+            type(specimen_effect), intent(inout) :: se_out
+            real(dp), parameter :: most_times = 1.0e4_dp
+            real(dp) :: target, times, lambda, emax
+            real(dp), allocatable :: p(:), p1(:)
+            integer :: it, j, g
+            logical :: ok
+            target = power_lambda(0.95_dp, se_out%q, sr%m)
+            lambda = se_out%lambda_low
+            times = 1.0_dp
+            do it = 1, 3
+               if (lambda <= 0.0_dp) return
+               times = min(times*sqrt(target/lambda), most_times)
+               if (it == 3) exit
+               call signal_at(ek, pz + times*d, se_out, lambda, ok)
+               if (.not. ok) return
+            end do
+            se_out%hidden%times = times
+            p = pz + times*d
+            ! One test's parameters: the specimen's own of a per-test effect
+            if (cat(ek%k)%sharing == param_per_test) then
+               p1 = [(p((g - 1)*nt + ispec), g=1, cat(ek%k)%nparam)]
+            else
+               p1 = p(:effect_nparams(cat(ek%k), 1))
+            end if
+            j = maxloc(abs(d), 1)
+            g = merge((j - 1)/nt + 1, j, cat(ek%k)%sharing == param_per_test)
+            se_out%hidden%magnitude = magnitude_text(cat(ek%k)%pname(g), p(j), cat(ek%k)%punit(g), prob%cfg%units)
+            emax = 0.005_dp
+            associate (h => prob%cfg%tests(ispec)%hist)
+               if (h%control == control_strain) emax = maxval(abs(h%v))
+            end associate
+            call finding_test(ek%prob%cfg%model, ek%k, p1, base, ek%prob%cfg%solver, emax, &
+                              sr%noise_sd/max(prob%targets(ispec)%y_ex_max, tiny(1.0_dp)), se_out%q, &
+                              se_out%hidden%test, se_out%hidden%power, se_out%nevals, &
+                              prob%cfg%tests(ispec)%temperature)
+      end subroutine hidden_bound
    end subroutine specimen_run
 
    !> The directions of the specimen's residual covariance that the constants' uncertainty
@@ -651,6 +717,7 @@ contains
       character(len=:), allocatable :: ln, verdict, fmt
       character(len=16), allocatable :: names(:)
       real(dp), allocatable :: power(:)
+      type(hidden_effect), allocatable :: hidden(:)
       allocate (lines(0))
       call add('# Per-specimen diagnosis: '//trim(sr%name))
       call add('')
@@ -807,7 +874,8 @@ contains
          ! (copied: a component of an array of derived type is not contiguous)
          names = sr%effects%name
          power = sr%effects%power_low
-         verdict = verdict//missed_note(names, power, 'this test alone')
+         hidden = sr%effects%hidden
+         verdict = verdict//missed_note(names, power, hidden, 'this test alone')
       end if
       call add('**Verdict:** '//verdict)
       call add('')

@@ -3,6 +3,7 @@
 module usharp_diagnose_types
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
+   use usharp_strings, only: real_str
    use usharp_objective, only: fit_problem
    use usharp_input_test, only: name_len
    use usharp_effects, only: test_effects, effect_info
@@ -14,7 +15,7 @@ module usharp_diagnose_types
    private
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
-   public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most
+   public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text
    public :: explains_resolved, rest_at_noise
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
@@ -60,6 +61,17 @@ module usharp_diagnose_types
       real(dp) :: cpu = 0.0_dp              !< s, processor time of every thread
    end type step_cost
 
+   !> What of an effect the tests could miss: above `times` its low end the significance
+   !> rule finds it with power 0.95 (below, it may hide), and the candidate test that would
+   !> find that much of it
+   type :: hidden_effect
+      real(dp) :: times = -1.0_dp            !< multiple of the low end (negative: not computed)
+      !> that magnitude as a parameter value ('' when it is not one number)
+      character(len=64) :: magnitude = ''
+      character(len=80) :: test = ''         !< the candidate ('' when none simulates)
+      real(dp) :: power = -1.0_dp            !< its power there
+   end type hidden_effect
+
    !> The problem every step of a diagnosis works on
    type :: diagnose_context
       type(fit_problem) :: prob              !< all tests; constants: the baseline's once fitted
@@ -91,6 +103,7 @@ module usharp_diagnose_types
       !> beyond what the constants take up, and the power of the BIC rule against it
       !> (negative: not computed)
       real(dp) :: lambda_low = 0.0_dp, power_low = -1.0_dp
+      type(hidden_effect) :: hidden
       logical :: refitted = .false.
       real(dp) :: f_after = 0.0_dp
       real(dp), allocatable :: per_test_after(:)
@@ -202,6 +215,19 @@ module usharp_diagnose_types
                                  joint_form_open = 6, joint_held_only = 7
 
 contains
+
+   !> A parameter's value with its unit ('stress': the model's stress unit; '-' or '': none)
+   function magnitude_text(name, value, unit, stress_unit) result(text)
+      character(len=*), intent(in) :: name, unit, stress_unit
+      real(dp), intent(in) :: value
+      character(len=:), allocatable :: text
+      text = trim(name)//' = '//real_str(value, 'es9.2')
+      if (unit == 'stress') then
+         text = text//' '//trim(stress_unit)
+      else if (unit /= '-' .and. len_trim(unit) > 0) then
+         text = text//' '//trim(unit)
+      end if
+   end function magnitude_text
 
    !> Tell the listener, if any, of a step: stage, simulations so far
    subroutine tell(ctx, stage, nevals)

@@ -12,7 +12,7 @@ module usharp_diagnose_verdict
                                     leaves_noise, explains_resolved, rest_at_noise, most, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
-                                    joint_partial
+                                    joint_partial, hidden_effect
    implicit none
    private
 
@@ -293,23 +293,33 @@ contains
       end if
    end function power_cells
 
-   !> The effects the tests would more often miss than find at the low end of their ranges
-   !> (power below one half), as a clause of a verdict ('' when there are none)
-   function missed_note(names, power, subject) result(text)
+   !> The effects the tests could miss at the low end of their ranges (the rule's power there
+   !> below 0.95), as a clause of a verdict ('' when there are none): for each, that power,
+   !> how much of it the rule finds with power 0.95, and the test that would find that much
+   function missed_note(names, power, hidden, subject) result(text)
       character(len=*), intent(in) :: names(:)
       real(dp), intent(in) :: power(:)
+      type(hidden_effect), intent(in) :: hidden(:)
       !> the tests the power is of ('the fit tests alone', 'this test alone')
       character(len=*), intent(in) :: subject
       character(len=:), allocatable :: text
       integer :: j
       text = ''
       do j = 1, size(names)
-         if (power(j) < 0.0_dp .or. power(j) >= 0.5_dp) cycle
+         if (power(j) < 0.0_dp .or. power(j) >= 0.95_dp) cycle
          if (len(text) > 0) text = text//', '
-         text = text//trim(names(j))
+         text = text//trim(names(j))//' (power '//real_str(power(j), 'f0.2')//' there'
+         associate (h => hidden(j))
+            if (h%times > 0.0_dp) then
+               text = text//'; found with power 0.95 from '//real_str(h%times, 'f0.1')//' times it'
+               if (len_trim(h%magnitude) > 0) text = text//', '//trim(h%magnitude)
+               if (len_trim(h%test) > 0 .and. h%power >= 0.0_dp) text = text//', which a '//trim(h%test)// &
+                  ' would find with power '//real_str(h%power, 'f0.2')
+            end if
+         end associate
+         text = text//')'
       end do
-      if (len(text) > 0) text = '; at the low end of their ranges '//subject//' would more often miss '// &
-         'than find: '//text//' (power below 0.5)'
+      if (len(text) > 0) text = '; at the low end of their ranges '//subject//' could miss: '//text
    end function missed_note
 
    !> The verdict when no effect is confirmed
@@ -318,6 +328,7 @@ contains
       integer :: j
       character(len=16), allocatable :: names(:)
       real(dp), allocatable :: power(:)
+      type(hidden_effect), allocatable :: hidden(:)
       integer, allocatable :: top(:)
       character(len=:), allocatable :: where
       if (.not. any(res%regions%structured) .or. (.not. fit_structured(res) .and. held_quiet(res))) then
@@ -334,7 +345,8 @@ contains
          ! (copied: a component of an array of derived type is not contiguous)
          names = res%effects%name
          power = res%effects%power_low
-         res%verdict = res%verdict//missed_note(names, power, 'the fit tests alone')
+         hidden = res%effects%hidden
+         res%verdict = res%verdict//missed_note(names, power, hidden, 'the fit tests alone')
          return
       end if
       where = ''

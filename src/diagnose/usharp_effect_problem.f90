@@ -11,7 +11,7 @@ module usharp_effect_problem
                              effect_model, effect_nparams, n_effects, param_per_test
    use usharp_objective, only: fit_problem, test_residuals, simulated
    use usharp_optimiser, only: least_squares_type
-   use usharp_simulation, only: sim_result
+   use usharp_simulation, only: sim_result, solver_options
    use usharp_history, only: history_type, control_strain
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
@@ -19,7 +19,7 @@ module usharp_effect_problem
    implicit none
    private
 
-   public :: effect_problem, new_effect_problem
+   public :: effect_problem, new_effect_problem, simulate_effect
 
    !> The objective of a point whose simulation failed: far above any objective of a test,
    !> so that a search turns away from it
@@ -231,38 +231,19 @@ contains
       !> Test it of the problem: its rows of r (and of the optional outputs)
       subroutine one(it)
          integer, intent(in) :: it
-         class(model_type), allocatable :: mt
          type(error_type), allocatable :: err
          type(sim_result) :: res
-         type(history_type) :: hist
-         real(dp), allocatable :: tout(:), ysim(:)
+         real(dp), allocatable :: ysim(:)
          integer :: i, n
          i = self%tests(it)
          associate (tg => self%prob%targets(i), test => self%prob%cfg%tests(i))
-            call effect_model(model, eff(i), mt, err, test%temperature)
-            if (allocated(err)) then
-               failed(it) = .true.
-               return
-            end if
-            ! The stress channel lags by shift: the data at t saw the response at t - shift
-            tout = min(max(tg%t - eff(i)%shift, test%hist%t(1)), test%hist%end_time())
-            ! An extensometer drift: a strain-controlled specimen follows the command less the
-            ! drift (linear in time, so the corners stay the corners)
-            hist = test%hist
-            if (eff(i)%drift /= 0.0_dp .and. hist%control == control_strain) &
-               call hist%add_ramp(-eff(i)%drift)
-            if (self%prob%cfg%solver%integrator == 'cvode') then
-               call simulate_cvode(mt, hist, tout, self%prob%cfg%solver, res, err, eff(i))
-            else
-               call simulate_rosenbrock(mt, hist, tout, self%prob%cfg%solver, res, err, eff(i))
-            end if
+            call simulate_effect(model, eff(i), test%hist, tg%t, self%prob%cfg%solver, res, err, &
+                                 test%temperature)
             if (allocated(err)) then
                failed(it) = .true.
                return
             end if
             n = size(tg%t)
-            ! ... and the measured strain is the specimen's plus the drift
-            if (eff(i)%drift /= 0.0_dp) res%strain = res%strain + eff(i)%drift*(tout - hist%t(1))
             ysim = simulated(test, res)
             r(k0(it) + 1:k0(it) + n) = test_residuals(self%prob%cfg%fit%objective, tg%y_ex, ysim, tg%w, &
                                                       tg%y_ex_max)
@@ -273,6 +254,38 @@ contains
          end associate
       end subroutine one
    end subroutine ep_residual_at
+
+   !> A test's response with the effects eff, at the data's times t (s): the model the test
+   !> sees (effect_model, at temperature, K, when > 0), the stress channel lagging by the
+   !> shift, and an extensometer drift that a strain-controlled specimen follows less (the
+   !> measured strain is then the specimen's plus the drift)
+   subroutine simulate_effect(model, eff, hist0, t, solver, res, error, temperature)
+      class(model_type), intent(in) :: model
+      type(test_effects), intent(in) :: eff
+      type(history_type), intent(in) :: hist0
+      real(dp), intent(in) :: t(:)
+      type(solver_options), intent(in) :: solver
+      type(sim_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), intent(in), optional :: temperature
+      class(model_type), allocatable :: mt
+      type(history_type) :: hist
+      real(dp), allocatable :: tout(:)
+      call effect_model(model, eff, mt, error, temperature)
+      if (allocated(error)) return
+      ! The stress channel lags by shift: the data at t saw the response at t - shift
+      tout = min(max(t - eff%shift, hist0%t(1)), hist0%end_time())
+      ! (linear in time, so the corners stay the corners)
+      hist = hist0
+      if (eff%drift /= 0.0_dp .and. hist%control == control_strain) call hist%add_ramp(-eff%drift)
+      if (solver%integrator == 'cvode') then
+         call simulate_cvode(mt, hist, tout, solver, res, error, eff)
+      else
+         call simulate_rosenbrock(mt, hist, tout, solver, res, error, eff)
+      end if
+      if (allocated(error)) return
+      if (eff%drift /= 0.0_dp) res%strain = res%strain + eff%drift*(tout - hist%t(1))
+   end subroutine simulate_effect
 
    !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty. A
    !> point that differs from the last point evaluated alone, or from an earlier point of the
