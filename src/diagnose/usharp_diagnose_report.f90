@@ -540,7 +540,7 @@ contains
       allocate (rows(0))
       rows = [character(len=row_len) :: rows, 'rank,effect,parameters,predicted_fall,predicted_dbic,refitted,'// &
               'objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed,'// &
-              'chi_square_low_end,power_low_end']
+              'chi_square_low_end,power_low_end,power_095_at_low_end_times,finding_test,finding_test_power']
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
             rows = [character(len=row_len) :: rows, str(j)//','//csv_field(trim(e%name))//','//str(e%q)//','// &
@@ -549,7 +549,8 @@ contains
                real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
                real_str(e%shrink_fit, 'f0.4')//','//real_str(e%shrink_held, 'f0.4')//','// &
                trim(merge('yes', 'no ', e%confirmed))//','//real_str(e%lambda_low, 'es12.5')//','// &
-               real_str(e%power_low, 'f0.4')]
+               real_str(e%power_low, 'f0.4')//','//real_str(e%hidden%times, 'f0.3')//','// &
+               csv_field(trim(e%hidden%test))//','//real_str(e%hidden%power, 'f0.4')]
          end associate
       end do
       call write_lines(join_path(dir, 'effects.csv'), rows, error)
