@@ -14,8 +14,7 @@ module usharp_diagnose_separate
    use usharp_model, only: model_type
    use usharp_history, only: history_type, control_strain, tensile_history, relaxation_history, &
                              cyclic_history, output_times
-   use usharp_simulation, only: sim_result
-   use usharp_simulation, only: solver_options
+   use usharp_simulation, only: sim_result, solver_options
    use usharp_effects, only: test_effects, effects_of, param_per_test, effect_nparams
    use usharp_effect_problem, only: simulate_effect
    use usharp_regions, only: noise_sd
@@ -165,6 +164,7 @@ contains
       y = sim%stress
       ok = all(abs(y) < huge(1.0_dp))
    end subroutine response
+
    !> The fit tests' largest strain amplitude (strain-controlled tests; 0.5 % when none)
    real(dp) function fit_amplitude(ctx) result(emax)
       type(diagnose_context), intent(in) :: ctx

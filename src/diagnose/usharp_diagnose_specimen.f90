@@ -523,59 +523,59 @@ contains
          logical, intent(out) :: ok
          real(dp), allocatable :: r(:)
          allocate (r(ek%nres()))
-            call ek%residual_at(pack(p/ek%pscale, ek%pfree), r, ok)
-            se_out%nevals = se_out%nevals + 1
-            lambda = 0.0_dp
-            if (.not. ok) return
-            if (allocated(sr%w)) then
-               lambda = specimen_noncentrality(sr, r - r0, s0)
-            else
-               lambda = sum((r - r0)**2)/(sr%f0/sr%m)
-            end if
+         call ek%residual_at(pack(p/ek%pscale, ek%pfree), r, ok)
+         se_out%nevals = se_out%nevals + 1
+         lambda = 0.0_dp
+         if (.not. ok) return
+         if (allocated(sr%w)) then
+            lambda = specimen_noncentrality(sr, r - r0, s0)
+         else
+            lambda = sum((r - r0)**2)/(sr%f0/sr%m)
+         end if
       end subroutine signal_at
 
-         !> How much of the effect the specimen could hide: the multiple of its low end (along
-         !> the weakest of them, d) at which the rule's power is 0.95, the signal's chi-square
-         !> simulated there (from its low end's, as if linear in the magnitude, then corrected
-         !> twice); and the candidate test that would find that much
-         subroutine hidden_bound(ek, pz, d, se_out)
-            type(effect_problem), intent(inout) :: ek
-            real(dp), intent(in) :: pz(:), d(:)
-            type(specimen_effect), intent(inout) :: se_out
-            real(dp), parameter :: most_times = 1.0e4_dp
-            real(dp) :: target, times, lambda, emax
-            real(dp), allocatable :: p(:), p1(:)
-            integer :: it, j, g
-            logical :: ok
-            target = power_lambda(0.95_dp, se_out%q, sr%m)
-            lambda = se_out%lambda_low
-            times = 1.0_dp
-            do it = 1, 3
-               if (lambda <= 0.0_dp) return
-               times = min(times*sqrt(target/lambda), most_times)
-               if (it == 3) exit
-               call signal_at(ek, pz + times*d, se_out, lambda, ok)
-               if (.not. ok) return
-            end do
-            se_out%hidden%times = times
-            p = pz + times*d
-            ! One test's parameters: the specimen's own of a per-test effect
-            if (cat(ek%k)%sharing == param_per_test) then
-               p1 = [(p((g - 1)*nt + ispec), g=1, cat(ek%k)%nparam)]
-            else
-               p1 = p(:effect_nparams(cat(ek%k), 1))
-            end if
-            j = maxloc(abs(d), 1)
-            g = merge((j - 1)/nt + 1, j, cat(ek%k)%sharing == param_per_test)
-            se_out%hidden%magnitude = magnitude_text(cat(ek%k)%pname(g), p(j), cat(ek%k)%punit(g), prob%cfg%units)
-            emax = 0.005_dp
-            associate (h => prob%cfg%tests(ispec)%hist)
-               if (h%control == control_strain) emax = maxval(abs(h%v))
-            end associate
-            call finding_test(ek%prob%cfg%model, ek%k, p1, base, ek%prob%cfg%solver, emax, &
-                              sr%noise_sd/max(prob%targets(ispec)%y_ex_max, tiny(1.0_dp)), se_out%q, &
-                              se_out%hidden%test, se_out%hidden%power, se_out%nevals, &
-                              prob%cfg%tests(ispec)%temperature)
+      !> How much of the effect the specimen could hide: the multiple of its low end (along
+      !> the weakest of them, d) at which the rule's power is 0.95, the signal's chi-square
+      !> simulated there (from its low end's, as if linear in the magnitude, then corrected
+      !> twice); and the candidate test that would find that much
+      subroutine hidden_bound(ek, pz, d, se_out)
+         type(effect_problem), intent(inout) :: ek
+         real(dp), intent(in) :: pz(:), d(:)
+         type(specimen_effect), intent(inout) :: se_out
+         real(dp), parameter :: most_times = 1.0e4_dp
+         real(dp) :: target, times, lambda, emax
+         real(dp), allocatable :: p(:), p1(:)
+         integer :: it, j, g
+         logical :: ok
+         target = power_lambda(0.95_dp, se_out%q, sr%m)
+         lambda = se_out%lambda_low
+         times = 1.0_dp
+         do it = 1, 3
+            if (lambda <= 0.0_dp) return
+            times = min(times*sqrt(target/lambda), most_times)
+            if (it == 3) exit
+            call signal_at(ek, pz + times*d, se_out, lambda, ok)
+            if (.not. ok) return
+         end do
+         se_out%hidden%times = times
+         p = pz + times*d
+         ! One test's parameters: the specimen's own of a per-test effect
+         if (cat(ek%k)%sharing == param_per_test) then
+            p1 = [(p((g - 1)*nt + ispec), g=1, cat(ek%k)%nparam)]
+         else
+            p1 = p(:effect_nparams(cat(ek%k), 1))
+         end if
+         j = maxloc(abs(d), 1)
+         g = merge((j - 1)/nt + 1, j, cat(ek%k)%sharing == param_per_test)
+         se_out%hidden%magnitude = magnitude_text(cat(ek%k)%pname(g), p(j), cat(ek%k)%punit(g), prob%cfg%units)
+         emax = 0.005_dp
+         associate (h => prob%cfg%tests(ispec)%hist)
+            if (h%control == control_strain) emax = maxval(abs(h%v))
+         end associate
+         call finding_test(ek%prob%cfg%model, ek%k, p1, base, ek%prob%cfg%solver, emax, &
+                           sr%noise_sd/max(prob%targets(ispec)%y_ex_max, tiny(1.0_dp)), se_out%q, &
+                           se_out%hidden%test, se_out%hidden%power, se_out%nevals, &
+                           prob%cfg%tests(ispec)%temperature)
       end subroutine hidden_bound
    end subroutine specimen_run
 
