@@ -171,7 +171,7 @@ contains
             'tests too are at the noise level (structured gap '//real_str(jres%gap_fit, 'es9.2')// &
             ' against its floor '//real_str(jres%floor_fit, 'es9.2')//'): their predicted gap '// &
             'comes from constants the fit tests alone leave loose, not from a missing effect'// &
-            serration_note(res)
+            serration_note(res)//stage_missed_note(jres)
          select case (why)
          case (joint_bic_only)
             res%verdict = res%verdict//'; '//trim(res%effects(res%leading)%name)// &
@@ -322,13 +322,26 @@ contains
       if (len(text) > 0) text = '; at the low end of their ranges '//subject//' could miss: '//text
    end function missed_note
 
+   !> The effects the fitted tests of res could miss (missed_note): the fit tests alone, or
+   !> every test when none is held out (the stage with every test fitted)
+   function stage_missed_note(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      ! (copied: a component of an array of derived type is not contiguous)
+      character(len=16), allocatable :: names(:)
+      real(dp), allocatable :: power(:)
+      type(hidden_effect), allocatable :: hidden(:)
+      names = res%effects%name
+      power = res%effects%power_low
+      hidden = res%effects%hidden
+      text = missed_note(names, power, hidden, trim(merge('the fit tests alone      ', 'the tests fitted together', &
+                                                          any(res%held))))
+   end function stage_missed_note
+
    !> The verdict when no effect is confirmed
    subroutine no_effect(res)
       type(diagnose_result), intent(inout) :: res
       integer :: j
-      character(len=16), allocatable :: names(:)
-      real(dp), allocatable :: power(:)
-      type(hidden_effect), allocatable :: hidden(:)
       integer, allocatable :: top(:)
       character(len=:), allocatable :: where
       if (.not. any(res%regions%structured) .or. (.not. fit_structured(res) .and. held_quiet(res))) then
@@ -342,11 +355,7 @@ contains
             if (res%effects(j)%significant) res%verdict = res%verdict//'; '// &
                trim(res%effects(j)%name)//' lowers BIC, but '//why_not(res%effects(j), res)
          end do
-         ! (copied: a component of an array of derived type is not contiguous)
-         names = res%effects%name
-         power = res%effects%power_low
-         hidden = res%effects%hidden
-         res%verdict = res%verdict//missed_note(names, power, hidden, 'the fit tests alone')
+         res%verdict = res%verdict//stage_missed_note(res)
          return
       end if
       where = ''
