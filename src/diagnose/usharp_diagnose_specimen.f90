@@ -454,10 +454,7 @@ contains
                                   ek%pnonneg(jj) .and. o%x(g) > 0.0_dp, opts%max_evals, pr, error)
             if (allocated(error)) return
             se_out%nevals = se_out%nevals + pr%nevals
-            se_out%p_lo(g) = pr%lo*ek%pscale(jj)
-            se_out%p_hi(g) = pr%hi*ek%pscale(jj)
-            se_out%lo_open(g) = pr%lo_open
-            se_out%hi_open(g) = pr%hi_open
+            call take_interval(se_out, g, pr, ek%pscale(jj))
          end do
          ! Beyond its physical limit only as the held-out diagnosis judges it
          call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
@@ -519,13 +516,22 @@ contains
                                   ek%pnonneg(jj) .and. e%xj(nc + g) > 0.0_dp, opts%max_evals, pr, error)
             if (allocated(error)) return
             sr%nevals = sr%nevals + pr%nevals
-            e%p_lo(g) = pr%lo*ek%pscale(jj)
-            e%p_hi(g) = pr%hi*ek%pscale(jj)
-            e%lo_open(g) = pr%lo_open
-            e%hi_open(g) = pr%hi_open
+            call take_interval(e, g, pr, ek%pscale(jj))
          end do
          e%profiled_joint = .true.
       end subroutine joint_profile
+
+      !> Parameter g's interval of effect e from its profile pr (x units times pscale)
+      subroutine take_interval(e, g, pr, pscale)
+         type(specimen_effect), intent(inout) :: e
+         integer, intent(in) :: g
+         type(profile_result), intent(in) :: pr
+         real(dp), intent(in) :: pscale
+         e%p_lo(g) = pr%lo*pscale
+         e%p_hi(g) = pr%hi*pscale
+         e%lo_open(g) = pr%lo_open
+         e%hi_open(g) = pr%hi_open
+      end subroutine take_interval
 
       !> The share of the specimen's structured gap that going from objective f_from to
       !> f_to removes (beyond the whole gap only by the noise: all of it)
