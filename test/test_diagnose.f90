@@ -29,6 +29,7 @@ module test_diagnose
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of
    use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign
+   use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
@@ -1525,7 +1526,8 @@ contains
    !> A refit starts from the lowest screening end point of the other sign too, and its
    !> further starts of the constants take that end point's parameters as well as the
    !> lowest's (the end points of the softening case in other_sign: the lowest a hardening,
-   !> the third a softening); an effect whose end points all have one sign, or no
+   !> the third a softening); a run that found nothing below the baseline gives its start;
+   !> an effect whose end points all have one sign, or no
    !> parameter, starts as before
    subroutine test_both_signs(error)
       type(error_type), allocatable, intent(out) :: error
@@ -1550,6 +1552,24 @@ contains
       e%x_alt(3, 4) = -0.006_dp
       call check(error, other_sign(e, 2) == 0 .and. size(with_params(e, xc), 2) == 3, &
                  'end points of one sign took another basin')
+      if (allocated(error)) return
+      ! A run that found nothing below the baseline keeps its start as its basin's point: the
+      ! softening started at +0.05, b = 100 that ended at a = 0.005, b = 0.001 (the baseline's
+      ! objective) is the other sign's basin to try, at its start's parameters
+      xs = basin_points(reshape([0.3_dp, 0.4_dp, -0.219_dp, 13.5_dp, 0.9_dp, 1.0_dp, 0.005_dp, 0.001_dp], [4, 2]), &
+                        reshape([0.1_dp, 0.2_dp, -0.05_dp, 10.0_dp, 0.1_dp, 0.2_dp, 0.05_dp, 100.0_dp], [4, 2]), &
+                        [0.80_dp, 1.0102_dp], 1.0102_dp)
+      call check(error, all(xs(:, 1) == [0.3_dp, 0.4_dp, -0.219_dp, 13.5_dp]) .and. &
+                 all(xs(:, 2) == [0.1_dp, 0.2_dp, 0.05_dp, 100.0_dp]), &
+                 'a run that found nothing kept its end point, or one that did its start')
+      if (allocated(error)) return
+      e%x_alt = xs
+      call check(error, other_sign(e, 2) == 2, 'the start of the other sign''s run not taken: '// &
+                 str(other_sign(e, 2)))
+      if (allocated(error)) return
+      xs = with_params(e, xc)
+      call check(error, all(xs(3:4, 4:6) == spread([0.05_dp, 100.0_dp], 2, 3)), &
+                 'further starts not at the other sign''s start parameters')
       if (allocated(error)) return
       ! No effect parameter in x (the constants alone)
       e%x = [0.1_dp, 0.2_dp]

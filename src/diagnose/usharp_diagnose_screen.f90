@@ -21,7 +21,7 @@ module usharp_diagnose_screen
    implicit none
    private
 
-   public :: screen
+   public :: screen, basin_points
 
 contains
 
@@ -85,7 +85,7 @@ contains
       type(effect_problem) :: ep
       type(optimum_type) :: opt
       real(dp), allocatable :: je(:, :), rr(:), x(:), step(:), lo(:), hi(:), steps(:)
-      real(dp), allocatable :: xs(:, :), xe(:, :), fe(:)
+      real(dp), allocatable :: xs(:, :), xe(:, :), x_from(:, :), fe(:)
       integer, allocatable :: idx(:)
       real(dp) :: d1, s, dev_lin, dev_end
       real(dp), allocatable :: r_end(:), sum0(:)
@@ -128,7 +128,7 @@ contains
       ! local minimum of a global effect: its short runs also start from a tenth of the
       ! physical limit with every sign, and the lowest end point is kept
       xs = screening_starts(ep, ctx%cat(k))
-      allocate (xe(size(xs, 1), 0), fe(0))
+      allocate (xe(size(xs, 1), 0), x_from(size(xs, 1), 0), fe(0))
       do j = 1, size(xs, 2)
          ! From a start away from zero the constants first have to come back: 5 steps
          ! (measured: holding the effect at the start while the constants alone move
@@ -155,6 +155,7 @@ contains
          end if
          nevals = nevals + opt%nevals
          xe = reshape([xe, opt%x], [size(xs, 1), size(fe) + 1])
+         x_from = reshape([x_from, min(max(xs(:, j), lo), hi)], [size(xs, 1), size(fe) + 1])
          fe = [fe, opt%f]
       end do
       ! The lowest end point leads; the others, best first, are kept for refits from
@@ -162,6 +163,7 @@ contains
       ! the cost, so 1 by default)
       idx = order_of(fe)
       e%x = xe(:, idx(1))
+      xe = basin_points(xe, x_from, fe, s)
       e%x_alt = xe(:, idx(2:))
       e%q = count(ep%pfree)
       q = e%q
@@ -251,6 +253,28 @@ contains
    !> Starts of the screening runs of a global effect with a physical limit: zero, then every
    !> sign combination of a tenth of the limit (non-negative parameters only positive); other
    !> effects start from zero only. Columns: x of ep.
+   !> The points of the short runs' basins that a refit tries from other constants
+   !> (other_sign): each run's end point, or its start where the run found nothing below the
+   !> baseline. Such a run has lost its start's effect (a softening started at +0.05 ended at
+   !> a = 0.005, b = 0.001, no effect at all, and the refits from that point with the
+   !> constants of Latin-hypercube starts stayed at the baseline, while the softening's
+   !> basin lay at a = 0.17, b = 200)
+   pure function basin_points(x_end, x_start, f_end, f_base) result(xb)
+      !> end points and start points of the runs (one column each)
+      real(dp), intent(in) :: x_end(:, :), x_start(:, :)
+      !> objective at each end point, and the baseline's
+      real(dp), intent(in) :: f_end(:), f_base
+      real(dp) :: xb(size(x_end, 1), size(x_end, 2))
+      integer :: j
+      do j = 1, size(f_end)
+         if (f_end(j) < (1.0_dp - 1.0e-6_dp)*f_base) then
+            xb(:, j) = x_end(:, j)
+         else
+            xb(:, j) = x_start(:, j)
+         end if
+      end do
+   end function basin_points
+
    pure function screening_starts(ep, info) result(xs)
       type(effect_problem), intent(in) :: ep
       type(effect_info), intent(in) :: info
