@@ -27,7 +27,7 @@ module test_diagnose
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
-   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of
+   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note
    use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign
    use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
@@ -98,6 +98,7 @@ contains
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('rate-held-where-undetermined', test_rate_held), &
          new_unittest('refit-starts-in-both-signs-basins', test_both_signs), &
+         new_unittest('held-out-prediction-open-between-end-points', test_alike_note), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
@@ -1522,6 +1523,30 @@ contains
       r = ratio_beyond_doubt(1.2_dp, 30.0_dp, ieee_value(1.0_dp, ieee_quiet_nan), 31.0_dp)
       call check(error, abs(r - 1.2_dp) < 1.0e-12_dp, 'no interval: the fitted ratio')
    end subroutine test_beyond_doubt
+
+   !> The verdict says what the end points of a refit that the fit tests cannot tell apart
+   !> carry of the held-out gap (the creep matrix's softening: 54.7 % from the end point
+   !> used, 88.2 % from one within BIC 10 of it), and says nothing where they agree to 5 %
+   !> of the gap or there are none
+   subroutine test_alike_note(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_outcome) :: e
+      character(len=:), allocatable :: text
+      e%shrink_held = 0.547_dp
+      e%n_alike = 4
+      e%shrink_alike_lo = 0.547_dp
+      e%shrink_alike_hi = 0.882_dp
+      text = alike_note(e)
+      call check(error, index(text, '54.7 to 88.2 % at 5 end points') > 0 .and. &
+                 index(text, 'leave the held-out prediction open') > 0, 'no range stated: '//text)
+      if (allocated(error)) return
+      e%shrink_alike_hi = 0.590_dp
+      call check(error, len(alike_note(e)) == 0, 'a range of 4 % of the gap stated: '//alike_note(e))
+      if (allocated(error)) return
+      e%shrink_alike_hi = 0.882_dp
+      e%n_alike = 0
+      call check(error, len(alike_note(e)) == 0, 'a range stated without other end points')
+   end subroutine test_alike_note
 
    !> A refit starts from the lowest screening end point of the other sign too, and its
    !> further starts of the constants take that end point's parameters as well as the

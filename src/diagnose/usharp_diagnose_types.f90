@@ -120,6 +120,12 @@ module usharp_diagnose_types
       character(len=name_len + 17), allocatable :: pname(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
       real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
+      !> End points of the refit's starts (columns) and their objectives on the fit tests
+      real(dp), allocatable :: x_ends(:, :), f_ends(:)
+      !> Other end points of the refit that the fit tests cannot tell from its own (BIC within
+      !> bic_margin), and the least and most of the held-out gap they carry
+      integer :: n_alike = 0
+      real(dp) :: shrink_alike_lo = 0.0_dp, shrink_alike_hi = 0.0_dp
       logical, allocatable :: c_bound(:)     !< its constants at a search bound
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it

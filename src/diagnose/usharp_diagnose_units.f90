@@ -80,7 +80,7 @@ contains
    !> best_of_starts(ep, xs, ...) as a unit of the journal jr (null: none); error: a stop
    !> signal came first, or the journal cannot be written. With memo, the starts that ran
    !> before take their outcomes from it, and only the others run (none: no unit).
-   subroutine starts_unit(jr, ep, xs, lo, hi, h, max_evals, opt, nevals, error, fs, over_ranks, memo)
+   subroutine starts_unit(jr, ep, xs, lo, hi, h, max_evals, opt, nevals, error, fs, over_ranks, memo, xe)
       type(diagnose_journal), pointer, intent(in) :: jr
       type(effect_problem), intent(inout) :: ep
       real(dp), intent(in) :: xs(:, :), lo(:), hi(:), h
@@ -91,6 +91,8 @@ contains
       real(dp), intent(out), optional :: fs(:)
       logical, intent(in), optional :: over_ranks
       type(run_memo), pointer, intent(in), optional :: memo
+      !> each start's end point (a column; a start that failed: the start itself)
+      real(dp), intent(out), optional :: xe(:, :)
       character(len=:), allocatable :: text, lines(:), problem
       type(key_text), allocatable :: keys(:)
       type(optimum_type), allocatable :: alts(:), run(:)
@@ -168,6 +170,15 @@ contains
          if (ok(j) .and. .not. known(j)) nevals = nevals + alts(j)%nevals
       end do
       if (present(fs)) fs = f
+      if (present(xe)) then
+         do j = 1, size(xs, 2)
+            if (ok(j)) then
+               xe(:, j) = alts(j)%x
+            else
+               xe(:, j) = xs(:, j)
+            end if
+         end do
+      end if
    end subroutine starts_unit
 
    !> Simulations counted by the problem itself (effect problems count theirs)

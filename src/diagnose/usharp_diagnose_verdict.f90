@@ -3,7 +3,7 @@
 !> with the evidence, each refit's verdict, and the regions that carry the structured gap
 module usharp_diagnose_verdict
    use usharp_kinds, only: dp
-   use usharp_strings, only: real_str
+   use usharp_strings, only: real_str, str
    use usharp_sort, only: order_of
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
@@ -19,7 +19,7 @@ module usharp_diagnose_verdict
    !> Said of a set's share removed below most whose rest lies at the noise level
    character(len=*), parameter :: rest_note = ', the rest below its floor'
 
-   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note
+   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note
 
 contains
 
@@ -126,6 +126,7 @@ contains
                text = text//' and '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % on the held-out tests'
                if (e%shrink_held < most .and. rest_at_noise(res%gap_held, e%shrink_held, res%floor_held)) &
                   text = text//rest_note
+               text = text//alike_note(e)
             end if
          end if
          if (size(res%alike) > 1) then
@@ -463,4 +464,17 @@ contains
       squash = x/(1.0_dp + abs(x))
    end function squash
 
+   !> What the end points of the refit that the fit tests cannot tell apart carry of the
+   !> held-out gap, where they part by 5 % of it or more: the fit tests leave the prediction
+   !> open between them ('' otherwise)
+   function alike_note(e) result(text)
+      type(effect_outcome), intent(in) :: e
+      character(len=:), allocatable :: text
+      text = ''
+      if (e%n_alike < 1 .or. e%shrink_alike_hi - e%shrink_alike_lo < 0.05_dp) return
+      text = ' ('//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')//' to '// &
+             real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' % at '//str(e%n_alike + 1)// &
+             ' end points of its refit that the fit tests cannot tell apart, BIC within '// &
+             real_str(bic_margin, 'f0.0')//': they leave the held-out prediction open)'
+   end function alike_note
 end module usharp_diagnose_verdict
