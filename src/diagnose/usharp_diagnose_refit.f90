@@ -184,6 +184,8 @@ contains
       call fit_constants(ctx, res, ep, e, opt, moved, error, starts)
       if (allocated(error)) return
       if (.not. moved) then
+         ! The further starts' end points may be alike on the fit tests all the same
+         if (e%refitted) call held_alike(ctx, res, ep, e)
          call judge(ctx, res, e)
          return
       end if
