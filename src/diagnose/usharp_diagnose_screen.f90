@@ -250,9 +250,6 @@ contains
       end subroutine hidden_bound
    end subroutine low_end_power
 
-   !> Starts of the screening runs of a global effect with a physical limit: zero, then every
-   !> sign combination of a tenth of the limit (non-negative parameters only positive); other
-   !> effects start from zero only. Columns: x of ep.
    !> The points of the short runs' basins that a refit tries from other constants
    !> (other_sign): each run's end point, or its start where the run found nothing below the
    !> baseline. Such a run has lost its start's effect (a softening started at +0.05 ended at
@@ -275,6 +272,9 @@ contains
       end do
    end function basin_points
 
+   !> Starts of the screening runs of a global effect with a physical limit: zero, then every
+   !> sign combination of a tenth of the limit (non-negative parameters only positive); other
+   !> effects start from zero only. Columns: x of ep.
    pure function screening_starts(ep, info) result(xs)
       type(effect_problem), intent(in) :: ep
       type(effect_info), intent(in) :: info
