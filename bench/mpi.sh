@@ -6,7 +6,10 @@
 # data and three effects, 4 repetitions each, on a small matrix: 16 tasks, whose costs differ
 # by up to 12 times; with 8 the one longest task left the other rank idle for a tenth of
 # the run). Prints the machine's load with the figures: on a shared machine the ratio is
-# only as good as the cores are free.
+# only as good as the cores are free. The ceiling of each fit pair: two copies of the 1-rank
+# run started side by side take T2s; two ranks that each did half the work at that pace
+# would take T2s/2, so no split of the work does better than 2 T1/T2s over the 1-rank run
+# (2.00 on two cores that do not slow each other).
 # usage: bash bench/mpi.sh   (release build; Open MPI's mpirun)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -36,9 +39,21 @@ wall() { # folder command...: wall seconds of the command
 compare() { # name file1 file2
   if cmp -s <(sed 's/ in [0-9.]* s$//' "$2") <(sed 's/ in [0-9.]* s$//' "$3"); then echo same; else echo DIFFERENT; fi
 }
-row() { # label t1 t1-under-mpirun t2 same
-  printf '%-34s %8.2f %8.2f %8.2f %8.2f %8.2f   %s\n' "$1" "$2" "$3" "$4" "$(echo "scale=3; $2 / $4" | bc)" \
-    "$(echo "scale=3; $3 / $4" | bc)" "$5"
+row() { # label t1 t1-under-mpirun t2 same [side-by-side]
+  local ceiling=-
+  [ -n "${6:-}" ] && ceiling=$(printf '%.2f' "$(echo "scale=3; 2 * $2 / $6" | bc)")
+  printf '%-34s %8.2f %8.2f %8.2f %8.2f %8.2f %8s   %s\n' "$1" "$2" "$3" "$4" "$(echo "scale=3; $2 / $4" | bc)" \
+    "$(echo "scale=3; $3 / $4" | bc)" "$ceiling" "$5"
+}
+pair_alone() { # folder deck: wall seconds of two copies of the 1-rank run side by side
+  local s e
+  sync
+  s=$(date +%s.%N)
+  "$exe" run -q -o "$1a" "$2" > /dev/null &
+  "$exe" run -q -o "$1b" "$2" > /dev/null
+  wait
+  e=$(date +%s.%N)
+  echo "$e - $s" | bc
 }
 
 cat > "$out/selfcheck.nml" <<'NML'
@@ -63,19 +78,20 @@ echo "machine: $(nproc --all) cores; load before: $(uptime | sed 's/.*load avera
 printf 'launch of 2 ranks (usharp --version): %.2f s as Open MPI chooses, %.2f s with pml %s\n' "$launch_default" "$launch_ob1" "$OMPI_MCA_pml"
 # 1 rank: the program started alone (a singleton, as a workstation user runs it) and under
 # mpirun -np 1 (the launch that 2 ranks pay too); the ratios of both to 2 ranks
-printf '%-34s %8s %8s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "mpirun 1" "2 ranks" \
-  "ratio" "ratio m" "results"
+printf '%-34s %8s %8s %8s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "mpirun 1" "2 ranks" \
+  "ratio" "ratio m" "ceiling" "results"
 if [ -d ../shared/realdata/a617-950C ]; then
   # Three pairs, each 1 rank then 2 ranks back to back (the ratio moves by a few hundredths
   # from pair to pair on this machine)
   for pair in 1 2 3; do
-    rm -rf "$out/fit1" "$out/fit1m" "$out/fit2"
+    rm -rf "$out/fit1" "$out/fit1m" "$out/fit2" "$out/side"a "$out/side"b
     t1=$(wall x "$exe" run -q -o "$out/fit1" decks/a617-950C-fit.nml)
     t1m=$(wall x $mpirun1 "$exe" run -q -o "$out/fit1m" decks/a617-950C-fit.nml)
     t2=$(wall x $mpirun "$exe" run -q -o "$out/fit2" decks/a617-950C-fit.nml)
+    ts=$(pair_alone "$out/side" decks/a617-950C-fit.nml)
     same=$(compare x "$out/fit1/fit.journal" "$out/fit2/fit.journal")
     cmp -s "$out/fit1/fit.cache" "$out/fit2/fit.cache" || same=DIFFERENT
-    row "Alloy 617 fit, 8 starts ($pair)" "$t1" "$t1m" "$t2" "$same"
+    row "Alloy 617 fit, 8 starts ($pair)" "$t1" "$t1m" "$t2" "$same" "$ts"
   done
   sed 's/multistart = 8, //' decks/a617-950C-fit.nml > "$one"
   t1=$(wall x "$exe" run -q -o "$out/one1" "$one")

@@ -7,7 +7,8 @@ module test_math
    use usharp_strings, only: str, lower, real_str
    use usharp_filesys, only: join_path
    use usharp_math, only: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp, &
-                          asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp
+                          asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp, &
+                          spline_power_form, power_piece
    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan, ieee_is_finite
    implicit none
    private
@@ -25,6 +26,7 @@ contains
          new_unittest('functions-made-from-exp-and-log', test_derived), &
          new_unittest('sin-and-cos-of-a-turn', test_sincos), &
          new_unittest('log-gamma', test_log_gamma), &
+         new_unittest('spline-pieces-in-power-form', test_power_form), &
          new_unittest('special-values', test_special), &
          new_unittest('no-intrinsic-transcendentals-in-src', test_no_intrinsics), &
          new_unittest('text-of-numbers-on-threads-side-by-side', test_text_threads)]
@@ -197,6 +199,46 @@ contains
       end do
       call bound(error, 'log gamma (in epsilon of max(|result|, 27.9))', w, at, 4.0_dp)
    end subroutine test_log_gamma
+
+   !> The power form of a cubic spline's pieces against the spline in its usual form (value
+   !> and slope from the knots' values and second derivatives) in quadruple precision: knots
+   !> of uneven spacing, values and curvatures of a measured strain's size (1e-3, 1e-3/s**2)
+   subroutine test_power_form(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer, parameter :: nk = 60
+      type(rng_type) :: rng
+      real(dp) :: tk(nk), vk(nk), mk(nk), c(4, nk - 1), t, u, du, eu, edu
+      real(qp) :: h, a, b, ur, dur
+      integer :: i, k
+      call rng%seed(21)
+      tk(1) = 100.0_dp
+      do k = 2, nk
+         tk(k) = tk(k - 1) + 10.0_dp**draw(rng, -2.0_dp, 1.0_dp)
+      end do
+      do k = 1, nk
+         vk(k) = 1.0e-2_dp*draw(rng, -1.0_dp, 1.0_dp)
+         mk(k) = 1.0e-3_dp*draw(rng, -1.0_dp, 1.0_dp)
+      end do
+      c = spline_power_form(tk, vk, mk)
+      eu = 0.0_dp
+      edu = 0.0_dp
+      do i = 1, 20000
+         k = 1 + mod(i, nk - 1)
+         t = tk(k) + draw(rng, 0.0_dp, 1.0_dp)*(tk(k + 1) - tk(k))
+         call power_piece(tk, c, k, t, u, du)
+         h = real(tk(k + 1), qp) - real(tk(k), qp)
+         a = (real(tk(k + 1), qp) - real(t, qp))/h
+         b = 1.0_qp - a
+         ur = a*vk(k) + b*vk(k + 1) + ((a**3 - a)*mk(k) + (b**3 - b)*mk(k + 1))*(h*h/6.0_qp)
+         dur = (real(vk(k + 1), qp) - vk(k))/h + ((1.0_qp - 3.0_qp*a*a)*mk(k) + &
+               (3.0_qp*b*b - 1.0_qp)*mk(k + 1))*(h/6.0_qp)
+         ! against the size of the piece's values and slopes (1e-2, and 1e-2 over its length)
+         eu = max(eu, real(abs(u - ur), dp)/1.0e-2_dp)
+         edu = max(edu, real(abs(du - dur)*h, dp)/1.0e-2_dp)
+      end do
+      call check(error, eu < 1.0e-14_dp .and. edu < 1.0e-14_dp, 'power form of a spline: value off by '// &
+                 real_str(eu, 'es9.2')//', slope by '//real_str(edu, 'es9.2')//' (relative; bound 1e-14)')
+   end subroutine test_power_form
 
    subroutine test_special(error)
       type(error_type), allocatable, intent(out) :: error

@@ -10,7 +10,7 @@ module usharp_rosenbrock_driver
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
-   use usharp_math, only: pow_dp, cubic_piece
+   use usharp_math, only: pow_dp, spline_power_form, power_piece
    use usharp_error, only: error_type, fatal_error, stat_failure
    use usharp_strings, only: str, real_str
    use usharp_model, only: model_type
@@ -43,6 +43,8 @@ module usharp_rosenbrock_driver
       logical :: smooth = .false.
       integer :: kend = 1, lo = 0, hi = 0
       real(dp), allocatable :: mc(:)
+      !> The same spline's pieces in power form (spline_power_form), evaluated at every stage
+      real(dp), allocatable :: pc(:, :)
       logical :: extended = .false.
       type(test_effects) :: eff
       real(dp) :: stiffness = 0.0_dp
@@ -148,6 +150,7 @@ contains
          sys%smooth = hist%smooth()
          if (sys%smooth) then
             sys%mc = hist%d2
+            sys%pc = spline_power_form(hist%t, hist%v, hist%d2)
             if (effects%lag > 0.0_dp) sys%yk = lag_corners(hist%t, hist%v, effects%lag, hist%d2)
          else
             sys%yk = lag_corners(hist%t, hist%v, effects%lag)
@@ -195,6 +198,7 @@ contains
          sys%tc = hist%t
          sys%vc = hist%v
          sys%mc = hist%d2
+         sys%pc = spline_power_form(hist%t, hist%v, hist%d2)
       end if
       if (allocated(hist%temp)) then
          sys%tt = hist%t
@@ -280,7 +284,7 @@ contains
       if (sys%extended .and. sys%eff%lag > 0.0_dp) then
          call lagged_value(sys%tc, sys%vc, sys%yk, k, sys%eff%lag, t, load, rate, sys%mc)
       else
-         call cubic_piece(sys%tc, sys%vc, sys%mc, k, t, load, rate)
+         call power_piece(sys%tc, sys%pc, k, t, load, rate)
       end if
    end subroutine smooth_load
 
@@ -316,13 +320,16 @@ contains
       real(dp), intent(in), contiguous :: y(:)
       real(dp), intent(out), contiguous :: jac(:, :), dfdt(:)
       real(dp), intent(out), optional, contiguous :: fy(:)
-      real(dp) :: sigma, dsig, dsig_dt, f(size(y)), fp(size(y)), fm(size(y)), rate
+      real(dp) :: sigma, dsig, dsig_dt, rate
+      ! Arrays of a size known only at run time are made on the heap, at every step: the
+      ! temperature's differences only, where they are needed; dfdt holds the rates first
+      real(dp), allocatable :: fp(:), fm(:)
       real(dp), parameter :: dtemp = 0.01_dp
       logical :: ok
       integer :: k
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
-      call system_rates(sys, t, 0.0_dp, sigma, 1.0_dp, y, f, ok, jac)
-      if (present(fy)) fy = f
+      call system_rates(sys, t, 0.0_dp, sigma, 1.0_dp, y, dfdt, ok, jac)
+      if (present(fy)) fy = dfdt
       dfdt = jac(:, 1)*dsig_dt
       jac(:, 1) = jac(:, 1)*dsig
       if (allocated(sys%temp) .and. ok) then
@@ -331,6 +338,7 @@ contains
          k = temperature_segment(sys, t)
          rate = (sys%temp(k + 1) - sys%temp(k))/(sys%tt(k + 1) - sys%tt(k))
          if (rate /= 0.0_dp) then
+            allocate (fp(size(y)), fm(size(y)))
             call system_rates(sys, t, dtemp, sigma, dsig, y, fp, ok)
             if (ok) call system_rates(sys, t, -dtemp, sigma, dsig, y, fm, ok)
             if (ok) dfdt = dfdt + (fp - fm)/(2.0_dp*dtemp)*rate

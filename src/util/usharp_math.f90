@@ -17,6 +17,7 @@ module usharp_math
 
    public :: exp_dp, expm1_dp, log_dp, log1p_dp, log10_dp, pow_dp, pow10_dp
    public :: asinh_dp, sinh_power_dp, sincos_turn, log_gamma_dp, cubic_piece
+   public :: spline_power_form, power_piece
 
    !> ln 2 = ln2_hi + ln2_lo, ln2_hi with 32 significant bits (so that k*ln2_hi is exact for
    !> |k| < 2**21)
@@ -428,4 +429,33 @@ contains
       if (present(d2u)) d2u = a*mk(k) + b*mk(k + 1)
       if (present(d3u)) d3u = (mk(k + 1) - mk(k))/h
    end subroutine cubic_piece
+   !> The pieces of the cubic spline through (tk, vk) with second derivatives mk at the knots
+   !> in power form: piece k is c(1,k) + s (c(2,k) + s (c(3,k) + s c(4,k))) with s = t - tk(k).
+   !> Evaluated by power_piece without a division: a simulation under a measured strain
+   !> evaluates its forcing at every stage of every step
+   pure function spline_power_form(tk, vk, mk) result(c)
+      real(dp), intent(in) :: tk(:), vk(:), mk(:)
+      real(dp) :: c(4, max(size(tk) - 1, 0))
+      real(dp) :: h
+      integer :: k
+      do k = 1, size(tk) - 1
+         h = tk(k + 1) - tk(k)
+         c(1, k) = vk(k)
+         c(2, k) = (vk(k + 1) - vk(k))/h - h*(2.0_dp*mk(k) + mk(k + 1))/6.0_dp
+         c(3, k) = 0.5_dp*mk(k)
+         c(4, k) = (mk(k + 1) - mk(k))/(6.0_dp*h)
+      end do
+   end function spline_power_form
+
+   !> Value u and derivative du in t at time t of piece k of a spline in power form (see
+   !> spline_power_form; the same spline as cubic_piece's)
+   pure subroutine power_piece(tk, c, k, t, u, du)
+      real(dp), intent(in) :: tk(:), c(:, :), t
+      integer, intent(in) :: k
+      real(dp), intent(out) :: u, du
+      real(dp) :: s
+      s = t - tk(k)
+      u = c(1, k) + s*(c(2, k) + s*(c(3, k) + s*c(4, k)))
+      du = c(2, k) + s*(2.0_dp*c(3, k) + 3.0_dp*s*c(4, k))
+   end subroutine power_piece
 end module usharp_math
