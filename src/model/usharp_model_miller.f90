@@ -820,13 +820,21 @@ contains
       real(dp), intent(out), contiguous :: ydot(:)
       real(dp), intent(in), optional :: dsig_depsin
       real(dp), intent(out), optional, contiguous :: jac(:, :)
-      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, soft, dsoft, sg, sgr, w, df(size(y))
+      real(dp) :: s, f, f_x, f_d, g, g_r, h, h_d, d_flow, e, soft, dsoft, sg, sgr, w
+      ! Of a size fixed at compile time: an array sized by y was made on the heap at every call
+      real(dp) :: df(5)
       s = sigma - y(2) - y(5)
-      e = exp_dp(-eff%soften_rate*y(4))
-      soft = 1.0_dp - eff%soften*(1.0_dp - e)
-      dsoft = -eff%soften*eff%soften_rate*e
-      if (soft < 1.0e-3_dp) then
-         soft = 1.0e-3_dp
+      if (abs(eff%soften) > 0.0_dp) then
+         e = exp_dp(-eff%soften_rate*y(4))
+         soft = 1.0_dp - eff%soften*(1.0_dp - e)
+         dsoft = -eff%soften*eff%soften_rate*e
+         if (soft < 1.0e-3_dp) then
+            soft = 1.0e-3_dp
+            dsoft = 0.0_dp
+         end if
+      else
+         ! Most refits carry no softening: its exponential took a twentieth of a diagnosis
+         soft = 1.0_dp
          dsoft = 0.0_dp
       end if
       d_flow = y(3)*soft
