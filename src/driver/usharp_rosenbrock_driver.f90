@@ -35,15 +35,14 @@ module usharp_rosenbrock_driver
       integer, allocatable :: positive(:)
       type(segment_type) :: seg
       integer :: k = 1
-      !> A smooth forcing (plain model, or extended without a lag): the spline's second
-      !> derivatives at the samples (tc, vc) and the last sample kend of the branch that
-      !> begins at sample k; the spline
-      !> is searched between samples lo and hi when hi > 0 (the span of the current step),
-      !> else over the branch
+      !> A smooth forcing through the samples (tc, vc) and the last sample kend of the branch
+      !> that begins at sample k; the spline is searched between samples lo and hi when
+      !> hi > 0 (the span of the current step), else over the branch. Its pieces in power
+      !> form (spline_power_form), evaluated at every stage; seen through a lag (extended
+      !> model), its second derivatives at the samples instead
       logical :: smooth = .false.
       integer :: kend = 1, lo = 0, hi = 0
       real(dp), allocatable :: mc(:)
-      !> The same spline's pieces in power form (spline_power_form), evaluated at every stage
       real(dp), allocatable :: pc(:, :)
       logical :: extended = .false.
       type(test_effects) :: eff
@@ -149,9 +148,12 @@ contains
          ! is lagged on each segment
          sys%smooth = hist%smooth()
          if (sys%smooth) then
-            sys%mc = hist%d2
-            sys%pc = spline_power_form(hist%t, hist%v, hist%d2)
-            if (effects%lag > 0.0_dp) sys%yk = lag_corners(hist%t, hist%v, effects%lag, hist%d2)
+            if (effects%lag > 0.0_dp) then
+               sys%mc = hist%d2
+               sys%yk = lag_corners(hist%t, hist%v, effects%lag, hist%d2)
+            else
+               sys%pc = spline_power_form(hist%t, hist%v, hist%d2)
+            end if
          else
             sys%yk = lag_corners(hist%t, hist%v, effects%lag)
          end if
@@ -197,7 +199,6 @@ contains
       if (sys%smooth) then
          sys%tc = hist%t
          sys%vc = hist%v
-         sys%mc = hist%d2
          sys%pc = spline_power_form(hist%t, hist%v, hist%d2)
       end if
       if (allocated(hist%temp)) then

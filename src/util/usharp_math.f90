@@ -429,6 +429,7 @@ contains
       if (present(d2u)) d2u = a*mk(k) + b*mk(k + 1)
       if (present(d3u)) d3u = (mk(k + 1) - mk(k))/h
    end subroutine cubic_piece
+
    !> The pieces of the cubic spline through (tk, vk) with second derivatives mk at the knots
    !> in power form: piece k is c(1,k) + s (c(2,k) + s (c(3,k) + s c(4,k))) with s = t - tk(k).
    !> Evaluated by power_piece without a division: a simulation under a measured strain
