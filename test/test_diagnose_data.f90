@@ -57,6 +57,7 @@ contains
          new_unittest('serration-signature-in-the-residual', test_serration), &
          new_unittest('profile-interval-coverage-monte-carlo', test_profile_coverage), &
          new_unittest('profile-left-open-where-the-model-fails', test_profile_failures), &
+         new_unittest('profile-starts-again-from-a-lower-point', test_profile_recentre), &
          new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift), &
          new_unittest('power-against-monte-carlo', test_power_monte_carlo), &
          new_unittest('clean-specimen-against-loose-replicates', test_specimen_clean), &
@@ -337,6 +338,53 @@ contains
       call check(error, .not. pr%lo_open .and. abs(pr%lo - pr0%lo) <= 1.0e-9_dp*abs(pr0%lo), &
                  'the lower end as before')
    end subroutine test_profile_failures
+
+   !> A profile asked from a point that is not the optimum (b at 70 % of the way to the upper
+   !> end of its interval, a refitted there: the objective 0.49 of the threshold above the
+   !> minimum): its walk meets lower points and starts again from them, so its ends are those
+   !> of the profile from the optimum, within 5 % of the interval's half width (from the
+   !> given point, without starting again, the lower end moves by about a fifth of it)
+   subroutine test_profile_recentre(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(decay_problem) :: dp_
+      type(optimum_type) :: opt
+      type(profile_result) :: pr, pr0
+      type(rng_type) :: rng
+      real(dp) :: se, scale, xc(2), fc, ex(12), half
+      integer :: i
+      call rng%seed(5)
+      dp_%t = [(4.0_dp*(i - 1)/11.0_dp, i=1, 12)]
+      dp_%y = [(exp(-0.8_dp*dp_%t(i)) + 0.15_dp*rng%normal(), i=1, 12)]
+      call levenberg_marquardt(dp_, [1.0_dp, 1.0_dp], [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                               1.0e-7_dp, 1.0e-12_dp, 200, 5000, opt, e)
+      call check(error, .not. allocated(e), 'fit failed')
+      if (allocated(error)) return
+      se = 0.3_dp*opt%x(2)
+      scale = opt%f/10.0_dp
+      call profile_interval(dp_, opt%x, opt%f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                            1.0e-7_dp, se, scale, .true., 2000, pr0, e)
+      call check(error, .not. allocated(e) .and. .not. (pr0%lo_open .or. pr0%hi_open), &
+                 'the profile from the optimum')
+      if (allocated(error)) return
+      ! b part of the way up, a at its least squares value for that b (linear in a)
+      xc(2) = opt%x(2) + 0.7_dp*(pr0%hi - opt%x(2))
+      ex = exp(-xc(2)*dp_%t)
+      xc(1) = sum(dp_%y*ex)/sum(ex**2)
+      fc = sum((dp_%y - xc(1)*ex)**2)
+      call check(error, fc - opt%f > 0.3_dp*pr0%threshold, 'the given point '// &
+                 real_str((fc - opt%f)/pr0%threshold, 'f0.3')//' of the threshold above the optimum')
+      if (allocated(error)) return
+      call profile_interval(dp_, xc, fc, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                            1.0e-7_dp, se, scale, .true., 2000, pr, e)
+      call check(error, .not. allocated(e), 'profile failed')
+      if (allocated(error)) return
+      half = 0.5_dp*(pr0%hi - pr0%lo)
+      call check(error, .not. (pr%lo_open .or. pr%hi_open) .and. abs(pr%lo - pr0%lo) <= 0.05_dp*half .and. &
+                 abs(pr%hi - pr0%hi) <= 0.05_dp*half .and. pr%f_min <= opt%f + 0.05_dp*pr0%threshold, &
+                 'from the point off the optimum ['//real_str(pr%lo, 'es12.5')//', '//real_str(pr%hi, 'es12.5')// &
+                 '], from the optimum ['//real_str(pr0%lo, 'es12.5')//', '//real_str(pr0%hi, 'es12.5')//']')
+   end subroutine test_profile_recentre
 
    !> Three cyclic tests of the thesis model, the third with an extensometer drift of 8e-6/s
    !> (0.04 % over its 48 s) and 0.5 % noise: fitted alone against the constants of the two

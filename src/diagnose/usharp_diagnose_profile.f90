@@ -35,6 +35,10 @@ module usharp_diagnose_profile
    real(dp), parameter :: wald_rel_limit = 0.5_dp
    !> Evaluations of each refit of the constants along a profile
    integer, parameter :: profile_evals = 400
+   !> Times a profile starts again from a lower point its walks met, and the least drop
+   !> below the centre (a share of the threshold) that counts as one
+   integer, parameter :: max_recentre = 2
+   real(dp), parameter :: recentre_share = 0.05_dp
 
    !> The interval of one coordinate
    type :: profile_result
@@ -45,6 +49,10 @@ module usharp_diagnose_profile
       real(dp) :: f_min = 0.0_dp             !< lowest objective met (below the given one:
                                              !<   the optimum was not one)
       integer :: nevals = 0
+      !> The point the interval is about (full x) and its objective: the given optimum, or
+      !> a lower point the walks met (then the given one was not the optimum)
+      real(dp), allocatable :: x_centre(:)
+      real(dp) :: f_centre = 0.0_dp
    end type profile_result
 
    !> The problem with coordinate j held at a value: x of the others
@@ -96,38 +104,57 @@ contains
       type(diagnose_journal), pointer, intent(in), optional :: journal
       type(diagnose_journal), pointer :: jr
       type(held_problem) :: hp
-      integer :: side
+      !> The profile's centre: the lowest point met (full x) and its objective
+      real(dp), allocatable :: xc(:)
+      real(dp) :: fc
+      integer :: side, nre
       real(dp) :: ends(2)
-      logical :: open(2)
+      logical :: open(2), lower
       jr => null()
       if (present(journal)) jr => journal
       allocate (hp%base, source=obj)
       hp%j = j
       pr%threshold = chi2_95*scale
+      xc = x_hat
+      fc = f_hat
       pr%f_min = f_hat
-      do side = 1, 2
-         call walk(merge(-1.0_dp, 1.0_dp, side == 1), ends(side), open(side))
-         if (allocated(error)) return
+      ! A walk that meets a point below the centre by more than the refits' own scatter
+      ! shows that the centre was not the optimum: both walks again from the optimum
+      ! refitted from that point, as the interval is where the objective stays within the
+      ! threshold of its minimum
+      do nre = 0, max_recentre
+         lower = .false.
+         do side = 1, 2
+            call walk(merge(-1.0_dp, 1.0_dp, side == 1), nre < max_recentre, ends(side), &
+                      open(side), lower)
+            if (allocated(error)) return
+            if (lower) exit
+         end do
+         if (.not. lower) exit
       end do
       pr%lo = ends(1)
       pr%hi = ends(2)
       pr%lo_open = open(1)
       pr%hi_open = open(2)
+      pr%x_centre = xc
+      pr%f_centre = fc
    contains
-      !> From the optimum in direction d until the objective has risen by the threshold
-      subroutine walk(d, endpoint, is_open)
+      !> From the centre in direction d until the objective has risen by the threshold;
+      !> lower: it met a point below the centre (then the new centre, when may_recentre)
+      subroutine walk(d, may_recentre, endpoint, is_open, lower)
          real(dp), intent(in) :: d
+         logical, intent(in) :: may_recentre
          real(dp), intent(out) :: endpoint
          logical, intent(out) :: is_open
-         type(optimum_type) :: opt
-         real(dp), allocatable :: xr(:), lor(:), hir(:)
+         logical, intent(inout) :: lower
+         type(optimum_type) :: opt, again
+         real(dp), allocatable :: xr(:), x0r(:)
          real(dp) :: u0, u, un, step, rise, rise_prev, ubound
          integer :: k, nfailed
          logical :: at_bound
-         xr = [x_hat(:j - 1), x_hat(j + 1:)]
-         lor = [lo(:j - 1), lo(j + 1:)]
-         hir = [hi(:j - 1), hi(j + 1:)]
-         u0 = to_u(x_hat(j))
+         x0r = [xc(:j - 1), xc(j + 1:)]
+         xr = x0r
+         u0 = to_u(xc(j))
          if (d < 0.0_dp) then
             ubound = merge(to_u(lo(j)), -huge(1.0_dp), .not. log_scale .or. lo(j) > 0.0_dp)
          else
@@ -149,16 +176,20 @@ contains
             at_bound = d*(un - ubound) >= 0.0_dp
             if (at_bound) un = ubound
             hp%value = from_u(un)
-            if (size(xr) > 0) then
-               call lm_unit(jr, hp, xr, lor, hir, h, 1.0e-10_dp, 60, max_evals, opt, error)
-               if (allocated(error)) return
-            else
-               opt%x = xr
-               call hp%eval(opt%x, opt%f, error)
-               if (allocated(error)) return
-               opt%nevals = 1
+            call refit(xr, opt)
+            if (allocated(error)) return
+            ! Each refit starts from the last point's constants and may end in another local
+            ! minimum of them, a few units of the objective up or down: a rise that would end
+            ! the walk, or jumps by more than half of it in one step, is checked by a refit
+            ! from the centre's constants, and the lower of the two taken (the profile is a
+            ! minimum, not the path of one chain of refits)
+            if (k > 0 .and. opt%f < failed_objective) then
+               if (opt%f - fc >= pr%threshold .or. opt%f - fc - rise_prev >= 0.5_dp*pr%threshold) then
+                  call refit(x0r, again)
+                  if (allocated(error)) return
+                  if (again%f < opt%f) opt = again
+               end if
             end if
-            pr%nevals = pr%nevals + opt%nevals
             if (.not. opt%f < failed_objective) then
                ! A value at which the model fails to simulate says nothing of the likelihood
                ! (taken as a rise, a first Wald step of 22 peak stresses into it gave an
@@ -172,7 +203,22 @@ contains
             end if
             k = k + 1
             pr%f_min = min(pr%f_min, opt%f)
-            rise = max(opt%f - f_hat, 0.0_dp)
+            if (may_recentre .and. fc - opt%f > recentre_share*pr%threshold) then
+               ! (the optimum itself, refitted from there with this coordinate free too)
+               xc = [opt%x(:j - 1), hp%value, opt%x(j:)]
+               fc = opt%f
+               call lm_unit(jr, hp%base, xc, lo, hi, h, 1.0e-10_dp, 60, max_evals, again, error)
+               if (allocated(error)) return
+               pr%nevals = pr%nevals + again%nevals
+               if (again%f < fc) then
+                  xc = again%x
+                  fc = again%f
+               end if
+               pr%f_min = min(pr%f_min, fc)
+               lower = .true.
+               return
+            end if
+            rise = max(opt%f - fc, 0.0_dp)
             if (rise >= pr%threshold) then
                ! sqrt(rise) is about linear in the coordinate near the end
                endpoint = from_u(u + (un - u)*(sqrt(pr%threshold) - sqrt(rise_prev))/ &
@@ -189,6 +235,25 @@ contains
             if (rise < 0.25_dp*pr%threshold) step = 2.0_dp*step
          end do
       end subroutine walk
+
+      !> The other coordinates refitted from x_start at the held value hp%value
+      subroutine refit(x_start, opt)
+         real(dp), intent(in) :: x_start(:)
+         type(optimum_type), intent(out) :: opt
+         real(dp), allocatable :: lor(:), hir(:)
+         if (size(x_start) > 0) then
+            lor = [lo(:j - 1), lo(j + 1:)]
+            hir = [hi(:j - 1), hi(j + 1:)]
+            call lm_unit(jr, hp, x_start, lor, hir, h, 1.0e-10_dp, 60, max_evals, opt, error)
+            if (allocated(error)) return
+         else
+            opt%x = x_start
+            call hp%eval(opt%x, opt%f, error)
+            if (allocated(error)) return
+            opt%nevals = 1
+         end if
+         pr%nevals = pr%nevals + opt%nevals
+      end subroutine refit
 
       pure real(dp) function to_u(x)
          real(dp), intent(in) :: x

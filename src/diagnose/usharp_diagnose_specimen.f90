@@ -330,9 +330,11 @@ contains
          type(specimen_effect), intent(out) :: se_out
          type(error_type), allocatable, intent(out) :: error
          type(effect_problem) :: ek, ej
-         type(optimum_type) :: o, o1, oj
+         type(optimum_type) :: o, o1, oj, x_low
          real(dp), allocatable :: xj(:, :), rjk(:), ptj(:)
          type(profile_result) :: pr
+         integer :: pass
+         logical :: lower
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
          real(dp), allocatable :: starts(:, :)
          real(dp) :: scale, g3, reach, saturation
@@ -416,45 +418,61 @@ contains
                se_out%dbic = huge(1.0_dp)
             end if
          end if
-         se_out%f_after = o%f
-         se_out%removed = gap_share(merge(sr%f_joint, sr%f0, refit_constants), o%f)
-         call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
-         if (.not. refit_constants) then
-            ! BIC in the residual's covariance: what the given constants leave open is not
-            ! the specimen's
-            if (okj .and. size(r) == sr%m .and. allocated(sr%w)) then
-               se_out%dbic = specimen_deviance(sr, r) - dev0 + se_out%q*log_dp(real(sr%m, dp))
-            else
-               se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
+         ! The figures at o, and again at most once from a lower point that a profile met
+         ! (o was not the optimum: the intervals are about that point, and so is the rest)
+         do pass = 1, 2
+            if (pass == 2) deallocate (se, grp, se_out%p_lo, se_out%p_hi, se_out%lo_open, &
+                                       se_out%hi_open, se_out%pname, se_out%punit)
+            lower = .false.
+            x_low%f = o%f
+            se_out%f_after = o%f
+            se_out%removed = gap_share(merge(sr%f_joint, sr%f0, refit_constants), o%f)
+            call jacobian(ek, o%x, 1.0e-3_dp, r, jac, okj)
+            if (.not. refit_constants) then
+               ! BIC in the residual's covariance: what the given constants leave open is not
+               ! the specimen's
+               if (okj .and. size(r) == sr%m .and. allocated(sr%w)) then
+                  se_out%dbic = specimen_deviance(sr, r) - dev0 + se_out%q*log_dp(real(sr%m, dp))
+               else
+                  se_out%dbic = sr%m*log_dp(max(o%f, tiny(1.0_dp))/sr%f0) + se_out%q*log_dp(real(sr%m, dp))
+               end if
             end if
-         end if
-         se_out%significant = se_out%dbic < -bic_margin
-         naive = pseudo_inverse(mat_mul(transpose(jac), jac))
-         cov = robust_covariance(jac, r, naive)
-         allocate (se(size(o%x)))
-         do jj = 1, size(o%x)
-            se(jj) = sqrt(max(cov(jj, jj), 0.0_dp))
-         end do
-         p = pack(o%x*pack(ek%pscale, ek%pfree), .true.)
-         se_out%p = p
-         allocate (se_out%p_lo(size(p)), se_out%p_hi(size(p)), se_out%lo_open(size(p)), &
-                   se_out%hi_open(size(p)), se_out%pname(size(p)), se_out%punit(size(p)))
-         allocate (grp(size(p)))
-         g = 0
-         do jj = 1, np
-            if (.not. ek%pfree(jj)) cycle
-            g = g + 1
-            grp(g) = merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test)
-            se_out%pname(g) = cat(k)%pname(grp(g))
-            se_out%punit(g) = cat(k)%punit(grp(g))
-            ! The rise of the objective at the 95 % ends: the sandwich over the naive variance
-            scale = o%f/max(sr%m - se_out%q, 1)
-            if (naive(g, g) > 0.0_dp .and. cov(g, g) > 0.0_dp) scale = cov(g, g)/naive(g, g)
-            call profile_interval(ek, o%x, o%f, g, lo, hi, 1.0e-3_dp, se(g), scale, &
-                                  ek%pnonneg(jj) .and. o%x(g) > 0.0_dp, opts%max_evals, pr, error)
-            if (allocated(error)) return
-            se_out%nevals = se_out%nevals + pr%nevals
-            call take_interval(se_out, g, pr, ek%pscale(jj))
+            se_out%significant = se_out%dbic < -bic_margin
+            naive = pseudo_inverse(mat_mul(transpose(jac), jac))
+            cov = robust_covariance(jac, r, naive)
+            allocate (se(size(o%x)))
+            do jj = 1, size(o%x)
+               se(jj) = sqrt(max(cov(jj, jj), 0.0_dp))
+            end do
+            p = pack(o%x*pack(ek%pscale, ek%pfree), .true.)
+            se_out%p = p
+            allocate (se_out%p_lo(size(p)), se_out%p_hi(size(p)), se_out%lo_open(size(p)), &
+                      se_out%hi_open(size(p)), se_out%pname(size(p)), se_out%punit(size(p)))
+            allocate (grp(size(p)))
+            g = 0
+            do jj = 1, np
+               if (.not. ek%pfree(jj)) cycle
+               g = g + 1
+               grp(g) = merge((jj - 1)/nt + 1, jj, cat(k)%sharing == param_per_test)
+               se_out%pname(g) = cat(k)%pname(grp(g))
+               se_out%punit(g) = cat(k)%punit(grp(g))
+               ! The rise of the objective at the 95 % ends: the sandwich over the naive variance
+               scale = o%f/max(sr%m - se_out%q, 1)
+               if (naive(g, g) > 0.0_dp .and. cov(g, g) > 0.0_dp) scale = cov(g, g)/naive(g, g)
+               call profile_interval(ek, o%x, o%f, g, lo, hi, 1.0e-3_dp, se(g), scale, &
+                                     ek%pnonneg(jj) .and. o%x(g) > 0.0_dp, opts%max_evals, pr, error)
+               if (allocated(error)) return
+               se_out%nevals = se_out%nevals + pr%nevals
+               call take_interval(se_out, g, pr, ek%pscale(jj))
+               if (pr%f_centre < x_low%f) then
+                  x_low%x = pr%x_centre
+                  x_low%f = pr%f_centre
+                  lower = .true.
+               end if
+            end do
+            if (.not. lower .or. pass == 2) exit
+            o%x = x_low%x
+            o%f = x_low%f
          end do
          ! Beyond its physical limit only as the held-out diagnosis judges it
          call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
