@@ -309,25 +309,14 @@ contains
       type(decay_problem) :: dp_
       type(optimum_type) :: opt
       type(profile_result) :: pr, pr0
-      type(rng_type) :: rng
-      real(dp) :: se
-      integer :: i
-      call rng%seed(5)
-      dp_%t = [(4.0_dp*(i - 1)/11.0_dp, i=1, 12)]
-      dp_%y = [(exp(-0.8_dp*dp_%t(i)) + 0.15_dp*rng%normal(), i=1, 12)]
-      call levenberg_marquardt(dp_, [1.0_dp, 1.0_dp], [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
-                               1.0e-7_dp, 1.0e-12_dp, 200, 5000, opt, e)
-      call check(error, .not. allocated(e), 'fit failed')
+      call decay_case(dp_, opt, error)
       if (allocated(error)) return
-      se = 0.3_dp*opt%x(2)
-      call profile_interval(dp_, opt%x, opt%f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
-                            1.0e-7_dp, se, opt%f/10.0_dp, .true., 2000, pr0, e)
+      call decay_profile(dp_, opt%x, opt%f, opt, pr0, e)
       call check(error, .not. allocated(e) .and. .not. pr0%hi_open, 'the profile without failures')
       if (allocated(error)) return
       ! The model fails above half-way to the interval's upper end
       dp_%fail_above = opt%x(2) + 0.5_dp*(pr0%hi - opt%x(2))
-      call profile_interval(dp_, opt%x, opt%f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
-                            1.0e-7_dp, se, opt%f/10.0_dp, .true., 2000, pr, e)
+      call decay_profile(dp_, opt%x, opt%f, opt, pr, e)
       call check(error, .not. allocated(e), 'profile failed')
       if (allocated(error)) return
       call check(error, pr%hi_open .and. pr%hi > opt%x(2) + 0.1_dp*(pr0%hi - opt%x(2)) .and. &
@@ -350,20 +339,10 @@ contains
       type(decay_problem) :: dp_
       type(optimum_type) :: opt
       type(profile_result) :: pr, pr0
-      type(rng_type) :: rng
-      real(dp) :: se, scale, xc(2), fc, ex(12), half
-      integer :: i
-      call rng%seed(5)
-      dp_%t = [(4.0_dp*(i - 1)/11.0_dp, i=1, 12)]
-      dp_%y = [(exp(-0.8_dp*dp_%t(i)) + 0.15_dp*rng%normal(), i=1, 12)]
-      call levenberg_marquardt(dp_, [1.0_dp, 1.0_dp], [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
-                               1.0e-7_dp, 1.0e-12_dp, 200, 5000, opt, e)
-      call check(error, .not. allocated(e), 'fit failed')
+      real(dp) :: xc(2), fc, ex(12), half
+      call decay_case(dp_, opt, error)
       if (allocated(error)) return
-      se = 0.3_dp*opt%x(2)
-      scale = opt%f/10.0_dp
-      call profile_interval(dp_, opt%x, opt%f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
-                            1.0e-7_dp, se, scale, .true., 2000, pr0, e)
+      call decay_profile(dp_, opt%x, opt%f, opt, pr0, e)
       call check(error, .not. allocated(e) .and. .not. (pr0%lo_open .or. pr0%hi_open), &
                  'the profile from the optimum')
       if (allocated(error)) return
@@ -375,8 +354,7 @@ contains
       call check(error, fc - opt%f > 0.3_dp*pr0%threshold, 'the given point '// &
                  real_str((fc - opt%f)/pr0%threshold, 'f0.3')//' of the threshold above the optimum')
       if (allocated(error)) return
-      call profile_interval(dp_, xc, fc, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
-                            1.0e-7_dp, se, scale, .true., 2000, pr, e)
+      call decay_profile(dp_, xc, fc, opt, pr, e)
       call check(error, .not. allocated(e), 'profile failed')
       if (allocated(error)) return
       half = 0.5_dp*(pr0%hi - pr0%lo)
@@ -385,6 +363,35 @@ contains
                  'from the point off the optimum ['//real_str(pr%lo, 'es12.5')//', '//real_str(pr%hi, 'es12.5')// &
                  '], from the optimum ['//real_str(pr0%lo, 'es12.5')//', '//real_str(pr0%hi, 'es12.5')//']')
    end subroutine test_profile_recentre
+
+   !> The decay data of seed 5 (y = exp(-0.8 t), noise sd 0.15, 12 points over 0-4 s) and
+   !> their least squares fit opt
+   subroutine decay_case(dp_, opt, error)
+      type(decay_problem), intent(out) :: dp_
+      type(optimum_type), intent(out) :: opt
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(rng_type) :: rng
+      integer :: i
+      call rng%seed(5)
+      dp_%t = [(4.0_dp*(i - 1)/11.0_dp, i=1, 12)]
+      dp_%y = [(exp(-0.8_dp*dp_%t(i)) + 0.15_dp*rng%normal(), i=1, 12)]
+      call levenberg_marquardt(dp_, [1.0_dp, 1.0_dp], [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], &
+                               1.0e-7_dp, 1.0e-12_dp, 200, 5000, opt, e)
+      call check(error, .not. allocated(e), 'fit failed')
+   end subroutine decay_case
+
+   !> The profile of b (in its log) from the point x (objective f) of the decay case, its
+   !> first step and variance scale from the fit opt (0.3 b, f/10)
+   subroutine decay_profile(dp_, x, f, opt, pr, e)
+      type(decay_problem), intent(in) :: dp_
+      real(dp), intent(in) :: x(:), f
+      type(optimum_type), intent(in) :: opt
+      type(profile_result), intent(out) :: pr
+      type(uerror), allocatable, intent(out) :: e
+      call profile_interval(dp_, x, f, 2, [-10.0_dp, 1.0e-6_dp], [10.0_dp, 100.0_dp], 1.0e-7_dp, &
+                            0.3_dp*opt%x(2), opt%f/10.0_dp, .true., 2000, pr, e)
+   end subroutine decay_profile
 
    !> Three cyclic tests of the thesis model, the third with an extensometer drift of 8e-6/s
    !> (0.04 % over its 48 s) and 0.5 % noise: fitted alone against the constants of the two
