@@ -26,7 +26,8 @@ one=decks/.a617-950C-fit-one-start.$$.nml
 trap 'rm -rf "$out" "$one"' EXIT
 export OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive
 
-wall() { # folder command...: wall seconds of the command
+wall() { # tag command...: wall seconds of the command; its processor time (user + system of
+  # every process it started, the ranks under mpirun too) in $out/cpu.<tag>
   local s e
   # The last run's files (a fit.cache of 112 MB) written out first: their write-back would
   # otherwise take a core from this run
@@ -35,15 +36,21 @@ wall() { # folder command...: wall seconds of the command
   "${@:2}" > /dev/null
   e=$(date +%s.%N)
   echo "$e - $s" | bc
+  # (this subshell's children: the command's processes, from bash's times, written by this
+  # shell: in a pipe or a substitution it would run in a fork, whose children have none)
+  times > "$out/times.$1"
+  tail -n 1 "$out/times.$1" | sed 's/m/ /g; s/s//g' | awk '{print 60 * $1 + $2 + 60 * $3 + $4}' > "$out/cpu.$1"
 }
+cpu() { cat "$out/cpu.$1"; }
 compare() { # name file1 file2
   if cmp -s <(sed 's/ in [0-9.]* s$//' "$2") <(sed 's/ in [0-9.]* s$//' "$3"); then echo same; else echo DIFFERENT; fi
 }
-row() { # label t1 t1-under-mpirun t2 same [side-by-side]
-  local ceiling=-
+row() { # label t1 t1-under-mpirun t2 same [side-by-side [cpu1 cpu2]]
+  local ceiling=- work=-
   [ -n "${6:-}" ] && ceiling=$(printf '%.2f' "$(echo "scale=3; 2 * $2 / $6" | bc)")
-  printf '%-34s %8.2f %8.2f %8.2f %8.2f %8.2f %8s   %s\n' "$1" "$2" "$3" "$4" "$(echo "scale=3; $2 / $4" | bc)" \
-    "$(echo "scale=3; $3 / $4" | bc)" "$ceiling" "$5"
+  [ -n "${8:-}" ] && work=$(printf '%.2f' "$(echo "scale=3; $8 / $7" | bc)")
+  printf '%-34s %8.2f %8.2f %8.2f %8.2f %8.2f %8s %8s   %s\n' "$1" "$2" "$3" "$4" "$(echo "scale=3; $2 / $4" | bc)" \
+    "$(echo "scale=3; $3 / $4" | bc)" "$ceiling" "$work" "$5"
 }
 least() { echo "if ($1 < $2) $1 else $2" | bc; }
 side_by_side() { # folder deck: two copies of the 1-rank run at once (timed by wall)
@@ -74,8 +81,10 @@ echo "machine: $(nproc --all) cores; load before: $(uptime | sed 's/.*load avera
 printf 'launch of 2 ranks (usharp --version): %.2f s as Open MPI chooses, %.2f s with pml %s\n' "$launch_default" "$launch_ob1" "$OMPI_MCA_pml"
 # 1 rank: the program started alone (a singleton, as a workstation user runs it) and under
 # mpirun -np 1 (the launch that 2 ranks pay too); the ratios of both to 2 ranks
-printf '%-34s %8s %8s %8s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "mpirun 1" "2 ranks" \
-  "ratio" "ratio m" "ceiling" "results"
+# cpu 2/1: the processor time of the 2-rank run over the 1-rank run's, the work the split adds
+# (1.00: none), apart from how fast two busy cores run
+printf '%-34s %8s %8s %8s %8s %8s %8s %8s   %s\n' "wall s, 1 thread per rank" "1 rank" "mpirun 1" "2 ranks" \
+  "ratio" "ratio m" "ceiling" "cpu 2/1" "results"
 if [ -d ../shared/realdata/a617-950C ]; then
   # Five rounds, each 1 rank, mpirun -np 1, 2 ranks and the side-by-side pair back to back,
   # and the best of each over the rounds: a neighbour's load on this virtual machine can add
@@ -84,14 +93,14 @@ if [ -d ../shared/realdata/a617-950C ]; then
   b1=1000000; b1m=1000000; b2=1000000; bs=1000000; allsame=same
   for round in 1 2 3 4 5; do
     rm -rf "$out/fit1" "$out/fit1m" "$out/fit2" "$out/side"a "$out/side"b
-    t1=$(wall x "$exe" run -q -o "$out/fit1" decks/a617-950C-fit.nml)
+    t1=$(wall f1 "$exe" run -q -o "$out/fit1" decks/a617-950C-fit.nml)
     t1m=$(wall x $mpirun1 "$exe" run -q -o "$out/fit1m" decks/a617-950C-fit.nml)
-    t2=$(wall x $mpirun "$exe" run -q -o "$out/fit2" decks/a617-950C-fit.nml)
+    t2=$(wall f2 $mpirun "$exe" run -q -o "$out/fit2" decks/a617-950C-fit.nml)
     ts=$(wall x side_by_side "$out/side" decks/a617-950C-fit.nml)
     same=$(compare x "$out/fit1/fit.journal" "$out/fit2/fit.journal")
     cmp -s "$out/fit1/fit.cache" "$out/fit2/fit.cache" || same=DIFFERENT
     [ "$same" = same ] || allsame=DIFFERENT
-    row "Alloy 617 fit, 8 starts ($round)" "$t1" "$t1m" "$t2" "$same" "$ts"
+    row "Alloy 617 fit, 8 starts ($round)" "$t1" "$t1m" "$t2" "$same" "$ts" "$(cpu f1)" "$(cpu f2)"
     b1=$(least "$b1" "$t1"); b1m=$(least "$b1m" "$t1m"); b2=$(least "$b2" "$t2"); bs=$(least "$bs" "$ts")
   done
   row "Alloy 617 fit, best of 5" "$b1" "$b1m" "$b2" "$allsame" "$bs"
@@ -104,9 +113,9 @@ if [ -d ../shared/realdata/a617-950C ]; then
 else
   echo "Alloy 617 fit: skipped (no ../shared/realdata/a617-950C)"
 fi
-t1=$(wall x "$exe" diagnose --selfcheck -q -o "$out/sc1" "$out/selfcheck.nml")
+t1=$(wall s1 "$exe" diagnose --selfcheck -q -o "$out/sc1" "$out/selfcheck.nml")
 t1m=$(wall x $mpirun1 "$exe" diagnose --selfcheck -q -o "$out/sc1m" "$out/selfcheck.nml")
-t2=$(wall x $mpirun "$exe" diagnose --selfcheck -q -o "$out/sc2" "$out/selfcheck.nml")
+t2=$(wall s2 $mpirun "$exe" diagnose --selfcheck -q -o "$out/sc2" "$out/selfcheck.nml")
 row "self-check subset, 16 repetitions" "$t1" "$t1m" "$t2" \
-  "$(compare x "$out/sc1/selfcheck.md" "$out/sc2/selfcheck.md")"
+  "$(compare x "$out/sc1/selfcheck.md" "$out/sc2/selfcheck.md")" "" "$(cpu s1)" "$(cpu s2)"
 echo "load after: $(uptime | sed 's/.*load average: //')"
