@@ -359,7 +359,7 @@ contains
       if (allocated(error)) return
       half = 0.5_dp*(pr0%hi - pr0%lo)
       call check(error, .not. (pr%lo_open .or. pr%hi_open) .and. abs(pr%lo - pr0%lo) <= 0.05_dp*half .and. &
-                 abs(pr%hi - pr0%hi) <= 0.05_dp*half .and. pr%f_min <= opt%f + 0.05_dp*pr0%threshold, &
+                 abs(pr%hi - pr0%hi) <= 0.05_dp*half .and. pr%f_centre <= opt%f + 0.05_dp*pr0%threshold, &
                  'from the point off the optimum ['//real_str(pr%lo, 'es12.5')//', '//real_str(pr%hi, 'es12.5')// &
                  '], from the optimum ['//real_str(pr0%lo, 'es12.5')//', '//real_str(pr0%hi, 'es12.5')//']')
    end subroutine test_profile_recentre

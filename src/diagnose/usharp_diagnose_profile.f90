@@ -46,8 +46,6 @@ module usharp_diagnose_profile
       logical :: lo_open = .false.           !< the objective stays below the threshold up
       logical :: hi_open = .false.           !<   to the bound (or max_steps): not bounded
       real(dp) :: threshold = 0.0_dp         !< rise of the objective at the ends
-      real(dp) :: f_min = 0.0_dp             !< lowest objective met (below the given one:
-                                             !<   the optimum was not one)
       integer :: nevals = 0
       !> The point the interval is about (full x) and its objective: the given optimum, or
       !> a lower point the walks met (then the given one was not the optimum)
@@ -117,7 +115,6 @@ contains
       pr%threshold = chi2_95*scale
       xc = x_hat
       fc = f_hat
-      pr%f_min = f_hat
       ! A walk that meets a point below the centre by more than the refits' own scatter
       ! shows that the centre was not the optimum: both walks again from the optimum
       ! refitted from that point, as the interval is where the objective stays within the
@@ -183,7 +180,8 @@ contains
             ! the walk, or jumps by more than half of it in one step, is checked by a refit
             ! from the centre's constants, and the lower of the two taken (the profile is a
             ! minimum, not the path of one chain of refits)
-            if (k > 0 .and. opt%f < failed_objective) then
+            ! (with no other coordinate there is nothing to refit)
+            if (k > 0 .and. size(x0r) > 0 .and. opt%f < failed_objective) then
                if (opt%f - fc >= pr%threshold .or. opt%f - fc - rise_prev >= 0.5_dp*pr%threshold) then
                   call refit(x0r, again)
                   if (allocated(error)) return
@@ -202,7 +200,6 @@ contains
                cycle
             end if
             k = k + 1
-            pr%f_min = min(pr%f_min, opt%f)
             if (may_recentre .and. fc - opt%f > recentre_share*pr%threshold) then
                ! (the optimum itself, refitted from there with this coordinate free too)
                xc = [opt%x(:j - 1), hp%value, opt%x(j:)]
@@ -214,7 +211,6 @@ contains
                   xc = again%x
                   fc = again%f
                end if
-               pr%f_min = min(pr%f_min, fc)
                lower = .true.
                return
             end if
