@@ -39,7 +39,7 @@ module usharp_diagnose
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
-   use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding
+   use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding, refit
    use usharp_diagnose_verdict, only: conclude, joint_verdict
    use usharp_diagnose_separate, only: separate
    use usharp_diagnose_report, only: diagnose_report, write_report
@@ -93,6 +93,9 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       logical, allocatable :: fresh(:)
+      real(dp), allocatable :: lower(:)
+      real(dp) :: f_before
+      integer :: counted
       associate (opts => ctx%opts)
       call screen(ctx, res, error)
       if (allocated(error)) return
@@ -160,8 +163,23 @@ contains
       if (allocated(error)) return
       ! The leading effect's intervals where the curvature says little: profile likelihood
       call tell(ctx, 'profile', res%nevals)
-      call profile_leading(ctx, res, error)
+      call profile_leading(ctx, res, error, lower)
       if (allocated(error)) return
+      ! A profile whose walks met a point below the leader's refit shows that the refit was
+      ! not the optimum: the leader refitted from there (its magnitudes, held-out prediction,
+      ! BIC and shares then belong to the point its intervals are about), the verdict drawn
+      ! again and the (new) leader profiled about its end point
+      if (allocated(lower)) then
+         counted = sum(res%effects%nevals)
+         f_before = res%effects(res%leading)%f_after
+         call refit(ctx, res, res%effects(res%leading), error, from=lower)
+         if (allocated(error)) return
+         res%nevals = res%nevals + sum(res%effects%nevals) - counted
+         if (res%effects(res%leading)%f_after < f_before) res%effects(res%leading)%f_unprofiled = f_before
+         call conclude(res)
+         call profile_leading(ctx, res, error)
+         if (allocated(error)) return
+      end if
       call step_done(res, 'profile intervals')
       ! Last: when effects explain the gap equally well, the test that would separate them
       call separate(ctx, res)

@@ -273,10 +273,15 @@ contains
    !> The leading effect's 95 % intervals from the profile likelihood where the curvature
    !> at its refit says little (see wald_rel_limit): the constants and the effect's other
    !> parameters refitted at each trial value; res%effects(leading)%p_profiled marks them
-   subroutine profile_leading(ctx, res, error)
+   subroutine profile_leading(ctx, res, error, lower)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
+      !> The lowest point (x of the leader's refit) that a profile's walks met below the
+      !> refit's end point, when one did: the refit was not the optimum, and its figures are
+      !> to come from there (unallocated: none)
+      real(dp), allocatable, intent(out), optional :: lower(:)
+      real(dp) :: f_lower
       type(effect_problem) :: ep
       type(profile_result) :: pr
       real(dp), allocatable :: r(:), jac(:, :), naive(:, :), cov(:, :), lo(:), hi(:), pscale(:)
@@ -287,10 +292,11 @@ contains
       if (res%leading == 0) return
       associate (e => res%effects(res%leading))
          if (.not. allocated(e%x_fit)) return
-         allocate (e%p_profiled(size(e%p)), e%p_lo_open(size(e%p)), e%p_hi_open(size(e%p)))
-         e%p_profiled = .false.
-         e%p_lo_open = .false.
-         e%p_hi_open = .false.
+         ! (anew when the leader is profiled again from a lower point)
+         e%p_profiled = spread(.false., 1, size(e%p))
+         e%p_lo_open = spread(.false., 1, size(e%p))
+         e%p_hi_open = spread(.false., 1, size(e%p))
+         f_lower = e%f_after
          call effect_fit(ctx, e%k, ep, e%held)
          if (size(e%x_fit) /= ep%nx()) return
          nc = size(ctx%prob%idx)
@@ -319,7 +325,12 @@ contains
             e%p_profiled(g) = .true.
             e%p_lo_open(g) = pr%lo_open
             e%p_hi_open(g) = pr%hi_open
+            if (pr%f_centre < f_lower) then
+               f_lower = pr%f_centre
+               if (present(lower)) lower = pr%x_centre
+            end if
          end do
+         e%f_profile_low = f_lower
       end associate
    end subroutine profile_leading
 

@@ -167,7 +167,7 @@ contains
    end subroutine tell_refit
 
    !> Refit of the constants with effect e on, its interval, AIC/BIC and the held-out check
-   subroutine refit(ctx, res, e, error, starts)
+   subroutine refit(ctx, res, e, error, starts, from)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(inout) :: e
@@ -175,13 +175,16 @@ contains
       !> Further starts of the constants (log10, columns), the effect's parameters at their
       !> screening values
       real(dp), intent(in), optional :: starts(:, :)
+      !> A refitted effect's point (constants and parameters, as its end point) to go on
+      !> from in place of its end point: a lower one its profile met
+      real(dp), intent(in), optional :: from(:)
       type(effect_problem) :: ep
       type(optimum_type) :: opt
       class(model_type), allocatable :: mdl
       real(dp), allocatable :: p(:)
       logical :: moved
       call effect_fit(ctx, e%k, ep, e%held)
-      call fit_constants(ctx, res, ep, e, opt, moved, error, starts)
+      call fit_constants(ctx, res, ep, e, opt, moved, error, starts, from)
       if (allocated(error)) return
       if (.not. moved) then
          ! The further starts' end points may be alike on the fit tests all the same
@@ -287,7 +290,7 @@ contains
    !> other screening end points, and the global starts); a refit again from further starts
    !> continues its own end point and tries those. moved is false when a refit again found
    !> nothing lower (only the verdict is then redone: the reference objective may have fallen)
-   subroutine fit_constants(ctx, res, ep, e, opt, moved, error, starts)
+   subroutine fit_constants(ctx, res, ep, e, opt, moved, error, starts, from)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_problem), intent(inout) :: ep
@@ -296,29 +299,36 @@ contains
       logical, intent(out) :: moved
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: starts(:, :)
-      real(dp), allocatable :: lo(:), hi(:), fs(:), xs(:, :), xe(:, :)
+      !> A refitted effect's point (x of ep) to go on from in place of its own end point
+      real(dp), intent(in), optional :: from(:)
+      real(dp), allocatable :: lo(:), hi(:), fs(:), xs(:, :), xe(:, :), x0(:)
       integer :: k
       call ep%bounds(lo, hi)
       moved = .true.
-      if (e%refitted .and. present(starts)) then
+      if (e%refitted .and. (present(starts) .or. present(from))) then
          ! Its own end point, continued (on real data 100 LM steps can stop short: Alloy
          ! 617's initial refit went on from 278 to 198), stands unless one is lower
-         call lm_unit(ctx%journal, ep, e%x_fit, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, &
+         x0 = e%x_fit
+         if (present(from)) x0 = from
+         call lm_unit(ctx%journal, ep, x0, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, &
                       opt, error, memo=ctx%memo)
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
          call add_ends(e, reshape(opt%x, [size(opt%x), 1]), [opt%f])
-         xs = with_params(e, starts)
-         allocate (fs(size(xs, 2)), xe(size(xs, 1), size(xs, 2)))
-         call starts_unit(ctx%journal, ep, xs, lo, hi, ctx%h, ctx%opts%max_evals, opt, &
-                          e%nevals, error, fs, ctx%opts%over_ranks, memo=ctx%memo, xe=xe)
-         if (allocated(error)) return
-         call add_ends(e, xe, fs)
-         e%nstarts = e%nstarts + size(fs)
-         e%f_lo = min(e%f_lo, opt%f)
-         ! A start whose simulation failed has no objective to show
-         e%f_hi = max(e%f_hi, maxval(fs, fs < failed_objective), opt%f)
-         e%nstarts_failed = e%nstarts_failed + count(fs >= failed_objective)
+         if (.not. present(starts)) e%f_lo = min(e%f_lo, opt%f)
+         if (present(starts)) then
+            xs = with_params(e, starts)
+            allocate (fs(size(xs, 2)), xe(size(xs, 1), size(xs, 2)))
+            call starts_unit(ctx%journal, ep, xs, lo, hi, ctx%h, ctx%opts%max_evals, opt, &
+                             e%nevals, error, fs, ctx%opts%over_ranks, memo=ctx%memo, xe=xe)
+            if (allocated(error)) return
+            call add_ends(e, xe, fs)
+            e%nstarts = e%nstarts + size(fs)
+            e%f_lo = min(e%f_lo, opt%f)
+            ! A start whose simulation failed has no objective to show
+            e%f_hi = max(e%f_hi, maxval(fs, fs < failed_objective), opt%f)
+            e%nstarts_failed = e%nstarts_failed + count(fs >= failed_objective)
+         end if
          moved = opt%f < (1.0_dp - 1.0e-6_dp)*e%f_after
       else
          call lm_unit(ctx%journal, ep, e%x, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, opt, &

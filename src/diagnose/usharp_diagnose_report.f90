@@ -292,6 +292,9 @@ contains
             'point and further starts of the constants): objective '// &
             real_str(e%f_lo, 'es10.3')//' to '//real_str(e%f_hi, 'es10.3')//', the lowest is used'//what)
       end if
+      if (e%f_unprofiled > 0.0_dp) call add_line(lines, '- refitted again from a lower point that its '// &
+         'profile met: objective '//real_str(e%f_unprofiled, 'es10.3')//' -> '//real_str(e%f_after, 'es10.3')// &
+         ', the figures from there')
       if (e%n_alike > 0) call add_line(lines, '- end points of the refit that the fit tests cannot '// &
          'tell from the one used (BIC within '//real_str(bic_margin, 'f0.0')//'): '//str(e%n_alike)// &
          ' more; with them the held-out gap removed is '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &

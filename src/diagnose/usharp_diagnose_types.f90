@@ -149,6 +149,12 @@ module usharp_diagnose_types
       logical, allocatable :: worse(:)       !< fit tests it makes worse beyond their noise
       !> Objectives of the refit from its further starts (the best is kept): the spread
       real(dp) :: f_lo = 0.0_dp, f_hi = 0.0_dp
+      !> The refit's objective before its profile met a lower point and it was refitted from
+      !> there (0: it was not)
+      real(dp) :: f_unprofiled = 0.0_dp
+      !> The lowest objective the walks of its last profile met (its end point's when none
+      !> was lower)
+      real(dp) :: f_profile_low = 0.0_dp
       integer :: nstarts_failed = 0          !< of its further starts, those that failed
       integer :: nstarts = 0
       integer :: nevals = 0
