@@ -950,17 +950,9 @@ contains
    subroutine test_leader_lower(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
-      type(uerror), allocatable :: e
       real(dp), parameter :: truth(3) = [8.3e-8_dp, 1.7e-8_dp, -1.7e-8_dp]
-      call read_config('data/independent-drift/diagnose.nml', cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
-      if (allocated(e)) then
-         call test_failed(error, 'diagnosis failed: '//e%message)
-         return
-      end if
+      call diagnose_deck('data/independent-drift/diagnose.nml', res, error)
+      if (allocated(error)) return
       call check(error, res%leading > 0 .and. named_effect(res) == effect_index('drift') .and. &
                  allocated(res%joint), 'drift not named, or no stage with every test fitted: '//res%verdict)
       if (allocated(error)) return
@@ -1009,18 +1001,10 @@ contains
    subroutine test_lag_screening(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
-      type(uerror), allocatable :: e
       real(dp) :: fall(2)
       integer :: i
-      call read_config('data/independent-lag/diagnose.nml', cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
-      if (allocated(e)) then
-         call test_failed(error, 'diagnosis failed: '//e%message)
-         return
-      end if
+      call diagnose_deck('data/independent-lag/diagnose.nml', res, error)
+      if (allocated(error)) return
       fall = 0.0_dp
       do i = 1, size(res%effects)
          if (res%effects(i)%k == effect_index('lag')) fall(1) = res%effects(i)%pred_drop
@@ -1062,11 +1046,22 @@ contains
          ' '//u//' '//seed//' '//dir//' > /dev/null', exitstat=stat, cmdstat=cmdstat)
       call check(error, cmdstat == 0 .and. stat == 0, 'the independent generator failed')
       if (allocated(error)) return
-      call read_config(dir//'/diagnose.nml', cfg, e)
+      call diagnose_deck(dir//'/diagnose.nml', res, error)
+   end subroutine diagnose_independent
+
+   !> The diagnosis of the deck at path, with its own options, into res
+   subroutine diagnose_deck(path, res, error)
+      character(len=*), intent(in) :: path
+      type(diagnose_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      call read_config(path, cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
       if (allocated(e)) call test_failed(error, 'diagnosis failed: '//e%message)
-   end subroutine diagnose_independent
+   end subroutine diagnose_deck
 
    subroutine decay_residuals(self, xs, rs, fs, ok, error)
       class(decay_problem), intent(inout) :: self
