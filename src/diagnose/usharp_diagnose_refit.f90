@@ -315,7 +315,6 @@ contains
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
          call add_ends(e, reshape(opt%x, [size(opt%x), 1]), [opt%f])
-         if (.not. present(starts)) e%f_lo = min(e%f_lo, opt%f)
          if (present(starts)) then
             xs = with_params(e, starts)
             allocate (fs(size(xs, 2)), xe(size(xs, 1), size(xs, 2)))
@@ -328,6 +327,8 @@ contains
             ! A start whose simulation failed has no objective to show
             e%f_hi = max(e%f_hi, maxval(fs, fs < failed_objective), opt%f)
             e%nstarts_failed = e%nstarts_failed + count(fs >= failed_objective)
+         else
+            e%f_lo = min(e%f_lo, opt%f)
          end if
          moved = opt%f < (1.0_dp - 1.0e-6_dp)*e%f_after
       else
