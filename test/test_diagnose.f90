@@ -84,6 +84,7 @@ contains
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('starts-on-threads-as-one-after-the-other', test_starts_threads), &
          new_unittest('runs-made-before-are-not-made-again', test_memo), &
+         new_unittest('resume-refuses-a-unit-made-for-another-request', test_unit_request), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
@@ -668,6 +669,67 @@ contains
       call check(error, .not. allocated(e) .and. ep2%nevals > n0, 'a run of another problem was taken from the memo')
       call execute_command_line('rm -f '//journal)
    end subroutine test_memo
+
+   !> A journal's unit is replayed only for the request it was made for: a resumed run that asks
+   !> its units in another order, or from other starts (a journal of another build), is
+   !> refused at the first unit that parts, with an input error naming the journal
+   subroutine test_unit_request(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_context) :: ctx
+      type(effect_problem) :: ep
+      type(optimum_type) :: opt(3)
+      type(diagnose_journal), target :: jfile
+      type(diagnose_journal), pointer :: jr
+      real(dp), allocatable :: xs(:, :), lo(:), hi(:)
+      integer :: nev, pass
+      character(len=*), parameter :: journal = scratch_dir//'/diag-request.journal'
+      call relaxation_baseline('diag-request', cfg, ctx, error)
+      if (allocated(error)) return
+      xs = global_points(cfg, ctx%prob, 3)
+      call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep)
+      call ep%bounds(lo, hi)
+      jr => jfile
+      call execute_command_line('rm -f '//journal)
+      ! Made: a run from start 1, then starts 2-3
+      call jfile%open(journal, 'request test', 'start', e)
+      if (.not. allocated(e)) call lm_unit(jr, ep, xs(:, 1), lo, hi, ctx%h, lm_ftol, lm_itermax, 400, opt(1), e)
+      nev = 0
+      if (.not. allocated(e)) call starts_unit(jr, ep, xs(:, 2:3), lo, hi, ctx%h, 400, opt(2), nev, e)
+      if (.not. allocated(e)) call jfile%close(e)
+      call check(error, .not. allocated(e), 'the journal was not made')
+      if (allocated(error)) return
+      do pass = 1, 2
+         call jfile%open(journal, 'request test', 'resume', e)
+         call check(error, .not. allocated(e), 'the journal did not open for resume')
+         if (allocated(error)) return
+         if (pass == 1) then
+            ! The same requests: replayed to the same end
+            call lm_unit(jr, ep, xs(:, 1), lo, hi, ctx%h, lm_ftol, lm_itermax, 400, opt(3), e)
+            call check(error, .not. allocated(e), 'the same first request was refused')
+            if (allocated(error)) return
+            call check(error, opt(3)%f == opt(1)%f .and. all(opt(3)%x == opt(1)%x), &
+                       'the replayed run ended elsewhere')
+            if (allocated(error)) return
+            ! The second unit asked with other starts (3-2, not 2-3)
+            nev = 0
+            call starts_unit(jr, ep, xs(:, [3, 2]), lo, hi, ctx%h, 400, opt(3), nev, e)
+         else
+            ! The first unit asked from another start
+            call lm_unit(jr, ep, xs(:, 2), lo, hi, ctx%h, lm_ftol, lm_itermax, 400, opt(3), e)
+         end if
+         call check(error, allocated(e), 'pass '//str(pass)//': a unit made for another request was replayed')
+         if (allocated(error)) return
+         call check(error, e%stat == 1 .and. index(e%message, journal//': cannot resume: its unit '// &
+                    str(3 - pass)//' was made') == 1 .and. index(e%message, '--force') > 0, &
+                    'not the refusal asked for: '//e%message)
+         if (allocated(error)) return
+         deallocate (e)
+         call jfile%close(e)
+      end do
+      call execute_command_line('rm -f '//journal)
+   end subroutine test_unit_request
 
    !> The constants given are only a start: from B three times too high (an unconverged fit)
    !> the baseline comes back to the B the data were made with

@@ -12,7 +12,7 @@ module usharp_cmd_diagnose
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
-   use usharp_diagnose_journal, only: next_unit, record_unit, text_lines
+   use usharp_diagnose_journal, only: next_unit, record_unit, text_lines, unit_digest
    use usharp_error, only: fatal_error, stat_input, stat_usage
    use usharp_filesys, only: make_dir, join_path, file_exists
    use usharp_output, only: write_lines
@@ -69,12 +69,11 @@ contains
       if (allocated(error)) return
       call make_dir(dir, error)
       if (allocated(error)) return
-      ! The journal's own format joins the fingerprint: a journal of another layout of the
-      ! diagnosis's units, or of units that start from other points (4: a refit from each
-      ! sign's basin; 5: the screening's first steps from columns over a tenth of each
-      ! effect's low end), is refused rather than misread
+      ! The journal's own format joins the fingerprint (6: each unit headed by its request's
+      ! digest). Units made for other requests (another build of usharp that orders or starts
+      ! its runs otherwise) are refused unit by unit as they are replayed (usharp_diagnose_journal)
       call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
-                        ' units=5', journal_mode, error)
+                        ' units=6', journal_mode, error)
       if (allocated(error)) return
       call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
       call journal%close(e)
@@ -140,7 +139,7 @@ contains
       jr => journal
       allocate (lines(0))
       do i = 1, size(which)
-         call next_unit(jr, text, replay, error)
+         call next_unit(jr, unit_digest('specimen '//trim(cfg%tests(which(i))%name)), text, replay, error)
          if (allocated(error)) exit
          if (replay) then
             part = text_lines(text)
@@ -152,7 +151,7 @@ contains
             do k = 1, size(part)
                text = text//trim(part(k))//new_line('a')
             end do
-            call record_unit(jr, text, error)
+            call record_unit(jr, unit_digest('specimen '//trim(cfg%tests(which(i))%name)), text, error)
             if (allocated(error)) exit
          end if
          call write_lines(join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'), part, error)

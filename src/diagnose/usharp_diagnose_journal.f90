@@ -3,12 +3,17 @@
 !> set of starts) are numbered in the fixed order the diagnosis runs them, and each one's
 !> outcome is kept at full precision (the bits of every real) in a usharp_journal file. On
 !> resume the units found there are replayed instead of computed, so that the diagnosis
-!> takes the same path to the same numbers on any number of ranks. A stop signal is looked
-!> at before each unit computed (over all ranks, which run the units in the same order).
+!> takes the same path to the same numbers on any number of ranks. Each unit carries the
+!> digest of what it computed (its problem, start points and settings), and a unit is
+!> replayed only for the same request: a journal that another build of usharp wrote, whose
+!> units come in another order or start elsewhere, is refused where it parts from this run
+!> rather than misread. A stop signal is looked at before each unit computed (over all
+!> ranks, which run the units in the same order).
 module usharp_diagnose_journal
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error
+   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_filesys, only: hash_text, hash_hex
    use usharp_strings, only: str
    use usharp_journal, only: journal_file
    use usharp_optimiser, only: optimum_type
@@ -17,7 +22,7 @@ module usharp_diagnose_journal
    implicit none
    private
 
-   public :: diagnose_journal, next_unit, record_unit, unit_stopped
+   public :: diagnose_journal, next_unit, record_unit, unit_stopped, unit_digest
    public :: optimum_text, read_optimum, reals_text, read_reals, text_lines
 
    !> A diagnosis's open journal and the units taken so far
@@ -29,6 +34,9 @@ module usharp_diagnose_journal
       procedure :: open => dj_open
       procedure :: close => dj_close
    end type diagnose_journal
+
+   !> The first line of a unit's text, before its request's digest
+   character(len=*), parameter :: unit_tag = 'request '
 
 contains
 
@@ -52,19 +60,37 @@ contains
       call self%file%close(error)
    end subroutine dj_close
 
-   !> Take the next unit: replay is true with its text when the journal holds it, else it is
-   !> to be computed, unless a stop signal has come (to any rank): then error says to
-   !> continue with --resume. Without a journal (null) every unit is computed.
-   subroutine next_unit(jr, text, replay, error)
+   !> The digest of a unit's request (what it computes, as text), as its journal keeps it
+   pure function unit_digest(request) result(digest)
+      character(len=*), intent(in) :: request
+      character(len=16) :: digest
+      digest = hash_hex(hash_text(request))
+   end function unit_digest
+
+   !> Take the next unit, whose request has this digest (see unit_digest): replay is true with
+   !> its text when the journal holds it, else it is to be computed, unless a stop signal has
+   !> come (to any rank): then error says to continue with --resume. A unit the journal holds
+   !> for another request is an error. Without a journal (null) every unit is computed.
+   subroutine next_unit(jr, digest, text, replay, error)
       type(diagnose_journal), pointer, intent(in) :: jr
+      character(len=*), intent(in) :: digest
       character(len=:), allocatable, intent(out) :: text
       logical, intent(out) :: replay
       type(error_type), allocatable, intent(out) :: error
+      integer :: eol
       replay = .false.
       if (.not. associated(jr)) return
       jr%next = jr%next + 1
       if (jr%next <= size(jr%file%done)) then
          text = jr%file%done(jr%next)%s
+         eol = index(text, new_line('a'))
+         if (eol == 0 .or. text(:max(eol - 1, 0)) /= unit_tag//digest) then
+            call fatal_error(error, jr%file%path//': cannot resume: its unit '//str(jr%next)// &
+               ' was made for another computation than this run asks for there (the journal '// &
+               'of another build of usharp); start again with --force', stat_input)
+            return
+         end if
+         text = text(eol + 1:)
          replay = .true.
          return
       end if
@@ -77,13 +103,14 @@ contains
          ' units of the diagnosis; continue with --resume', 128 + jr%stopped)
    end subroutine next_unit
 
-   !> The outcome of the unit just computed, into the journal (rank 0 writes it)
-   subroutine record_unit(jr, text, error)
+   !> The outcome of the unit just computed, with its request's digest (as given to
+   !> next_unit), into the journal (rank 0 writes it)
+   subroutine record_unit(jr, digest, text, error)
       type(diagnose_journal), pointer, intent(in) :: jr
-      character(len=*), intent(in) :: text
+      character(len=*), intent(in) :: digest, text
       type(error_type), allocatable, intent(out) :: error
       if (.not. associated(jr)) return
-      call jr%file%put(jr%next, text, error)
+      call jr%file%put(jr%next, unit_tag//digest//new_line('a')//text, error)
    end subroutine record_unit
 
    !> Whether a stop signal has ended the diagnosis (its later units are not computed)

@@ -12,7 +12,7 @@ module usharp_diagnose_units
    use usharp_diagnose_numerics, only: best_of_starts, take_starts, lm_ftol, lm_itermax, lm_updates
    use usharp_diagnose_memo, only: run_memo, run_key, problem_key
    use usharp_diagnose_journal, only: diagnose_journal, next_unit, record_unit, optimum_text, &
-                                      read_optimum, text_lines
+                                      read_optimum, text_lines, unit_digest
    implicit none
    private
 
@@ -37,26 +37,36 @@ contains
       type(run_memo), pointer, intent(in), optional :: memo
       type(error_type), allocatable :: e
       character(len=:), allocatable :: text, lines(:), key
-      logical :: replay
+      character(len=16) :: digest
+      logical :: replay, memoised
       integer :: n0, at, dn, i
+      memoised = .false.
+      if (present(memo)) memoised = associated(memo)
       key = ''
-      if (present(memo)) then
-         if (associated(memo)) then
-            select type (obj)
-            type is (effect_problem)
-               key = run_key(problem_key(obj), min(max(x0, lo), hi), lo, hi, h, ftol, itermax, max_evals, &
-                             present(jac0))
-               i = memo%find(key)
-               if (i > 0) then
-                  ! made before: no evaluation now
-                  opt = memo%entries(i)%opt
-                  opt%nevals = 0
-                  return
-               end if
-            end select
-         end if
+      if (memoised .or. associated(jr)) then
+         select type (obj)
+         type is (effect_problem)
+            key = run_key(problem_key(obj), min(max(x0, lo), hi), lo, hi, h, ftol, itermax, max_evals, &
+                          present(jac0))
+         class default
+            key = run_key('residuals '//str(obj%nres()), min(max(x0, lo), hi), lo, hi, h, ftol, itermax, &
+                          max_evals, present(jac0))
+         end select
       end if
-      call next_unit(jr, text, replay, error)
+      if (memoised) then
+         select type (obj)
+         type is (effect_problem)
+            i = memo%find(key)
+            if (i > 0) then
+               ! made before: no evaluation now
+               opt = memo%entries(i)%opt
+               opt%nevals = 0
+               return
+            end if
+         end select
+      end if
+      digest = unit_digest('lm '//key)
+      call next_unit(jr, digest, text, replay, error)
       if (allocated(error)) return
       if (replay) then
          lines = text_lines(text)
@@ -68,13 +78,18 @@ contains
          n0 = evals_of(obj)
          call levenberg_marquardt(obj, x0, lo, hi, h, ftol, itermax, max_evals, opt, error, jac0, lm_updates)
          text = str(evals_of(obj) - n0)//new_line('a')//optimum_text(opt, error)
-         call record_unit(jr, text, e)
+         call record_unit(jr, digest, text, e)
          if (allocated(e)) then
             call move_alloc(e, error)
             return
          end if
       end if
-      if (len(key) > 0 .and. .not. allocated(error)) call memo%add(key, opt)
+      if (memoised .and. .not. allocated(error)) then
+         select type (obj)
+         type is (effect_problem)
+            call memo%add(key, opt)
+         end select
+      end if
    end subroutine lm_unit
 
    !> best_of_starts(ep, xs, ...) as a unit of the journal jr (null: none); error: a stop
@@ -93,7 +108,8 @@ contains
       type(run_memo), pointer, intent(in), optional :: memo
       !> each start's end point (a column; a start that failed: the start itself)
       real(dp), intent(out), optional :: xe(:, :)
-      character(len=:), allocatable :: text, lines(:), problem
+      character(len=:), allocatable :: text, lines(:), problem, request
+      character(len=16) :: digest
       type(key_text), allocatable :: keys(:)
       type(optimum_type), allocatable :: alts(:), run(:)
       type(optimum_type) :: none
@@ -107,11 +123,15 @@ contains
       allocate (alts(size(xs, 2)), ok(size(xs, 2)), known(size(xs, 2)), keys(size(xs, 2)))
       ok = .false.
       known = .false.
-      if (memoised) then
+      if (memoised .or. associated(jr)) then
          problem = problem_key(ep)
          do j = 1, size(xs, 2)
             keys(j)%s = run_key(problem, min(max(xs(:, j), lo), hi), lo, hi, h, lm_ftol, lm_itermax, &
                                 max_evals, .false.)
+         end do
+      end if
+      if (memoised) then
+         do j = 1, size(xs, 2)
             i = memo%find(keys(j)%s)
             if (i > 0) then
                alts(j) = memo%entries(i)%opt
@@ -123,7 +143,14 @@ contains
       cols = pack([(j, j=1, size(xs, 2))], .not. known)
       nrun = size(cols)
       if (nrun > 0) then
-         call next_unit(jr, text, replay, error)
+         request = 'starts'
+         if (associated(jr)) then
+            do i = 1, nrun
+               request = request//new_line('a')//keys(cols(i))%s
+            end do
+         end if
+         digest = unit_digest(request)
+         call next_unit(jr, digest, text, replay, error)
          if (allocated(error)) return
          if (replay) then
             lines = text_lines(text)
@@ -152,7 +179,7 @@ contains
                alts(cols(i)) = run(i)
                ok(cols(i)) = run_ok(i)
             end do
-            call record_unit(jr, text, error)
+            call record_unit(jr, digest, text, error)
             if (allocated(error)) return
          end if
          if (memoised) then

@@ -51,6 +51,8 @@ contains
       logical :: resuming
       integer :: k
       self%path = path
+      ! (a journal object may be opened again after its close)
+      if (allocated(self%done)) deallocate (self%done)
       allocate (self%done(0))
       resuming = mode == 'resume'
       if (mode == 'auto') resuming = has_results(path)
