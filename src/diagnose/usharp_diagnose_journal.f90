@@ -86,8 +86,8 @@ contains
          eol = index(text, new_line('a'))
          if (eol == 0 .or. text(:max(eol - 1, 0)) /= unit_tag//digest) then
             call fatal_error(error, jr%file%path//': cannot resume: its unit '//str(jr%next)// &
-               ' was made for another computation than this run asks for there (the journal '// &
-               'of another build of usharp); start again with --force', stat_input)
+               ' was made for another computation than this run asks for there (a journal '// &
+               'written by another build of usharp, or altered); start again with --force', stat_input)
             return
          end if
          text = text(eol + 1:)
