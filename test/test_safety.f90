@@ -782,6 +782,18 @@ contains
          '1,5.0,47.3,15.0,-45.8', '2,25.0,48.0,35.0,-46.5', '3,45.0,48.8,55.0,-47.3'])
       call run_command(input, dir, '', .true., summary, e)
       call check_message(error, e, "cannot resume: the peak file of test 'c' changed")
+      if (allocated(error)) return
+      ! The journal of another build of the program (its build hash replaced)
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      call check(error, .not. allocated(e), 'run on the changed peak file')
+      if (allocated(error)) return
+      stat = shell("sed -i '1s/ build=[0-9A-Fa-z]* / build=0123456789ABCDEF /' "//dir//'/fit.journal')
+      call check(error, index(read_text(dir//'/fit.journal'), ' build=0123456789ABCDEF ') > 0, &
+                 'the journal names no build: '//read_text(dir//'/fit.journal'))
+      if (allocated(error)) return
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, 'cannot resume: the program (another build of usharp) changed since '// &
+                         'the journal was written')
    end subroutine test_fingerprint
 
    !> A journal whose fingerprint line is cut short (within an item, at an item's end without

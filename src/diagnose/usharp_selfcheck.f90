@@ -20,7 +20,7 @@ module usharp_selfcheck
    use usharp_sort, only: order_of
    use usharp_task_farm, only: task_list, task_text, run_tasks
    use usharp_filesys, only: file_hash, hash_hex
-   use usharp_version, only: usharp_version_string
+   use usharp_version, only: usharp_version_string, build_id
    implicit none
    private
 
@@ -294,7 +294,7 @@ contains
       integer(int64) :: h
       logical :: ok
       call file_hash(cfg%path, h, ok)
-      fp = 'version='//usharp_version_string//' input='//hash_hex(h)
+      fp = 'version='//usharp_version_string//' build='//build_id()//' input='//hash_hex(h)
    end function selfcheck_fingerprint
 
    !> The lines of a text whose lines end with new_line('a')

@@ -20,7 +20,7 @@ module usharp_fit
    use usharp_journal, only: fingerprint_mismatch, fingerprint_damaged
    use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text, read_line
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
-   use usharp_version, only: usharp_version_string
+   use usharp_version, only: usharp_version_string, build_id
    use usharp_config, only: run_config
    use usharp_mpi, only: n_ranks, this_rank, is_root, share, parallel_sync, tasks_per_share, &
                          task_deal, ranks_that_ran, any_rank, transfer_set, post_send, post_receive, &
@@ -923,8 +923,8 @@ contains
       close (unit)
    end function journal_has_records
 
-   !> The fingerprint of everything that decides a fit's result: the program version and the
-   !> FNV-1a 64-bit hashes of the input file's, the constants file's and every test's data
+   !> The fingerprint of everything that decides a fit's result: the program version, its
+   !> build (see build_id), the FNV-1a 64-bit hashes of the input file's, the constants file's and every test's data
    !> file's contents and of every test's control history (which a history file decides), as
    !> space-separated name=value items
    function fit_fingerprint(cfg, constants_file) result(fp)
@@ -932,7 +932,7 @@ contains
       character(len=*), intent(in) :: constants_file
       character(len=:), allocatable :: fp
       integer :: i
-      fp = 'version='//usharp_version_string//' input='//hashed(cfg%path)
+      fp = 'version='//usharp_version_string//' build='//build_id()//' input='//hashed(cfg%path)
       if (len_trim(constants_file) > 0) fp = fp//' constants='//hashed(constants_file)
       do i = 1, size(cfg%tests)
          ! The control history itself (a history file's contents reach the fit only through it)

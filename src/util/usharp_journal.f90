@@ -335,6 +335,7 @@ contains
          character(len=:), allocatable :: text
          select case (name)
          case ('version'); text = 'the program version'
+         case ('build'); text = 'the program (another build of usharp)'
          case ('input'); text = 'the input file'
          case ('constants'); text = 'the constants file (--constants)'
          case ('units'); text = "the layout of the journal's units"
