@@ -602,11 +602,8 @@ contains
       real(dp), allocatable :: xs(:, :), lo(:), hi(:), fref(:), f(:)
       integer :: nev, n0, sims34, pass, d12(2)
       character(len=*), parameter :: journal = scratch_dir//'/diag-memo.journal'
-      call relaxation_baseline('diag-memo', cfg, ctx, error)
+      call baseline_starts('diag-memo', 4, cfg, ctx, ep, xs, lo, hi, error)
       if (allocated(error)) return
-      xs = global_points(cfg, ctx%prob, 4)
-      call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep)
-      call ep%bounds(lo, hi)
       ! Without a memo: starts 2-4, and 3-4 alone
       allocate (fref(3))
       nev = 0
@@ -670,6 +667,23 @@ contains
       call execute_command_line('rm -f '//journal)
    end subroutine test_memo
 
+   !> The relaxation baseline's problem without an effect, its bounds and n Latin-hypercube
+   !> starts of its constants
+   subroutine baseline_starts(name, n, cfg, ctx, ep, xs, lo, hi, error)
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: n
+      type(run_config), intent(out) :: cfg
+      type(diagnose_context), intent(out) :: ctx
+      type(effect_problem), intent(out) :: ep
+      real(dp), allocatable, intent(out) :: xs(:, :), lo(:), hi(:)
+      type(error_type), allocatable, intent(out) :: error
+      call relaxation_baseline(name, cfg, ctx, error)
+      if (allocated(error)) return
+      xs = global_points(cfg, ctx%prob, n)
+      call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep)
+      call ep%bounds(lo, hi)
+   end subroutine baseline_starts
+
    !> A journal's unit is replayed only for the request it was made for: a resumed run that asks
    !> its units in another order, or from other starts (a journal of another build), is
    !> refused at the first unit that parts, with an input error naming the journal
@@ -685,11 +699,8 @@ contains
       real(dp), allocatable :: xs(:, :), lo(:), hi(:)
       integer :: nev, pass
       character(len=*), parameter :: journal = scratch_dir//'/diag-request.journal'
-      call relaxation_baseline('diag-request', cfg, ctx, error)
+      call baseline_starts('diag-request', 3, cfg, ctx, ep, xs, lo, hi, error)
       if (allocated(error)) return
-      xs = global_points(cfg, ctx%prob, 3)
-      call new_effect_problem(ctx%prob, ctx%ifit, 0, ctx%eff_base, ctx%peak, ep)
-      call ep%bounds(lo, hi)
       jr => jfile
       call execute_command_line('rm -f '//journal)
       ! Made: a run from start 1, then starts 2-3
