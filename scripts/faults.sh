@@ -251,6 +251,8 @@ cp fit.orig fit.nml
 row '`--resume` with another `--constants` file' - u run -q --resume fit.nml -o r1 -c fit.nml
 head -c 300 r1/fit.journal > torn; cp torn r1/fit.journal
 row '`--resume` of a journal torn by a kill' r1/best.nml u run -q --resume fit.nml -o r1
+sed -i '1s/ build=[0-9A-Za-z]* / build=0123456789ABCDEF /' r1/fit.journal
+row '`--resume` of a journal another build of usharp wrote' - u run -q --resume fit.nml -o r1
 truncate -s 100 r1/fit.journal
 row '`--resume` of a journal whose fingerprint line is cut short' - u run -q --resume fit.nml -o r1
 echo 'not a journal' > r1/fit.journal
