@@ -102,6 +102,7 @@ contains
       character(len=:), allocatable :: report, dir, text
       integer, allocatable :: which(:)
       integer :: i, k
+      character(len=16) :: digest
       logical :: replay
       !> a report's name and how its first line begins
       character(len=256) :: own_name(1), own_mark(1)
@@ -139,7 +140,8 @@ contains
       jr => journal
       allocate (lines(0))
       do i = 1, size(which)
-         call next_unit(jr, unit_digest('specimen '//trim(cfg%tests(which(i))%name)), text, replay, error)
+         digest = unit_digest('specimen '//trim(cfg%tests(which(i))%name))
+         call next_unit(jr, digest, text, replay, error)
          if (allocated(error)) exit
          if (replay) then
             part = text_lines(text)
@@ -151,7 +153,7 @@ contains
             do k = 1, size(part)
                text = text//trim(part(k))//new_line('a')
             end do
-            call record_unit(jr, unit_digest('specimen '//trim(cfg%tests(which(i))%name)), text, error)
+            call record_unit(jr, digest, text, error)
             if (allocated(error)) exit
          end if
          call write_lines(join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'), part, error)

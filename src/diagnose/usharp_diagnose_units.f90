@@ -53,17 +53,22 @@ contains
                           max_evals, present(jac0))
          end select
       end if
+      ! The memo keeps runs of effect problems alone
       if (memoised) then
          select type (obj)
          type is (effect_problem)
-            i = memo%find(key)
-            if (i > 0) then
-               ! made before: no evaluation now
-               opt = memo%entries(i)%opt
-               opt%nevals = 0
-               return
-            end if
+         class default
+            memoised = .false.
          end select
+      end if
+      if (memoised) then
+         i = memo%find(key)
+         if (i > 0) then
+            ! made before: no evaluation now
+            opt = memo%entries(i)%opt
+            opt%nevals = 0
+            return
+         end if
       end if
       digest = unit_digest('lm '//key)
       call next_unit(jr, digest, text, replay, error)
@@ -84,12 +89,7 @@ contains
             return
          end if
       end if
-      if (memoised .and. .not. allocated(error)) then
-         select type (obj)
-         type is (effect_problem)
-            call memo%add(key, opt)
-         end select
-      end if
+      if (memoised .and. .not. allocated(error)) call memo%add(key, opt)
    end subroutine lm_unit
 
    !> best_of_starts(ep, xs, ...) as a unit of the journal jr (null: none); error: a stop

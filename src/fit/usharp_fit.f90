@@ -924,9 +924,9 @@ contains
    end function journal_has_records
 
    !> The fingerprint of everything that decides a fit's result: the program version, its
-   !> build (see build_id), the FNV-1a 64-bit hashes of the input file's, the constants file's and every test's data
-   !> file's contents and of every test's control history (which a history file decides), as
-   !> space-separated name=value items
+   !> build (see build_id), the FNV-1a 64-bit hashes of the input file's, the constants
+   !> file's and every test's data file's contents and of every test's control history
+   !> (which a history file decides), as space-separated name=value items
    function fit_fingerprint(cfg, constants_file) result(fp)
       type(run_config), intent(in) :: cfg
       character(len=*), intent(in) :: constants_file
