@@ -2,7 +2,7 @@
 !> report and the independence of a fit from the number of OpenMP threads
 module test_optimise
    use omp_lib, only: omp_set_num_threads, omp_get_max_threads
-   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed
+   use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_optimiser, only: objective_type, least_squares_type, optimum_type
@@ -69,6 +69,7 @@ contains
          new_unittest('annealing-rosenbrock', test_sa), &
          new_unittest('latin-hypercube-one-point-per-stratum', test_lhs), &
          new_unittest('identify-thesis-lcf-relaxation', test_identify), &
+         new_unittest('identify-status-agrees-with-its-words', test_identify_status), &
          new_unittest('sandwich-covariance-heteroscedastic', test_sandwich), &
          new_unittest('simultaneous-intervals-cover-jointly', test_joint_intervals), &
          new_unittest('sensitivity-jacobian-vs-differences', test_sens_jacobian), &
@@ -612,4 +613,51 @@ contains
                             index(res%words, 'more than its search bounds (8.7E-04): not determined within them') > 0), &
                  'the words name H2''s interval against its bounds')
    end subroutine test_wide_interval
+
+   !> On the seven Alloy 617 tests at constants a fit of decks/a617-950C-fit.nml ends at, A2
+   !> and B have intervals of 1.4 and 2.4 decades and are tied to the undetermined A1: each
+   !> is "not determined" in its status, with no interval, as its words say, and none is
+   !> "loosely determined" (a kind of determined) at the same time
+   subroutine test_identify_status(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(identify_result) :: res
+      character(len=report_line_len), allocatable :: lines(:)
+      character(len=*), parameter :: data = '../shared/realdata/a617-950C/lcf/HTM_A19_Cycles_E12.csv'
+      real(dp), parameter :: c(7) = [1.273242619867362e-2_dp, 5.453514538816576e-7_dp, &
+         3.071256733430478e12_dp, 3.560408719212952e3_dp, 1.293397018225941e3_dp, &
+         1.532254781456042e1_dp, 4.112494233718385_dp]
+      logical :: exists
+      integer :: j, k
+      inquire (file=data, exist=exists)
+      if (.not. exists) then
+         call skip_test(error, 'measured data not found at '//data//' (shared/ not beside the checkout)')
+         return
+      end if
+      call read_config('decks/a617-950C-fit.nml', cfg, e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      if (.not. allocated(e)) call identify_at(prob, c, 1.0e-3_dp, res, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      lines = identify_report(res)
+      do j = 1, size(res%c)
+         if (.not. any(index(res%words, trim(res%names(j))//' is tied to ') == 1)) cycle
+         k = findloc(index(lines, '  '//res%names(j)//'  ') == 1, .true., 1)
+         call check(error, k > 0, 'a status line for '//trim(res%names(j)))
+         if (allocated(error)) return
+         call check(error, index(lines(k), 'none') > 0 .and. index(lines(k), 'not determined') > 0 .and. &
+                    .not. res%determined(j) .and. .not. res%loose(j), &
+                    trim(res%names(j))//' is tied, so not determined: '//trim(lines(k)))
+         if (allocated(error)) return
+      end do
+      call check(error, count([(any(index(res%words, trim(res%names(j))//' is tied to ') == 1), &
+                 j=1, size(res%c))]) >= 2, 'A2 and B named as tied to A1')
+      if (allocated(error)) return
+      call check(error, .not. any(index(lines, 'none') > 0 .and. index(lines, 'loosely determined') > 0), &
+                 'no loosely determined constant without an interval')
+   end subroutine test_identify_status
 end module test_optimise

@@ -196,7 +196,6 @@ contains
       end do
       res%gn_fall = gauss_newton_fall(jac, r0, .not. res%at_bound)
       ! A constant tied to an undetermined one (|correlation| > 0.99) is not determined alone
-      tied = .false.
       do j = 1, n
          if (.not. res%determined(j)) cycle
          do i = 1, n
@@ -207,6 +206,9 @@ contains
             end if
          end do
       end do
+      ! Settled before the words and the status: a tied constant is not determined, so not
+      ! loosely determined either
+      where (tied > 0) res%determined = .false.
       call describe(res)
       do j = 1, n
          if (wide(j)) res%words = [character(len=report_line_len) :: res%words, trim(res%names(j))// &
@@ -216,7 +218,6 @@ contains
       end do
       do j = 1, n
          if (tied(j) == 0) cycle
-         res%determined(j) = .false.
          res%words = [character(len=report_line_len) :: res%words, trim(res%names(j))//' is tied to '// &
             trim(res%names(tied(j)))//' (correlation '//real_str(res%corr(j, tied(j)), 'f5.2')// &
             '): not determined on its own']
