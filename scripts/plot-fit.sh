@@ -23,6 +23,25 @@ gq() { printf "'%s'" "$(printf '%s' "$1" | sed "s/'/''/g")"; }
 shopt -s nullglob
 files=("$dir"/*.fit.txt)
 [ ${#files[@]} -gt 0 ] || { echo "plot-fit: no *.fit.txt in $dir" >&2; exit 1; }
+# A run started again in its folder (--force) with fewer tests leaves the files of the tests it
+# no longer has: where the run's summary.txt names its tests ("  test <name>: ..."), only those
+# are plotted (test names hold only letters, digits, _ - .)
+if [ -f "$dir/summary.txt" ]; then
+  tests=$(sed -n 's/^  test \([A-Za-z0-9_.-]*\): .*/\1/p' "$dir/summary.txt")
+  if [ -n "$tests" ]; then
+    kept=()
+    for f in "${files[@]}"; do
+      name=$(basename -- "$f" .fit.txt)
+      if printf '%s\n' "$tests" | grep -qxF -- "$name"; then
+        kept+=("$f")
+      else
+        echo "plot-fit: $f left out: not a test of the run in $dir/summary.txt" >&2
+      fi
+    done
+    files=("${kept[@]}")
+    [ ${#files[@]} -gt 0 ] || { echo "plot-fit: none of the *.fit.txt in $dir is a test of its summary.txt" >&2; exit 1; }
+  fi
+fi
 mkdir -p -- "$dir/plots"
 # The measured column's title says whether the test is fitted on stress or on strain
 for f in "${files[@]}"; do

@@ -6,6 +6,7 @@ module test_cli
    use usharp_cli, only: cli_command, arg_string, parse_arguments, command_names, command_help, &
                          version_text
    use usharp_cli_args, only: accepts_option
+   use usharp_cmd_deck, only: deck_command
    use test_util, only: require_exe, read_text, scratch_dir
    use usharp_filesys, only: make_dir
    use usharp_kinds, only: dp
@@ -27,7 +28,8 @@ contains
          new_unittest('folders-import-only-downward', test_layers), &
          new_unittest('predict-with-the-constants-that-made-the-data', test_predict), &
          new_unittest('predict-needs-constants', test_predict_needs_constants), &
-         new_unittest('predict-readme-a617-twice', test_predict_a617)]
+         new_unittest('predict-readme-a617-twice', test_predict_a617), &
+         new_unittest('deck-test-and-input-swapped', test_deck_swapped)]
    end subroutine collect_cli
 
    !> The argument list of a command line given as one string split at blanks
@@ -252,4 +254,18 @@ contains
       inquire (file=dir//'/J2-2.0pct-1e-4.peaks.txt', exist=exists)
       call check(error, exists, 'J2-2.0pct-1e-4.peaks.txt written')
    end subroutine test_predict_a617
+
+   !> `usharp deck decks/thesis-data.nml lcf` (the input before the test's name): a usage error
+   !> that gives the order, not "lcf: no such input file"; nothing written
+   subroutine test_deck_swapped(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=4096), allocatable :: written(:)
+      call deck_command('lcf', 'decks/thesis-data.nml', scratch_dir//'/deck-swapped', '', written, e)
+      call check(error, allocated(e), 'swapped arguments refused')
+      if (allocated(error)) return
+      call check(error, e%stat == stat_usage .and. index(e%message, 'lcf: no such input file; usharp '// &
+                 'deck takes the test''s name first: usharp deck lcf decks/thesis-data.nml') == 1 .and. &
+                 size(written) == 0, 'usage error giving the order: '//e%message)
+   end subroutine test_deck_swapped
 end module test_cli

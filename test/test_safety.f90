@@ -968,6 +968,19 @@ contains
       if (allocated(error)) return
       call check(error, file_exists(dir//'/plots/a" b.png') .and. file_exists(dir//'/plots/all.png'), &
                  'plots written')
+      if (allocated(error)) return
+      ! A run started again with fewer tests: the file of the test it no longer has stays in
+      ! the folder, and only the tests its summary.txt names are plotted
+      dir = scratch_dir//'/plot/again'
+      stat = shell('mkdir -p '//dir//' && cp data/thesis/lcf.sim.txt '//dir//'/lcf.fit.txt && '// &
+                   'cp data/thesis/lcf.sim.txt '//dir//'/gone.fit.txt && printf "%s\n" '// &
+                   '"usharp run x.nml: best of 1 start" "  objective (eq7): start 1, best 1" '// &
+                   '"  test lcf: 1.0E+00" > '//dir//'/summary.txt && '// &
+                   'bash scripts/plot-fit.sh '//dir//' > /dev/null 2>&1')
+      call check(error, stat, 0, 'plot-fit.sh exit status, a test gone')
+      if (allocated(error)) return
+      call check(error, file_exists(dir//'/plots/lcf.png') .and. .not. file_exists(dir//'/plots/gone.png'), &
+                 'only the test of the run''s summary.txt plotted')
    end subroutine test_plot_script
 
    !> Levenberg-Marquardt from 2 starts, stopped after 90 % of its evaluations and resumed:

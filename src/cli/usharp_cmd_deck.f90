@@ -1,12 +1,12 @@
 !> `usharp deck`: write the APDL input deck of one test (or of every test) of an input file,
 !> <out_dir>/<test>.inp, and the constants file the decks read, with the input's constants
 module usharp_cmd_deck
-   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants, check_inputs_kept
    use usharp_apdl, only: apdl_deck, line_len
    use usharp_external, only: write_constants_file
-   use usharp_filesys, only: make_dir, join_path
+   use usharp_filesys, only: make_dir, join_path, file_exists
    use usharp_output, only: write_lines
    use usharp_strings, only: shell_word
    use usharp_overwrite, only: check_overwrite, made_by_usharp
@@ -35,6 +35,12 @@ contains
       overwrite = .false.
       if (present(force)) overwrite = force
       allocate (written(0))
+      ! The test's name comes first: given after the input, it would be read as the input
+      if (len(test_name) > 0 .and. .not. file_exists(path) .and. file_exists(test_name)) then
+         call fatal_error(error, path//': no such input file; usharp deck takes the test''s '// &
+            'name first: usharp deck '//shell_word(path)//' '//shell_word(test_name), stat_usage)
+         return
+      end if
       call read_config(path, cfg, error)
       if (allocated(error)) return
       command = 'usharp deck'
