@@ -195,6 +195,7 @@ echo "&model youngs=1 /" > noconst.nml
 row '`--constants` file without `&constants`' - u simulate fit.nml -c noconst.nml -o c2
 row '`simulate -t` names no test' - u simulate fit.nml -t nosuch -o t1
 row '`deck` names no test' - u deck nosuch fit.nml -o d1
+row '`deck` with the input before the test'"'"'s name' - u deck fit.nml lcf -o d2
 { echo "$model"; echo "$consts"; echo "$fitg"; echo "$lcf"; } > noheld.nml
 row '`diagnose` with no held-out test' - u diagnose noheld.nml -o noheld
 put '... what it left' 0 "$([ -e noheld ] && echo "the folder noheld: $(find noheld | tr '\n' ' ')" || echo 'nothing: no folder noheld')"

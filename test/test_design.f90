@@ -13,7 +13,8 @@ module test_design
    use usharp_experiment, only: experiment_type
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_identify, only: identify_result, identify_at
-   use usharp_design, only: design_result, design_run, design_report, test_information
+   use usharp_design, only: design_result, design_run, design_report, test_information, &
+                            design_combination
    use test_util, only: write_text, check_message
    use usharp_strings, only: report_line_len
    implicit none
@@ -36,7 +37,8 @@ contains
          new_unittest('design-needs-a-candidate', test_no_candidate), &
          new_unittest('design-rejects-column-weights', test_column_weights), &
          new_unittest('creep-is-fitted-on-strain', test_creep_strain), &
-         new_unittest('rate-jump-history', test_rate_jump)]
+         new_unittest('rate-jump-history', test_rate_jump), &
+         new_unittest('report-columns-hold-ten-constants', test_report_columns)]
    end subroutine collect_design
 
    !> Synthetic data of every test of cfg from its own constants (plus the tests' noise)
@@ -233,4 +235,44 @@ contains
       call rate_jump_history([1.0e-3_dp, -1.0_dp], 0.02_dp, h, e)
       call check_message(error, e, 'rate_jump needs rates > 0')
    end subroutine test_rate_jump
+
+   !> A model of ten fitted constants (Chaboche's): a matrix that determines all ten reads
+   !> 10/10 in the det column, right-aligned under its header, as 9/10 does
+   subroutine test_report_columns(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(design_result) :: res
+      type(design_combination) :: all, nine
+      character(len=report_line_len), allocatable :: lines(:)
+      integer :: i, k, hdr
+      res%names = [character(len=4) :: 'E', 'sy', 'Q', 'b', 'C1', 'g1', 'C2', 'g2', 'K', 'n']
+      res%test_names = [character(len=64) :: 'cyc1', 'cyc2']
+      all%tests = [1, 2]
+      all%half95 = spread(0.005_dp, 1, 10)
+      all%determined = spread(.true., 1, 10)
+      nine = all
+      nine%tests = [1]
+      nine%determined(10) = .false.
+      res%current = nine
+      res%single = [all]
+      res%best = [all, nine]
+      res%max_tests = 2
+      res%ncombinations = 3
+      lines = design_report(res)
+      k = 0
+      do i = 1, size(lines)
+         if (index(lines(i), ' det ') > 0) hdr = index(lines(i), ' det ', back=.true.) + 3
+         if (index(lines(i), '10/10 ') > 0) then
+            k = k + 1
+            call check(error, index(lines(i), '10/10 ') + 4 == hdr, '10/10 under its header: '// &
+                       trim(lines(i - 1))//' / '//trim(lines(i)))
+            if (allocated(error)) return
+         end if
+         if (index(lines(i), ' 9/10 ') > 0) then
+            call check(error, index(lines(i), ' 9/10 ') + 4 == hdr, ' 9/10 under its header: '// &
+                       trim(lines(i - 1))//' / '//trim(lines(i)))
+            if (allocated(error)) return
+         end if
+      end do
+      call check(error, k == 2, 'two rows of ten determined, found '//achar(48 + k))
+   end subroutine test_report_columns
 end module test_design

@@ -364,7 +364,7 @@ contains
       character(len=6) :: name
       col = what
       col = adjustr(col)
-      line = '    '//col//'  det'
+      line = '    '//col//'   det'
       do j = 1, size(res%names)
          ! Right-aligned over its column of half-widths (pct's 6 characters)
          name = trim(adjustl(res%names(j)))
@@ -382,10 +382,12 @@ contains
       character(len=:), allocatable :: line
       integer :: j
       character(len=9) :: val
-      character(len=4) :: det
+      ! 10/10 and more: five characters
+      character(len=5) :: det
       ! Fixed widths under the header's columns
       write (val, '(f9.2)') value
-      det = adjustr(str(count(comb%determined))//'/'//str(size(comb%determined)))
+      det = str(count(comb%determined))//'/'//str(size(comb%determined))
+      det = adjustr(det)
       line = '    '//val//' '//det
       do j = 1, size(comb%half95)
          line = line//'  '//pct(comb%half95(j))
