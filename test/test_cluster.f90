@@ -25,6 +25,7 @@ contains
       testsuite = [ &
          new_unittest('job-scripts-parse', test_syntax), &
          new_unittest('job-stopped-by-term-resumes-to-same-result', test_restart), &
+         new_unittest('job-script-run-as-a-copy-finds-its-helper', test_job_copy), &
          new_unittest('mpi-multistart-same-on-1-and-2-ranks', test_mpi_multistart), &
          new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume), &
          new_unittest('mpi-selfcheck-same-on-1-and-2-ranks', test_mpi_selfcheck), &
@@ -91,6 +92,59 @@ contains
       if (allocated(error)) return
       call check(error, read_text(a//'/GUESS.TXT') == read_text(b//'/GUESS.TXT'), 'guesses differ')
    end subroutine test_restart
+
+   !> A scheduler runs a copy of the job script from its spool folder, and a job may be
+   !> submitted from anywhere: the SLURM script finds usharp-job.sh where scontrol says it was
+   !> submitted from, or at USHARP_JOB; the PBS script at USHARP_JOB; without either, a usage
+   !> error (exit 2) that names USHARP_JOB. (usharp is echo here: only the helper's start counts.)
+   subroutine test_job_copy(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=:), allocatable :: d, run, here
+      character(len=4096) :: cwd
+      ! cmdstat: gfortran stops at an exit status of 127 (a shell's command not found) without it
+      integer :: stat, cstat
+      call make_dir(scratch_dir, e)
+      call get_environment_variable('PWD', cwd)
+      here = trim(cwd)
+      d = here//'/'//scratch_dir//'/job-copy'
+      call execute_command_line('rm -rf '//d//' && mkdir -p '//d//'/spool '//d//'/bin '//d//'/sub && '// &
+         'cp scripts/cluster/slurm-run.sbatch '//d//'/spool/slurm_script && '// &
+         'cp scripts/cluster/pbs-run.pbs '//d//'/spool/pbs_script && '// &
+         'printf ''#!/bin/sh\necho "JobId=7 JobName=usharp"\necho "   Command='//here// &
+         '/scripts/cluster/slurm-run.sbatch"\n'' > '//d//'/bin/scontrol && chmod +x '//d//'/bin/scontrol', &
+         exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 0, 'spool folder')
+      if (allocated(error)) return
+      run = 'cd '//d//'/sub && env -u USHARP_JOB SLURM_JOB_ID=7 SLURM_SUBMIT_DIR='//d//'/sub USHARP=echo '
+      ! scontrol names the submitted script
+      call execute_command_line(run//'PATH='//d//'/bin:$PATH bash ../spool/slurm_script fit.nml > '// &
+                                d//'/out1 2>&1', exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 0 .and. index(read_text(d//'/out1'), 'run --auto-resume -q fit.nml') > 0, &
+                 'SLURM copy, scontrol: '//read_text(d//'/out1'))
+      if (allocated(error)) return
+      ! No scontrol, submitted from elsewhere: refused, naming USHARP_JOB; with it, found
+      call execute_command_line(run//'PATH=/usr/bin:/bin bash ../spool/slurm_script fit.nml > '// &
+                                d//'/out2 2>&1', exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 2 .and. index(read_text(d//'/out2'), 'set USHARP_JOB=') > 0, &
+                 'SLURM copy, nothing to find it by: '//read_text(d//'/out2'))
+      if (allocated(error)) return
+      call execute_command_line(run//'USHARP_JOB='//here//'/scripts/cluster/usharp-job.sh PATH=/usr/bin:/bin '// &
+                                'bash ../spool/slurm_script fit.nml > '//d//'/out3 2>&1', exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 0 .and. index(read_text(d//'/out3'), 'run --auto-resume -q fit.nml') > 0, &
+                 'SLURM copy, USHARP_JOB: '//read_text(d//'/out3'))
+      if (allocated(error)) return
+      call execute_command_line('cd '//d//'/sub && env -u USHARP_JOB PBS_O_WORKDIR='//d//'/sub INPUT=fit.nml '// &
+                                'USHARP=echo bash ../spool/pbs_script > '//d//'/out4 2>&1', exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 2 .and. index(read_text(d//'/out4'), 'USHARP_JOB=') > 0, &
+                 'PBS copy, no USHARP_JOB: '//read_text(d//'/out4'))
+      if (allocated(error)) return
+      call execute_command_line('cd '//d//'/sub && PBS_O_WORKDIR='//d//'/sub INPUT=fit.nml USHARP=echo '// &
+                                'USHARP_JOB='//here//'/scripts/cluster/usharp-job.sh bash ../spool/pbs_script > '// &
+                                d//'/out5 2>&1', exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 0 .and. index(read_text(d//'/out5'), 'run --auto-resume -q fit.nml') > 0, &
+                 'PBS copy, USHARP_JOB: '//read_text(d//'/out5'))
+   end subroutine test_job_copy
 
    !> mpirun for 2 ranks of one thread each, or a skip when there is none
    subroutine require_mpirun(mpirun, error)

@@ -107,7 +107,8 @@ contains
          new_unittest('separating-test-for-effects-alike', test_separate), &
          new_unittest('softening-saturates-jacobian-against-differences', test_softening), &
          new_unittest('separating-test-softening-against-initial', test_separate_softening), &
-         new_unittest('selfcheck-finds-injected-effects', test_selfcheck)]
+         new_unittest('selfcheck-finds-injected-effects', test_selfcheck), &
+         new_unittest('selfcheck-at-a-start-names-the-matrix-and-effect', test_selfcheck_start)]
    end subroutine collect_diagnose
 
    !> A thesis model, set up
@@ -1810,4 +1811,25 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_selfcheck
+
+   !> A fit deck as the self-check's matrix, its constants a search's start (the quickstart's
+   !> standard guess): an injected effect's data cannot be simulated there, and the error names
+   !> the deck, the effect and its magnitude, and what constants the matrix needs
+   subroutine test_selfcheck_start(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(selfcheck_result) :: sc
+      call read_config('decks/quickstart.nml', cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      call check(error, .not. allocated(e), 'the deck reads')
+      if (allocated(error)) return
+      call selfcheck_run(cfg, opts, sc, e)
+      call check(error, allocated(e), 'a self-check at a start refused')
+      if (allocated(error)) return
+      call check(error, index(e%message, 'decks/quickstart.nml: self-check: its tests cannot be '// &
+                 'simulated at its &constants with the injected effect ') == 1 .and. &
+                 index(e%message, ' = ') > 0 .and. index(e%message, 'best.nml') > 0, e%message)
+   end subroutine test_selfcheck_start
 end module test_diagnose

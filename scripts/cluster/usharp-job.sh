@@ -7,6 +7,8 @@
 # the job is then put back in the queue when the scheduler can (USHARP_REQUEUE).
 #
 # usage: usharp-job.sh INPUT.nml [OUT_DIR]
+#        usharp-job.sh [MATRIX.nml] [OUT_DIR]    (USHARP_COMMAND='diagnose --selfcheck': without a
+#                                                 matrix, or with '' for it, the built-in one)
 # environment:
 #   USHARP          the usharp executable (default: usharp on PATH)
 #   USHARP_COMMAND  the command: run (default), design, diagnose or 'diagnose --selfcheck'
@@ -17,10 +19,14 @@
 #   USHARP_REQUEUE  a command that puts this job back in the queue after a stop by TERM
 #                   (the SLURM and PBS scripts set it; empty: none)
 set -uo pipefail
-input=${1:?usage: usharp-job.sh INPUT.nml [OUT_DIR]}
+input=${1:-}
 out=${2:-}
 usharp=${USHARP:-usharp}
 command=${USHARP_COMMAND:-run}
+case " $command " in
+  *" --selfcheck "*) ;;
+  *) [ -n "$input" ] || { echo "usage: usharp-job.sh INPUT.nml [OUT_DIR]" >&2; exit 2; } ;;
+esac
 
 # Threads from the allocation; passive waiting, so that threads that wait give their core away
 # on a node shared with other jobs instead of spinning on it
@@ -32,7 +38,7 @@ export OMP_PROC_BIND=${OMP_PROC_BIND:-false}
 read -r -a args <<< "$command"
 args+=(--auto-resume -q)
 [ -n "$out" ] && args+=(-o "$out")
-args+=("$input")
+[ -n "$input" ] && args+=("$input")
 
 read -r -a launcher <<< "${USHARP_LAUNCHER:-}"
 echo "usharp-job: $(date -u +%FT%TZ) start: ${launcher[*]} $usharp ${args[*]} ($threads threads)" >&2

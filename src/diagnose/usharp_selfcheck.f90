@@ -137,7 +137,9 @@ contains
       allocate (r(ep%nres()), y(ep%nres()))
       call ep%residual_at(ep%start(), r, ok, y)
       if (.not. ok) then
-         call fatal_error(error, 'self-check: the model with the injected effect fails to simulate')
+         call fatal_error(error, cfg%path//': self-check: its tests cannot be simulated at its '// &
+            '&constants '//what()//'; the data are made at the matrix''s own constants, which '// &
+            'must be a material''s (a fit''s best.nml: -c), not a search''s start')
          return
       end if
       k0 = 0
@@ -150,6 +152,19 @@ contains
          end do
          k0 = k0 + n
       end do
+   contains
+      !> The data being made, for the message
+      function what() result(text)
+         character(len=:), allocatable :: text
+         type(effect_info) :: cat(n_effects)
+         if (k == 0) then
+            text = 'without an effect (the clean data)'
+         else
+            cat = effect_catalogue(1.0_dp)
+            text = 'with the injected effect '//trim(cat(k)%name)
+            if (size(p) > 0) text = text//' ('//trim(cat(k)%pname(1))//' = '//real_str(p(1), 'es10.3')//')'
+         end if
+      end function what
    end subroutine synthetic_data
 
    !> Run reps repetitions for the clean data and for every considered effect; the
