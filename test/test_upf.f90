@@ -7,6 +7,7 @@ module test_upf
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_abaqus, perm_ansys, &
                          upf_ok, upf_cut, upf_invalid
    use usharp_model_miller, only: miller_model, n_upf_state => n_state
+   use test_util, only: read_text
    implicit none
    private
    public :: collect_upf
@@ -516,5 +517,37 @@ contains
       call execute_command_line('bash scripts/build-umat.sh --check build/test-scratch/umat-single '// &
                                 '> build/test-scratch-umat-single.log 2>&1', exitstat=stat)
       call check(error, stat, 0, 'scripts/build-umat.sh --check (see build/test-scratch-umat-single.log)')
+      if (allocated(error)) return
+      call abaqus_point_report(error)
    end subroutine test_single_files
+
+   !> The Abaqus single file, called at integration point 2 above the melting temperature
+   !> (1900 K against Tm 1800 K): that point reports the problem in the message file and ends
+   !> the analysis by XIT (a driver stands in for Abaqus: XIT writes a line and stops)
+   subroutine abaqus_point_report(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), parameter :: d = 'build/test-scratch/umat-single/check-umat_miller_abaqus'
+      character(len=:), allocatable :: msg, out
+      integer :: stat, cstat
+      call execute_command_line('cd '//d//' && printf ''%s\n'' '// &
+         '"program drv" "  implicit none" "  integer, parameter :: dp = kind(1d0)" '// &
+         '"  real(dp) :: s(6), v(13), c(6,6), sse, spd, scd, rpl, ddt(6), dde(6), dpt, e(6), de(6)" '// &
+         '"  real(dp) :: t(2), p(13), x(3), r(3,3), pnewdt, f0(3,3), f1(3,3), pr(1), dpr(1)" '// &
+         '"  character(len=80) :: cm = ''MILLER''" '// &
+         '"  p = [22500d0,0.3d0,0.8d0,7.42d-5,1d15,0d0,0.1d0,1.9859d0,280d0,100d0,5.8d0,91000d0,1800d0]" '// &
+         '"  s = 0; v = 0; e = 0; de = 0; de(1) = 1d-3; t = 0; pnewdt = 1d36; x = 0; r = 0; f0 = 0; f1 = 0" '// &
+         '"  open (7, file=''msg.txt'')" '// &
+         '"  call umat(s, v, c, sse, spd, scd, rpl, ddt, dde, dpt, e, de, t, 1d0, 1900d0, 0d0, pr, dpr, &" '// &
+         '"    cm, 3, 3, 6, 13, p, 13, x, r, pnewdt, 1d0, f0, f1, 1, 2, 0, 0, 1, 1)" '// &
+         '"  print *, ''no XIT''" "end program drv" "subroutine xit()" "  print *, ''XIT called''" '// &
+         '"  close (7)" "  stop" "end subroutine xit" > drv.f90 && gfortran drv.f90 umat_miller_abaqus.o '// &
+         '-o drv > drv.log 2>&1 && ./drv > drv.out 2>&1', exitstat=stat, cmdstat=cstat)
+      call check(error, stat == 0 .and. cstat == 0, 'driver of the Abaqus single file built and ran (see '// &
+                 d//'/drv.log)')
+      if (allocated(error)) return
+      msg = read_text(d//'/msg.txt')
+      out = read_text(d//'/drv.out')
+      call check(error, index(out, 'XIT called') > 0 .and. index(msg, '***ERROR: usharp Miller material '// &
+                 'MILLER: ') > 0, 'point 2 above Tm: message and XIT; printed: '//out//' message file: '//msg)
+   end subroutine abaqus_point_report
 end module test_upf

@@ -15,7 +15,7 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_abaqus, &
                          upf_ok, upf_cut, upf_call_problem
    use usharp_model_miller, only: miller_model
-   use usharp_upf_report, only: upf_report_invalid
+   use usharp_upf_report, only: upf_report_invalid, upf_report_stops
    implicit none
    integer, intent(in) :: ndi, nshr, ntens, nstatv, nprops, noel, npt, layer, kspt, kstep, kinc
    character(len=80), intent(in) :: cmname
@@ -52,8 +52,10 @@ subroutine umat(stress, statev, ddsdde, sse, spd, scd, rpl, ddsddt, drplde, drpl
       end if
    end if
    call upf_elastic_tangent(props, perm_abaqus, ntens, ddsdde)
-   ! One line per element (its first integration point), not per point
-   if (npt == 1) call upf_report_invalid(cmname, res%message)
+   ! One line per element (its first integration point), not per point; where the report
+   ! ends the analysis (Abaqus), at whichever point first finds the problem (a temperature at
+   ! or above Tm may be one point's)
+   if (npt == 1 .or. upf_report_stops) call upf_report_invalid(cmname, res%message)
    call ask_smaller(pnewdt, stop_factor)
 contains
    !> Ask for the increment scaled by factor unless a smaller one is asked already. Abaqus

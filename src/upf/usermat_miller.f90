@@ -16,7 +16,7 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
    use usharp_upf, only: upf_update, upf_result, upf_elastic_tangent, perm_ansys, &
                          upf_ok, upf_cut, upf_call_problem
    use usharp_model_miller, only: miller_model
-   use usharp_upf_report, only: upf_report_invalid
+   use usharp_upf_report, only: upf_report_invalid, upf_report_stops
    implicit none
    integer, intent(in) :: matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst
    integer, intent(out) :: keycut
@@ -70,5 +70,6 @@ subroutine usermat(matId, elemId, kDomIntPt, kLayer, kSectPt, ldstep, isubst, ke
    keycut = 1
    cutFactor = 0.25_dp
    write (mat, '(i0)') matId
-   if (kDomIntPt == 1) call upf_report_invalid(mat, res%message)
+   ! As in umat_miller: once per element unless the report ends the analysis
+   if (kDomIntPt == 1 .or. upf_report_stops) call upf_report_invalid(mat, res%message)
 end subroutine usermat

@@ -11,6 +11,10 @@ module usharp_upf_report
 
    public :: upf_report_invalid
 
+   !> Whether a report ends the analysis: here not (the cut-back stops it at its minimum
+   !> increment), so the adapters report once per element
+   logical, parameter, public :: upf_report_stops = .false.
+
 contains
 
    !> Report one line: "usharp Miller material NAME: MESSAGE"
