@@ -1769,6 +1769,15 @@ contains
                  real_str(1.5e10_dp, 'es11.4') == '1.5000E+10', 'real_str: '// &
                  real_str(5.4329e-167_dp, 'es11.4')//' '//real_str(-1.7749e159_dp, 'es11.4'))
       if (allocated(error)) return
+      ! G0.d of a small or large value: d significant digits and a two-digit exponent, not the
+      ! processor's 0.300000E-4; values G0.d writes without an exponent as they were
+      call check(error, real_str(3.0e-5_dp, 'g0.6') == '3.00000E-05' .and. &
+                 real_str(-1.25e-120_dp, 'g0.4') == '-1.250E-120' .and. &
+                 real_str(2.5e7_dp, 'g0.6') == '2.50000E+07' .and. real_str(0.125_dp, 'g0.6') == &
+                 '0.125000' .and. real_str(866.15_dp, 'g0.8') == '866.15000', 'g0.d: '// &
+                 real_str(3.0e-5_dp, 'g0.6')//' '//real_str(-1.25e-120_dp, 'g0.4')//' '// &
+                 real_str(2.5e7_dp, 'g0.6')//' '//real_str(0.125_dp, 'g0.6')//' '//real_str(866.15_dp, 'g0.8'))
+      if (allocated(error)) return
       ! A number wider than a line (a runaway value in f0.1; the write had overrun its buffer
       ! and stopped the program), and one that cannot be written in the descriptor
       wide = real_str(1.0e100_dp, 'f0.1')

@@ -124,6 +124,17 @@ contains
          call put_real(val, fmt(:k - 1)//str_int(w + 2)//fmt(dot:)//'e3', buf, n, ios)
          return
       end if
+      ! G0.d of a small or large value writes a mantissa below 1 and a bare exponent
+      ! ('0.300000E-4'): written instead with d significant digits as 3.00000E-05
+      if (len(fmt) > 3 .and. scan(fmt(1:1), 'gG') == 1 .and. fmt(2:3) == '0.' .and. &
+          scan(buf(:n), 'eE') > 0) then
+         read (fmt(4:), *, iostat=ios) w
+         if (ios /= 0 .or. w < 1) return
+         k = 2
+         if (abs(val) >= 1.0e100_dp .or. abs(val) < 1.0e-99_dp) k = 3
+         call put_real(val, 'es'//str_int(w + 8)//'.'//str_int(w - 1)//'e'//str_int(k), buf, n, ios)
+         return
+      end if
       if (.not. (scan(fmt(1:1), 'fF') == 1 .and. fmt(2:2) == '0')) return
       if (buf(1:1) == '.') then
          buf = '0'//buf(:n)
