@@ -88,8 +88,8 @@ contains
          text = 'usage: usharp run [options] <fit.nml>'//nl//nl// &
             'Reads the &model, &constants (the start), &solver, &fit and &test groups and the'//nl// &
             'data files the tests name; fits the constants named in &fit. Writes into the'//nl// &
-            'output folder GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, fit.journal, best.nml,'//nl// &
-            'summary.txt, identify.txt and <test>.sim.txt / <test>.fit.txt per test.'//nl//nl// &
+            'output folder GUESS.TXT, FOM.TXT, SUMS.TXT, fit.log, fit.journal, fit.cache,'//nl// &
+            'best.nml, summary.txt, identify.txt and <test>.sim.txt / <test>.fit.txt per test.'//nl//nl// &
             'options:'//nl// &
             '  -c, --constants FILE  start from the &constants of FILE (e.g. a best.nml)'//nl// &
             '      --resume          continue a stopped run from its fit.journal (refused when'//nl// &
@@ -110,6 +110,7 @@ contains
             'options:'//nl// &
             '  -c, --constants FILE  use the &constants of FILE (e.g. a best.nml from run)'//nl// &
             force_option// &
+            '  -q, --quiet           no progress line on stderr'//nl// &
             common_options
       case ('design')
          text = 'usage: usharp design [options] <design.nml>'//nl//nl// &
@@ -169,6 +170,7 @@ contains
             'options:'//nl// &
             '  -c, --constants FILE  the fitted constants (required)'//nl// &
             force_option// &
+            '  -q, --quiet           no progress line on stderr'//nl// &
             common_options
       case default
          text = 'usage: usharp simulate [options] <input.nml>'//nl//nl// &
