@@ -42,6 +42,9 @@ contains
          new_unittest('constant-not-positive', test_constant), &
          new_unittest('history-file-time-not-increasing', test_file_time), &
          new_unittest('history-file-empty-or-garbled', test_file_garbled), &
+         new_unittest('history-file-columns-by-name', test_file_columns), &
+         new_unittest('filter-and-its-column-together', test_filter_pair), &
+         new_unittest('cyclic-rate-or-period', test_cyclic_rate_period), &
          new_unittest('unwritable-output-folder', test_unwritable), &
          new_unittest('simulate-writes-files', test_simulate_ok), &
          new_unittest('integrator-chosen-in-namelist', test_integrator_choice), &
@@ -355,6 +358,54 @@ contains
          "&test name='f', history='file', file='garbled.hist' /"], &
          "garbled.hist:2:2: '0.0x01' in column 2 is not a number")
    end subroutine test_file_garbled
+
+   !> A history file with a header row is read by its column names: the stress column of a
+   !> stress-controlled history (not the second column, the strain); a header without the
+   !> column named is an error that lists the file's columns; bare numbers by position
+   subroutine test_file_columns(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: hfile
+      hfile = write_text('named.hist', [character(len=30) :: 'time,strain,stress', '0,0,0', &
+                         '10,0.0007,15', '1000,0.0034,15'])
+      call read_config(write_text('named.nml', deck_lines([character(len=100) :: &
+         "&test name='f', history='file', file='named.hist', control='stress' /"])), cfg, uerr)
+      call check(error, .not. allocated(uerr), 'named history read')
+      if (allocated(error)) return
+      call check(error, maxval(cfg%tests(1)%hist%v) == 15.0_dp, 'the stress column commands the test')
+      if (allocated(error)) return
+      hfile = write_text('load.hist', [character(len=30) :: 'time,load', '0,0', '10,0.001', '20,0'])
+      call expect_config_error(error, 'load.nml', [character(len=80) :: &
+         "&test name='f', history='file', file='load.hist' /"], "load.hist: no column 'strain' (columns: time, load)")
+      if (allocated(error)) return
+      hfile = write_text('bare.hist', [character(len=30) :: '0 0', '10 0.001', '20 0'])
+      call read_config(write_text('bare.nml', deck_lines([character(len=100) :: &
+         "&test name='f', history='file', file='bare.hist' /"])), cfg, uerr)
+      call check(error, .not. allocated(uerr), 'bare history read')
+      if (allocated(error)) return
+      call check(error, maxval(cfg%tests(1)%hist%v) == 0.001_dp, 'bare numbers by position')
+   end subroutine test_file_columns
+
+   !> filter without filter_column (all rows were read) and filter_column without filter
+   subroutine test_filter_pair(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'filter1.nml', [character(len=120) :: &
+         "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002, filter='Cycle 1' /"], &
+         "filter needs filter_column")
+      if (allocated(error)) return
+      call expect_config_error(error, 'filter2.nml', [character(len=120) :: &
+         "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002, filter_column='Cycle' /"], &
+         "filter_column = 'Cycle' needs filter")
+   end subroutine test_filter_pair
+
+   !> cyclic with both strain_rate and period: refused (strain_rate had won, period ignored)
+   subroutine test_cyclic_rate_period(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'rateperiod.nml', [character(len=120) :: &
+         "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, period=100.0 /"], &
+         "history 'cyclic' takes strain_rate or period, not both")
+   end subroutine test_cyclic_rate_period
 
    subroutine test_unwritable(error)
       type(error_type), allocatable, intent(out) :: error

@@ -417,7 +417,7 @@ contains
       type(history_type), intent(out) :: hist
       type(error_type), allocatable, intent(out) :: error
       if (rate <= 0.0_dp .or. final_strain <= 0.0_dp) then
-         call fatal_error(error, 'tensile needs rate > 0 and final_strain > 0')
+         call fatal_error(error, 'tensile needs strain_rate > 0 and final_strain > 0')
          return
       end if
       call history_from_points([0.0_dp, final_strain/rate], [0.0_dp, final_strain], &

@@ -325,6 +325,15 @@ contains
          nlev = nlev + 1
          t%data%filter_values(nlev) = v%filter(i)
       end do
+      ! Each needs the other: a filter without its column was ignored, and all rows were read
+      if (size(t%data%filter_values) > 0 .and. len(t%data%filter_col) == 0) then
+         call fatal_error(error, 'filter needs filter_column (the column whose text it selects)')
+         return
+      else if (len(t%data%filter_col) > 0 .and. size(t%data%filter_values) == 0) then
+         call fatal_error(error, "filter_column = '"//t%data%filter_col//"' needs filter (the "// &
+            'texts of the rows to keep)')
+         return
+      end if
       t%data%format = trim(v%data_format)
       call build_external(v, t%name, units, t%ext, error)
       if (allocated(error)) return
@@ -350,6 +359,10 @@ contains
             call fatal_error(error, "history 'cyclic' needs strain_range")
             return
          end if
+         if (v%strain_rate > 0.0_dp .and. v%period > 0.0_dp) then
+            call fatal_error(error, "history 'cyclic' takes strain_rate or period, not both")
+            return
+         end if
          call cyclic_history(v%strain_range, v%mean_strain, v%strain_rate, v%period, v%cycles, &
                              v%hold_max, v%hold_min, t%hist, error)
       case ('tensile')
@@ -372,6 +385,7 @@ contains
          call creep_history(v%stress, v%ramp_time, v%duration, t%hist, error)
       case ('file')
          call file_history(resolve_path(base_dir, trim(v%file)), lower_text(trim(v%control)), &
+                           trim(v%time_column), trim(v%strain_column), trim(v%stress_column), &
                            t%hist, error)
       case ('data')
          if (len_trim(v%data_file) == 0) then
@@ -706,11 +720,15 @@ contains
    end subroutine test_namelist
 
    !> History from a file of (time, value) points; control is 'strain' or 'stress'
-   subroutine file_history(path, control, hist, error)
+   subroutine file_history(path, control, time_col, strain_col, stress_col, hist, error)
       character(len=*), intent(in) :: path, control
+      !> the columns of time and of the commanded strain or stress (names or positions) in a
+      !> file with a header row; a file of bare numbers holds time and value in columns 1 and 2
+      character(len=*), intent(in) :: time_col, strain_col, stress_col
       type(history_type), intent(out) :: hist
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: vals(:, :)
+      character(len=:), allocatable :: cols(:)
       integer :: mode
       select case (control)
       case ('strain'); mode = control_strain
@@ -719,7 +737,14 @@ contains
          call fatal_error(error, "control = '"//control//"' is not known (strain or stress)")
          return
       end select
-      call read_columns(path, ['1', '2'], vals, error)
+      allocate (character(len=max(len(time_col), len(strain_col), len(stress_col))) :: cols(2))
+      cols(1) = time_col
+      if (mode == control_strain) then
+         cols(2) = strain_col
+      else
+         cols(2) = stress_col
+      end if
+      call read_columns(path, cols, vals, error, unnamed=['1', '2'])
       if (allocated(error)) return
       call history_from_points(vals(:, 1), vals(:, 2), mode, hist, error)
       if (allocated(error)) call prefix_error(error, path//': ')

@@ -22,7 +22,7 @@ contains
    !> of filter_values are kept. With fmt (a Fortran format such as '(2E12.5)'), each data line
    !> is read with that format and columns must be positions.
    subroutine read_columns(file, columns, values, error, filter_column, filter_values, fmt, &
-                           skip_missing)
+                           skip_missing, unnamed)
       character(len=*), intent(in) :: file
       character(len=*), intent(in) :: columns(:)
       real(dp), allocatable, intent(out) :: values(:, :)
@@ -32,6 +32,9 @@ contains
       character(len=*), intent(in), optional :: fmt
       !> drop the rows where a requested field is empty or '.' (a missing value)
       logical, intent(in), optional :: skip_missing
+      !> the columns' positions in a file that names none (no header row): a file of bare
+      !> numbers is read by these, one with a header by the names in columns
+      character(len=*), intent(in), optional :: unnamed(:)
 
       character(len=:), allocatable :: text
       character(len=field_len) :: fields(max_fields), header(max_fields)
@@ -43,6 +46,8 @@ contains
       integer :: nlong, nshort, nfull
       character(len=:), allocatable :: counted_from
       logical :: have_header, filtering, fixed
+      !> the columns were found by the positions unnamed (a file without a header row)
+      logical :: by_position
       !> Of the filter values, those some row holds; the first values the filter column holds,
       !> each after ', '
       logical, allocatable :: matched(:), hit(:)
@@ -51,6 +56,7 @@ contains
       real(dp), allocatable :: buf(:, :)
       real(dp) :: row(max_fields)
 
+      by_position = .false.
       filtering = .false.
       if (present(filter_column)) filtering = len_trim(filter_column) > 0
       if (filtering) then
@@ -103,7 +109,7 @@ contains
                call fatal_error(error, file//':'//str(lineno)//': does not match format '//trim(fmt))
                exit
             end if
-            if (npt == 0) call resolve_positions(nfield)
+            if (npt == 0) call resolve_positions(nfield, columns)
             if (allocated(error)) exit
             call append([(row(icol(j)), j=1, size(columns))])
             cycle
@@ -131,8 +137,12 @@ contains
                 .not. all_positions()) then
                call resolve_names()
                call set_counts('the header names')
+            else if (present(unnamed)) then
+               by_position = .true.
+               call resolve_positions(nfield, unnamed)
+               call set_counts('the first row')
             else
-               call resolve_positions(nfield)
+               call resolve_positions(nfield, columns)
                call set_counts('the first row')
             end if
             if (allocated(error)) exit
@@ -163,18 +173,18 @@ contains
          do j = 1, size(columns)
             if (icol(j) > nfield) then
                call fatal_error(error, file//':'//str(lineno)//': row has '//str(nfield)// &
-                  ' columns, column '//trim(columns(j))//' is missing')
+                  ' columns, column '//label(j)//' is missing')
                exit
             end if
             call to_real(fields(icol(j)), row(j), ios)
             if (ios /= 0) then
                call fatal_error(error, file//':'//str(lineno)//':'//str(icol(j))//": '"// &
-                  trim(fields(icol(j)))//"' in column "//trim(columns(j))//' is not a number')
+                  trim(fields(icol(j)))//"' in column "//label(j)//' is not a number')
                exit
             end if
             if (.not. ieee_is_finite(row(j))) then
                call fatal_error(error, file//':'//str(lineno)//':'//str(icol(j))//': '// &
-                  trim(fields(icol(j)))//' in column '//trim(columns(j))//' is not finite')
+                  trim(fields(icol(j)))//' in column '//label(j)//' is not finite')
                exit
             end if
          end do
@@ -244,6 +254,17 @@ contains
          buf(:, npt) = vals
       end subroutine append
 
+      !> Column j as the messages name it: as asked, or by its position in a file that names none
+      function label(j) result(text)
+         integer, intent(in) :: j
+         character(len=:), allocatable :: text
+         if (by_position) then
+            text = trim(unnamed(j))
+         else
+            text = trim(columns(j))
+         end if
+      end function label
+
       subroutine resolve_names()
          integer :: k, m
          do k = 1, size(columns)
@@ -289,13 +310,14 @@ contains
          end do
       end function all_positions
 
-      subroutine resolve_positions(ncol)
+      subroutine resolve_positions(ncol, cols)
          integer, intent(in) :: ncol
+         character(len=*), intent(in) :: cols(:)
          integer :: k
-         do k = 1, size(columns)
-            icol(k) = position(columns(k), ncol)
+         do k = 1, size(cols)
+            icol(k) = position(cols(k), ncol)
             if (icol(k) == 0) then
-               call fatal_error(error, file//": column '"//trim(columns(k))// &
+               call fatal_error(error, file//": column '"//trim(cols(k))// &
                   "' not found: the file has no header row and "//str(ncol)//' columns')
                return
             end if
