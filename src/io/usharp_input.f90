@@ -67,6 +67,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       class(model_type), allocatable :: mt
       real(dp), allocatable :: temps(:)
+      character(len=:), allocatable :: what
       integer :: i, j
       do i = 1, size(cfg%tests)
          ! A temperature cycle is checked at its two ends
@@ -78,16 +79,26 @@ contains
          end if
          if (allocated(cfg%tests(i)%hist%temp)) then
             temps = [minval(cfg%tests(i)%hist%temp), maxval(cfg%tests(i)%hist%temp)]
+            what = 'tmf_temperatures reaches '
          else
             temps = [cfg%tests(i)%temperature]
+            what = 'temperature = '
          end if
          do j = 1, size(temps)
             associate (temp => temps(j))
                if (.not. temp > 0.0_dp) cycle
                if (temp < 0.1_dp*cfg%model%tm .or. temp >= cfg%model%tm) then
-                  call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': temperature = "// &
-                     str(temp)//' K must lie between a tenth of tm and tm = '//str(cfg%model%tm)// &
+                  call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': "//what// &
+                     str(temp)//' K, which must lie between a tenth of tm and tm = '//str(cfg%model%tm)// &
                      ' K (temperatures are in kelvin)')
+                  return
+               end if
+               ! A model whose rates do not follow the temperature would simulate the test at
+               ! the model's own, while its output said otherwise
+               if (temp /= cfg%model%temperature .and. .not. cfg%model%temperature_matters()) then
+                  call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': "//what// &
+                     str(temp)//' K changes nothing: the rates of the '//cfg%model%name()// &
+                     ' model here do not depend on the temperature (set &model activation)')
                   return
                end if
                call model_at(cfg%model, temp, mt, error)

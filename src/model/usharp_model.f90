@@ -124,6 +124,9 @@ module usharp_model
       !> history): the rates follow the temperature, the initial state stays that of the
       !> temperature the model was set up at
       procedure :: set_temperature
+      !> Whether the rates depend on the temperature (a test at a temperature of its own, or
+      !> a temperature cycle, then changes them): by default they do
+      procedure :: temperature_matters
       !> The rates of the model with the effects of usharp diagnose (its states, then the
       !> accumulated inelastic strain p and a second back stress R2): by default its own rates
       !> wrapped (wrapped_rates); a model whose states the effects also act on overrides it
@@ -352,6 +355,12 @@ contains
       self%temperature = temperature
       call self%setup(error)
    end subroutine set_temperature
+
+   !> By default a model's rates follow the temperature
+   pure logical function temperature_matters(self)
+      class(model_type), intent(in) :: self
+      temperature_matters = .true.
+   end function temperature_matters
 
    !> Any model's rates with the effects: wrapped_rates
    pure subroutine model_extended_rates(self, eff, sigma, y, ydot, dsig_depsin, jac)

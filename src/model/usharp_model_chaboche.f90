@@ -126,6 +126,7 @@ module usharp_model_chaboche
       procedure :: complete_state => ch_complete_state
       procedure :: set_option => ch_set_option
       procedure :: derived_values => ch_derived_values
+      procedure :: temperature_matters => ch_temperature_matters
    end type chaboche_model
 
 contains
@@ -181,6 +182,12 @@ contains
 
    !> &model activation (cal/mol, >= 0) and tref (K, > 0: the temperature the constants
    !> hold at)
+   !> The rates follow the temperature only through an activation energy
+   pure logical function ch_temperature_matters(self)
+      class(chaboche_model), intent(in) :: self
+      ch_temperature_matters = self%activation > 0.0_dp
+   end function ch_temperature_matters
+
    pure subroutine ch_set_option(self, name, val, error)
       class(chaboche_model), intent(inout) :: self
       character(len=*), intent(in) :: name
