@@ -150,6 +150,9 @@ contains
          call fatal_error(error, 'data cover '//real_str(x(1), 'g0.6')//' to '// &
             real_str(x(n), 'g0.6')//' s but the simulation runs from '// &
             real_str(xi(1), 'g0.6')//' to '//real_str(xi(size(xi)), 'g0.6')//' s')
+         ! Far shorter: a time column in minutes or hours is read as seconds
+         if (x(n) - x(1) < 0.5_dp*(xi(size(xi)) - xi(1))) error%message = error%message// &
+            ' (time is read in s: is the data''s time column in minutes or hours?)'
          return
       end if
       k = 1
