@@ -45,6 +45,7 @@ contains
          new_unittest('history-file-columns-by-name', test_file_columns), &
          new_unittest('filter-and-its-column-together', test_filter_pair), &
          new_unittest('cyclic-rate-or-period', test_cyclic_rate_period), &
+         new_unittest('data-format-checked-as-a-format', test_data_format), &
          new_unittest('unwritable-output-folder', test_unwritable), &
          new_unittest('simulate-writes-files', test_simulate_ok), &
          new_unittest('integrator-chosen-in-namelist', test_integrator_choice), &
@@ -398,6 +399,19 @@ contains
          "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002, filter_column='Cycle' /"], &
          "filter_column = 'Cycle' needs filter")
    end subroutine test_filter_pair
+
+   !> A data_format that is no Fortran format of numbers is named as such, not blamed on the
+   !> data file's first line
+   subroutine test_data_format(error)
+      type(error_type), allocatable, intent(out) :: error
+      call expect_config_error(error, 'badformat1.nml', [character(len=140) :: &
+         "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002, data_format='(3Q12.5)' /"], &
+         "data_format = '(3Q12.5)' is not a Fortran format of numbers")
+      if (allocated(error)) return
+      call expect_config_error(error, 'badformat2.nml', [character(len=140) :: &
+         "&test name='t', history='tensile', strain_rate=1e-4, final_strain=0.002, data_format='3E12.5' /"], &
+         "data_format = '3E12.5' is not a Fortran format of numbers")
+   end subroutine test_data_format
 
    !> cyclic with both strain_rate and period: refused (strain_rate had won, period ignored)
    subroutine test_cyclic_rate_period(error)

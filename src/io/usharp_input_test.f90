@@ -11,7 +11,7 @@ module usharp_input_test
    use usharp_forcing, only: measured_history
    use usharp_cycles, only: gap_filled_history, match_peaks
    use usharp_sort, only: order_of
-   use usharp_table, only: read_columns, merge_repeated_times
+   use usharp_table, only: read_columns, merge_repeated_times, numbers_format
    use usharp_namelist, only: nml_file, group_text, check_length, read_error, value_len, max_list, unset, &
                               resolve_path
    implicit none
@@ -335,6 +335,13 @@ contains
          return
       end if
       t%data%format = trim(v%data_format)
+      if (len(t%data%format) > 0) then
+         if (.not. numbers_format(t%data%format)) then
+            call fatal_error(error, "data_format = '"//t%data%format//"' is not a Fortran format "// &
+               "of numbers (e.g. '(2E12.5)', in parentheses)")
+            return
+         end if
+      end if
       call build_external(v, t%name, units, t%ext, error)
       if (allocated(error)) return
       nlev = count(v%levels /= unset)

@@ -10,7 +10,7 @@ module usharp_table
    implicit none
    private
 
-   public :: read_columns, merge_repeated_times
+   public :: read_columns, merge_repeated_times, numbers_format
 
    integer, parameter :: max_fields = 64, field_len = 128, line_len = 4096
 
@@ -339,6 +339,18 @@ contains
       if (ios /= 0 .or. verify(trim(adjustl(text)), '0123456789') /= 0) pos = 0
       if (pos < 1 .or. pos > ncol) pos = 0
    end function position
+
+   !> Whether fmt is a Fortran format that reads numbers (such as '(2E12.5)'): a blank record
+   !> read with it gives zeros, where a format that is none, or one of text, fails
+   logical function numbers_format(fmt) result(ok)
+      character(len=*), intent(in) :: fmt
+      real(dp) :: row(max_fields)
+      character(len=line_len) :: blank
+      integer :: ios
+      blank = ''
+      read (blank, fmt, iostat=ios) row
+      ok = ios <= 0
+   end function numbers_format
 
    subroutine read_fixed(line, fmt, row, nfield, ios)
       character(len=*), intent(in) :: line, fmt
