@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Install what usharp needs to build and test, without prompts; a no-op when all is present.
 # Debian packages: gfortran, LAPACK/BLAS, SUNDIALS 6 Fortran 2003 interface, Open MPI, gnuplot,
-# GNU time. PyPI: fpm, numpy and scipy (independent reference data for the diagnosis tests).
+# GNU time. PyPI: fpm, numpy and scipy (the independent references of bench/).
 set -euo pipefail
 
 command -v python3 >/dev/null 2>&1 || need_py=1
@@ -49,16 +49,16 @@ if ! command -v fpm >/dev/null 2>&1; then
     || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages 'fpm>=0.12,<0.13'
   hash -r
 fi
-# numpy and scipy make the independent reference data of the diagnosis (bench/independent,
-# and its short version in the tests, which is skipped without them). Installed at the
-# versions the tests were checked with: another scipy's solve_ivp may move a case that lies
-# near a verdict's threshold (an installed numpy and scipy are used as they are)
+# numpy and scipy make the independent references of bench/ (bench/independent: the
+# diagnosis's self-check on data usharp did not make; the tests read such data kept in data/).
+# Installed at the versions the benches were checked with: another scipy's solve_ivp may move
+# a case that lies near a verdict's threshold (an installed numpy and scipy are used as they are)
 py_pins=(numpy==2.4.6 scipy==1.17.1)
 if ! python3 -c 'import numpy, scipy' >/dev/null 2>&1; then
   echo "setup: installing ${py_pins[*]} from PyPI" >&2
   python3 -m pip install --quiet --disable-pip-version-check "${py_pins[@]}" 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check --break-system-packages "${py_pins[@]}" \
-    || echo "setup: numpy/scipy not installed: the independent-data test will be skipped" >&2
+    || echo "setup: numpy/scipy not installed: bench/independent and bench/scipy_compare.sh need them" >&2
 fi
 command -v pyenv >/dev/null 2>&1 && pyenv rehash 2>/dev/null || true
 command -v fpm >/dev/null 2>&1 || { echo "setup: fpm not on PATH after install" >&2; exit 1; }

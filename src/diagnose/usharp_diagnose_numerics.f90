@@ -216,6 +216,7 @@ contains
       else if (screening) then
          free = free .and. cat(ep%k)%screened(1:size(free))
       end if
+      free = free .and. ep%pacts
    end function free_params
 
    !> The effect's parameters at the low end of its realistic range (info%low), as changes
@@ -233,6 +234,13 @@ contains
       allocate (d(size(ep%p0), 0))
       do g = 1, min(2, info%nparam)
          if (info%low(g) <= 0.0_dp) cycle
+         ! A group that does not act on the model (scatter's drag factor on a model without
+         ! one) has no signal to find
+         if (info%sharing == param_per_test) then
+            if (.not. any(ep%pacts((g - 1)*nt + 1:g*nt))) cycle
+         else if (.not. ep%pacts(g)) then
+            cycle
+         end if
          d = reshape([d, spread(0.0_dp, 1, size(ep%p0))], [size(ep%p0), size(d, 2) + 1])
          if (info%sharing == param_per_test) then
             do i = 1, size(tests)

@@ -4,7 +4,8 @@ module usharp_diagnose_options
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_config, only: run_config
-   use usharp_effects, only: effect_info, effect_catalogue, n_effects, effect_index
+   use usharp_effects, only: effect_info, effect_catalogue, n_effects, effect_index, effect_acts, &
+                             effect_acts_why
    implicit none
    private
 
@@ -26,6 +27,9 @@ module usharp_diagnose_options
    !> the held-out tests are cfg%diagnose%holdout) with names resolved, and the algorithm's own
    type :: diagnose_options
       integer, allocatable :: effects(:)     !< catalogue effects considered
+      !> catalogue effects left out because they do not act on the model (effect_acts)
+      integer, allocatable :: inert(:)
+      character(len=120), allocatable :: inert_why(:)  !< why each does not act, in words
       integer, allocatable :: rows(:)        !< self-check: effects injected (0: clean data)
       integer :: n_refit                     !< leading candidates refitted
       real(dp) :: dlnE_dT                    !< 1/K, temperature slope of ln E
@@ -63,14 +67,36 @@ contains
       if (allocated(error)) return
       call effect_numbers(cfg, cfg%diagnose%rows, 'rows', .true., opts%rows, error)
       if (allocated(error)) return
-      if (size(opts%effects) == 0) opts%effects = [(k, k=1, n_effects)]
+      cat = effect_catalogue(1.0_dp)
+      ! An effect that cannot act on the model (the Miller model's drag and back stress
+      ! effects on another model) would be a refit of the constants alone under its name
+      do k = 1, size(opts%effects)
+         if (effect_acts(cfg%model, opts%effects(k))) cycle
+         call fatal_error(error, cfg%path//": &diagnose: effects: '"//trim(cat(opts%effects(k))%name)// &
+            "' does not act on this model: "//effect_acts_why(cfg%model, opts%effects(k)), stat_input)
+         return
+      end do
+      if (size(opts%effects) == 0) then
+         opts%effects = pack([(k, k=1, n_effects)], [(effect_acts(cfg%model, k), k=1, n_effects)])
+         opts%inert = pack([(k, k=1, n_effects)], [(.not. effect_acts(cfg%model, k), k=1, n_effects)])
+      else
+         allocate (opts%inert(0))
+      end if
+      allocate (opts%inert_why(size(opts%inert)))
+      do k = 1, size(opts%inert)
+         opts%inert_why(k) = effect_acts_why(cfg%model, opts%inert(k))
+      end do
       if (size(opts%rows) == 0) opts%rows = [0, opts%effects]
       ! A row injects an effect that the diagnosis is to name: one it does not consider can
       ! never be named
-      cat = effect_catalogue(1.0_dp)
       do k = 1, size(opts%rows)
          if (opts%rows(k) == 0) cycle
          if (any(opts%effects == opts%rows(k))) cycle
+         if (.not. effect_acts(cfg%model, opts%rows(k))) then
+            call fatal_error(error, cfg%path//": &diagnose: rows: '"//trim(cat(opts%rows(k))%name)// &
+               "' does not act on this model: "//effect_acts_why(cfg%model, opts%rows(k)), stat_input)
+            return
+         end if
          call fatal_error(error, cfg%path//": &diagnose: rows: '"//trim(cat(opts%rows(k))%name)// &
             "' is injected but effects does not list it, so the diagnosis cannot name it "// &
             '(add it to effects)', stat_input)

@@ -148,6 +148,7 @@ contains
       type(diagnose_options), intent(in) :: opts
       character(len=*), intent(in), optional :: heading  !< instead of section 2's
       integer :: j
+      real(dp) :: f_ref
       type(effect_info) :: cat(n_effects)
       cat = effect_catalogue(1.0_dp)
       if (present(heading)) then
@@ -174,6 +175,10 @@ contains
                power_cells(e%lambda_low, e%power_low)//' |')
          end associate
       end do
+      if (allocated(opts%inert)) then
+         if (size(opts%inert) > 0) call add_line(lines, '(not considered, as they do not act on this '// &
+            'model: '//inert_list()//')')
+      end if
       call add_line(lines, '')
       call add_line(lines, 'Refits of the leading '//str(count(res%effects%refitted))//' (constants and the '// &
                'effect''s parameters; dAIC, dBIC < 0: better; significant: dBIC < -'// &
@@ -187,15 +192,19 @@ contains
          'those simpler than a leader with parameters per test that the screening found significant)')
       if (res%global) call add_line(lines, '(no significant local refit brought the fit tests'' structured gap '// &
          'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
-         str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them '// &
+         str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them and from '// &
+         'each refit''s constants '// &
          real_str(res%f0_global, 'es10.3')//', the lower of the two is the reference of dAIC, dBIC)')
       call add_line(lines, '')
+      ! Before: the reference of dAIC and dBIC, the lower baseline
+      f_ref = res%f0
+      if (res%global) f_ref = min(res%f0, res%f0_global)
       call add_line(lines, '| effect | objective before | after | dAIC | dBIC | gap removed, fit % | held-out % | verdict |')
       call add_line(lines, '|---|---|---|---|---|---|---|---|')
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
             if (.not. e%refitted) cycle
-            call add_line(lines, '| '//trim(e%name)//' | '//real_str(res%f0, 'es10.3')//' | '// &
+            call add_line(lines, '| '//trim(e%name)//' | '//real_str(f_ref, 'es10.3')//' | '// &
                real_str(e%f_after, 'es10.3')//' | '//real_str(e%daic, 'f0.1')//' | '// &
                real_str(e%dbic, 'f0.1')//' | '//real_str(100.0_dp*e%shrink_fit, 'f0.1')//' | '// &
                held_share(e)//' | '//trim(verdict_of(e, res))//' |')
@@ -206,6 +215,17 @@ contains
       end do
       call add_line(lines, '')
    contains
+      !> The effects left out, each with why
+      function inert_list() result(text)
+         character(len=:), allocatable :: text
+         integer :: i
+         text = ''
+         do i = 1, size(opts%inert)
+            if (i > 1) text = text//'; '
+            text = text//trim(cat(opts%inert(i))%name)//': '//trim(opts%inert_why(i))
+         end do
+      end function inert_list
+
       !> The held-out gap an effect removes, %; '-' when every test is fitted
       function held_share(e) result(text)
          type(effect_outcome), intent(in) :: e
@@ -268,6 +288,11 @@ contains
          if (allocated(e%p_all) .and. info%sharing == param_per_test) then
             do g = 1, info%nparam
                do i = 1, size(res%names)
+                  if (allocated(e%p_acts)) then
+                     if ((g - 1)*size(res%names) + i <= size(e%p_acts)) then
+                        if (.not. e%p_acts((g - 1)*size(res%names) + i)) cycle
+                     end if
+                  end if
                   if (res%held(i) .and. (g - 1)*size(res%names) + i <= size(e%p_all)) &
                      call add_line(lines, '- '//trim(info%pname(g))//' '//trim(res%names(i))// &
                         ' (held out, fitted to it with the constants fixed) = '// &

@@ -488,7 +488,7 @@ contains
          integer :: jj
          call new_effect_problem(prob, [ispec], k, base, peak, ek, free_constants=.false.)
          do jj = 1, size(ek%p0)
-            if (cat(k)%sharing == param_per_test) ek%pfree(jj) = mod(jj - 1, nt) + 1 == ispec
+            if (cat(k)%sharing == param_per_test) ek%pfree(jj) = mod(jj - 1, nt) + 1 == ispec .and. ek%pacts(jj)
          end do
          if (k == 8) ek%p0 = [0.01_dp*peak, opts%gamma3]
          if (k == 7) ek%p0 = [0.0_dp, soften_rate0]

@@ -109,6 +109,7 @@ module usharp_diagnose_types
       real(dp), allocatable :: per_test_after(:)
       real(dp), allocatable :: p(:), p_lo(:), p_hi(:)  !< fitted parameters, 95 % interval
       real(dp), allocatable :: p_all(:)      !< every parameter, all tests (held-out ones fitted)
+      logical, allocatable :: p_acts(:)     !< which of p_all act on the model (effect_acts)
       !> Its parameters of the held-out tests were fitted to them (an effect per test), not
       !> predicted: how well it meets them is no prediction
       logical :: held_fitted = .false.

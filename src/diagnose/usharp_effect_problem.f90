@@ -8,7 +8,7 @@ module usharp_effect_problem
    use usharp_error, only: error_type
    use usharp_model, only: model_type
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, effects_of, &
-                             effect_model, effect_nparams, n_effects, param_per_test
+                             effect_model, effect_nparams, n_effects, param_per_test, effect_acts
    use usharp_objective, only: fit_problem, test_residuals, simulated
    use usharp_optimiser, only: least_squares_type
    use usharp_simulation, only: sim_result, solver_options
@@ -33,6 +33,8 @@ module usharp_effect_problem
       logical :: free_constants = .true.       !< the fitted constants are in x
       real(dp), allocatable :: p0(:)           !< effect parameters (physical units, all tests)
       logical, allocatable :: pfree(:)         !< which of them are in x
+      !> which of them act on the model (effect_acts): the others stay at zero, never free
+      logical, allocatable :: pacts(:)
       real(dp), allocatable :: pscale(:)       !< unit of x for each parameter
       logical, allocatable :: pnonneg(:)
       type(test_effects) :: base               !< dlnE_dT, gamma3 held fixed
@@ -83,10 +85,9 @@ contains
          cat = effect_catalogue(peak)
          np = effect_nparams(cat(k), nt)
       end if
-      allocate (ep%p0(np), ep%pfree(np), ep%pscale(np), ep%pnonneg(np))
+      allocate (ep%p0(np), ep%pfree(np), ep%pscale(np), ep%pnonneg(np), ep%pacts(np))
       ep%p0 = 0.0_dp
       if (present(p0)) ep%p0 = p0
-      ep%pfree = .true.
       do j = 1, np
          ! per-test parameters are ordered parameter-major: group g holds nt values
          if (cat(k)%sharing == param_per_test) then
@@ -96,7 +97,9 @@ contains
          end if
          ep%pscale(j) = cat(k)%scale(g)
          ep%pnonneg(j) = cat(k)%nonneg(g)
+         ep%pacts(j) = effect_acts(prob%cfg%model, k, g)
       end do
+      ep%pfree = ep%pacts
    end subroutine new_effect_problem
 
    pure integer function ep_nx(self) result(n)

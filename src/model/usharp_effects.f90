@@ -15,6 +15,7 @@ module usharp_effects
 
    public :: test_effects, effect_info, n_effects, effect_catalogue, effect_index
    public :: effects_of, extended_rates, n_extended, lagged_value, lag_corners, effect_nparams
+   public :: effect_acts, effect_acts_why
    public :: param_global, param_per_test, effect_model, extended_size, extended_initial
    public :: wrapped_rates
 
@@ -125,6 +126,41 @@ contains
          if (trim(cat(i)%name) == trim(adjustl(name))) k = i
       end do
    end function effect_index
+
+   !> Whether effect k (parameter group g when given) acts on model: the effects on states of
+   !> the model's own (an initial back stress and drag, specimen scatter's factor on the
+   !> initial drag, a softened drag) where the model applies them (own_state_effects), a
+   !> temperature offset where its rates follow the temperature (temperature_matters); the
+   !> others act on every model through the wrapped rates, the control and the measurement
+   pure logical function effect_acts(model, k, g) result(acts)
+      class(model_type), intent(in) :: model
+      integer, intent(in) :: k
+      integer, intent(in), optional :: g
+      select case (k)
+      case (3)
+         acts = model%temperature_matters()
+      case (4)
+         acts = .true.
+         if (present(g)) acts = g == 1 .or. model%own_state_effects()
+      case (5, 7)
+         acts = model%own_state_effects()
+      case default
+         acts = .true.
+      end select
+   end function effect_acts
+
+   !> Why effect k does not act on model (see effect_acts), in words
+   function effect_acts_why(model, k) result(text)
+      class(model_type), intent(in) :: model
+      integer, intent(in) :: k
+      character(len=:), allocatable :: text
+      if (k == 3) then
+         text = 'the '//model%name()//' model''s rates do not follow the temperature'
+      else
+         text = 'it acts on a back stress or drag stress state that the '//model%name()// &
+                ' model does not give the diagnosis'
+      end if
+   end function effect_acts_why
 
    !> Number of parameters of effect k for ntests tests
    pure integer function effect_nparams(info, ntests) result(np)

@@ -127,6 +127,11 @@ module usharp_model
       !> Whether the rates depend on the temperature (a test at a temperature of its own, or
       !> a temperature cycle, then changes them): by default they do
       procedure :: temperature_matters
+      !> Whether the effects of usharp diagnose on states of the model's own act on it (an
+      !> initial back stress R0 and drag offset dD0, specimen scatter's factor on the initial
+      !> drag, a softened drag): only a model that applies them in extended_rates and
+      !> extended_initial; by default they do not (wrapped_rates)
+      procedure :: own_state_effects
       !> The rates of the model with the effects of usharp diagnose (its states, then the
       !> accumulated inelastic strain p and a second back stress R2): by default its own rates
       !> wrapped (wrapped_rates); a model whose states the effects also act on overrides it
@@ -361,6 +366,11 @@ contains
       class(model_type), intent(in) :: self
       temperature_matters = .true.
    end function temperature_matters
+
+   pure logical function own_state_effects(self)
+      class(model_type), intent(in) :: self
+      own_state_effects = .false.
+   end function own_state_effects
 
    !> Any model's rates with the effects: wrapped_rates
    pure subroutine model_extended_rates(self, eff, sigma, y, ydot, dsig_depsin, jac)

@@ -124,6 +124,7 @@ module usharp_model_miller
       procedure :: set_temperature => miller_set_temperature
       procedure :: extended_rates => miller_extended_rates
       procedure :: extended_initial => miller_extended_initial
+      procedure :: own_state_effects => miller_own_state_effects
    end type miller_model
 
    !> The scalar parts of the rates at equivalent overstress x, back stress r and drag stress D,
@@ -868,6 +869,12 @@ contains
       jac(5, :) = eff%h3*jac(1, :) - eff%gamma3*y(5)*df
       jac(5, 5) = jac(5, 5) - eff%gamma3*f
    end subroutine miller_extended_rates
+
+   !> The effects on the back stress and drag stress act (miller_extended_rates and _initial)
+   pure logical function miller_own_state_effects(self)
+      class(miller_model), intent(in) :: self
+      miller_own_state_effects = .true.
+   end function miller_own_state_effects
 
    !> The extended start: R0 = eff%r0, the drag D0*(1 + strength) + dD0; p = R2 = 0
    pure subroutine miller_extended_initial(self, eff, y)
