@@ -138,6 +138,8 @@ mk pct.nml "$fitg" "&test name='fast', history='data', data_file='pct.csv' /"
 row 'data: measured strain in percent' - u run pct.nml -o pct
 mk range.nml "$fitg" "&test name='c', history='cyclic', strain_range=3.0, strain_rate=1e-3, cycles=1 /"
 row 'strain range in percent (3 for 3 %)' - u run range.nml -o range
+mk range-half.nml "$fitg" "&test name='c', history='cyclic', strain_range=0.5, strain_rate=1e-3, cycles=1 /"
+row 'strain range in percent (0.5 for 0.5 %)' - u run range-half.nml -o range-half
 awk '/^#/ { print; next } { $3 = $3 * 0.006894757; print }' lcf.txt > gpa.txt
 mk gpa.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='gpa.txt' /"
 row 'data: stress in GPa on a deck in ksi' - u run gpa.nml -o gpa

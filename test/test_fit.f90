@@ -234,6 +234,12 @@ contains
          "strain_rate=0.1, cycles=1 /", "history 'cyclic' reaches a strain of 1.500: strain is in mm/mm "// &
          "(is strain_range or mean_strain in percent?)")
       if (allocated(error)) return
+      ! 0.5 meant as 0.5 %: a cycle of 50 % strain range, below the 100 % of any strain but
+      ! beyond what a push-pull cycle reaches
+      call refused('scale-range-half.nml', "&test name='c', history='cyclic', strain_range=0.5, "// &
+         "strain_rate=1e-3, cycles=1 /", "history 'cyclic' reaches a strain of 0.2500, beyond the 10 % no "// &
+         "push-pull cycle reaches: strain is in mm/mm (is strain_range or mean_strain in percent?)")
+      if (allocated(error)) return
       call refused('scale-tensile.nml', "&test name='t', history='tensile', strain_rate=1e-3, final_strain=20.0 /", &
          "history 'tensile' reaches a strain of 20.00: strain is in mm/mm (is final_strain in percent?)")
       if (allocated(error)) return

@@ -25,6 +25,8 @@ module usharp_input_test
    !> The largest measured strain (mm/mm) a test driven by it may reach: Alloy 617's tensile
    !> test ends at 0.62; a column in percent of a 1.5 % test reaches 1.5
    real(dp), parameter :: max_strain = 1.0_dp
+   !> Largest strain (mm/mm) of a commanded push-pull cycle: a specimen buckles before
+   real(dp), parameter :: max_cycle_strain = 0.1_dp
 
    !> Where a test's measured data come from and how to read them
    type :: data_spec
@@ -410,12 +412,21 @@ contains
       end select
       if (allocated(error)) return
       ! A strain beyond 1 (100 %) is what a range or end given in percent makes (3 for
-      ! 3 %): the test would be simulated a hundred times too large
+      ! 3 %): the test would be simulated a hundred times too large. A push-pull cycle stays
+      ! within 10 % (a specimen buckles long before): beyond it, 0.5 meant as 0.5 % is caught
       if (t%hist%control == control_strain .and. t%history_kind /= 'data') then
          if (maxval(abs(t%hist%v)) > max_strain) then
             call fatal_error(error, "history '"//t%history_kind//"' reaches a strain of "// &
                real_str(maxval(abs(t%hist%v)), 'g0.4')//': strain is in mm/mm (is '// &
                strain_source(t%history_kind)//' in percent?)')
+            return
+         end if
+         if (any(t%history_kind == ['cyclic    ', 'thesis_lcf']) .and. &
+             maxval(abs(t%hist%v)) > max_cycle_strain) then
+            call fatal_error(error, "history '"//t%history_kind//"' reaches a strain of "// &
+               real_str(maxval(abs(t%hist%v)), 'g0.4')//', beyond the '// &
+               real_str(100.0_dp*max_cycle_strain, 'f0.0')//' % no push-pull cycle reaches: '// &
+               'strain is in mm/mm (is '//strain_source(t%history_kind)//' in percent?)')
             return
          end if
       end if
