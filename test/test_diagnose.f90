@@ -28,7 +28,7 @@ module test_diagnose
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note
-   use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign
+   use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign, global_baseline_starts
    use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
@@ -82,6 +82,7 @@ contains
          new_unittest('history-classes-and-cycles', test_classes), &
          new_unittest('diagnose-bad-inputs', test_bad_inputs), &
          new_unittest('effects-that-do-not-act-on-the-model-left-out', test_inert_effects), &
+         new_unittest('global-baseline-starts-from-the-refits-constants', test_global_baseline_starts), &
          new_unittest('baseline-ignores-held-out-data', test_held_out_unused), &
          new_unittest('baseline-fitted-from-an-unconverged-start', test_unconverged_start), &
          new_unittest('starts-on-threads-as-one-after-the-other', test_starts_threads), &
@@ -546,6 +547,29 @@ contains
       call check(error, size(opts%effects) == n_effects .and. size(opts%inert) == 0, &
          'every effect acts on the Miller model')
    end subroutine test_inert_effects
+
+   !> The baseline of the global stage starts from the Latin-hypercube points and from each
+   !> refit's constants (within the box): a refit that ends lower by its constants alone then
+   !> lowers the reference, not the effect's BIC
+   subroutine test_global_baseline_starts(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      real(dp), allocatable :: xs(:, :)
+      allocate (res%x_global(2, 3), res%effects(3))
+      res%x_global = reshape([1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp, 6.0_dp], [2, 3])
+      res%effects%refitted = [.true., .false., .true.]
+      res%effects(1)%c = [10.0_dp, 1.0e3_dp]
+      res%effects(2)%c = [1.0_dp, 1.0_dp]
+      res%effects(3)%c = [1.0e9_dp, 1.0e-9_dp]
+      xs = global_baseline_starts(res, [-1.0_dp, -1.0_dp], [7.0_dp, 7.0_dp])
+      call check(error, size(xs, 2) == 5, 'three Latin-hypercube points and two refits: 5 starts, not '// &
+                 str(size(xs, 2)))
+      if (allocated(error)) return
+      call check(error, all(abs(xs(:, 1:3) - res%x_global) < 1.0e-12_dp) .and. &
+                 all(abs(xs(:, 4) - [1.0_dp, 3.0_dp]) < 1.0e-12_dp) .and. &
+                 all(abs(xs(:, 5) - [7.0_dp, -1.0_dp]) < 1.0e-12_dp), &
+                 'the refits'' constants as log10, within the box')
+   end subroutine test_global_baseline_starts
 
    subroutine write_relaxation_data(name, scale, e)
       character(len=*), intent(in) :: name

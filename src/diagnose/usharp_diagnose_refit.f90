@@ -27,7 +27,8 @@ module usharp_diagnose_refit
    implicit none
    private
 
-   public :: refit, refit_candidates, refit_global, refit_deciding, judge, rate_undetermined, with_params, other_sign
+   public :: refit, refit_candidates, refit_global, global_baseline_starts, refit_deciding, judge, &
+             rate_undetermined, with_params, other_sign
 
 contains
 
@@ -96,12 +97,7 @@ contains
       call base%bounds(lo, hi)
       opt%f = res%f0
       opt%x = log10_dp(res%c)
-      xs = res%x_global
-      do j = 1, size(res%effects)
-         if (.not. res%effects(j)%refitted) cycle
-         if (.not. allocated(res%effects(j)%c)) cycle
-         xs = reshape([xs, min(max(log10_dp(res%effects(j)%c), lo), hi)], [size(xs, 1), size(xs, 2) + 1])
-      end do
+      xs = global_baseline_starts(res, lo, hi)
       call starts_unit(ctx%journal, base, xs, lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, &
                        error, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
       if (allocated(error)) return
@@ -122,6 +118,21 @@ contains
       end do
       res%nevals = res%nevals + sum(res%effects%nevals) - counted
    end subroutine refit_global
+
+   !> The starts of the baseline's global stage (x: log10 of the fitted constants): the
+   !> Latin-hypercube points res%x_global, then each refit's constants, within [lo, hi]
+   pure function global_baseline_starts(res, lo, hi) result(xs)
+      type(diagnose_result), intent(in) :: res
+      real(dp), intent(in) :: lo(:), hi(:)
+      real(dp), allocatable :: xs(:, :)
+      integer :: j
+      xs = res%x_global
+      do j = 1, size(res%effects)
+         if (.not. res%effects(j)%refitted) cycle
+         if (.not. allocated(res%effects(j)%c)) cycle
+         xs = reshape([xs, min(max(log10_dp(res%effects(j)%c), lo), hi)], [size(xs, 1), size(xs, 2) + 1])
+      end do
+   end function global_baseline_starts
 
    !> Refits that decide the verdict (confirmed, or lowering BIC at all) again from further
    !> starts of the constants: the baseline's, the best other refit's and, unless the global
