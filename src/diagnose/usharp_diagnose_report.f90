@@ -320,6 +320,11 @@ contains
       if (e%f_unprofiled > 0.0_dp) call add_line(lines, '- refitted again from a lower point that its '// &
          'profile met: objective '//real_str(e%f_unprofiled, 'es10.3')//' -> '//real_str(e%f_after, 'es10.3')// &
          ', the figures from there')
+      if (e%shrink_held_constants > -huge(1.0_dp) .and. any(res%held)) call add_line(lines, &
+         '- its refit''s constants without the effect remove '// &
+         real_str(100.0_dp*e%shrink_held_constants, 'f0.1')//' % of the held-out gap'// &
+         trim(merge(': the prediction is theirs, no evidence of the effect', &
+                    '                                                     ', e%carried_by_constants)))
       if (e%n_alike > 0) call add_line(lines, '- end points of the refit that the fit tests cannot '// &
          'tell from the one used (BIC within '//real_str(bic_margin, 'f0.0')//'): '//str(e%n_alike)// &
          ' more; with them the held-out gap removed is '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &

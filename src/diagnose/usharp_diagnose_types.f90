@@ -131,6 +131,10 @@ module usharp_diagnose_types
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
+      !> The held-out gap the refit's constants remove with the effect off: where they alone
+      !> carry the held-out tests, their prediction is no evidence of the effect
+      real(dp) :: shrink_held_constants = -huge(1.0_dp)
+      logical :: carried_by_constants = .false.
       logical :: significant = .false., confirmed = .false.
       logical :: plausible = .true.          !< every magnitude within the effect's physical limit
       !> Refitted with its rate (the second back stress's gamma3, the softening's b) held at

@@ -384,6 +384,10 @@ contains
       else if (.not. e%resolved) then
          text = 'its delay is below the sampling interval ('//real_str(res%dt_sample, 'g0.3')// &
                 ' s) and it does not remove most of the gap'
+      else if (e%carried_by_constants) then
+         text = 'its refit''s constants carry the held-out tests without it ('// &
+                real_str(100.0_dp*e%shrink_held_constants, 'f0.1')//' % of their gap, with it '// &
+                real_str(100.0_dp*e%shrink_held, 'f0.1')//' %): the fit tests leave the constants loose'
       else
          text = 'it does not carry to the held-out tests'
       end if
