@@ -225,7 +225,7 @@ contains
       do i = 1, 20000
          k = 1 + mod(i, nk - 1)
          t = tk(k) + draw(rng, 0.0_dp, 1.0_dp)*(tk(k + 1) - tk(k))
-         call power_piece(tk, c, k, t, u, du)
+         call power_piece(tk(k), c(:, k), t, u, du)
          h = real(tk(k + 1), qp) - real(tk(k), qp)
          a = (real(tk(k + 1), qp) - real(t, qp))/h
          b = 1.0_qp - a

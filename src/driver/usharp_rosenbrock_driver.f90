@@ -285,7 +285,7 @@ contains
       if (sys%extended .and. sys%eff%lag > 0.0_dp) then
          call lagged_value(sys%tc, sys%vc, sys%yk, k, sys%eff%lag, t, load, rate, sys%mc)
       else
-         call power_piece(sys%tc, sys%pc, k, t, load, rate)
+         call power_piece(sys%tc(k), sys%pc(:, k), t, load, rate)
       end if
    end subroutine smooth_load
 

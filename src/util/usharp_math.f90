@@ -448,15 +448,15 @@ contains
       end do
    end function spline_power_form
 
-   !> Value u and derivative du in t at time t of piece k of a spline in power form (see
-   !> spline_power_form; the same spline as cubic_piece's)
-   pure subroutine power_piece(tk, c, k, t, u, du)
-      real(dp), intent(in) :: tk(:), c(:, :), t
-      integer, intent(in) :: k
+   !> Value u and derivative du in t at time t of one piece of a spline in power form (see
+   !> spline_power_form; the same spline as cubic_piece's): tk its knot, c its coefficients.
+   !> Scalars and an explicit-shape piece, no array descriptors: it runs at every stage
+   pure subroutine power_piece(tk, c, t, u, du)
+      real(dp), intent(in) :: tk, c(4), t
       real(dp), intent(out) :: u, du
       real(dp) :: s
-      s = t - tk(k)
-      u = c(1, k) + s*(c(2, k) + s*(c(3, k) + s*c(4, k)))
-      du = c(2, k) + s*(2.0_dp*c(3, k) + 3.0_dp*s*c(4, k))
+      s = t - tk
+      u = c(1) + s*(c(2) + s*(c(3) + s*c(4)))
+      du = c(2) + s*(2.0_dp*c(3) + 3.0_dp*s*c(4))
    end subroutine power_piece
 end module usharp_math
