@@ -132,7 +132,7 @@ module usharp_diagnose_types
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
       !> The held-out gap the refit's constants remove with the effect off: where they alone
-      !> carry the held-out tests, their prediction is no evidence of the effect
+      !> leave none above its floor, their prediction is no evidence of the effect
       real(dp) :: shrink_held_constants = -huge(1.0_dp)
       logical :: carried_by_constants = .false.
       logical :: significant = .false., confirmed = .false.

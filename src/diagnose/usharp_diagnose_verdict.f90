@@ -387,7 +387,8 @@ contains
       else if (e%carried_by_constants) then
          text = 'its refit''s constants carry the held-out tests without it ('// &
                 real_str(100.0_dp*e%shrink_held_constants, 'f0.1')//' % of their gap, with it '// &
-                real_str(100.0_dp*e%shrink_held, 'f0.1')//' %): the fit tests leave the constants loose'
+                real_str(100.0_dp*e%shrink_held, 'f0.1')//' %; what they leave lies below its floor): '// &
+                'the fit tests leave the constants loose'
       else
          text = 'it does not carry to the held-out tests'
       end if
