@@ -62,41 +62,36 @@ contains
       type(diagnose_options), intent(out) :: opts
       type(error_type), allocatable, intent(out) :: error
       type(effect_info) :: cat(n_effects)
+      logical :: acts(n_effects)
       integer :: k
       call effect_numbers(cfg, cfg%diagnose%effects, 'effects', .false., opts%effects, error)
       if (allocated(error)) return
       call effect_numbers(cfg, cfg%diagnose%rows, 'rows', .true., opts%rows, error)
       if (allocated(error)) return
       cat = effect_catalogue(1.0_dp)
+      acts = [(effect_acts(cfg%model, k), k=1, n_effects)]
       ! An effect that cannot act on the model (the Miller model's drag and back stress
       ! effects on another model) would be a refit of the constants alone under its name
-      do k = 1, size(opts%effects)
-         if (effect_acts(cfg%model, opts%effects(k))) cycle
-         call fatal_error(error, cfg%path//": &diagnose: effects: '"//trim(cat(opts%effects(k))%name)// &
-            "' does not act on this model: "//effect_acts_why(cfg%model, opts%effects(k)), stat_input)
-         return
-      end do
       if (size(opts%effects) == 0) then
-         opts%effects = pack([(k, k=1, n_effects)], [(effect_acts(cfg%model, k), k=1, n_effects)])
-         opts%inert = pack([(k, k=1, n_effects)], [(.not. effect_acts(cfg%model, k), k=1, n_effects)])
+         opts%effects = pack([(k, k=1, n_effects)], acts)
+         opts%inert = pack([(k, k=1, n_effects)], .not. acts)
       else
          allocate (opts%inert(0))
       end if
+      call refuse_inert(opts%effects, 'effects')
+      if (allocated(error)) return
       allocate (opts%inert_why(size(opts%inert)))
       do k = 1, size(opts%inert)
          opts%inert_why(k) = effect_acts_why(cfg%model, opts%inert(k))
       end do
       if (size(opts%rows) == 0) opts%rows = [0, opts%effects]
+      call refuse_inert(pack(opts%rows, opts%rows > 0), 'rows')
+      if (allocated(error)) return
       ! A row injects an effect that the diagnosis is to name: one it does not consider can
       ! never be named
       do k = 1, size(opts%rows)
          if (opts%rows(k) == 0) cycle
          if (any(opts%effects == opts%rows(k))) cycle
-         if (.not. effect_acts(cfg%model, opts%rows(k))) then
-            call fatal_error(error, cfg%path//": &diagnose: rows: '"//trim(cat(opts%rows(k))%name)// &
-               "' does not act on this model: "//effect_acts_why(cfg%model, opts%rows(k)), stat_input)
-            return
-         end if
          call fatal_error(error, cfg%path//": &diagnose: rows: '"//trim(cat(opts%rows(k))%name)// &
             "' is injected but effects does not list it, so the diagnosis cannot name it "// &
             '(add it to effects)', stat_input)
@@ -109,6 +104,20 @@ contains
       opts%dlnE_dT = cfg%diagnose%dlnE_dT
       opts%gamma3 = cfg%diagnose%gamma3
       opts%confirm_shrink = cfg%diagnose%confirm_shrink
+   contains
+      !> The first of the effects ks named in `variable` that does not act on the model: an
+      !> input error
+      subroutine refuse_inert(ks, variable)
+         integer, intent(in) :: ks(:)
+         character(len=*), intent(in) :: variable
+         integer :: i
+         do i = 1, size(ks)
+            if (acts(ks(i))) cycle
+            call fatal_error(error, cfg%path//': &diagnose: '//variable//": '"//trim(cat(ks(i))%name)// &
+               "' does not act on this model: "//effect_acts_why(cfg%model, ks(i)), stat_input)
+            return
+         end do
+      end subroutine refuse_inert
    end subroutine diagnose_options_of
 
    !> Catalogue numbers of the effect names given to &diagnose variable `variable` (blank

@@ -288,10 +288,9 @@ contains
          if (allocated(e%p_all) .and. info%sharing == param_per_test) then
             do g = 1, info%nparam
                do i = 1, size(res%names)
-                  if (allocated(e%p_acts)) then
-                     if ((g - 1)*size(res%names) + i <= size(e%p_acts)) then
-                        if (.not. e%p_acts((g - 1)*size(res%names) + i)) cycle
-                     end if
+                  ! (p_acts is p_all's companion: the same size)
+                  if (allocated(e%p_acts) .and. (g - 1)*size(res%names) + i <= size(e%p_all)) then
+                     if (.not. e%p_acts((g - 1)*size(res%names) + i)) cycle
                   end if
                   if (res%held(i) .and. (g - 1)*size(res%names) + i <= size(e%p_all)) &
                      call add_line(lines, '- '//trim(info%pname(g))//' '//trim(res%names(i))// &
