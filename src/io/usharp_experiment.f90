@@ -59,10 +59,16 @@ contains
       if (fits_strain(test)) cols(2) = test%data%strain_col
       cols(3) = ''
       if (test%weighting == 'column') cols(3) = test%data%weight_col
-      call read_data_columns(test%data, pack(cols, len_trim(cols) > 0), vals, error)
-      if (allocated(error)) return
-      call merge_repeated_times(vals, test%data%file, exp%nmerged, error)
-      if (allocated(error)) return
+      if (allocated(test%data_read)) then
+         ! Read with the history (history 'data'), in these columns
+         vals = test%data_read
+         exp%nmerged = test%data_merged
+      else
+         call read_data_columns(test%data, pack(cols, len_trim(cols) > 0), vals, error)
+         if (allocated(error)) return
+         call merge_repeated_times(vals, test%data%file, exp%nmerged, error)
+         if (allocated(error)) return
+      end if
       exp%t = vals(:, 1)
       if (fits_strain(test)) then
          exp%y = vals(:, 2)

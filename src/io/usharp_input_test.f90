@@ -89,6 +89,12 @@ module usharp_input_test
       !> number of the simulated cycle (0 at data points)
       real(dp), allocatable :: peak_y(:)
       integer, allocatable :: peak_cycle(:)
+      !> History 'data': the data file's time, stress (and weight) columns, read with the
+      !> history and merged at repeated times (rows), so that the compared data are not read
+      !> a second time; data_merged: the rows merged. Unallocated: the data are read when
+      !> compared
+      real(dp), allocatable :: data_read(:, :)
+      integer :: data_merged = 0
    contains
       procedure :: times => test_times
       procedure :: has_peaks => test_has_peaks
@@ -402,7 +408,8 @@ contains
             return
          end if
          call data_history(t%data, t%gap_fill, merge(v%strain_range, 0.0_dp, v%strain_range /= unset), &
-                           v%mean_strain, v%strain_rate, v%duration, t%hist, t%dt_out, t%tout, error)
+                           v%mean_strain, v%strain_rate, v%duration, t%hist, t%dt_out, t%tout, error, &
+                           compared_columns(t), t%data_read, t%data_merged)
       case ('')
          call fatal_error(error, 'history is not set (thesis_lcf, relaxation, ratchet, '// &
             'cyclic, tensile, rate_jump, creep, file, data)')
@@ -773,7 +780,27 @@ contains
    !> through (gap_filled_history; range, mean, rate: the cycles' strain range, mean strain
    !> and rate per s if stated, else 0) and, when there are gaps, tout holds the output times
    !> (step dt_out, s) inside the recorded pieces only: the filled cycles are not compared.
-   subroutine data_history(spec, gap_fill, range, mean, rate, duration, hist, dt_out, tout, error)
+   !> The columns of a test's data compared with its simulation (besides time), as
+   !> load_experiment reads them: none for a peaks target
+   pure function compared_columns(t) result(cols)
+      type(test_config), intent(in) :: t
+      character(len=:), allocatable :: cols(:)
+      if (t%target == 'peaks') then
+         allocate (character(len=1) :: cols(0))
+      else if (t%weighting == 'column') then
+         cols = [character(len=max(len(t%data%stress_col), len(t%data%weight_col))) :: &
+                 t%data%stress_col, t%data%weight_col]
+      else
+         cols = [t%data%stress_col]
+      end if
+   end function compared_columns
+
+   !> with compared (column names), table returns the file's time and those columns as
+   !> read with the history, merged at repeated times (nmerged rows), for the comparison;
+   !> where they cannot be read with it (a column the file lacks) table is left unallocated
+   !> and the comparison reads them and reports why
+   subroutine data_history(spec, gap_fill, range, mean, rate, duration, hist, dt_out, tout, error, &
+                           compared, table, nmerged)
       type(data_spec), intent(in) :: spec
       character(len=*), intent(in) :: gap_fill
       !> the history ends at the last sample at or before duration (s; unset: at the last)
@@ -782,18 +809,29 @@ contains
       type(history_type), intent(out) :: hist
       real(dp), allocatable, intent(inout) :: tout(:)
       type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in) :: compared(:)
+      real(dp), allocatable, intent(out) :: table(:, :)
+      integer, intent(out) :: nmerged
       real(dp), allocatable :: vals(:, :), spans(:, :), times(:)
       real(dp) :: tol
       logical, allocatable :: inside(:)
-      integer :: nmerged, j
+      integer :: j
       character(len=:), allocatable :: cols(:)
-      allocate (character(len=max(len(spec%time_col), len(spec%strain_col))) :: cols(2))
+      allocate (character(len=max(len(spec%time_col), len(spec%strain_col), len(compared))) :: &
+                cols(2 + size(compared)))
       cols(1) = spec%time_col
       cols(2) = spec%strain_col
+      cols(3:) = compared
       call read_data_columns(spec, cols, vals, error)
+      if (allocated(error) .and. size(cols) > 2) then
+         deallocate (error)
+         cols = cols(:2)
+         call read_data_columns(spec, cols, vals, error)
+      end if
       if (allocated(error)) return
       call merge_repeated_times(vals, spec%file, nmerged, error)
       if (allocated(error)) return
+      if (size(cols) > 2) table = vals(:, [1, (j, j=3, size(cols))])
       ! A strain beyond 1 (100 %) is no test this model describes, but it is what a column in
       ! percent gives: the loops would be simulated a hundred times too large
       if (maxval(abs(vals(:, 2))) > max_strain) then

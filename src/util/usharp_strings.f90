@@ -231,6 +231,7 @@ contains
 
    !> Split a line into fields: by commas when the line holds one, else by white space.
    !> Double quotes group a field (a comma inside quotes does not split); quotes are removed.
+   !> fields(:nfield) hold the fields (those beyond size(fields) dropped); the rest are undefined.
    pure subroutine split_fields(line, fields, nfield)
       character(len=*), intent(in) :: line
       character(len=*), intent(out) :: fields(:)
@@ -239,7 +240,8 @@ contains
       integer :: i, k
       character :: c
       comma = has_unquoted_comma(line)
-      fields = ''
+      ! Each field blanked as it starts, not all of them: a data file's rows use a few of the
+      ! fields, and blanking every one took most of the time of reading a long file
       nfield = 0
       inquote = .false.
       infield = .false.
@@ -248,14 +250,12 @@ contains
          c = line(i:i)
          if (c == '"') then
             inquote = .not. inquote
-            if (.not. infield) then
-               nfield = nfield + 1; k = 0; infield = .true.
-            end if
+            if (.not. infield) call start_field(fields, nfield, k, infield)
             cycle
          end if
          if (.not. inquote) then
             if (comma .and. c == ',') then
-               if (.not. infield) nfield = nfield + 1
+               if (.not. infield) call start_field(fields, nfield, k, infield)
                infield = .false.
                cycle
             else if (.not. comma .and. (c == ' ' .or. c == achar(9))) then
@@ -263,9 +263,7 @@ contains
                cycle
             end if
          end if
-         if (.not. infield) then
-            nfield = nfield + 1; k = 0; infield = .true.
-         end if
+         if (.not. infield) call start_field(fields, nfield, k, infield)
          if (nfield <= size(fields)) then
             k = k + 1
             if (k <= len(fields)) fields(nfield)(k:k) = c
@@ -273,14 +271,26 @@ contains
       end do
       ! A trailing comma ends with an empty last field
       if (comma .and. len_trim(line) > 0) then
-         if (line(len_trim(line):len_trim(line)) == ',') nfield = nfield + 1
+         if (line(len_trim(line):len_trim(line)) == ',') call start_field(fields, nfield, k, infield)
       end if
       if (comma) then
          do i = 1, min(nfield, size(fields))
-            fields(i) = adjustl(fields(i))
+            if (fields(i)(1:1) == ' ') fields(i) = adjustl(fields(i))
          end do
       end if
    end subroutine split_fields
+
+   !> split_fields: the next field, blank, its length k 0
+   pure subroutine start_field(fields, nfield, k, infield)
+      character(len=*), intent(inout) :: fields(:)
+      integer, intent(inout) :: nfield
+      integer, intent(out) :: k
+      logical, intent(out) :: infield
+      nfield = nfield + 1
+      k = 0
+      infield = .true.
+      if (nfield <= size(fields)) fields(nfield) = ''
+   end subroutine start_field
 
    pure logical function has_unquoted_comma(line) result(found)
       character(len=*), intent(in) :: line
