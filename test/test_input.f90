@@ -502,35 +502,41 @@ contains
       type(experiment_type) :: exp
       character(len=:), allocatable :: deck, csv
       character(len=60) :: rows(7)
-      integer :: i
-      rows(1) = 'time,strain,stress,w'
-      do i = 0, 5
-         write (rows(i + 2), '(f4.1,a,es10.3,a,f6.2,a)') real(i, dp), ',', 1.0e-4_dp*i, ',', 2.0_dp*i, ',1'
-      end do
-      ! The time 2.0 twice: merged into one row of their mean
-      rows(5) = ' 2.0, 3.000E-04,  5.00,3'
-      csv = write_text('once.csv', rows)
-      deck = write_text('once.nml', deck_lines([character(len=200) :: &
-         "&test name='m', history='data', dt_out=1, data_file='once.csv', weighting='column', ", &
-         "time_column='time', strain_column='strain', stress_column='stress', weight_column='w' /"]))
-      call read_config(deck, cfg, uerr)
-      if (.not. allocated(uerr)) then
-         ! Other stresses written over the file after the input was read
-         rows(2:) = [character(len=60) :: '0,0,9,1', '1,1e-4,9,1', '2,2e-4,9,1', '3,3e-4,9,1', &
-                     '4,4e-4,9,1', '5,5e-4,9,1']
+      character(len=*), parameter :: weighted(2) = [character(len=40) :: "weighting='column', ", '']
+      integer :: i, k
+      ! With and without a weight column
+      do k = 1, 2
+         rows(1) = 'time,strain,Stress MPa,w'
+         do i = 0, 5
+            write (rows(i + 2), '(f4.1,a,es10.3,a,f6.2,a)') real(i, dp), ',', 1.0e-4_dp*i, ',', 2.0_dp*i, ',1'
+         end do
+         ! The time 2.0 twice: merged into one row of their mean
+         rows(5) = ' 2.0, 3.000E-04,  5.00,3'
          csv = write_text('once.csv', rows)
-         call load_experiment(cfg%tests(1), cfg%units, exp, uerr)
-      end if
-      if (allocated(uerr)) then
-         call test_failed(error, uerr%message)
-         return
-      end if
-      call check(error, size(exp%t) == 5 .and. exp%nmerged == 1, 'five distinct times, one row merged')
-      if (allocated(error)) return
-      call check(error, all(abs(exp%y - [0.0_dp, 2.0_dp, 4.5_dp, 8.0_dp, 10.0_dp]) < 1e-12_dp) .and. &
-                 all(abs(exp%weight - [1.0_dp, 1.0_dp, 2.0_dp, 1.0_dp, 1.0_dp]) < 1e-12_dp), &
-                 'the stresses and weights read with the history (merged at 2 s)')
-      if (allocated(error)) return
+         deck = write_text('once.nml', deck_lines([character(len=200) :: &
+            "&test name='m', history='data', dt_out=1, data_file='once.csv', "//weighted(k), &
+            "time_column='time', strain_column='strain', stress_column='Stress MPa', weight_column='w' /"]))
+         call read_config(deck, cfg, uerr)
+         if (.not. allocated(uerr)) then
+            ! Other stresses written over the file after the input was read
+            rows(2:) = [character(len=60) :: '0,0,9,1', '1,1e-4,9,1', '2,2e-4,9,1', '3,3e-4,9,1', &
+                        '4,4e-4,9,1', '5,5e-4,9,1']
+            csv = write_text('once.csv', rows)
+            call load_experiment(cfg%tests(1), cfg%units, exp, uerr)
+         end if
+         if (allocated(uerr)) then
+            call test_failed(error, uerr%message)
+            return
+         end if
+         call check(error, size(exp%t) == 5 .and. exp%nmerged == 1, 'five distinct times, one row merged')
+         if (allocated(error)) return
+         call check(error, all(abs(exp%y - [0.0_dp, 2.0_dp, 4.5_dp, 8.0_dp, 10.0_dp]) < 1e-12_dp), &
+                    'the stresses read with the history (merged at 2 s), '//trim(weighted(k)))
+         if (allocated(error)) return
+         if (k == 1) call check(error, all(abs(exp%weight - [1.0_dp, 1.0_dp, 2.0_dp, 1.0_dp, 1.0_dp]) &
+                                           < 1e-12_dp), 'the weights read with the history (merged at 2 s)')
+         if (allocated(error)) return
+      end do
       ! No stress column: the history is read; the comparison says what is missing
       csv = write_text('once.csv', [character(len=20) :: 'time,strain', '0,0', '1,1e-4', '2,2e-4'])
       call read_config(deck, cfg2, uerr)
@@ -541,7 +547,7 @@ contains
       call check(error, size(cfg2%tests(1)%hist%t) == 3, 'the history of three samples')
       if (allocated(error)) return
       call load_experiment(cfg2%tests(1), cfg2%units, exp, uerr)
-      call check_message(error, uerr, "no column 'stress'")
+      call check_message(error, uerr, "no column 'Stress MPa'")
    end subroutine test_data_read_once
 
    !> &solver integrator = 'umat' runs the single-element driver; an unknown one is an error

@@ -785,14 +785,11 @@ contains
    pure function compared_columns(t) result(cols)
       type(test_config), intent(in) :: t
       character(len=:), allocatable :: cols(:)
-      if (t%target == 'peaks') then
-         allocate (character(len=1) :: cols(0))
-      else if (t%weighting == 'column') then
-         cols = [character(len=max(len(t%data%stress_col), len(t%data%weight_col))) :: &
-                 t%data%stress_col, t%data%weight_col]
-      else
-         cols = [t%data%stress_col]
-      end if
+      integer :: n
+      n = merge(0, merge(2, 1, t%weighting == 'column'), t%target == 'peaks')
+      allocate (character(len=max(len(t%data%stress_col), len(t%data%weight_col))) :: cols(n))
+      if (n >= 1) cols(1) = t%data%stress_col
+      if (n == 2) cols(2) = t%data%weight_col
    end function compared_columns
 
    !> with compared (column names), table returns the file's time and those columns as
