@@ -7,7 +7,7 @@ module usharp_experiment
    use usharp_config, only: test_config
    use usharp_history, only: control_stress
    use usharp_input, only: read_data_columns
-   use usharp_input_test, only: max_strain, percent_strain
+   use usharp_input_test, only: max_strain, percent_strain, compared_columns
    use usharp_table, only: merge_repeated_times
    use usharp_units, only: stress_factor
    implicit none
@@ -42,7 +42,7 @@ contains
       type(experiment_type), intent(out) :: exp
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: vals(:, :)
-      character(len=128) :: cols(3)
+      character(len=:), allocatable :: compared(:), cols(:)
       if (.not. test%has_data) then
          call fatal_error(error, "test '"//test%name//"' has no data_file: nothing to compare "// &
             'its simulation with (usharp simulate simulates it alone)')
@@ -54,17 +54,16 @@ contains
          exp%y = pack(test%peak_y, test%point_kind /= 0)*stress_factor(test%data%unit, model_units)
          return
       end if
-      cols(1) = test%data%time_col
-      cols(2) = test%data%stress_col
-      if (fits_strain(test)) cols(2) = test%data%strain_col
-      cols(3) = ''
-      if (test%weighting == 'column') cols(3) = test%data%weight_col
       if (allocated(test%data_read)) then
-         ! Read with the history (history 'data'), in these columns
+         ! Read with the history (history 'data'): time and compared_columns
          vals = test%data_read
          exp%nmerged = test%data_merged
       else
-         call read_data_columns(test%data, pack(cols, len_trim(cols) > 0), vals, error)
+         compared = compared_columns(test, fits_strain(test))
+         allocate (character(len=max(len(test%data%time_col), len(compared))) :: cols(1 + size(compared)))
+         cols(1) = test%data%time_col
+         cols(2:) = compared
+         call read_data_columns(test%data, cols, vals, error)
          if (allocated(error)) return
          call merge_repeated_times(vals, test%data%file, exp%nmerged, error)
          if (allocated(error)) return

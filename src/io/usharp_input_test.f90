@@ -18,7 +18,7 @@ module usharp_input_test
    private
 
    public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
-   public :: read_data_columns, max_strain, percent_strain
+   public :: read_data_columns, max_strain, percent_strain, compared_columns
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
@@ -409,7 +409,7 @@ contains
          end if
          call data_history(t%data, t%gap_fill, merge(v%strain_range, 0.0_dp, v%strain_range /= unset), &
                            v%mean_strain, v%strain_rate, v%duration, t%hist, t%dt_out, t%tout, error, &
-                           compared_columns(t), t%data_read, t%data_merged)
+                           compared_columns(t, .false.), t%data_read, t%data_merged)
       case ('')
          call fatal_error(error, 'history is not set (thesis_lcf, relaxation, ratchet, '// &
             'cyclic, tensile, rate_jump, creep, file, data)')
@@ -775,24 +775,34 @@ contains
       if (allocated(error)) call prefix_error(error, path//': ')
    end subroutine file_history
 
+   !> The columns of a test's data file compared with its simulation, besides time: the
+   !> response (the strain where it is fitted, else the stress) and the weight column of
+   !> weighting 'column'; none for a peaks target (its peaks file is the data). The one list
+   !> that data_history reads with the history and load_experiment reads otherwise
+   pure function compared_columns(t, fits_strain) result(cols)
+      type(test_config), intent(in) :: t
+      !> the strain is the fitted response (a stress-controlled test)
+      logical, intent(in) :: fits_strain
+      character(len=:), allocatable :: cols(:)
+      integer :: n
+      n = merge(0, merge(2, 1, t%weighting == 'column'), t%target == 'peaks')
+      allocate (character(len=max(len(t%data%stress_col), len(t%data%strain_col), &
+                                  len(t%data%weight_col))) :: cols(n))
+      if (n == 0) return
+      if (fits_strain) then
+         cols(1) = t%data%strain_col
+      else
+         cols(1) = t%data%stress_col
+      end if
+      if (n == 2) cols(2) = t%data%weight_col
+   end function compared_columns
+
    !> Strain-controlled history from a measured file's time and strain columns. With
    !> gap_fill = 'cycles' its gaps (unrecorded cycles between recorded ones) are cycled
    !> through (gap_filled_history; range, mean, rate: the cycles' strain range, mean strain
    !> and rate per s if stated, else 0) and, when there are gaps, tout holds the output times
    !> (step dt_out, s) inside the recorded pieces only: the filled cycles are not compared.
-   !> The columns of a test's data compared with its simulation (besides time), as
-   !> load_experiment reads them: none for a peaks target
-   pure function compared_columns(t) result(cols)
-      type(test_config), intent(in) :: t
-      character(len=:), allocatable :: cols(:)
-      integer :: n
-      n = merge(0, merge(2, 1, t%weighting == 'column'), t%target == 'peaks')
-      allocate (character(len=max(len(t%data%stress_col), len(t%data%weight_col))) :: cols(n))
-      if (n >= 1) cols(1) = t%data%stress_col
-      if (n == 2) cols(2) = t%data%weight_col
-   end function compared_columns
-
-   !> with compared (column names), table returns the file's time and those columns as
+   !> With compared (column names), table returns the file's time and those columns as
    !> read with the history, merged at repeated times (nmerged rows), for the comparison;
    !> where they cannot be read with it (a column the file lacks) table is left unallocated
    !> and the comparison reads them and reports why
