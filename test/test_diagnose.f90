@@ -26,18 +26,19 @@ module test_diagnose
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
-                                    joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats
-   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note
+                                    joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
+   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note
    use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign, global_baseline_starts
    use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
-                                       at_box_end, at_bound, beyond_limit
+                                       at_box_end, at_bound, beyond_limit, limit_measures
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
    use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_diagnose_profile, only: open_beyond_estimate
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_specimen, only: specimen_result, specimen_deviance, constants_directions, &
@@ -105,6 +106,9 @@ contains
          new_unittest('held-out-prediction-open-between-end-points', test_alike_note), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
+         new_unittest('interval-that-leaves-out-its-estimate-opens', test_open_beyond_estimate), &
+         new_unittest('gap-shares-of-the-lower-baseline', test_gap_fit_ref), &
+         new_unittest('verdict-says-the-refit-ran-to-a-bound', test_bound_note), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -1645,12 +1649,13 @@ contains
    !> One rule of plausibility for both diagnoses: a temperature offset of 177 K [150, 204] is
    !> beyond its 25 K limit, 25.1 K [24.6, 25.6] is not, 30 K with an open end is judged by
    !> its value; a softening by its reach; a second back stress whose H3 has no limit by its
-   !> saturation against the peak (597 MPa against 176: beyond); a parameter without a limit
-   !> leaves the others to decide
+   !> saturation against the peak (597 MPa against 176: beyond), and one that does not
+   !> saturate (gamma3 = 0) beyond it; a parameter without a limit leaves the others to decide
    subroutine test_beyond_limit(error)
       type(error_type), allocatable, intent(out) :: error
       type(effect_info) :: cat(n_effects)
-      real(dp) :: r
+      type(effect_problem) :: ep
+      real(dp) :: r, reach, saturation
       cat = effect_catalogue(176.0_dp)
       associate (dt => cat(effect_index('temperature')), soft => cat(effect_index('softening')), &
                  bs2 => cat(effect_index('backstress2')))
@@ -1673,8 +1678,76 @@ contains
                           [2.0e5_dp, 400.0_dp], [.false., .false.], 0.0_dp, 597.0_dp/176.0_dp)
          call check(error, abs(r - 597.0_dp/176.0_dp) < 1.0e-12_dp, 'back stress by its saturation: '// &
                     real_str(r, 'f0.4'))
+         if (allocated(error)) return
+         ! H3 = 866 MPa at gamma3 = 0 never saturates, at 300 it saturates at 2.9 MPa
+         call limit_measures(bs2, ep, [0.0_dp], [866.0_dp, 0.0_dp], 176.0_dp, reach, saturation)
+         r = beyond_limit(bs2, [1, 2], [866.0_dp, 0.0_dp], [773.0_dp, 0.0_dp], [960.0_dp, 2.05_dp], &
+                          [.false., .false.], reach, saturation)
+         call check(error, r > 1.0_dp, 'a back stress without saturation within its limit: '//real_str(r, 'es10.3'))
+         if (allocated(error)) return
+         call limit_measures(bs2, ep, [0.0_dp], [866.0_dp, 300.0_dp], 176.0_dp, reach, saturation)
+         call check(error, abs(saturation - 866.0_dp/300.0_dp/176.0_dp) < 1.0e-15_dp, &
+                    'saturation of gamma3 300: '//real_str(saturation, 'es10.3'))
       end associate
    end subroutine test_beyond_limit
+
+   !> Where the global starts found a lower baseline (494.8 against 533.7, noise 0.5), the
+   !> refits' shares are of the structured gap there: 494.3, so an effect that leaves 240.3
+   !> removes 51.4 %, not the 54.9 % of the first baseline's gap; without it the first's gap
+   subroutine test_gap_fit_ref(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      res%f0 = 533.7_dp
+      res%gap_fit = 533.2_dp
+      res%f0_global = 494.8_dp
+      res%global = .false.
+      call check(error, gap_fit_ref(res) == 533.2_dp, 'no global stage: the baseline''s gap')
+      if (allocated(error)) return
+      res%global = .true.
+      call check(error, abs(gap_fit_ref(res) - 494.3_dp) < 1.0e-9_dp, 'the lower baseline''s gap: '// &
+                 real_str(gap_fit_ref(res), 'f0.3'))
+      if (allocated(error)) return
+      call check(error, abs(1.0_dp - 240.3_dp/gap_fit_ref(res) - 0.5139_dp) < 1.0e-4_dp, 'share')
+      if (allocated(error)) return
+      res%f0_global = 600.0_dp
+      call check(error, gap_fit_ref(res) == 533.2_dp, 'a global stage that found no lower baseline')
+   end subroutine test_gap_fit_ref
+
+   !> The verdict's note of a leader whose refit ran to search bounds: its constants (ran
+   !> away) and its own parameters (not determined); nothing where none did
+   subroutine test_bound_note(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      type(effect_outcome) :: e
+      character(len=:), allocatable :: text
+      res%cnames = [character(len=2) :: 'A1', 'B', 'n']
+      e%c = [1.16e-3_dp, 1.03e12_dp, 4.0_dp]
+      e%c_bound = [.true., .true., .false.]
+      e%pname = [character(len=40) :: 'H3', 'gamma3']
+      e%p = [1.7609e5_dp, 3.9968e3_dp]
+      e%p_bound = [.true., .false.]
+      text = bound_note(res, e)
+      call check(error, index(text, 'ran away: A1 = 1.160E-03, B = 1.030E+12 at a search bound') > 0 .and. &
+                 index(text, 'H3 = 1.761E+05 at its search bound, not determined') > 0 .and. &
+                 index(text, 'gamma3') == 0 .and. index(text, ' n ') == 0, text)
+      if (allocated(error)) return
+      e%c_bound = .false.
+      e%p_bound = .false.
+      call check(error, len(bound_note(res, e)) == 0, 'no bound: '//bound_note(res, e))
+   end subroutine test_bound_note
+
+   !> An interval about a lower point than the estimate's that leaves the estimate out
+   !> (dE/E = -0.181 [-0.224, -0.191]) is open on the estimate's side; one that holds it stays
+   subroutine test_open_beyond_estimate(error)
+      type(error_type), allocatable, intent(out) :: error
+      logical :: lo_open(3), hi_open(3)
+      lo_open = .false.
+      hi_open = [.false., .false., .true.]
+      call open_beyond_estimate([-0.181_dp, 1.0_dp, -2.0_dp], [-0.224_dp, 0.5_dp, -1.0_dp], &
+                                [-0.191_dp, 1.5_dp, 3.0_dp], lo_open, hi_open)
+      call check(error, all(hi_open .eqv. [.true., .false., .true.]) .and. &
+                 all(lo_open .eqv. [.false., .false., .true.]), 'the ends on the estimate''s side open')
+   end subroutine test_open_beyond_estimate
 
    !> A fitted magnitude is implausible only when its interval lies beyond the limit: a
    !> temperature offset fitted at 25.1 K [24.6, 25.6] against a limit of 25 K is at the

@@ -351,6 +351,7 @@ contains
       ctx%ifit = pack([(i, i=1, nt)], .not. res%held)
       ctx%ihold = pack([(i, i=1, nt)], res%held)
       allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt), strain_fit(nt))
+      res%stress_unit = cfg%units
       do i = 1, nt
          res%names(i) = cfg%tests(i)%name
          res%unit(i) = merge('strain (-)     ', 'stress ('//cfg%units//')   ', fits_strain(cfg%tests(i)))

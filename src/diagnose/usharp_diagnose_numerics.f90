@@ -405,7 +405,13 @@ contains
       saturation = 0.0_dp
       if (size(p) < 2) return
       if (info%name == 'softening') reach = softening_reached(ep, x, p(1), p(2))
-      if (info%name == 'backstress2' .and. p(2) > 0.0_dp) saturation = abs(p(1)/p(2))/peak
+      if (info%name == 'backstress2' .and. p(2) > 0.0_dp) then
+         saturation = abs(p(1)/p(2))/peak
+      else if (info%name == 'backstress2' .and. p(1) /= 0.0_dp) then
+         ! gamma3 at 0: a back stress that hardens without end never saturates (a fit of a
+         ! specimen's difference to H3 = 866 MPa, gamma3 = 0 passed as within the peak)
+         saturation = huge(1.0_dp)
+      end if
    end subroutine limit_measures
 
    !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the

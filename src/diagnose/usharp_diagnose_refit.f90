@@ -18,7 +18,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most, most, &
-                                    delay_precision
+                                    delay_precision, gap_fit_ref
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, &
                                        block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures
@@ -490,7 +490,8 @@ contains
       integer :: j, nt, g
       nt = size(ctx%prob%targets)
       if (allocated(e%pname)) deallocate (e%pname)
-      allocate (e%pname(count(ep%pfree)))
+      if (allocated(e%punit)) deallocate (e%punit)
+      allocate (e%pname(count(ep%pfree)), e%punit(count(ep%pfree)))
       g = 0
       associate (info => ctx%cat(e%k))
          do j = 1, size(ep%p0)
@@ -498,8 +499,10 @@ contains
             g = g + 1
             if (info%sharing == param_per_test) then
                e%pname(g) = trim(info%pname((j - 1)/nt + 1))//' '//trim(res%names(mod(j - 1, nt) + 1))
+               e%punit(g) = info%punit((j - 1)/nt + 1)
             else
                e%pname(g) = info%pname(j)
+               e%punit(g) = info%punit(j)
             end if
          end do
       end associate
@@ -621,8 +624,8 @@ contains
       e%y = y
       e%held_gap = max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
       if (res%gap_held > 0.0_dp) e%shrink_held = 1.0_dp - e%held_gap/res%gap_held
-      if (res%gap_fit > 0.0_dp) e%shrink_fit = 1.0_dp - &
-         max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)/res%gap_fit
+      if (gap_fit_ref(res) > 0.0_dp) e%shrink_fit = 1.0_dp - &
+         max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)/gap_fit_ref(res)
       ! The same constants without the effect: what of the held-out share they carry alone
       ! (see judge)
       e%shrink_held_constants = -huge(1.0_dp)

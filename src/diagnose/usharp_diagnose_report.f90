@@ -13,7 +13,8 @@ module usharp_diagnose_report
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, &
-                                    joint_form_beats, joint_loose, fit_effect_not_carried
+                                    joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
+                                    fit_structured, most, bound_list
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -194,7 +195,7 @@ contains
          'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
          str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them and from '// &
          'each refit''s constants '// &
-         real_str(res%f0_global, 'es10.3')//', the lower of the two is the reference of dAIC, dBIC)')
+         real_str(res%f0_global, 'es10.3')//', the lower of the two is the reference of dAIC, dBIC and the gap shares)')
       call add_line(lines, '')
       ! Before: the reference of dAIC and dBIC, the lower baseline
       f_ref = res%f0
@@ -242,7 +243,7 @@ contains
       type(effect_outcome), intent(in) :: e
       integer, allocatable :: order(:)
       integer :: i, k, g
-      character(len=:), allocatable :: what
+      character(len=:), allocatable :: what, unit
       logical :: lo_open, hi_open
       type(effect_info) :: cat(n_effects)
       order = top_regions(res%regions, 15)
@@ -271,9 +272,13 @@ contains
             lo_open = e%p_lo_open(k)
             hi_open = e%p_hi_open(k)
          end if
+         unit = ''
+         if (allocated(e%punit)) then
+            if (k <= size(e%punit)) unit = unit_text(e%punit(k), res%stress_unit)
+         end if
          call add_line(lines, '- '//trim(e%pname(k))//' = '//real_str(e%p(k), 'es11.4')//' ['// &
             interval_end(e%p_lo(k), lo_open, 'es11.4')//', '//interval_end(e%p_hi(k), hi_open, 'es11.4')// &
-            ']'//what)
+            ']'//unit//what)
       end do
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
@@ -295,7 +300,8 @@ contains
                   if (res%held(i) .and. (g - 1)*size(res%names) + i <= size(e%p_all)) &
                      call add_line(lines, '- '//trim(info%pname(g))//' '//trim(res%names(i))// &
                         ' (held out, fitted to it with the constants fixed) = '// &
-                        real_str(e%p_all((g - 1)*size(res%names) + i), 'es11.4'))
+                        real_str(e%p_all((g - 1)*size(res%names) + i), 'es11.4')// &
+                        unit_text(info%punit(g), res%stress_unit))
                end do
             end do
          end if
@@ -376,6 +382,7 @@ contains
       !> the diagnosis of the fit tests, its joint stage in res%joint
       type(diagnose_result), intent(in) :: res
       type(diagnose_options), intent(in) :: opts
+      character(len=:), allocatable :: what
       integer :: i
       associate (jres => res%joint)
       call add_line(lines, '')
@@ -396,7 +403,14 @@ contains
             'floor, and the fit tests'' structured gap below its floor too or mostly left): the held-out '// &
             'floor is too wide for the prediction to confirm it.')
       case (joint_held_fit)
-         call add_line(lines, trim(res%effects(res%leading)%name)//' explains little of the fit tests and met '// &
+         if (fit_structured(res)) then
+            what = 'removes '//real_str(100.0_dp*res%effects(res%leading)%shrink_fit, 'f0.1')//' % of the '// &
+                   'fit tests'' structured gap, under the '//real_str(100.0_dp*most, 'f0.0')//' % that '// &
+                   'explains them,'
+         else
+            what = 'has no structured gap of the fit tests to explain'
+         end if
+         call add_line(lines, trim(res%effects(res%leading)%name)//' '//what//' and met '// &
             'the held-out tests only by its parameters fitted to them (an effect per test), not by a '// &
             'prediction: only every effect fitted to every test compares fairly.')
       case (joint_form_beats)
@@ -475,21 +489,6 @@ contains
          end associate
       end do
    end subroutine separate_section
-
-   !> 'n = 170, H2 = 1.0e+04' for the constants in mask
-   function bound_list(names, c, mask) result(text)
-      character(len=*), intent(in) :: names(:)
-      real(dp), intent(in) :: c(:)
-      logical, intent(in) :: mask(:)
-      character(len=:), allocatable :: text
-      integer :: j
-      text = ''
-      do j = 1, size(mask)
-         if (.not. mask(j)) cycle
-         if (len(text) > 0) text = text//', '
-         text = text//trim(names(j))//' = '//real_str(c(j), 'es10.3')
-      end do
-   end function bound_list
 
    !> Noise part of test i's objective
    real(dp) function region_noise(res, i) result(v)
@@ -574,21 +573,13 @@ contains
       if (allocated(error)) return
       deallocate (rows)
       allocate (rows(0))
-      rows = [character(len=row_len) :: rows, 'rank,effect,parameters,predicted_fall,predicted_dbic,refitted,'// &
-              'objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed,'// &
+      ! Each stage's effects: the fit tests', and where every test was fitted too (which then
+      ! decides the verdict) that stage's; leads: the stage's leader
+      rows = [character(len=row_len) :: rows, 'stage,rank,effect,parameters,predicted_fall,predicted_dbic,'// &
+              'refitted,objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed,leads,'// &
               'chi_square_low_end,power_low_end,power_095_at_low_end_times,finding_test,finding_test_power']
-      do j = 1, size(res%effects)
-         associate (e => res%effects(j))
-            rows = [character(len=row_len) :: rows, str(j)//','//csv_field(trim(e%name))//','//str(e%q)//','// &
-               real_str(e%pred_drop, 'es12.5')//','//real_str(e%pred_dbic, 'f0.2')//','// &
-               trim(merge('yes', 'no ', e%refitted))//','//real_str(e%f_after, 'es12.5')//','// &
-               real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
-               real_str(e%shrink_fit, 'f0.4')//','//real_str(e%shrink_held, 'f0.4')//','// &
-               trim(merge('yes', 'no ', e%confirmed))//','//real_str(e%lambda_low, 'es12.5')//','// &
-               real_str(e%power_low, 'f0.4')//','//real_str(e%hidden%times, 'f0.3')//','// &
-               csv_field(trim(e%hidden%test))//','//real_str(e%hidden%power, 'f0.4')]
-         end associate
-      end do
+      call effect_rows('fit tests', res)
+      if (allocated(res%joint)) call effect_rows('every test', res%joint)
       call write_lines(join_path(dir, 'effects.csv'), rows, error)
       if (allocated(error)) return
       deallocate (rows)
@@ -615,6 +606,26 @@ contains
          y = res%y_base(i)
          if (lead > 0) y = res%effects(lead)%y(i)
       end function effect_curve
+
+      !> The rows of effects.csv of one stage's result r
+      subroutine effect_rows(stage, r)
+         character(len=*), intent(in) :: stage
+         type(diagnose_result), intent(in) :: r
+         integer :: k
+         do k = 1, size(r%effects)
+            associate (e => r%effects(k))
+               rows = [character(len=row_len) :: rows, stage//','//str(k)//','//csv_field(trim(e%name))//','// &
+                  str(e%q)//','//real_str(e%pred_drop, 'es12.5')//','//real_str(e%pred_dbic, 'f0.2')//','// &
+                  trim(merge('yes', 'no ', e%refitted))//','//real_str(e%f_after, 'es12.5')//','// &
+                  real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
+                  real_str(e%shrink_fit, 'f0.4')//','//real_str(e%shrink_held, 'f0.4')//','// &
+                  trim(merge('yes', 'no ', e%confirmed))//','//trim(merge('yes', 'no ', k == r%leading))// &
+                  ','//real_str(e%lambda_low, 'es12.5')//','// &
+                  real_str(e%power_low, 'f0.4')//','//real_str(e%hidden%times, 'f0.3')//','// &
+                  csv_field(trim(e%hidden%test))//','//real_str(e%hidden%power, 'f0.4')]
+            end associate
+         end do
+      end subroutine effect_rows
    end subroutine write_tables
 
    !> residuals.png (data - baseline against time, one panel per test) and fit.png (data,

@@ -34,7 +34,7 @@ module usharp_diagnose_specimen
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most, hidden_effect, magnitude_text
    use usharp_diagnose_separate, only: finding_test
-   use usharp_diagnose_profile, only: profile_interval, profile_result
+   use usharp_diagnose_profile, only: profile_interval, profile_result, open_beyond_estimate
    implicit none
    private
 
@@ -340,6 +340,8 @@ contains
          real(dp) :: scale, g3, reach, saturation
          integer, allocatable :: grp(:)
          real(dp), parameter :: sats(2) = [0.03_dp, 0.1_dp], rates(3) = [0.5_dp, 2.0_dp, 10.0_dp]
+         ! Figures and intervals again from a lower point that a profile met, at most twice
+         integer, parameter :: max_passes = 3
          integer :: jj, g, np
          logical :: okj
          se_out%k = k
@@ -418,11 +420,11 @@ contains
                se_out%dbic = huge(1.0_dp)
             end if
          end if
-         ! The figures at o, and again at most once from a lower point that a profile met
+         ! The figures at o, and again (max_passes) from a lower point that a profile met
          ! (o was not the optimum: the intervals are about that point, and so is the rest)
-         do pass = 1, 2
-            if (pass == 2) deallocate (se, grp, se_out%p_lo, se_out%p_hi, se_out%lo_open, &
-                                       se_out%hi_open, se_out%pname, se_out%punit)
+         do pass = 1, max_passes
+            if (pass > 1) deallocate (se, grp, se_out%p_lo, se_out%p_hi, se_out%lo_open, &
+                                      se_out%hi_open, se_out%pname, se_out%punit)
             lower = .false.
             x_low%f = o%f
             se_out%f_after = o%f
@@ -470,10 +472,13 @@ contains
                   lower = .true.
                end if
             end do
-            if (.not. lower .or. pass == 2) exit
+            if (.not. lower .or. pass == max_passes) exit
             o%x = x_low%x
             o%f = x_low%f
          end do
+         ! (profiles that still met lower points in the last pass: intervals about such a
+         ! point may leave out the estimate)
+         call open_beyond_estimate(se_out%p, se_out%p_lo, se_out%p_hi, se_out%lo_open, se_out%hi_open)
          ! Beyond its physical limit only as the held-out diagnosis judges it
          call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &

@@ -9,17 +9,17 @@ module usharp_diagnose_verdict
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
-                                    leaves_noise, explains_resolved, rest_at_noise, most, &
+                                    leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
-                                    joint_partial, hidden_effect
+                                    joint_partial, hidden_effect, bound_list
    implicit none
    private
 
    !> Said of a set's share removed below most whose rest lies at the noise level
    character(len=*), parameter :: rest_note = ', the rest below its floor'
 
-   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note
+   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note, bound_note
 
 contains
 
@@ -119,7 +119,7 @@ contains
             text = text//', structured gap removed '//real_str(100.0_dp*e%shrink_fit, 'f0.1')// &
                    ' % on the fit tests'
             if (fit_structured(res) .and. e%shrink_fit < most .and. &
-                rest_at_noise(res%gap_fit, e%shrink_fit, res%floor_fit)) text = text//rest_note
+                rest_at_noise(gap_fit_ref(res), e%shrink_fit, res%floor_fit)) text = text//rest_note
             if (held_quiet(res)) then
                text = text//'; the held-out tests had none and still have none'
             else
@@ -141,6 +141,7 @@ contains
                    ' is the simplest'
          end if
          if (any(e%worse)) text = text//'; it makes '//test_list(res, e%worse)//' worse'
+         text = text//bound_note(res, e)
          if (.not. e%resolved .and. allocated(e%p)) then
             if (size(e%p) > 0) text = text//'; its delay, '//real_str(e%p(1), 'g0.3')// &
                ' s, is below the sampling interval of the fit tests ('//real_str(res%dt_sample, 'g0.3')// &
@@ -149,6 +150,27 @@ contains
       end associate
       res%verdict = text
    end subroutine effect_verdict
+
+   !> What the verdict adds of a leader's refit that ran to a search bound: its constants at
+   !> a bound of &fit (the refit ran away), its own parameters at theirs (not determined);
+   !> '' when none did (the report had flagged a backstress2 with H3 at its bound and A1, B
+   !> at the box's while the verdict read as if the refit had settled)
+   function bound_note(res, e) result(text)
+      type(diagnose_result), intent(in) :: res
+      type(effect_outcome), intent(in) :: e
+      character(len=:), allocatable :: text
+      integer :: n
+      text = ''
+      if (allocated(e%c_bound) .and. allocated(e%c) .and. allocated(res%cnames)) then
+         if (any(e%c_bound)) text = '; its refit ran away: '//bound_list(res%cnames, e%c, e%c_bound)// &
+            ' at a search bound of &fit'
+      end if
+      if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) then
+         n = min(size(e%p_bound), size(e%pname), size(e%p))
+         if (any(e%p_bound(:n))) text = text//'; '//bound_list(e%pname(:n), e%p(:n), e%p_bound(:n))// &
+            ' at its search bound, not determined by the data'
+      end if
+   end function bound_note
 
    !> The verdict of a diagnosis whose prediction could not decide (see joint_reason), from
    !> its joint stage (jres: every test fitted): an effect the joint stage confirms leads,
