@@ -128,7 +128,7 @@ contains
       call add_line(lines, 'Regions ranked by structured gap (share: of the objective of the test set the region')
       call add_line(lines, 'belongs to; bias = mean of data - model; runs z < -3 with more residual than noise: structured):')
       call add_line(lines, '')
-      call add_line(lines, '| rank | test | region | points | share % | RMS | bias | runs z | residual/noise | |')
+      call add_line(lines, '| rank | test | region | points | share % | RMS | bias | runs z | mean square residual/noise | |')
       call add_line(lines, '|---|---|---|---|---|---|---|---|---|---|')
       order = top_regions(res%regions, 15)
       do k = 1, size(order)
@@ -325,11 +325,17 @@ contains
       if (e%f_unprofiled > 0.0_dp) call add_line(lines, '- refitted again from a lower point that its '// &
          'profile met: objective '//real_str(e%f_unprofiled, 'es10.3')//' -> '//real_str(e%f_after, 'es10.3')// &
          ', the figures from there')
-      if (e%shrink_held_constants > -huge(1.0_dp) .and. any(res%held)) call add_line(lines, &
-         '- its refit''s constants without the effect remove '// &
-         real_str(100.0_dp*e%shrink_held_constants, 'f0.1')//' % of the held-out gap'// &
-         trim(merge(': the prediction is theirs, no evidence of the effect', &
-                    '                                                     ', e%carried_by_constants)))
+      if (e%shrink_held_constants > -huge(1.0_dp) .and. any(res%held)) then
+         ! (a negative share: they widen the gap)
+         if (e%shrink_held_constants >= 0.0_dp) then
+            what = 'remove '//real_str(100.0_dp*e%shrink_held_constants, 'f0.1')//' % of'
+         else
+            what = 'widen by '//real_str(-100.0_dp*e%shrink_held_constants, 'f0.1')//' %'
+         end if
+         call add_line(lines, '- its refit''s constants without the effect '//what//' the held-out gap'// &
+            trim(merge(': the prediction is theirs, no evidence of the effect', &
+                       '                                                     ', e%carried_by_constants)))
+      end if
       if (e%n_alike > 0) call add_line(lines, '- end points of the refit that the fit tests cannot '// &
          'tell from the one used (BIC within '//real_str(bic_margin, 'f0.0')//'): '//str(e%n_alike)// &
          ' more; with them the held-out gap removed is '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &
@@ -549,6 +555,18 @@ contains
                'regions.csv, effects.csv, residuals.csv, steps.csv'//trim(merge(', *.png', '       ', plotted))]
    end subroutine write_report
 
+   !> The effect whose curve residuals.csv and fit.png show: the leader, else the first
+   !> refitted; 0 where none was refitted
+   pure integer function curve_effect(res) result(lead)
+      type(diagnose_result), intent(in) :: res
+      integer :: j
+      lead = res%leading
+      if (lead /= 0) return
+      do j = size(res%effects), 1, -1
+         if (res%effects(j)%refitted) lead = j
+      end do
+   end function curve_effect
+
    !> regions.csv, effects.csv, residuals.csv
    subroutine write_tables(dir, res, error)
       character(len=*), intent(in) :: dir
@@ -557,7 +575,7 @@ contains
       ! (long enough for a test name of its greatest length, quoted, and the numbers)
       integer, parameter :: row_len = 600
       character(len=row_len), allocatable :: rows(:)
-      integer :: i, j, lead
+      integer :: i, lead
       allocate (rows(0))
       rows = [character(len=row_len) :: rows, 'test,region,points,objective,noise_part,structured_gap,rms,bias,runs_z,structured']
       do i = 1, size(res%regions)
@@ -584,12 +602,7 @@ contains
       if (allocated(error)) return
       deallocate (rows)
       ! The curves: data, baseline, and with the leading (else the first refitted) effect
-      lead = res%leading
-      if (lead == 0) then
-         do j = size(res%effects), 1, -1
-            if (res%effects(j)%refitted) lead = j
-         end do
-      end if
+      lead = curve_effect(res)
       allocate (rows(size(res%t) + 1))
       rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id,cycle,inelastic'
       do i = 1, size(res%t)
@@ -686,6 +699,7 @@ contains
       function script(suffix) result(gp)
          character(len=*), intent(in) :: suffix
          character(len=512), allocatable :: gp(:)
+         character(len=:), allocatable :: with
          integer :: i, nt
          nt = size(res%names)
          allocate (gp(0))
@@ -699,14 +713,19 @@ contains
                   trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
                   "plot "//csv//" every ::1 using "//own_x(i)//":($5-$6):8 with points pt 7 ps 0.3 lc variable"]
          end do
+         ! (the legend beside the panel, where it hides no data)
          gp = [character(len=512) :: gp, 'unset multiplot', "set output "// &
                gnuplot_string(join_path(base, 'fit.png'//suffix)), 'set multiplot layout '//str(nt)//',1', &
-               'set key top right']
+               'set key outside right top']
+         with = 'no effect refitted'
+         if (curve_effect(res) > 0) with = 'with '//trim(res%effects(curve_effect(res))%name)
          do i = 1, nt
             gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
+                  'set ylabel "'//trim(res%unit(i))//'"', &
                   "plot "//csv//" every ::1 using "//own_x(i)//":5 with dots "// &
                   "lc rgb 'black' title 'data', '' every ::1 using "//own_x(i)//":6 with lines lc rgb 'blue' "// &
-                  "title 'baseline', '' every ::1 using "//own_x(i)//":7 with lines lc rgb 'red' title 'with effect'"]
+                  "title 'baseline', '' every ::1 using "//own_x(i)//":7 with lines lc rgb 'red' title '"// &
+                  with//"'"]
          end do
          gp = [character(len=512) :: gp, 'unset multiplot']
       end function script

@@ -854,7 +854,7 @@ contains
             do j = 1, size(sr%c)
                if (sr%c_bound(j)) ln = ln//', '//trim(sr%cnames(j))
             end do
-            call add('The replicates'' fit ran to a search bound of the &fit box for '//ln(3:)//': the '// &
+            call add('The replicates'' fit ran to a search bound of &fit (lower, upper) for '//ln(3:)//': the '// &
                'replicates do not bound it there, and what the specimen is set against rests on where '// &
                'the search stopped.')
          end if
@@ -862,7 +862,7 @@ contains
       call add('')
       if (sr%f_joint >= 0.0_dp) then
          ln = trim(sr%name)//' predicted with them: objective '//real_str(sr%f0, 'es10.3')//' on '// &
-              str(sr%m)//' points; its noise (sd '//real_str(sr%noise_sd, 'es9.2')//' '//trim(sr%unit)// &
+              str(sr%m)//' points; its noise (sd of its '//trim(sr%unit)//' '//real_str(sr%noise_sd, 'es9.2')// &
               ') explains '//real_str(sum(sr%nv), 'es10.3')
          if (allocated(sr%w)) ln = ln//', and the constants'' own uncertainty (their covariance from the '// &
             'replicates'' noise, carried linearly to the specimen) '//real_str(sr%pred, 'es10.3')
