@@ -262,8 +262,14 @@ contains
          end if
          if (allocated(e%p_bound)) then
             if (k <= size(e%p_bound)) then
-               if (e%p_bound(k)) what = what//': at its search bound, which the data do not move it '// &
-                  'from: its value is not determined and this interval does not hold'
+               if (e%p_bound(k)) then
+                  what = what//': at its search bound, which the data do not move it '// &
+                     'from: its value is not determined and this interval does not hold'
+               else if (any(e%p_bound)) then
+                  ! (H3 at its bound leaves only H3/gamma3 determined, not gamma3)
+                  what = what//': with '//bound_list(e%pname, mask=e%p_bound)//' held at its bound, '// &
+                     'so only as far as that holds'
+               end if
             end if
          end if
          lo_open = .false.

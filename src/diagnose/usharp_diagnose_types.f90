@@ -244,18 +244,19 @@ contains
       text = trim(name)//' = '//real_str(value, 'es9.2')//unit_text(unit, stress_unit)
    end function magnitude_text
 
-   !> 'n = 170, H2 = 1.0e+04' for the constants in mask
-   function bound_list(names, c, mask) result(text)
+   !> 'n = 170, H2 = 1.0e+04' for the constants in mask, or without their values c 'n, H2'
+   pure function bound_list(names, c, mask) result(text)
       character(len=*), intent(in) :: names(:)
-      real(dp), intent(in) :: c(:)
+      real(dp), intent(in), optional :: c(:)
       logical, intent(in) :: mask(:)
       character(len=:), allocatable :: text
       integer :: j
       text = ''
-      do j = 1, size(mask)
+      do j = 1, min(size(names), size(mask))
          if (.not. mask(j)) cycle
          if (len(text) > 0) text = text//', '
-         text = text//trim(names(j))//' = '//real_str(c(j), 'es10.3')
+         text = text//trim(names(j))
+         if (present(c)) text = text//' = '//real_str(c(j), 'es10.3')
       end do
    end function bound_list
 
