@@ -624,8 +624,8 @@ contains
       e%y = y
       e%held_gap = max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
       if (res%gap_held > 0.0_dp) e%shrink_held = 1.0_dp - e%held_gap/res%gap_held
-      if (gap_fit_ref(res) > 0.0_dp) e%shrink_fit = 1.0_dp - &
-         max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)/gap_fit_ref(res)
+      ! (its share of the reference baseline's gap: see judge)
+      e%gap_fit_after = max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
       ! The same constants without the effect: what of the held-out share they carry alone
       ! (see judge)
       e%shrink_held_constants = -huge(1.0_dp)
@@ -729,7 +729,8 @@ contains
    end function worse_tests
 
    !> AIC, BIC against the baseline's (lowest) objective, each fit test's residuals of a
-   !> variance of their own (deviance_change), and the verdict
+   !> variance of their own (deviance_change), the share of the gap at that baseline, and the
+   !> verdict
    subroutine judge(ctx, res, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
@@ -745,6 +746,9 @@ contains
       end if
       e%daic = dev + 2.0_dp*e%q
       e%dbic = dev + e%q*log_dp(real(res%m, dp))
+      ! The share of the fit tests' structured gap removed, of the gap at the same reference
+      ! (a refit that the global starts left where it was kept the first baseline's share)
+      if (e%refitted .and. gap_fit_ref(res) > 0.0_dp) e%shrink_fit = 1.0_dp - e%gap_fit_after/gap_fit_ref(res)
       e%significant = e%dbic < -bic_margin
       ! No structured gap above the floors is asked for: the floors test every direction of
       ! the residual at once against a noise estimate (which a curved response lifts), BIC

@@ -133,6 +133,7 @@ module usharp_diagnose_types
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
+      real(dp) :: gap_fit_after = 0.0_dp  !< the fit tests' structured gap left with the effect
       !> The held-out gap the refit's constants remove with the effect off: where they alone
       !> leave none above its floor, their prediction is no evidence of the effect
       real(dp) :: shrink_held_constants = -huge(1.0_dp)
