@@ -402,7 +402,8 @@ contains
       type(diagnose_result), intent(in) :: res
       character(len=:), allocatable :: text
       if (.not. e%plausible) then
-         text = 'its '//trim(e%worst_what)//' is '//real_str(e%worst, 'f0.1')//' x its physical limit'
+         ! (the largest fitted value; plausibility asks its interval too: see beyond_limit)
+         text = 'its fitted '//trim(e%worst_what)//' reaches '//real_str(e%worst, 'f0.1')//' x its physical limit'
       else if (.not. e%resolved) then
          text = 'its delay is below the sampling interval ('//real_str(res%dt_sample, 'g0.3')// &
                 ' s) and it does not remove most of the gap'
