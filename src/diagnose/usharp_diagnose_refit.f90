@@ -18,7 +18,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most, most, &
-                                    delay_precision, gap_fit_ref
+                                    delay_precision, gap_fit_ref, per_test_ref
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, &
                                        block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures
@@ -619,7 +619,6 @@ contains
       logical :: ok
       call every_test(ctx, mdl, e%k, p, r, y, ok)
       e%per_test_after = per_test(ctx%prob, r)
-      e%worse = worse_tests(ctx, res, e%per_test_after)
       e%regions = all_regions(ctx%prob, res, r, y, ctx%nv)
       e%y = y
       e%held_gap = max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
@@ -721,9 +720,11 @@ contains
       type(diagnose_result), intent(in) :: res
       real(dp), intent(in) :: after(:)
       logical :: worse(size(after))
+      real(dp), allocatable :: before(:)
       integer :: i
+      before = per_test_ref(res)
       do i = 1, size(after)
-         worse(i) = .not. res%held(i) .and. after(i) - res%per_test0(i) > &
+         worse(i) = .not. res%held(i) .and. after(i) - before(i) > &
                     3.0_dp*sqrt(2.0_dp*sum(ctx%nv**2, res%test_of == i))
       end do
    end function worse_tests
@@ -749,6 +750,8 @@ contains
       ! The share of the fit tests' structured gap removed, of the gap at the same reference
       ! (a refit that the global starts left where it was kept the first baseline's share)
       if (e%refitted .and. gap_fit_ref(res) > 0.0_dp) e%shrink_fit = 1.0_dp - e%gap_fit_after/gap_fit_ref(res)
+      ! ... and the fit tests it makes worse than that baseline does
+      if (e%refitted .and. allocated(e%per_test_after)) e%worse = worse_tests(ctx, res, e%per_test_after)
       e%significant = e%dbic < -bic_margin
       ! No structured gap above the floors is asked for: the floors test every direction of
       ! the residual at once against a noise estimate (which a curved response lifts), BIC

@@ -14,7 +14,7 @@ module usharp_diagnose_report
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
-                                    fit_structured, most, bound_list
+                                    fit_structured, most, bound_list, per_test_ref, joint_decides
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -244,6 +244,7 @@ contains
       integer, allocatable :: order(:)
       integer :: i, k, g
       character(len=:), allocatable :: what, unit
+      real(dp), allocatable :: before(:)
       logical :: lo_open, hi_open
       type(effect_info) :: cat(n_effects)
       order = top_regions(res%regions, 15)
@@ -346,10 +347,12 @@ contains
          'tell from the one used (BIC within '//real_str(bic_margin, 'f0.0')//'): '//str(e%n_alike)// &
          ' more; with them the held-out gap removed is '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &
          ' to '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %')
+      ! (before: at the reference baseline, as "objective before")
       call add_line(lines, '- objective per test, before -> after:')
+      before = per_test_ref(res)
       do k = 1, size(res%names)
          call add_line(lines, '  - '//trim(res%names(k))//trim(merge(' (held out)', '           ', res%held(k)))// &
-            ': '//real_str(res%per_test0(k), 'es10.3')//' -> '//real_str(e%per_test_after(k), 'es10.3'))
+            ': '//real_str(before(k), 'es10.3')//' -> '//real_str(e%per_test_after(k), 'es10.3'))
       end do
       call add_line(lines, '- top regions, structured gap before -> after:')
       do k = 1, min(5, size(order))
@@ -573,6 +576,35 @@ contains
       end do
    end function curve_effect
 
+   !> Whether the effect curve is the verdict's leader fitted with every test (the stage
+   !> that fits every test decides the verdict and names one)
+   pure logical function joint_curve(res)
+      type(diagnose_result), intent(in) :: res
+      joint_curve = joint_decides(res)
+      if (.not. joint_curve) return
+      joint_curve = res%joint%leading > 0
+      if (.not. joint_curve) return
+      joint_curve = allocated(res%joint%effects(res%joint%leading)%y) .and. allocated(res%y_base)
+      if (joint_curve) joint_curve = size(res%joint%effects(res%joint%leading)%y) == size(res%y_base)
+   end function joint_curve
+
+   !> The effect curve's name in the plots: the verdict's leader fitted with every test, or
+   !> the effect whose curve it is with whether it was confirmed
+   function curve_label(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      integer :: lead
+      lead = curve_effect(res)
+      if (joint_curve(res)) then
+         text = 'with '//trim(res%joint%effects(res%joint%leading)%name)//' (every test fitted)'
+      else if (lead > 0) then
+         text = 'with '//trim(res%effects(lead)%name)
+         if (.not. res%effects(lead)%confirmed) text = text//' (not confirmed)'
+      else
+         text = 'no effect refitted'
+      end if
+   end function curve_label
+
    !> regions.csv, effects.csv, residuals.csv
    subroutine write_tables(dir, res, error)
       character(len=*), intent(in) :: dir
@@ -623,21 +655,29 @@ contains
       real(dp) function effect_curve(i) result(y)
          integer, intent(in) :: i
          y = res%y_base(i)
-         if (lead > 0) y = res%effects(lead)%y(i)
+         if (joint_curve(res)) then
+            y = res%joint%effects(res%joint%leading)%y(i)
+         else if (lead > 0) then
+            y = res%effects(lead)%y(i)
+         end if
       end function effect_curve
 
       !> The rows of effects.csv of one stage's result r
       subroutine effect_rows(stage, r)
          character(len=*), intent(in) :: stage
          type(diagnose_result), intent(in) :: r
+         character(len=:), allocatable :: held
          integer :: k
          do k = 1, size(r%effects)
             associate (e => r%effects(k))
+               ! (empty where no test is held out, as the report's '-')
+               held = ''
+               if (any(r%held)) held = real_str(e%shrink_held, 'f0.4')
                rows = [character(len=row_len) :: rows, stage//','//str(k)//','//csv_field(trim(e%name))//','// &
                   str(e%q)//','//real_str(e%pred_drop, 'es12.5')//','//real_str(e%pred_dbic, 'f0.2')//','// &
                   trim(merge('yes', 'no ', e%refitted))//','//real_str(e%f_after, 'es12.5')//','// &
                   real_str(e%daic, 'f0.2')//','//real_str(e%dbic, 'f0.2')//','// &
-                  real_str(e%shrink_fit, 'f0.4')//','//real_str(e%shrink_held, 'f0.4')//','// &
+                  real_str(e%shrink_fit, 'f0.4')//','//held//','// &
                   trim(merge('yes', 'no ', e%confirmed))//','//trim(merge('yes', 'no ', k == r%leading))// &
                   ','//real_str(e%lambda_low, 'es12.5')//','// &
                   real_str(e%power_low, 'f0.4')//','//real_str(e%hidden%times, 'f0.3')//','// &
@@ -723,8 +763,7 @@ contains
          gp = [character(len=512) :: gp, 'unset multiplot', "set output "// &
                gnuplot_string(join_path(base, 'fit.png'//suffix)), 'set multiplot layout '//str(nt)//',1', &
                'set key outside right top']
-         with = 'no effect refitted'
-         if (curve_effect(res) > 0) with = 'with '//trim(res%effects(curve_effect(res))%name)
+         with = curve_label(res)
          do i = 1, nt
             gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
                   'set ylabel "'//trim(res%unit(i))//'"', &

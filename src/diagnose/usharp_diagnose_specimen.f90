@@ -30,9 +30,9 @@ module usharp_diagnose_specimen
                                        soften_rate0, low_end_deltas, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
-                                       block_sums
+                                       block_sums, at_box_end
    use usharp_diagnose_verdict, only: power_cells, missed_note
-   use usharp_diagnose_types, only: most, hidden_effect, magnitude_text
+   use usharp_diagnose_types, only: most, hidden_effect, magnitude_text, bound_list
    use usharp_diagnose_separate, only: finding_test
    use usharp_diagnose_profile, only: profile_interval, profile_result, open_beyond_estimate
    implicit none
@@ -52,6 +52,8 @@ module usharp_diagnose_specimen
       character(len=16), allocatable :: pname(:), punit(:)
       real(dp), allocatable :: p(:), p_lo(:), p_hi(:)    !< magnitudes, 95 % profile interval
       logical, allocatable :: lo_open(:), hi_open(:)     !< interval open at that end
+      !> at an outer end of its search box: not determined by the data, its interval void
+      logical, allocatable :: p_bound(:)
       logical :: plausible = .true.                      !< within the effect's physical limit
       logical :: significant = .false.                   !< BIC falls by more than bic_margin
       !> Expected chi-square of the effect at the low end of its range on the specimen, and
@@ -479,6 +481,10 @@ contains
          ! (profiles that still met lower points in the last pass: intervals about such a
          ! point may leave out the estimate)
          call open_beyond_estimate(se_out%p, se_out%p_lo, se_out%p_hi, se_out%lo_open, se_out%hi_open)
+         ! A parameter at an outer end of its search box (dD0/D0 of 52 [52.1, 52.3], 130 times
+         ! its limit, a profile pinned there) is not measured by the data
+         call ek%bounds(lo, hi)
+         se_out%p_bound = at_box_end(o%x, lo, hi)
          ! Beyond its physical limit only as the held-out diagnosis judges it
          call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
@@ -915,10 +921,13 @@ contains
                if (g > 1) ln = ln//'; '
                fmt = interval_format(e%p(g), merge(e%p(g), e%p_lo(g), e%lo_open(g)), &
                                      merge(e%p(g), e%p_hi(g), e%hi_open(g)))
-               ln = ln//trim(e%pname(g))//' = '//trim(adjustl(real_str(e%p(g), fmt)))//' ['// &
-                    interval_end(e%p_lo(g), e%lo_open(g), fmt)//', '// &
-                    interval_end(e%p_hi(g), e%hi_open(g), fmt)//'] '// &
-                    trim(unit_of(e%punit(g)))
+               ln = ln//trim(e%pname(g))//' = '//trim(adjustl(real_str(e%p(g), fmt)))
+               if (bound_at(e, g)) then
+                  ln = ln//' (at its search bound: not determined) '//trim(unit_of(e%punit(g)))
+               else
+                  ln = ln//' ['//interval_end(e%p_lo(g), e%lo_open(g), fmt)//', '// &
+                       interval_end(e%p_hi(g), e%hi_open(g), fmt)//'] '//trim(unit_of(e%punit(g)))
+               end if
             end do
             if (e%significant .and. e%plausible) then
                verdict = 'significant'
@@ -963,6 +972,12 @@ contains
          end do
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
          if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
+         associate (e => sr%effects(lead))
+            if (allocated(e%p_bound)) then
+               if (any(e%p_bound)) verdict = verdict//'; '//bound_list(e%pname, e%p, e%p_bound)// &
+                  ' at its search bound, not determined by the data'
+            end if
+         end associate
       end if
       if (sr%gap <= sr%floor .and. lead == 0) then
          if (sr%f_joint >= 0.0_dp) then
@@ -989,6 +1004,16 @@ contains
          character(len=*), intent(in) :: text
          call add_line(lines, text)
       end subroutine add
+
+      !> Parameter g of e at an outer end of its search box
+      pure logical function bound_at(e, g)
+         type(specimen_effect), intent(in) :: e
+         integer, intent(in) :: g
+         bound_at = .false.
+         if (allocated(e%p_bound)) then
+            if (g <= size(e%p_bound)) bound_at = e%p_bound(g)
+         end if
+      end function bound_at
 
       !> A catalogue unit with 'stress' as the model's stress unit
       function unit_of(u) result(text)

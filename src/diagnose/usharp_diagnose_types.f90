@@ -16,7 +16,7 @@ module usharp_diagnose_types
 
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text
-   public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list
+   public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
              partial_carry, joint_reason, fit_effect_not_carried
@@ -310,6 +310,15 @@ contains
       type(diagnose_result), intent(in) :: res
       fit_structured = res%gap_fit > res%floor_fit
    end function fit_structured
+
+   !> Each test's objective at the reference baseline (see gap_fit_ref): the global
+   !> baseline's where it is the lower, against which a refit makes a test worse
+   pure function per_test_ref(res) result(f)
+      type(diagnose_result), intent(in) :: res
+      real(dp), allocatable :: f(:)
+      f = res%per_test0
+      if (res%global .and. res%f0_global < res%f0 .and. allocated(res%per_test_global)) f = res%per_test_global
+   end function per_test_ref
 
    !> The fit tests' structured gap at the reference baseline, of which the refits' shares
    !> are taken: where the global starts found a lower baseline (the reference of dAIC and
