@@ -39,6 +39,8 @@ module test_diagnose
    use usharp_diagnose_journal, only: diagnose_journal
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_diagnose_profile, only: open_beyond_estimate
+   use usharp_diagnose_memo, only: effect_reals
+   use usharp_effect_values, only: test_effects
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_optimiser, only: optimum_type
    use usharp_diagnose_specimen, only: specimen_result, specimen_deviance, constants_directions, &
@@ -109,6 +111,7 @@ contains
          new_unittest('interval-that-leaves-out-its-estimate-opens', test_open_beyond_estimate), &
          new_unittest('gap-shares-of-the-lower-baseline', test_gap_fit_ref), &
          new_unittest('verdict-says-the-refit-ran-to-a-bound', test_bound_note), &
+         new_unittest('run-key-holds-every-effect-value', test_effect_reals), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
          new_unittest('separating-test-for-effects-alike', test_separate), &
@@ -1735,6 +1738,18 @@ contains
       e%p_bound = .false.
       call check(error, len(bound_note(res, e)) == 0, 'no bound: '//bound_note(res, e))
    end subroutine test_bound_note
+
+   !> The key of a problem holds every value of its effects and no padding bytes: as many
+   !> values as the type has 8-byte slots, the flag among them
+   subroutine test_effect_reals(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(test_effects) :: a, b
+      b%extra_states = .not. a%extra_states
+      call check(error, size(effect_reals(a))*storage_size(1.0_dp) >= storage_size(a), &
+                 'a component of test_effects left out of effect_reals')
+      if (allocated(error)) return
+      call check(error, any(effect_reals(a) /= effect_reals(b)), 'the extended states'' flag in the key')
+   end subroutine test_effect_reals
 
    !> An interval about a lower point than the estimate's that leaves the estimate out
    !> (dE/E = -0.181 [-0.224, -0.191]) is open on the estimate's side; one that holds it stays

@@ -27,8 +27,8 @@ module usharp_diagnose_report
    !> when it wrote it (the plots: by their hashes, which plots.gp records; see drawn_line)
    character(len=*), parameter :: report_names(8) = [character(len=13) :: 'report.md', &
       'steps.csv', 'regions.csv', 'effects.csv', 'residuals.csv', 'plots.gp', 'residuals.png', 'fit.png']
-   character(len=*), parameter :: report_marks(8) = [character(len=28) :: '# usharp diagnose', &
-      'step,simulations,', 'test,region,points,', 'rank,effect,parameters,', 'test,held_out,t_s,', &
+   character(len=*), parameter :: report_marks(8) = [character(len=29) :: '# usharp diagnose', &
+      'step,simulations,', 'test,region,points,', 'stage,rank,effect,parameters,', 'test,held_out,t_s,', &
       "set datafile separator ','", '@plots.gp', '@plots.gp']
 
 contains
@@ -631,7 +631,8 @@ contains
       allocate (rows(0))
       ! Each stage's effects: the fit tests', and where every test was fitted too (which then
       ! decides the verdict) that stage's; leads: the stage's leader
-      rows = [character(len=row_len) :: rows, 'stage,rank,effect,parameters,predicted_fall,predicted_dbic,'// &
+      ! (its header begins with the mark a later run knows it by)
+      rows = [character(len=row_len) :: rows, trim(report_marks(4))//'predicted_fall,predicted_dbic,'// &
               'refitted,objective_after,daic,dbic,gap_removed_fit,gap_removed_held_out,confirmed,leads,'// &
               'chi_square_low_end,power_low_end,power_095_at_low_end_times,finding_test,finding_test_power']
       call effect_rows('fit tests', res)
