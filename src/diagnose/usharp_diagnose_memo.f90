@@ -101,14 +101,14 @@ contains
             ' parameters '//hex_text([ep%p0, ep%pscale, effect_reals(ep%base)])
    end function problem_key
 
-   !> The values of e, in order, its flag as 0 or 1: component by component, as a logical
-   !> beside the reals leaves padding whose bytes no run fixes (a copy of the whole type made
-   !> the key of the same problem differ between a run and its resumption)
+   !> The values of e, in order, component by component: a copy of the whole type would take
+   !> the padding bytes of any component that is not real(dp) into the key, whose values no
+   !> run fixes (the key of one problem then differed between a run and its resumption)
    pure function effect_reals(e) result(v)
       type(test_effects), intent(in) :: e
       real(dp), allocatable :: v(:)
       v = [e%compliance, e%lag, e%dtemp, e%dlnE_dT, e%modulus, e%strength, e%r0, e%dd0, e%shift, &
-           e%soften, e%soften_rate, e%h3, e%gamma3, e%drift, merge(1.0_dp, 0.0_dp, e%extra_states)]
+           e%soften, e%soften_rate, e%h3, e%gamma3, e%drift]
    end function effect_reals
 
    pure function reals_bytes(x) result(bytes)

@@ -45,8 +45,6 @@ module usharp_rosenbrock_driver
       real(dp), allocatable :: mc(:)
       real(dp), allocatable :: pc(:, :)
       logical :: extended = .false.
-      !> The extended model's states p and R2 carried (see test_effects%extra_states)
-      logical :: extra = .false.
       type(test_effects) :: eff
       real(dp) :: stiffness = 0.0_dp
       real(dp), allocatable :: tc(:), vc(:), yk(:)
@@ -159,30 +157,22 @@ contains
          else
             sys%yk = lag_corners(hist%t, hist%v, effects%lag)
          end if
-         ! p and R2 only where the softening or the second back stress can act: without them
-         ! the rates of the model's own states are the plain model's
-         sys%extra = effects%extra_states
          n = extended_size(model)
-         allocate (y0(n))
+         allocate (y0(n), atol(n))
          call extended_initial(model, effects, y0)
-         if (.not. sys%extra) then
-            n = model%n_uniaxial()
-            y0 = y0(:n)
-         end if
-         allocate (atol(n))
          if (allocated(hist%temp)) then
             sys%tt = hist%t
             sys%temp = hist%temp
          end if
          ! p is a strain, R2 a stress
-         if (sys%extra) atol(n - 1:n) = [as, ar]
+         atol(n - 1:n) = [as, ar]
       else
          call plain_system(model, hist, sys)
          n = model%n_uniaxial()
          allocate (y0(n), atol(n))
          call model%uniaxial_initial(y0)
       end if
-      do i = 1, n - merge(2, 0, sys%extended .and. sys%extra)
+      do i = 1, n - merge(2, 0, sys%extended)
          atol(i) = merge(ar, as, model%uniaxial_is_stress(i))
       end do
       ! Small arrays of a size known at compile time where the model has one of these sizes
@@ -223,7 +213,7 @@ contains
    ! fpm compiles a file again when its own text changes, not when a file it includes does.
    ! The body's hash stands here, checked by the test rodas4-body-hash-recorded, so that an
    ! edit of the body changes this file too and the build takes it:
-   ! usharp_rodas4.inc FNV-1a CDE174C56B1F58A0
+   ! usharp_rodas4.inc FNV-1a 936667FCAF650EEA
    subroutine integrate_3(sys, hist, tout, opts, y0, atol, rtol, res, error)
       integer, parameter :: n = 3
       include 'usharp_rodas4.inc'
@@ -397,7 +387,7 @@ contains
       real(dp), intent(in), contiguous :: y(:)
       real(dp), intent(out), contiguous :: f(:)
       real(dp), intent(out), optional, contiguous :: jac(:, :)
-      if (sys%extended .and. sys%extra) then
+      if (sys%extended) then
          call extended_rates(model, sys%eff, sigma, y, f, dsig, jac)
       else
          call model%uniaxial_rates(sigma, dsig, y, f, jac)

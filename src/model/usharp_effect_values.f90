@@ -30,8 +30,5 @@ module usharp_effect_values
       !> 1/s, extensometer drift: the measured strain is the specimen's plus drift*(t - t0), t0
       !> the test's start (a strain-controlled specimen sees the command less the drift)
       real(dp) :: drift = 0.0_dp
-      !> The extended states p and R2 carried (the softening's and the second back stress's);
-      !> false where neither can act: the model's own states alone, their rates the same
-      logical :: extra_states = .true.
    end type test_effects
 end module usharp_effect_values

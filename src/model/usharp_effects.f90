@@ -210,8 +210,6 @@ contains
             eff(i)%drift = p(i)
          end do
       end select
-      ! (a problem's every simulation alike: a difference Jacobian's columns share one form)
-      eff%extra_states = k == 7 .or. k == 8 .or. eff_base%soften /= 0.0_dp .or. eff_base%h3 /= 0.0_dp
    end function effects_of
 
    !> The model a test with effects eff sees: modulus E*(1 + dE/E)*(1 + dlnE_dT*dT), set up at
