@@ -46,7 +46,8 @@ contains
    end subroutine test_csv_field
 
    !> Report lines: text longer than a line wrapped at a space, continuations indented by two
-   !> spaces; a word longer than a line cut rather than wrapped without end
+   !> spaces; a word longer than a line cut rather than wrapped without end; a value kept on
+   !> the line of its name, a number with its percent sign
    subroutine test_add_line(error)
       type(error_type), allocatable, intent(out) :: error
       character(len=20), allocatable :: lines(:)
@@ -63,6 +64,23 @@ contains
       call check(error, lines(1) == 'x' .and. lines(2) == '  '//repeat('y', 18) .and. &
                  lines(3) == '  '//repeat('y', 18) .and. lines(4) == '  '//repeat('y', 9), &
                  'a long word cut: '//lines(2)//'/'//lines(4))
+      if (allocated(error)) return
+      ! Not between a name and its value, nor before a percent sign
+      deallocate (lines)
+      allocate (lines(0))
+      call add_line(lines, 'away: A1 = 1.2, B = 1.0E+12')
+      call check(error, size(lines), 2, 'lines of a name and its value')
+      if (allocated(error)) return
+      call check(error, lines(1) == 'away: A1 = 1.2, ' .and. lines(2) == '  B = 1.0E+12', &
+                 'a value kept with its name: '//lines(1)//'/'//lines(2))
+      if (allocated(error)) return
+      deallocate (lines)
+      allocate (lines(0))
+      call add_line(lines, 'the value 51.43219 % now')
+      call check(error, size(lines), 2, 'lines of a number and its percent sign')
+      if (allocated(error)) return
+      call check(error, lines(1) == 'the value ' .and. lines(2) == '  51.43219 % now', &
+                 'a number kept with its percent sign: '//lines(1)//'/'//lines(2))
    end subroutine test_add_line
 
    subroutine test_csv(error)

@@ -39,6 +39,12 @@ contains
          return
       end if
       cut = index(text(1:len(lines)), ' ', back=.true.)
+      ! Not between a name and its value ("B = 1.030E+12") nor a number and its percent sign:
+      ! the space before
+      do while (cut > 2)
+         if (.not. (scan(text(cut + 1:cut + 1), '=%') > 0 .or. text(cut - 1:cut - 1) == '=')) exit
+         cut = index(text(1:cut - 1), ' ', back=.true.)
+      end do
       ! (no space after a continuation's indent: cut the word, or the next call gets the same)
       if (cut <= 1 .or. (cut == 2 .and. text(1:2) == '  ')) cut = len(lines)
       lines = [character(len=len(lines)) :: lines, text(1:cut)]
