@@ -614,6 +614,7 @@ contains
       integer, parameter :: row_len = 600
       character(len=row_len), allocatable :: rows(:)
       integer :: i, lead
+      logical :: joint
       allocate (rows(0))
       rows = [character(len=row_len) :: rows, 'test,region,points,objective,noise_part,structured_gap,rms,bias,runs_z,structured']
       do i = 1, size(res%regions)
@@ -642,6 +643,8 @@ contains
       deallocate (rows)
       ! The curves: data, baseline, and with the leading (else the first refitted) effect
       lead = curve_effect(res)
+      ! (decided once, not at every point)
+      joint = joint_curve(res)
       allocate (rows(size(res%t) + 1))
       rows(1) = 'test,held_out,t_s,class,data,baseline,with_effect,class_id,cycle,inelastic'
       do i = 1, size(res%t)
@@ -656,7 +659,7 @@ contains
       real(dp) function effect_curve(i) result(y)
          integer, intent(in) :: i
          y = res%y_base(i)
-         if (joint_curve(res)) then
+         if (joint) then
             y = res%joint%effects(res%joint%leading)%y(i)
          else if (lead > 0) then
             y = res%effects(lead)%y(i)
