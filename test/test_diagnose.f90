@@ -1464,7 +1464,7 @@ contains
       res%effects(2)%shrink_held = 0.9_dp
       ! ... but the baseline ran away (a constant at a search bound): the prediction that
       ! confirms it rests on constants the fit tests leave loose
-      res%c_bound = [.true., .false.]
+      res%c_bound = [1, 0]
       call check(error, joint_reason(res, .false.) == joint_loose, 'a prediction from a baseline at a bound confirms it')
       if (allocated(error)) return
       res%gap_fit = 1.0_dp
@@ -1638,15 +1638,15 @@ contains
    !> &fit bound is flagged within 1e-3 of its box in log10 units
    subroutine test_box_end(error)
       type(error_type), allocatable, intent(out) :: error
-      logical :: got(6)
+      integer :: got(6)
       got = at_box_end([1.7463e5_dp, 1.7462e5_dp, 0.0_dp, -50.0_dp, 3.0_dp, 0.07_dp], &
                        [0.0_dp, 0.0_dp, 0.0_dp, -50.0_dp, -50.0_dp, 0.0_dp], &
                        [1.7463e5_dp, 1.7463e5_dp, 70.0_dp, 50.0_dp, 50.0_dp, 70.0_dp])
-      call check(error, all(got .eqv. [.true., .false., .false., .true., .false., .false.]), &
-                 'effect parameters at the box''s end')
+      call check(error, all(got == [1, 0, 0, -1, 0, 0]), 'effect parameters at the box''s ends')
       if (allocated(error)) return
-      got(1:3) = at_bound([2.0_dp, 2.9995_dp, 2.99_dp], [-3.0_dp, -3.0_dp, -3.0_dp], [3.0_dp, 3.0_dp, 3.0_dp])
-      call check(error, all(got(1:3) .eqv. [.false., .true., .false.]), 'constants at a bound of &fit')
+      got(1:4) = at_bound([2.0_dp, 2.9995_dp, 2.99_dp, -2.9995_dp], [-3.0_dp, -3.0_dp, -3.0_dp, -3.0_dp], &
+                          [3.0_dp, 3.0_dp, 3.0_dp, 3.0_dp])
+      call check(error, all(got(1:4) == [0, 1, 0, -1]), 'constants at a bound of &fit, and which')
    end subroutine test_box_end
 
    !> One rule of plausibility for both diagnoses: a temperature offset of 177 K [150, 204] is
@@ -1725,17 +1725,18 @@ contains
       character(len=:), allocatable :: text
       res%cnames = [character(len=2) :: 'A1', 'B', 'n']
       e%c = [1.16e-3_dp, 1.03e12_dp, 4.0_dp]
-      e%c_bound = [.true., .true., .false.]
+      e%c_bound = [1, -1, 0]
       e%pname = [character(len=40) :: 'H3', 'gamma3']
       e%p = [1.7609e5_dp, 3.9968e3_dp]
-      e%p_bound = [.true., .false.]
+      e%p_bound = [1, 0]
       text = bound_note(res, e)
-      call check(error, index(text, 'ran away: A1 = 1.160E-03, B = 1.030E+12 at a search bound') > 0 .and. &
-                 index(text, 'H3 = 1.761E+05 at its search bound, not determined') > 0 .and. &
+      ! (which end each is at: a fit that ran to B's lower bound ran the other way)
+      call check(error, index(text, 'ran away: A1 = 1.160E-03 (upper), B = 1.030E+12 (lower) at that search '// &
+                 'bound') > 0 .and. index(text, 'H3 = 1.761E+05 (upper) at its search bound, not determined') > 0 .and. &
                  index(text, 'gamma3') == 0 .and. index(text, ' n ') == 0, text)
       if (allocated(error)) return
-      e%c_bound = .false.
-      e%p_bound = .false.
+      e%c_bound = 0
+      e%p_bound = 0
       call check(error, len(bound_note(res, e)) == 0, 'no bound: '//bound_note(res, e))
    end subroutine test_bound_note
 

@@ -725,19 +725,25 @@ contains
    end function pseudo_inverse
 
    !> Which components of x lie at a bound (within 1e-3 of the box, log10 units for the
-   !> constants): a fit that ends there has run away rather than converged
-   pure function at_bound(x, lo, hi) result(mask)
+   !> constants): -1 at the lower, 1 at the upper, 0 at neither. A fit that ends there has
+   !> run away rather than converged, and which end says which way.
+   pure function at_bound(x, lo, hi) result(side)
       real(dp), intent(in) :: x(:), lo(:), hi(:)
-      logical :: mask(size(x))
-      mask = x <= lo + 1.0e-3_dp*max(hi - lo, 1.0_dp) .or. x >= hi - 1.0e-3_dp*max(hi - lo, 1.0_dp)
+      integer :: side(size(x))
+      side = 0
+      where (x >= hi - 1.0e-3_dp*max(hi - lo, 1.0_dp)) side = 1
+      where (x <= lo + 1.0e-3_dp*max(hi - lo, 1.0_dp)) side = -1
    end function at_bound
 
    !> Which effect parameters x lie at an outer end of their search box [lo, hi] (within 1e-6
    !> of its width): at hi, or at lo where lo is negative. A lower end of zero is the physical
    !> bound of a parameter that cannot be negative, a value there a finding, not a runaway.
-   pure function at_box_end(x, lo, hi) result(mask)
+   !> -1 at the lower end, 1 at the upper, 0 at neither.
+   pure function at_box_end(x, lo, hi) result(side)
       real(dp), intent(in) :: x(:), lo(:), hi(:)
-      logical :: mask(size(x))
-      mask = x >= hi - 1.0e-6_dp*(hi - lo) .or. (lo < 0.0_dp .and. x <= lo + 1.0e-6_dp*(hi - lo))
+      integer :: side(size(x))
+      side = 0
+      where (x >= hi - 1.0e-6_dp*(hi - lo)) side = 1
+      where (lo < 0.0_dp .and. x <= lo + 1.0e-6_dp*(hi - lo)) side = -1
    end function at_box_end
 end module usharp_diagnose_numerics

@@ -98,8 +98,8 @@ contains
                real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals, best of '//str(res%baseline_starts)// &
                ' start'//trim(merge('s', ' ', res%baseline_starts > 1))//'); held-out tests predicted.')
       if (allocated(res%c_bound)) then
-         if (any(res%c_bound)) call add_line(lines, '**Flag:** the baseline fit ran away: '// &
-            bound_list(res%cnames, res%c, res%c_bound)//' at a search bound of &fit (lower, upper); '// &
+         if (any(res%c_bound /= 0)) call add_line(lines, '**Flag:** the baseline fit ran away: '// &
+            bound_list(res%cnames, res%c, res%c_bound)//' at that search bound of &fit; '// &
             'its figures describe a fit that did not converge inside the bounds.')
       end if
       call add_line(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
@@ -263,12 +263,12 @@ contains
          end if
          if (allocated(e%p_bound)) then
             if (k <= size(e%p_bound)) then
-               if (e%p_bound(k)) then
+               if (e%p_bound(k) /= 0) then
                   what = what//': at its search bound, which the data do not move it '// &
                      'from: its value is not determined and this interval does not hold'
-               else if (any(e%p_bound)) then
+               else if (any(e%p_bound /= 0)) then
                   ! (H3 at its bound leaves only H3/gamma3 determined, not gamma3)
-                  what = what//': with '//bound_list(e%pname, mask=e%p_bound)//' held at its bound, '// &
+                  what = what//': with '//bound_list(e%pname, side=e%p_bound)//' held at its bound, '// &
                      'so only as far as that holds'
                end if
             end if
@@ -319,8 +319,8 @@ contains
          'interval within '//real_str(100.0_dp*delay_precision, 'f0.0')//' % of it'// &
          trim(merge(': so here ', ': not here', e%measured))//') and it removes most of the fit tests'' gap')
       if (allocated(e%c_bound)) then
-         if (any(e%c_bound)) call add_line(lines, '- **flag:** the refit ran away: '// &
-            bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit')
+         if (any(e%c_bound /= 0)) call add_line(lines, '- **flag:** the refit ran away: '// &
+            bound_list(res%cnames, e%c, e%c_bound)//' at that search bound of &fit')
       end if
       if (e%nstarts > 1) then
          what = ''

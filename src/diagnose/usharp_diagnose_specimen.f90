@@ -53,7 +53,7 @@ module usharp_diagnose_specimen
       real(dp), allocatable :: p(:), p_lo(:), p_hi(:)    !< magnitudes, 95 % profile interval
       logical, allocatable :: lo_open(:), hi_open(:)     !< interval open at that end
       !> at an outer end of its search box: not determined by the data, its interval void
-      logical, allocatable :: p_bound(:)
+      integer, allocatable :: p_bound(:)                 !< -1, 1: at the lower, upper end
       logical :: plausible = .true.                      !< within the effect's physical limit
       logical :: significant = .false.                   !< BIC falls by more than bic_margin
       !> Expected chi-square of the effect at the low end of its range on the specimen, and
@@ -78,7 +78,7 @@ module usharp_diagnose_specimen
       character(len=name_len), allocatable :: replicates(:)
       character(len=:), allocatable :: cnames(:)
       real(dp), allocatable :: c(:)          !< constants fitted to the replicates
-      logical, allocatable :: c_bound(:)     !< of them, those at a search bound
+      integer, allocatable :: c_bound(:)     !< of them, those at a search bound (see bound_list)
       real(dp) :: f_rep = 0.0_dp             !< their objective on the replicates
       integer :: m = 0                       !< the specimen's points
       real(dp) :: f0 = 0.0_dp                !< the specimen's objective, predicted
@@ -855,12 +855,9 @@ contains
       end do
       call add(ln//'.')
       if (allocated(sr%c_bound)) then
-         if (any(sr%c_bound)) then
-            ln = ''
-            do j = 1, size(sr%c)
-               if (sr%c_bound(j)) ln = ln//', '//trim(sr%cnames(j))
-            end do
-            call add('The replicates'' fit ran to a search bound of &fit (lower, upper) for '//ln(3:)//': the '// &
+         if (any(sr%c_bound /= 0)) then
+            call add('The replicates'' fit ran to a search bound of &fit for '// &
+               bound_list(sr%cnames, side=sr%c_bound)//': the '// &
                'replicates do not bound it there, and what the specimen is set against rests on where '// &
                'the search stopped.')
          end if
@@ -974,7 +971,7 @@ contains
          if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
          associate (e => sr%effects(lead))
             if (allocated(e%p_bound)) then
-               if (any(e%p_bound)) verdict = verdict//'; '//bound_list(e%pname, e%p, e%p_bound)// &
+               if (any(e%p_bound /= 0)) verdict = verdict//'; '//bound_list(e%pname, e%p, e%p_bound)// &
                   ' at its search bound, not determined by the data'
             end if
          end associate
@@ -1011,7 +1008,7 @@ contains
          integer, intent(in) :: g
          bound_at = .false.
          if (allocated(e%p_bound)) then
-            if (g <= size(e%p_bound)) bound_at = e%p_bound(g)
+            if (g <= size(e%p_bound)) bound_at = e%p_bound(g) /= 0
          end if
       end function bound_at
 

@@ -129,7 +129,7 @@ module usharp_diagnose_types
       !> bic_margin), and the least and most of the held-out gap they carry
       integer :: n_alike = 0
       real(dp) :: shrink_alike_lo = 0.0_dp, shrink_alike_hi = 0.0_dp
-      logical, allocatable :: c_bound(:)     !< its constants at a search bound
+      integer, allocatable :: c_bound(:)     !< its constants at a search bound (see bound_list)
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
@@ -146,7 +146,7 @@ module usharp_diagnose_types
       logical :: held = .false.
       real(dp) :: rate_lo = 0.0_dp, rate_hi = 0.0_dp  !< the rate's interval when free
       !> Of its free parameters, those at a search bound (their intervals do not hold)
-      logical, allocatable :: p_bound(:)
+      integer, allocatable :: p_bound(:)
       real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
       character(len=64) :: worst_what = ''   !< which magnitude that is
       !> A delay (shift, lag) resolved by the data: not below their sampling interval
@@ -179,7 +179,7 @@ module usharp_diagnose_types
       real(dp), allocatable :: noise(:)           !< noise sd per test, response unit
       real(dp), allocatable :: peak(:)
       real(dp), allocatable :: c0(:), c(:)        !< constants given and of the baseline fit
-      logical, allocatable :: c_bound(:)          !< baseline constants at a search bound
+      integer, allocatable :: c_bound(:)          !< baseline constants at a search bound
       integer :: baseline_starts = 1              !< starts of the baseline fit
       character(len=:), allocatable :: cnames(:)
       real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
@@ -245,19 +245,22 @@ contains
       text = trim(name)//' = '//real_str(value, 'es9.2')//unit_text(unit, stress_unit)
    end function magnitude_text
 
-   !> 'n = 170, H2 = 1.0e+04' for the constants in mask, or without their values c 'n, H2'
-   pure function bound_list(names, c, mask) result(text)
+   !> 'n = 170 (upper), H2 = 1.0e+04 (lower)' for the constants at a bound (side -1: the
+   !> lower, 1: the upper, 0: none, as at_bound gives them), or without their values c
+   !> 'n (upper), H2 (lower)': which end a fit ran to says which way it ran away
+   pure function bound_list(names, c, side) result(text)
       character(len=*), intent(in) :: names(:)
       real(dp), intent(in), optional :: c(:)
-      logical, intent(in) :: mask(:)
+      integer, intent(in) :: side(:)
       character(len=:), allocatable :: text
       integer :: j
       text = ''
-      do j = 1, min(size(names), size(mask))
-         if (.not. mask(j)) cycle
+      do j = 1, min(size(names), size(side))
+         if (side(j) == 0) cycle
          if (len(text) > 0) text = text//', '
          text = text//trim(names(j))
          if (present(c)) text = text//' = '//real_str(c(j), 'es10.3')
+         text = text//trim(merge(' (upper)', ' (lower)', side(j) > 0))
       end do
    end function bound_list
 
@@ -483,7 +486,7 @@ contains
       type(diagnose_result), intent(in) :: res
       loose_prediction = .false.
       if (res%leading == 0 .or. .not. allocated(res%c_bound)) return
-      if (.not. any(res%c_bound)) return
+      if (.not. any(res%c_bound /= 0)) return
       loose_prediction = .not. fit_structured(res) .and. .not. held_quiet(res) .and. &
                          .not. res%effects(res%leading)%held_fitted
    end function loose_prediction

@@ -162,12 +162,12 @@ contains
       integer :: n
       text = ''
       if (allocated(e%c_bound) .and. allocated(e%c) .and. allocated(res%cnames)) then
-         if (any(e%c_bound)) text = '; its refit ran away: '//bound_list(res%cnames, e%c, e%c_bound)// &
-            ' at a search bound of &fit'
+         if (any(e%c_bound /= 0)) text = '; its refit ran away: '//bound_list(res%cnames, e%c, e%c_bound)// &
+            ' at that search bound of &fit'
       end if
       if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) then
          n = min(size(e%p_bound), size(e%pname), size(e%p))
-         if (any(e%p_bound(:n))) text = text//'; '//bound_list(e%pname(:n), e%p(:n), e%p_bound(:n))// &
+         if (any(e%p_bound(:n) /= 0)) text = text//'; '//bound_list(e%pname(:n), e%p(:n), e%p_bound(:n))// &
             ' at its search bound, not determined by the data'
       end if
    end function bound_note
