@@ -26,6 +26,7 @@ module test_diagnose
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
+                                    joint_not_carried, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note
    use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign, global_baseline_starts
@@ -33,7 +34,7 @@ module test_diagnose
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
-                                       at_box_end, at_bound, beyond_limit, limit_measures
+                                       at_box_end, at_bound, beyond_limit, limit_measures, judge_held_values
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -111,6 +112,7 @@ contains
          new_unittest('interval-that-leaves-out-its-estimate-opens', test_open_beyond_estimate), &
          new_unittest('gap-shares-of-the-lower-baseline', test_gap_fit_ref), &
          new_unittest('verdict-says-the-refit-ran-to-a-bound', test_bound_note), &
+         new_unittest('held-out-values-judged-against-their-limits', test_held_values), &
          new_unittest('run-key-holds-every-effect-value', test_effect_reals), &
          new_unittest('chi-square-tails-against-references', test_chi2_tails), &
          new_unittest('numbers-print-with-a-leading-zero', test_number_format), &
@@ -1396,13 +1398,22 @@ contains
       if (allocated(error)) return
       res%effects(2)%significant = .true.
       res%effects(2)%shrink_fit = 0.5_dp
-      call check(error, .not. joint_wanted(res, .false.), 'a significant effect explains part of the fit gap')
+      ! (the Alloy 617 tests with E12 and J2 held out: significant effects, none confirmed, and
+      ! the held-out tests with a gap of their own had ended without every test fitted)
+      call check(error, joint_reason(res, .false.) == joint_not_carried, &
+                 'a significant effect explains part of the fit gap and carries to no held-out test')
       if (allocated(error)) return
+      res%gap_held_noise = 100.0_dp
+      call check(error, .not. joint_wanted(res, .false.), &
+                 'a significant effect explains part of the fit gap, the held-out tests at their noise')
+      if (allocated(error)) return
+      res%gap_held_noise = 439.0_dp
       res%effects(2)%shrink_fit = 0.99_dp
       call check(error, joint_reason(res, .false.) == joint_form_open, 'an effect takes the fit gap to its floor, not confirmed')
       if (allocated(error)) return
       res%effects(2)%plausible = .false.
-      call check(error, .not. joint_wanted(res, .false.), 'that effect at an implausible magnitude')
+      call check(error, joint_reason(res, .false.) == joint_not_carried, &
+                 'that effect at an implausible magnitude, carried to no held-out test')
       if (allocated(error)) return
       res%effects(2)%plausible = .true.
       res%leading = 2
@@ -1731,7 +1742,7 @@ contains
       e%p_bound = [1, 0]
       text = bound_note(res, e)
       ! (which end each is at: a fit that ran to B's lower bound ran the other way)
-      call check(error, index(text, 'ran away: A1 = 1.160E-03 (upper), B = 1.030E+12 (lower) at that search '// &
+      call check(error, index(text, 'ran away: A1 = 1.160E-03 (upper), B = 1.030E+12 (lower) at a search '// &
                  'bound') > 0 .and. index(text, 'H3 = 1.761E+05 (upper) at its search bound, not determined') > 0 .and. &
                  index(text, 'gamma3') == 0 .and. index(text, ' n ') == 0, text)
       if (allocated(error)) return
@@ -1739,6 +1750,35 @@ contains
       e%p_bound = 0
       call check(error, len(bound_note(res, e)) == 0, 'no bound: '//bound_note(res, e))
    end subroutine test_bound_note
+
+   !> A drift fitted to a held-out test at 3 times its limit is the largest against the limit
+   !> of every test, named with its test; at a tenth of it the fit tests' largest stands; a
+   !> global effect's values are not per test
+   subroutine test_held_values(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_info) :: cat(n_effects)
+      real(dp) :: worst
+      character(len=64) :: what
+      integer :: k
+      cat = effect_catalogue(176.0_dp)
+      k = effect_index('drift')
+      worst = 0.2_dp
+      what = 'd E-12'
+      call judge_held_values(cat(k), [character(len=6) :: 'E-12', 'E-28', '43-3'], [.false., .false., .true.], &
+                             [2.0e-6_dp, 1.0e-6_dp, -3.0e-5_dp], worst, what)
+      call check(error, abs(worst - 3.0_dp) < 1.0e-12_dp .and. what == 'd 43-3 (held out)', &
+                 'a held-out drift of 3 times its limit: '//trim(what))
+      if (allocated(error)) return
+      worst = 0.2_dp
+      what = 'd E-12'
+      call judge_held_values(cat(k), [character(len=6) :: 'E-12', 'E-28', '43-3'], [.false., .false., .true.], &
+                             [2.0e-6_dp, 1.0e-6_dp, 1.0e-6_dp], worst, what)
+      call check(error, worst == 0.2_dp .and. what == 'd E-12', 'a held-out drift at a tenth of its limit: '//trim(what))
+      if (allocated(error)) return
+      call judge_held_values(cat(effect_index('initial')), [character(len=6) :: 'E-12', 'E-28'], &
+                             [.true., .true.], [500.0_dp, 0.0_dp], worst, what)
+      call check(error, worst == 0.2_dp .and. what == 'd E-12', 'a global effect: '//trim(what))
+   end subroutine test_held_values
 
    !> The key of a problem holds every value of its effects, component by component: as many
    !> values as the type has 8-byte slots, and a change of the last one shows

@@ -21,7 +21,8 @@ module usharp_diagnose_refit
                                     delay_precision, gap_fit_ref, per_test_ref
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, &
-                                       block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures
+                                       block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures, &
+                                      judge_held_values
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -222,7 +223,7 @@ contains
          call refit_held(ctx, res, e, ep, opt, mdl, p, error)
          if (allocated(error)) return
       end if
-      call predict_held(ctx, mdl, e, p, error)
+      call predict_held(ctx, res, mdl, e, p, error)
       if (allocated(error)) return
       e%p_all = p
       e%p_acts = ep%pacts
@@ -535,7 +536,7 @@ contains
             do g = 1, info%nparam
                do j = 1, nt
                   if (ep%pfree((g - 1)*nt + j)) call worse_of(abs(p((g - 1)*nt + j))/info%plausible(g), &
-                                                              info%pname(g))
+                                                              trim(info%pname(g))//' '//trim(res%names(j)))
                end do
             end do
             grp = pack([((g, j=1, nt), g=1, info%nparam)], ep%pfree)
@@ -577,9 +578,11 @@ contains
    end subroutine judge_magnitude
 
    !> Held-out tests: constants and global parameters carried over; per-test parameters of
-   !> a held-out test fitted to it with the constants fixed (p updated)
-   subroutine predict_held(ctx, mdl, e, p, error)
+   !> a held-out test fitted to it with the constants fixed (p updated) and set against
+   !> their limits (see judge_held_values)
+   subroutine predict_held(ctx, res, mdl, e, p, error)
       type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(in) :: res
       class(model_type), intent(in) :: mdl
       type(effect_outcome), intent(inout) :: e
       real(dp), allocatable, intent(inout) :: p(:)
@@ -605,7 +608,9 @@ contains
          x0 = opt%x
       end if
       call eh%unpack(x0, m2, p)
+      if (e%held_fitted) call judge_held_values(ctx%cat(e%k), res%names, eh%pfree, p, e%worst, e%worst_what)
    end subroutine predict_held
+
 
    !> Every test with the effect at constants mdl and parameters p: per-test objectives,
    !> regions, curves, and the share of each set's structured gap removed

@@ -12,7 +12,7 @@ module usharp_diagnose_report
    use usharp_output, only: write_lines
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
-                                    joint_reason, joint_partial, joint_bic_only, joint_held_fit, &
+                                    joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
                                     fit_structured, most, bound_list, per_test_ref, joint_decides
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
@@ -99,7 +99,7 @@ contains
                ' start'//trim(merge('s', ' ', res%baseline_starts > 1))//'); held-out tests predicted.')
       if (allocated(res%c_bound)) then
          if (any(res%c_bound /= 0)) call add_line(lines, '**Flag:** the baseline fit ran away: '// &
-            bound_list(res%cnames, res%c, res%c_bound)//' at that search bound of &fit; '// &
+            bound_list(res%cnames, res%c, res%c_bound)//' at a search bound of &fit; '// &
             'its figures describe a fit that did not converge inside the bounds.')
       end if
       call add_line(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
@@ -320,7 +320,7 @@ contains
          trim(merge(': so here ', ': not here', e%measured))//') and it removes most of the fit tests'' gap')
       if (allocated(e%c_bound)) then
          if (any(e%c_bound /= 0)) call add_line(lines, '- **flag:** the refit ran away: '// &
-            bound_list(res%cnames, e%c, e%c_bound)//' at that search bound of &fit')
+            bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit')
       end if
       if (e%nstarts > 1) then
          what = ''
@@ -381,7 +381,32 @@ contains
             real_str(100.0_dp*opts%confirm_shrink, 'f0.0')//' % of the held-out structured gap, '// &
             'or opening none where there was none).')
       end if
+      call skip_note(lines, res)
    end subroutine shrink_section
+
+   !> Why a diagnosis with held-out tests did not go on to fit every test together (see
+   !> joint_reason): a report that ends without that stage, where another deck's went on
+   !> to it, says why
+   subroutine skip_note(lines, res)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      if (allocated(res%joint) .or. .not. allocated(res%held)) return
+      if (.not. any(res%held)) return
+      if (res%leading > 0) then
+         associate (e => res%effects(res%leading))
+            call add_line(lines, 'Every test fitted together: not needed, the prediction decides: '// &
+               trim(e%name)//', fitted to the fit tests alone, removes '// &
+               real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out tests'' structured gap'// &
+               trim(merge(' (its per-test parameters fitted to them, the rest carried over)', &
+                          '                                                                ', &
+                          e%held_fitted))//'.')
+         end associate
+      else
+         call add_line(lines, 'Every test fitted together: not needed: the held-out tests show no structured '// &
+            'gap against their noise alone ('//real_str(res%gap_held_noise, 'es10.3')//' against '// &
+            real_str(res%floor_held_noise, 'es10.3')//'), so a fit of them has nothing to explain.')
+      end if
+   end subroutine skip_note
 
    !> Section 5, when the prediction could not decide (see joint_reason): the
    !> diagnosis of every test fitted together (jres)
@@ -433,6 +458,11 @@ contains
             'the leader '//trim(res%effects(res%leading)%name)//' and leaves their form open, but does not '// &
             'carry to the held-out tests: only every test fitted together tells whether its parameters or '// &
             'its form failed there.')
+      case (joint_not_carried)
+         call add_line(lines, 'Effects lower the fit tests'' BIC, none taking their structured gap to its '// &
+            'floor, and none carries to the held-out tests, which show a gap against their noise alone ('// &
+            real_str(res%gap_held_noise, 'es10.3')//' against '//real_str(res%floor_held_noise, 'es10.3')// &
+            '): only every test fitted together tells which effect explains most of every test.')
       case (joint_loose)
          call add_line(lines, trim(res%effects(res%leading)%name)//' rests on its prediction of the held-out '// &
             'tests alone (the fit tests show no structured gap), while the baseline''s constants sit at a '// &

@@ -32,7 +32,8 @@ module usharp_diagnose_specimen
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end
    use usharp_diagnose_verdict, only: power_cells, missed_note
-   use usharp_diagnose_types, only: most, hidden_effect, magnitude_text, bound_list
+   use usharp_diagnose_types, only: most, hidden_effect, magnitude_text, bound_list, unit_text, &
+                                    params_bound_note
    use usharp_diagnose_separate, only: finding_test
    use usharp_diagnose_profile, only: profile_interval, profile_result, open_beyond_estimate
    implicit none
@@ -920,10 +921,10 @@ contains
                                      merge(e%p(g), e%p_hi(g), e%hi_open(g)))
                ln = ln//trim(e%pname(g))//' = '//trim(adjustl(real_str(e%p(g), fmt)))
                if (bound_at(e, g)) then
-                  ln = ln//' (at its search bound: not determined) '//trim(unit_of(e%punit(g)))
+                  ln = ln//unit_text(e%punit(g), sr%stress_unit)//' (at its search bound: not determined)'
                else
                   ln = ln//' ['//interval_end(e%p_lo(g), e%lo_open(g), fmt)//', '// &
-                       interval_end(e%p_hi(g), e%hi_open(g), fmt)//'] '//trim(unit_of(e%punit(g)))
+                       interval_end(e%p_hi(g), e%hi_open(g), fmt)//']'//unit_text(e%punit(g), sr%stress_unit)
                end if
             end do
             if (e%significant .and. e%plausible) then
@@ -970,10 +971,8 @@ contains
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
          if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
          associate (e => sr%effects(lead))
-            if (allocated(e%p_bound)) then
-               if (any(e%p_bound /= 0)) verdict = verdict//'; '//bound_list(e%pname, e%p, e%p_bound)// &
-                  ' at its search bound, not determined by the data'
-            end if
+            if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) &
+               verdict = verdict//params_bound_note(e%pname, e%p, e%p_bound)
          end associate
       end if
       if (sr%gap <= sr%floor .and. lead == 0) then
@@ -1011,13 +1010,5 @@ contains
             if (g <= size(e%p_bound)) bound_at = e%p_bound(g) /= 0
          end if
       end function bound_at
-
-      !> A catalogue unit with 'stress' as the model's stress unit
-      function unit_of(u) result(text)
-         character(len=*), intent(in) :: u
-         character(len=:), allocatable :: text
-         text = trim(u)
-         if (text == 'stress') text = trim(sr%stress_unit)
-      end function unit_of
    end function specimen_report
 end module usharp_diagnose_specimen

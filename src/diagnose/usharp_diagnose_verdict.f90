@@ -12,7 +12,7 @@ module usharp_diagnose_verdict
                                     leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
-                                    joint_partial, hidden_effect, bound_list
+                                    joint_partial, hidden_effect, bound_list, params_bound_note
    implicit none
    private
 
@@ -159,17 +159,13 @@ contains
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(in) :: e
       character(len=:), allocatable :: text
-      integer :: n
       text = ''
       if (allocated(e%c_bound) .and. allocated(e%c) .and. allocated(res%cnames)) then
          if (any(e%c_bound /= 0)) text = '; its refit ran away: '//bound_list(res%cnames, e%c, e%c_bound)// &
-            ' at that search bound of &fit'
+            ' at a search bound of &fit'
       end if
-      if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) then
-         n = min(size(e%p_bound), size(e%pname), size(e%p))
-         if (any(e%p_bound(:n) /= 0)) text = text//'; '//bound_list(e%pname(:n), e%p(:n), e%p_bound(:n))// &
-            ' at its search bound, not determined by the data'
-      end if
+      if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) &
+         text = text//params_bound_note(e%pname, e%p, e%p_bound)
    end function bound_note
 
    !> The verdict of a diagnosis whose prediction could not decide (see joint_reason), from
