@@ -462,21 +462,24 @@ contains
 
    !> A per-test effect's values fitted to the held-out tests (those free in held_free, of
    !> the parameters p of every test, names the tests') against their physical limits: the
-   !> largest against its limit of every test is the one the report and the verdict name
-   !> (worst, worst_what: updated; a drift named 0.4 of its limit on the fit tests had needed
-   !> more than its limit on a held-out test). Plausibility stays with the fit tests' values
-   !> and their intervals: a held-out value is fitted with the constants fixed at the fit
-   !> tests', carries their error, and has no interval that holds it (a temperature offset of
-   !> -24.8 K, 0.99 of its limit, came out at 32 K on a held-out LCF test).
+   !> largest (worst, 0 when none has a limit) and which, parameter and test (worst_what),
+   !> for the report beside the fit tests' largest (a drift named 0.4 of its limit on the
+   !> fit tests had needed more than its limit on a held-out test). Plausibility stays with
+   !> the fit tests' values and their intervals: a held-out value is fitted with the
+   !> constants fixed at the fit tests', carries their error, and has no interval that holds
+   !> it (a temperature offset of -24.8 K, 0.99 of its limit, came out at 32 K on a held-out
+   !> LCF test).
    pure subroutine judge_held_values(info, names, held_free, p, worst, worst_what)
       type(effect_info), intent(in) :: info
       character(len=*), intent(in) :: names(:)
       logical, intent(in) :: held_free(:)
       real(dp), intent(in) :: p(:)
-      real(dp), intent(inout) :: worst
-      character(len=*), intent(inout) :: worst_what
+      real(dp), intent(out) :: worst
+      character(len=:), allocatable, intent(out) :: worst_what
       integer :: g, j, nt, i
       real(dp) :: ratio
+      worst = 0.0_dp
+      worst_what = ''
       if (info%sharing /= param_per_test) return
       nt = size(names)
       do g = 1, info%nparam
@@ -486,9 +489,9 @@ contains
             if (i > min(size(held_free), size(p))) cycle
             if (.not. held_free(i)) cycle
             ratio = abs(p(i))/info%plausible(g)
-            if (.not. ratio <= worst) then
+            if (ratio > worst .or. len(worst_what) == 0) then
                worst = ratio
-               worst_what = trim(info%pname(g))//' '//trim(names(j))//' (held out)'
+               worst_what = trim(info%pname(g))//' '//trim(names(j))
             end if
          end do
       end do

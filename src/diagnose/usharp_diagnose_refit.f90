@@ -22,7 +22,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, &
                                        block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures, &
-                                      judge_held_values
+                                       judge_held_values
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -608,9 +608,8 @@ contains
          x0 = opt%x
       end if
       call eh%unpack(x0, m2, p)
-      if (e%held_fitted) call judge_held_values(ctx%cat(e%k), res%names, eh%pfree, p, e%worst, e%worst_what)
+      call judge_held_values(ctx%cat(e%k), res%names, eh%pfree, p, e%worst_held, e%worst_held_what)
    end subroutine predict_held
-
 
    !> Every test with the effect at constants mdl and parameters p: per-test objectives,
    !> regions, curves, and the share of each set's structured gap removed

@@ -14,7 +14,7 @@ module usharp_diagnose_report
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
-                                    fit_structured, most, bound_list, per_test_ref, joint_decides
+                                    fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -251,8 +251,15 @@ contains
       cat = effect_catalogue(1.0_dp)
       call add_line(lines, '')
       if (len_trim(e%worst_what) > 0) then
+         what = ''
+         if (allocated(e%worst_held_what)) then
+            ! (the held-out tests' own values, fitted to them: reported, not judged)
+            if (len(e%worst_held_what) > 0 .and. e%worst_held > e%worst) what = '; of a held-out test''s, '// &
+               e%worst_held_what//', '//real_str(e%worst_held, 'f0.2')//' of it'
+         end if
          call add_line(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; largest against the '// &
-            'physical limit of the catalogue: '//trim(e%worst_what)//', '//real_str(e%worst, 'f0.2')//' of it):')
+            'physical limit of the catalogue: '//trim(e%worst_what)//', '//real_str(e%worst, 'f0.2')//' of it'// &
+            what//'):')
       else
          call add_line(lines, '**'//trim(e%name)//'** fitted magnitude (95 % interval; no physical limit):')
       end if
@@ -390,13 +397,22 @@ contains
    subroutine skip_note(lines, res)
       character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: what
       if (allocated(res%joint) .or. .not. allocated(res%held)) return
       if (.not. any(res%held)) return
       if (res%leading > 0) then
          associate (e => res%effects(res%leading))
+            if (held_quiet(res)) then
+               ! (confirmed by leaving them at their noise: a share of a gap below its floor
+               ! says nothing)
+               what = 'leaves the held-out tests at their noise (structured gap '// &
+                      real_str(e%held_gap, 'es10.3')//' against its floor '//real_str(res%floor_held, 'es10.3')//')'
+            else
+               what = 'removes '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out tests'' '// &
+                      'structured gap'
+            end if
             call add_line(lines, 'Every test fitted together: not needed, the prediction decides: '// &
-               trim(e%name)//', fitted to the fit tests alone, removes '// &
-               real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out tests'' structured gap'// &
+               trim(e%name)//', fitted to the fit tests alone, '//what// &
                trim(merge(' (its per-test parameters fitted to them, the rest carried over)', &
                           '                                                                ', &
                           e%held_fitted))//'.')
@@ -408,8 +424,6 @@ contains
       end if
    end subroutine skip_note
 
-   !> Section 5, when the prediction could not decide (see joint_reason): the
-   !> diagnosis of every test fitted together (jres)
    !> Whether the report has section 4 (a test that would tell alike effects apart)
    pure logical function has_separation(res)
       type(diagnose_result), intent(in) :: res
@@ -417,6 +431,8 @@ contains
       if (allocated(res%seps)) has_separation = size(res%seps) > 0
    end function has_separation
 
+   !> Section 5, when the prediction could not decide (see joint_reason): the
+   !> diagnosis of every test fitted together (jres)
    subroutine joint_section(lines, res, opts)
       character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       !> the diagnosis of the fit tests, its joint stage in res%joint
@@ -459,8 +475,9 @@ contains
             'carry to the held-out tests: only every test fitted together tells whether its parameters or '// &
             'its form failed there.')
       case (joint_not_carried)
-         call add_line(lines, 'Effects lower the fit tests'' BIC, none taking their structured gap to its '// &
-            'floor, and none carries to the held-out tests, which show a gap against their noise alone ('// &
+         call add_line(lines, 'Effects lower the fit tests'' BIC, none of a plausible, resolved magnitude '// &
+            'taking their structured gap to its floor, and none is confirmed on the held-out tests, which '// &
+            'show a gap against their noise alone ('// &
             real_str(res%gap_held_noise, 'es10.3')//' against '//real_str(res%floor_held_noise, 'es10.3')// &
             '): only every test fitted together tells which effect explains most of every test.')
       case (joint_loose)

@@ -147,8 +147,12 @@ module usharp_diagnose_types
       real(dp) :: rate_lo = 0.0_dp, rate_hi = 0.0_dp  !< the rate's interval when free
       !> Of its free parameters, those at a search bound (their intervals do not hold)
       integer, allocatable :: p_bound(:)
-      real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit
+      real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit of the fit tests
       character(len=64) :: worst_what = ''   !< which magnitude that is
+      !> The largest of a per-test effect's values fitted to the held-out tests against its
+      !> limit, and which (parameter and test): reported, not judged (see judge_held_values)
+      real(dp) :: worst_held = 0.0_dp
+      character(len=:), allocatable :: worst_held_what
       !> A delay (shift, lag) resolved by the data: not below their sampling interval
       logical :: resolved = .true.
       !> A delay below the sampling interval that the data measure all the same: its 95 %
@@ -518,8 +522,8 @@ contains
    end function loose_prediction
 
    !> The leader's prediction carries less than most of the held-out tests' structured gap
-   !> and leaves a rest above their floor, while on the fit tests it leaves none above theirs. Fitted to the fit tests alone its parameters may be what fails (a softening of
-   !> 0.17, fitted to the LCF and ratcheting tests as a slower one, carried 55 % of the
+   !> and leaves a rest above their floor, while on the fit tests it leaves none above theirs.
+   !> Fitted to the fit tests alone its parameters may be what fails (a softening of 0.17, fitted to the LCF and ratcheting tests as a slower one, carried 55 % of the
    !> relaxation test's gap), or another effect adds to it: only every test fitted together
    !> tells which, and how much of every gap the effect closes. Not where the baseline ran to
    !> a bound (see loose_prediction), whose joint stage decides alone.
