@@ -1740,10 +1740,12 @@ contains
       e%pname = [character(len=40) :: 'H3', 'gamma3']
       e%p = [1.7609e5_dp, 3.9968e3_dp]
       e%p_bound = [1, 0]
+      e%punit = [character(len=12) :: 'stress', '-']
+      res%stress_unit = 'MPa'
       text = bound_note(res, e)
       ! (which end each is at: a fit that ran to B's lower bound ran the other way)
       call check(error, index(text, 'ran away: A1 = 1.160E-03 (upper), B = 1.030E+12 (lower) at a search '// &
-                 'bound') > 0 .and. index(text, 'H3 = 1.761E+05 (upper) at its search bound, not determined') > 0 .and. &
+                 'bound') > 0 .and. index(text, 'H3 = 1.761E+05 MPa (upper) at its search bound, not determined') > 0 .and. &
                  index(text, 'gamma3') == 0 .and. index(text, ' n ') == 0, text)
       if (allocated(error)) return
       e%c_bound = 0
@@ -1977,13 +1979,16 @@ contains
       call check(error, abs(ncx2_sf(16.0_dp, 3.0_dp, 0.0_dp) - want(5)) < 1.0e-15_dp, 'lambda = 0')
    end subroutine test_chi2_tails
 
-   !> Zero-width F descriptors print a leading zero and no bare point
+   !> Zero-width F descriptors print a leading zero and no bare point; a negative value that
+   !> rounds to zero prints as zero
    subroutine test_number_format(error)
       type(error_type), allocatable, intent(out) :: error
       character(len=:), allocatable :: wide
       call check(error, real_str(0.55_dp, 'f0.2') == '0.55' .and. real_str(-0.55_dp, 'f0.2') == '-0.55' &
                  .and. real_str(6.0_dp, 'f0.0') == '6' .and. real_str(0.0_dp, 'f0.2') == '0.00' .and. &
                  real_str(-0.2_dp, 'f0.0') == '0' .and. real_str(12.5_dp, 'f0.1') == '12.5' .and. &
+                 real_str(-0.004_dp, 'f0.1') == '0.0' .and. real_str(-0.04_dp, 'f6.1') == '0.0' .and. &
+                 real_str(-0.06_dp, 'f0.1') == '-0.1' .and. &
                  real_str(0.5_dp, 'f6.2') == '0.50', 'real_str: '//real_str(0.55_dp, 'f0.2')//' '// &
                  real_str(6.0_dp, 'f0.0')//' '//real_str(-0.55_dp, 'f0.2'))
       if (allocated(error)) return

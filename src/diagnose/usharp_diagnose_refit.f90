@@ -717,8 +717,10 @@ contains
       end function same_point
    end subroutine held_alike
 
-   !> Fit tests whose objective an effect raises by more than 3 standard deviations of the
-   !> objective noise alone gives that test (chi-square: sqrt(2 sum nv**2))
+   !> Tests whose objective an effect raises by more than 3 standard deviations of the
+   !> objective noise alone gives that test (chi-square: sqrt(2 sum nv**2)): a fit test, or
+   !> a held-out test its prediction makes worse (a softening confirmed on 56 % of the
+   !> held-out gap had raised one held-out test's objective from 36.4 to 43.0 unsaid)
    function worse_tests(ctx, res, after) result(worse)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
@@ -728,7 +730,7 @@ contains
       integer :: i
       before = per_test_ref(res)
       do i = 1, size(after)
-         worse(i) = .not. res%held(i) .and. after(i) - before(i) > &
+         worse(i) = after(i) - before(i) > &
                     3.0_dp*sqrt(2.0_dp*sum(ctx%nv**2, res%test_of == i))
       end do
    end function worse_tests

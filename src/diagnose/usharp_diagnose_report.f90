@@ -14,7 +14,7 @@ module usharp_diagnose_report
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
-                                    fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet
+                                    fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet, side_word
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -271,7 +271,7 @@ contains
          if (allocated(e%p_bound)) then
             if (k <= size(e%p_bound)) then
                if (e%p_bound(k) /= 0) then
-                  what = what//': at its search bound, which the data do not move it '// &
+                  what = what//': at its '//side_word(e%p_bound(k))//' search bound, which the data do not move it '// &
                      'from: its value is not determined and this interval does not hold'
                else if (any(e%p_bound /= 0)) then
                   ! (H3 at its bound leaves only H3/gamma3 determined, not gamma3)

@@ -33,7 +33,7 @@ module usharp_diagnose_specimen
                                        block_sums, at_box_end
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most, hidden_effect, magnitude_text, bound_list, unit_text, &
-                                    params_bound_note
+                                    params_bound_note, side_word, hardening_note
    use usharp_diagnose_separate, only: finding_test
    use usharp_diagnose_profile, only: profile_interval, profile_result, open_beyond_estimate
    implicit none
@@ -921,7 +921,8 @@ contains
                                      merge(e%p(g), e%p_hi(g), e%hi_open(g)))
                ln = ln//trim(e%pname(g))//' = '//trim(adjustl(real_str(e%p(g), fmt)))
                if (bound_at(e, g)) then
-                  ln = ln//unit_text(e%punit(g), sr%stress_unit)//' (at its search bound: not determined)'
+                  ln = ln//unit_text(e%punit(g), sr%stress_unit)//' (at its '//side_word(e%p_bound(g))// &
+                       ' search bound: not determined)'
                else
                   ln = ln//' ['//interval_end(e%p_lo(g), e%lo_open(g), fmt)//', '// &
                        interval_end(e%p_hi(g), e%hi_open(g), fmt)//']'//unit_text(e%punit(g), sr%stress_unit)
@@ -971,8 +972,9 @@ contains
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
          if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
          associate (e => sr%effects(lead))
-            if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) &
-               verdict = verdict//params_bound_note(e%pname, e%p, e%p_bound)
+            if (allocated(e%p)) verdict = verdict//hardening_note(e%name, e%p)
+            if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p) .and. allocated(e%punit)) &
+               verdict = verdict//params_bound_note(e%pname, e%p, e%p_bound, e%punit, sr%stress_unit)
          end associate
       end if
       if (sr%gap <= sr%floor .and. lead == 0) then

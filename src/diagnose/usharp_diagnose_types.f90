@@ -14,7 +14,8 @@ module usharp_diagnose_types
    implicit none
    private
 
-   public :: params_bound_note, diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
+   public :: params_bound_note, hardening_note, side_word
+   public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text
    public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
@@ -252,11 +253,13 @@ contains
 
    !> 'n = 170 (upper), H2 = 1.0e+04 (lower)' for the constants at a bound (side -1: the
    !> lower, 1: the upper, 0: none, as at_bound gives them), or without their values c
-   !> 'n (upper), H2 (lower)': which end a fit ran to says which way it ran away
-   pure function bound_list(names, c, side) result(text)
+   !> 'n (upper), H2 (lower)': which end a fit ran to says which way it ran away. units, if
+   !> given, follow each value (' MPa', as unit_text gives them).
+   pure function bound_list(names, c, side, units) result(text)
       character(len=*), intent(in) :: names(:)
       real(dp), intent(in), optional :: c(:)
       integer, intent(in) :: side(:)
+      character(len=*), intent(in), optional :: units(:)
       character(len=:), allocatable :: text
       integer :: j
       text = ''
@@ -265,24 +268,53 @@ contains
          if (len(text) > 0) text = text//', '
          text = text//trim(names(j))
          if (present(c)) text = text//' = '//real_str(c(j), 'es10.3')
-         text = text//trim(merge(' (upper)', ' (lower)', side(j) > 0))
+         if (present(units)) then
+            if (j <= size(units)) text = text//trim(units(j))
+         end if
+         text = text//' ('//side_word(side(j))//')'
       end do
    end function bound_list
 
    !> What a verdict adds of an effect's own parameters at an end of their search box
-   !> ('; H3 = 1.761E+05 (upper) at its search bound, not determined by the data'; side as
-   !> bound_list takes it), in both diagnoses; '' when none is
-   pure function params_bound_note(names, p, side) result(text)
-      character(len=*), intent(in) :: names(:)
+   !> ('; H3 = 1.761E+05 MPa (upper) at its search bound, not determined by the data'; side
+   !> as bound_list takes it, units the catalogue's, 'stress' as stress_unit), in both
+   !> diagnoses; '' when none is
+   pure function params_bound_note(names, p, side, units, stress_unit) result(text)
+      character(len=*), intent(in) :: names(:), units(:), stress_unit
       real(dp), intent(in) :: p(:)
       integer, intent(in) :: side(:)
       character(len=:), allocatable :: text
-      integer :: n
+      character(len=32), allocatable :: shown(:)
+      integer :: n, j
       text = ''
-      n = min(size(names), size(p), size(side))
-      if (any(side(:n) /= 0)) text = '; '//bound_list(names(:n), p(:n), side(:n))// &
+      n = min(size(names), size(p), size(side), size(units))
+      allocate (shown(n))
+      do j = 1, n
+         shown(j) = unit_text(units(j), stress_unit)
+      end do
+      if (any(side(:n) /= 0)) text = '; '//bound_list(names(:n), p(:n), side(:n), shown)// &
          ' at its search bound, not determined by the data'
    end function params_bound_note
+
+   !> What a verdict adds of a softening fitted with a < 0, which makes the drag grow: a
+   !> cyclic hardening under the softening's name (the catalogue's one form serves both
+   !> signs); '' for any other effect or sign
+   pure function hardening_note(name, p) result(text)
+      character(len=*), intent(in) :: name
+      real(dp), intent(in) :: p(:)
+      character(len=:), allocatable :: text
+      text = ''
+      if (name /= 'softening' .or. size(p) < 1) return
+      if (p(1) < 0.0_dp) text = '; with a = '//real_str(p(1), 'g0.3')// &
+                                ' < 0 it is a cyclic hardening, not a softening'
+   end function hardening_note
+
+   !> 'lower' or 'upper' for the side at_bound gives (-1, 1)
+   pure function side_word(side) result(word)
+      integer, intent(in) :: side
+      character(len=5) :: word
+      word = merge('upper', 'lower', side > 0)
+   end function side_word
 
    !> A parameter's unit as it follows its value (' K', ' MPa'): the catalogue's unit,
    !> 'stress' the model's stress unit, nothing for '-' or ''

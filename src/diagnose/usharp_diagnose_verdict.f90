@@ -12,7 +12,8 @@ module usharp_diagnose_verdict
                                     leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
-                                    joint_partial, hidden_effect, bound_list, params_bound_note
+                                    joint_partial, hidden_effect, bound_list, params_bound_note, &
+                                    hardening_note, joint_not_carried
    implicit none
    private
 
@@ -140,6 +141,7 @@ contains
                    ' or only noise left): the tests cannot tell them apart; '//trim(e%name)// &
                    ' is the simplest'
          end if
+         if (allocated(e%p)) text = text//hardening_note(e%name, e%p)
          if (any(e%worse)) text = text//'; it makes '//test_list(res, e%worse)//' worse'
          text = text//bound_note(res, e)
          if (.not. e%resolved .and. allocated(e%p)) then
@@ -164,8 +166,8 @@ contains
          if (any(e%c_bound /= 0)) text = '; its refit ran away: '//bound_list(res%cnames, e%c, e%c_bound)// &
             ' at a search bound of &fit'
       end if
-      if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p)) &
-         text = text//params_bound_note(e%pname, e%p, e%p_bound)
+      if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p) .and. allocated(e%punit)) &
+         text = text//params_bound_note(e%pname, e%p, e%p_bound, e%punit, res%stress_unit)
    end function bound_note
 
    !> The verdict of a diagnosis whose prediction could not decide (see joint_reason), from
@@ -231,6 +233,10 @@ contains
          text = 'the prediction of the held-out tests that named '//trim(res%effects(res%leading)%name)// &
                 ' rests on constants the fit tests leave at a search bound, so it tests those constants '// &
                 'as much as the effect'
+      case (joint_not_carried)
+         text = 'fitted to the fit tests alone, no effect of a plausible magnitude took their structured '// &
+                'gap to its floor and none was confirmed on the held-out tests, so their prediction cannot '// &
+                'confirm it'
       case default
          if (fit_effect_not_carried(res)) then
             text = 'fitted to the fit tests alone, the effects that explain them do not carry to the '// &
@@ -424,6 +430,11 @@ contains
          if (.not. mask(i)) cycle
          if (len(text) > 0) text = text//', '
          text = text//trim(res%names(i))
+         if (allocated(res%held)) then
+            if (i <= size(res%held)) then
+               if (res%held(i)) text = text//' (held out)'
+            end if
+         end if
       end do
    end function test_list
 

@@ -141,7 +141,14 @@ contains
          call put_real(val, 'es'//str_int(w + 8)//'.'//str_int(w - 1)//'e'//str_int(k), buf, n, ios)
          return
       end if
-      if (.not. (scan(fmt(1:1), 'fF') == 1 .and. fmt(2:2) == '0')) return
+      if (scan(fmt(1:1), 'fF') /= 1) return
+      ! A negative value that rounds to zero prints as zero ('-0.0' read as a loss where a
+      ! share was zero to the digits shown)
+      if (n > 1 .and. buf(1:1) == '-' .and. verify(buf(2:n), '0.') == 0) then
+         buf = buf(2:n)
+         n = n - 1
+      end if
+      if (fmt(2:2) /= '0') return
       if (buf(1:1) == '.') then
          buf = '0'//buf(:n)
          n = n + 1
@@ -152,10 +159,6 @@ contains
       if (buf(n:n) == '.') then
          buf(n:n) = ' '
          n = n - 1
-      end if
-      if (buf(:n) == '-0') then
-         buf = '0'
-         n = 1
       end if
    end subroutine real_text
 
