@@ -806,7 +806,7 @@ contains
                str(300*nt)//' font ",9"', "set output "//gnuplot_string(join_path(base, 'residuals.png'//suffix)), &
                'set multiplot layout '//str(nt)//',1', 'set key off', 'set xlabel "time (s)"']
          do i = 1, nt
-            gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//': data - baseline fit, '// &
+            gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//held_mark(i)//': data - baseline, '// &
                   trim(res%unit(i))//'; red loading, blue unloading, green reversal, black hold"', &
                   "plot "//csv//" every ::1 using "//own_x(i)//":($5-$6):8 with points pt 7 ps 0.3 lc variable"]
          end do
@@ -816,7 +816,7 @@ contains
                'set key outside right top']
          with = curve_label(res)
          do i = 1, nt
-            gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//'"', &
+            gp = [character(len=512) :: gp, 'set title "'//trim(res%names(i))//held_mark(i)//'"', &
                   'set ylabel "'//trim(res%unit(i))//'"', &
                   "plot "//csv//" every ::1 using "//own_x(i)//":5 with dots "// &
                   "lc rgb 'black' title 'data', '' every ::1 using "//own_x(i)//":6 with lines lc rgb 'blue' "// &
@@ -825,6 +825,18 @@ contains
          end do
          gp = [character(len=512) :: gp, 'unset multiplot']
       end function script
+
+      !> ' (held out: the baseline is its prediction)' for a held-out test i, else ''
+      function held_mark(i) result(text)
+         integer, intent(in) :: i
+         character(len=:), allocatable :: text
+         text = ''
+         if (allocated(res%held)) then
+            if (i <= size(res%held)) then
+               if (res%held(i)) text = ' (held out: the baseline is its prediction)'
+            end if
+         end if
+      end function held_mark
 
       !> Time of test i's points only (other tests' undefined): each panel spans its own test
       function own_x(i) result(text)
