@@ -50,38 +50,33 @@ contains
    !> the line of its name, a number with its percent sign
    subroutine test_add_line(error)
       type(error_type), allocatable, intent(out) :: error
-      character(len=20), allocatable :: lines(:)
-      allocate (lines(0))
-      call add_line(lines, 'a table row | that stays')
-      call check(error, size(lines) == 2 .and. lines(1) == 'a table row | that ' .and. &
-                 lines(2) == '  stays', 'wrapped at a space: '//lines(1)//'/'//lines(2))
+      character(len=20) :: y18
+      y18 = '  '//repeat('y', 18)
+      call check_wrap(error, 'a table row | that stays', [character(len=20) :: 'a table row | that ', '  stays'], &
+                      'wrapped at a space')
       if (allocated(error)) return
-      deallocate (lines)
-      allocate (lines(0))
-      call add_line(lines, 'x '//repeat('y', 45))
-      call check(error, size(lines), 4, 'lines of a long word after a space')
-      if (allocated(error)) return
-      call check(error, lines(1) == 'x' .and. lines(2) == '  '//repeat('y', 18) .and. &
-                 lines(3) == '  '//repeat('y', 18) .and. lines(4) == '  '//repeat('y', 9), &
-                 'a long word cut: '//lines(2)//'/'//lines(4))
+      call check_wrap(error, 'x '//repeat('y', 45), [character(len=20) :: 'x', y18, y18, '  '//repeat('y', 9)], &
+                      'a long word after a space, cut')
       if (allocated(error)) return
       ! Not between a name and its value, nor before a percent sign
-      deallocate (lines)
-      allocate (lines(0))
-      call add_line(lines, 'away: A1 = 1.2, B = 1.0E+12')
-      call check(error, size(lines), 2, 'lines of a name and its value')
+      call check_wrap(error, 'away: A1 = 1.2, B = 1.0E+12', [character(len=20) :: 'away: A1 = 1.2, ', &
+                      '  B = 1.0E+12'], 'a value kept with its name')
       if (allocated(error)) return
-      call check(error, lines(1) == 'away: A1 = 1.2, ' .and. lines(2) == '  B = 1.0E+12', &
-                 'a value kept with its name: '//lines(1)//'/'//lines(2))
-      if (allocated(error)) return
-      deallocate (lines)
-      allocate (lines(0))
-      call add_line(lines, 'the value 51.43219 % now')
-      call check(error, size(lines), 2, 'lines of a number and its percent sign')
-      if (allocated(error)) return
-      call check(error, lines(1) == 'the value ' .and. lines(2) == '  51.43219 % now', &
-                 'a number kept with its percent sign: '//lines(1)//'/'//lines(2))
+      call check_wrap(error, 'the value 51.43219 % now', [character(len=20) :: 'the value ', '  51.43219 % now'], &
+                      'a number kept with its percent sign')
    end subroutine test_add_line
+
+   !> text added to lines of 20 characters gives the lines expected
+   subroutine check_wrap(error, text, expected, what)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=*), intent(in) :: text, expected(:), what
+      character(len=20), allocatable :: lines(:)
+      allocate (lines(0))
+      call add_line(lines, text)
+      call check(error, size(lines), size(expected), 'lines: '//what)
+      if (allocated(error)) return
+      call check(error, all(lines == expected), what//': '//lines(1)//'/'//lines(size(lines)))
+   end subroutine check_wrap
 
    subroutine test_csv(error)
       type(error_type), allocatable, intent(out) :: error
