@@ -29,12 +29,14 @@ module test_diagnose
                                     joint_not_carried, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note
-   use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign, global_baseline_starts
+   use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign, global_baseline_starts, &
+                                    rate_rungs
    use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
-                                       at_box_end, at_bound, beyond_limit, limit_measures, judge_held_values
+                                       at_box_end, at_bound, beyond_limit, limit_measures, judge_held_values, &
+                                       backstress2_starts
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -106,6 +108,7 @@ contains
          new_unittest('magnitude-beyond-its-limit-beyond-doubt', test_beyond_doubt), &
          new_unittest('rate-held-where-undetermined', test_rate_held), &
          new_unittest('refit-starts-in-both-signs-basins', test_both_signs), &
+         new_unittest('refit-starts-in-each-rates-basin', test_rate_rungs), &
          new_unittest('held-out-prediction-open-between-end-points', test_alike_note), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
@@ -1901,6 +1904,34 @@ contains
       e%x_alt = reshape([0.3_dp, -0.4_dp], [2, 1])
       call check(error, other_sign(e, 2) == 0, 'a constant''s sign taken for the effect''s')
    end subroutine test_both_signs
+
+   !> The second back stress's screening starts span its recovery rates (a fit stays in the
+   !> basin of the rate it starts from: on Alloy 617's tests every start at gamma3 = 200 ended
+   !> near the baseline, one at 4000 at 41 % of its objective), and a refit starts from the
+   !> lowest end point of each rate's starts, the leading one's first, each rate once
+   subroutine test_rate_rungs(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_outcome) :: e
+      real(dp) :: ps(2, 7), sat(6)
+      ps = backstress2_starts(150.0_dp, 200.0_dp)
+      call check(error, all(ps(:, 1) == [1.5_dp, 200.0_dp]), 'the first start is not the near-zero one')
+      if (allocated(error)) return
+      sat = ps(1, 2:)/ps(2, 2:)/150.0_dp
+      call check(error, minval(ps(2, 2:)) <= 100.0_dp .and. maxval(ps(2, 2:)) >= 2000.0_dp .and. &
+                 all(abs(sat - 0.03_dp) < 1.0e-12_dp .or. abs(sat - 0.1_dp) < 1.0e-12_dp) .and. &
+                 count(abs(sat - 0.1_dp) < 1.0e-12_dp) == 3, 'starts do not span rates 100-2000 at '// &
+                 'saturations of 3 and 10 % of the peak')
+      if (allocated(error)) return
+      e%x = [0.1_dp, 0.5_dp, 0.4_dp]
+      e%x_alt = reshape([0.2_dp, 0.6_dp, 0.1_dp, 0.3_dp, 7.0_dp, 2.0_dp, 0.4_dp, 0.1_dp, 0.4_dp, &
+                         0.5_dp, 0.0_dp, 0.1_dp, 0.6_dp, 8.0_dp, 2.0_dp], [3, 5])
+      call check(error, size(rate_rungs(e)) == 1, 'rungs without the starts'' rates')
+      if (allocated(error)) return
+      e%rate_start = 400.0_dp
+      e%rate_alt = [100.0_dp, 2000.0_dp, 400.0_dp, 100.0_dp, 2000.0_dp]
+      call check(error, all(rate_rungs(e) == [0, 1, 2]), 'not the lowest end point of each rate once: '// &
+                 str(size(rate_rungs(e))))
+   end subroutine test_rate_rungs
 
    !> An effect judged beyond its limit is refitted with its rate held only where the rate
    !> is undetermined (the LCF-held-out case: a second back stress with gamma3 25 [-2.8,

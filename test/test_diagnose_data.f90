@@ -67,6 +67,7 @@ contains
          new_unittest('lcf-held-out-softening-found-with-every-test-fitted', test_joint), &
          new_unittest('softening-refitted-in-the-basin-of-its-sign', test_softening_sign), &
          new_unittest('held-out-prediction-of-loose-constants-confirms-nothing', test_loose_constants), &
+         new_unittest('fast-second-back-stress-found-at-its-rate', test_fast_backstress), &
          new_unittest('lag-screened-at-a-realistic-step', test_lag_screening), &
          new_unittest('serrated-flow-named-in-the-verdict', test_serrated_verdict), &
          new_unittest('held-out-floor-holds-the-constants-uncertainty', test_prediction_spread)]
@@ -971,6 +972,31 @@ contains
       end do
       call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
    end subroutine test_loose_constants
+
+   !> A fast second back stress (independent data: H3/gamma3 1.55 ksi at gamma3 = 1266; the
+   !> LCF test held out): its screening runs start from recovery rates half, twice and ten
+   !> times the screening's 200 (backstress2_starts) and its refit from the lowest end point
+   !> of each rate's (rate_rungs); from gamma3 = 200 alone the refit stayed in that rate's basin
+   !> and a softening was named. The second back stress is named, with an interval of gamma3
+   !> that holds the injected one
+   subroutine test_fast_backstress(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      integer :: k
+      call diagnose_deck('data/independent-lcf-backstress2-fast/diagnose.nml', res, error)
+      if (allocated(error)) return
+      write (*, '(4x,a)') res%verdict
+      call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
+      if (allocated(error)) return
+      k = findloc(res%effects%k, effect_index('backstress2'), dim=1)
+      associate (e => res%effects(k))
+         call check(error, .not. e%held .and. size(e%p) == 2, 'gamma3 held or not fitted')
+         if (allocated(error)) return
+         write (*, '(4x,a,3es11.3)') 'gamma3 and its interval:', e%p(2), e%p_lo(2), e%p_hi(2)
+         call check(error, e%p_lo(2) <= 1266.0_dp .and. 1266.0_dp <= e%p_hi(2), 'the interval of gamma3 '// &
+                    'does not hold the injected 1266')
+      end associate
+   end subroutine test_fast_backstress
 
    !> Extensometer drifts of 8.3e-8, 1.7e-8 and -1.7e-8 1/s (independent data,
    !> data/independent-drift; the relaxation test held out): the walks of the leading drift's

@@ -231,14 +231,16 @@ contains
       call check(error, read_text(mine) == notes, 'the report is untouched')
    end subroutine test_specimen_kept
 
-   !> A per-specimen diagnosis keeps each specimen's report in diagnose/specimen.journal: a
-   !> run resumed (or resumed by --auto-resume) replays them into the same reports
+   !> A per-specimen diagnosis keeps each specimen's report and table in
+   !> diagnose/specimen.journal: a run resumed (or resumed by --auto-resume) replays them into
+   !> the same files; the table has a row per parameter of each effect, as the report has
    subroutine test_specimen_resume(error)
       use usharp_cmd_diagnose, only: diagnose_command
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=report_line_len), allocatable :: first(:), again(:)
-      character(len=:), allocatable :: input, dir, lcf, relax
+      character(len=:), allocatable :: input, dir, lcf, relax, table
+      integer :: k
       input = fit_deck('specimen-resume.nml', '', [character(len=200) :: &
          "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', weighting='threshold', sig=14 /", &
          "&test name='relax', history='relaxation', data_file='"//thesis//"relax.sim.txt', weighting='relaxation' /", &
@@ -256,13 +258,26 @@ contains
       call check(error, file_exists(dir//'/diagnose/specimen.journal') .and. len(lcf) > 0 .and. len(relax) > 0, &
                  'reports and journal written')
       if (allocated(error)) return
+      ! temperature (dT) and drift (the specimen's d): a row each after the header; the
+      ! summary says what it wrote
+      table = read_text(dir//'/diagnose/specimen-lcf.csv')
+      call check(error, index(table, 'specimen,rank,effect,parameters,') == 1 .and. &
+                 count([(table(k:k) == new_line('a'), k=1, len(table))]) == 3 .and. &
+                 index(table, new_line('a')//'lcf,1,') > 0 .and. index(table, new_line('a')//'lcf,2,') > 0 .and. &
+                 index(table, ',dT,') > 0 .and. index(table, ',K,') > 0 .and. index(table, ',d,') > 0 .and. &
+                 index(table, ',1/s,') > 0, 'the table of effects: '//table)
+      if (allocated(error)) return
+      call check(error, any(index(first, 'wrote '//dir//'/diagnose/specimen-lcf.md, specimen-lcf.csv') == 1), &
+                 'no line names the files written')
+      if (allocated(error)) return
       call diagnose_command(input, dir, '', again, e, mode='resume')
       if (allocated(e)) then
          call test_failed(error, 'resume: '//e%message)
          return
       end if
       call check(error, all(first == again) .and. read_text(dir//'/diagnose/specimen-lcf.md') == lcf .and. &
-                 read_text(dir//'/diagnose/specimen-relax.md') == relax, 'the resumed reports are the same')
+                 read_text(dir//'/diagnose/specimen-relax.md') == relax .and. &
+                 read_text(dir//'/diagnose/specimen-lcf.csv') == table, 'the resumed reports are the same')
       if (allocated(error)) return
       call diagnose_command(input, dir, '', again, e, mode='auto')
       call check(error, .not. allocated(e), '--auto-resume of a finished per-specimen diagnosis')

@@ -57,7 +57,7 @@ def main(dirs):
     low = collections.defaultdict(list)
     for case, lowall in unique_cases(dirs):
         txt = open(os.path.join(case, 'truth.txt')).read()
-        m = re.match(r'(\w+): (.*)\nverdict: (.*)', txt, re.S)
+        m = re.match(r'([\w-]+): (.*)\nverdict: (.*)', txt, re.S)
         row, label = m.group(1), m.group(2)
         name = os.path.basename(case)
         mname = name[:name.index('-' + row + '-')]

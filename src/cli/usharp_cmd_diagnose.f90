@@ -11,7 +11,8 @@ module usharp_cmd_diagnose
    use usharp_overwrite, only: check_overwrite, check_overwrite_each
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
-   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index
+   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index, &
+                                       specimen_csv, specimen_csv_header
    use usharp_diagnose_journal, only: next_unit, record_unit, text_lines, unit_digest
    use usharp_error, only: fatal_error, stat_input, stat_usage
    use usharp_filesys, only: make_dir, join_path, file_exists
@@ -83,7 +84,8 @@ contains
    end subroutine diagnose_command
 
    !> Per-specimen mode: each named specimen (or every test) against its replicates;
-   !> <out_dir>/diagnose/specimen-<name>.md. Each specimen's report is a unit of
+   !> <out_dir>/diagnose/specimen-<name>.md and its table of effects specimen-<name>.csv.
+   !> Each specimen's report and table are a unit of
    !> <out_dir>/diagnose/specimen.journal, so that a run stopped by a signal (a cluster job
    !> at its wall time) continues with --resume from the specimen it had not finished
    subroutine specimen_command(cfg, opts, constants_file, lines, error, mode)
@@ -99,13 +101,13 @@ contains
       type(diagnose_journal), pointer :: jr
       type(error_type), allocatable :: e
       character(len=report_line_len), allocatable :: part(:)
-      character(len=:), allocatable :: report, dir, text
+      character(len=:), allocatable :: report, dir, text, unit_lines(:), table(:), name
       integer, allocatable :: which(:)
-      integer :: i, k
+      integer :: i, k, at
       character(len=16) :: digest
       logical :: replay
-      !> a report's name and how its first line begins
-      character(len=256) :: own_name(1), own_mark(1)
+      !> a report's and a table's name and how their first lines begin
+      character(len=256) :: own_name(2), own_mark(2)
       if (trim(cfg%diagnose%specimen) == 'all') then
          which = [(i, i=1, size(cfg%tests))]
       else
@@ -120,22 +122,27 @@ contains
       ! Neither an earlier run's reports (but on --resume, whose journal holds them) nor a
       ! user's file of their names is overwritten unasked (before any work is done)
       do i = 1, size(which)
-         report = join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name)//'.md')
-         own_name(1) = 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'
-         own_mark(1) = '# Per-specimen diagnosis: '//trim(cfg%tests(which(i))%name)
+         name = 'specimen-'//trim(cfg%tests(which(i))%name)
+         own_name = [character(len=256) :: name//'.md', name//'.csv']
+         own_mark = [character(len=256) :: '# Per-specimen diagnosis: '//trim(cfg%tests(which(i))%name), &
+                     specimen_csv_header]
          call check_overwrite(dir, own_name, own_mark, 'diagnose', mode == 'force', error)
          if (allocated(error)) return
-         if (mode == 'start' .and. file_exists(report) .and. &
-             .not. file_exists(join_path(dir, 'specimen.journal'))) then
-            call fatal_error(error, report//': holds the report of an earlier run; start again and '// &
-               'overwrite it with --force', stat_usage)
-            return
-         end if
+         do k = 1, size(own_name)
+            report = join_path(dir, trim(own_name(k)))
+            if (mode == 'start' .and. file_exists(report) .and. &
+                .not. file_exists(join_path(dir, 'specimen.journal'))) then
+               call fatal_error(error, report//': holds the '//trim(merge('report', 'table ', k == 1))// &
+                  ' of an earlier run; start again and overwrite it with --force', stat_usage)
+               return
+            end if
+         end do
       end do
       call make_dir(dir, error)
       if (allocated(error)) return
+      ! (units=2: a unit holds the report and then its table)
       call journal%open(join_path(dir, 'specimen.journal'), fit_fingerprint(cfg, constants_file)// &
-                        ' specimen='//trim(cfg%diagnose%specimen), mode, error)
+                        ' specimen='//trim(cfg%diagnose%specimen)//' units=2', mode, error)
       if (allocated(error)) return
       jr => journal
       allocate (lines(0))
@@ -144,21 +151,34 @@ contains
          call next_unit(jr, digest, text, replay, error)
          if (allocated(error)) exit
          if (replay) then
-            part = text_lines(text)
+            ! the report, then the table from its header on
+            unit_lines = text_lines(text)
+            at = findloc(unit_lines == specimen_csv_header, .true., dim=1)
+            if (at == 0) at = size(unit_lines) + 1
+            part = unit_lines(:at - 1)
+            table = unit_lines(at:)
          else
             call specimen_run(cfg, which(i), opts, .true., sr, error)
             if (allocated(error)) exit
             part = specimen_report(sr)
+            table = specimen_csv(sr)
             text = ''
             do k = 1, size(part)
                text = text//trim(part(k))//new_line('a')
             end do
+            do k = 1, size(table)
+               text = text//trim(table(k))//new_line('a')
+            end do
             call record_unit(jr, digest, text, error)
             if (allocated(error)) exit
          end if
-         call write_lines(join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name)//'.md'), part, error)
+         name = join_path(dir, 'specimen-'//trim(cfg%tests(which(i))%name))
+         call write_lines(name//'.md', part, error)
          if (allocated(error)) exit
-         lines = [character(len=report_line_len) :: lines, part, '']
+         call write_lines(name//'.csv', table, error)
+         if (allocated(error)) exit
+         lines = [character(len=report_line_len) :: lines, part, '', 'wrote '//name//'.md, '// &
+                  'specimen-'//trim(cfg%tests(which(i))%name)//'.csv', '']
       end do
       call journal%close(e)
       if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)

@@ -28,7 +28,8 @@ module usharp_diagnose_numerics
    public :: set_constants_at, copy_constants, jacobian, gn_decrease, pseudo_inverse, best_of_starts
    public :: take_starts, global_points, lm_ftol, lm_itermax, lm_updates
    public :: judge_held_values
-   public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached
+   public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached, &
+             backstress2_starts
    public :: limit_measures
    public :: low_end_deltas, screening_steps, bic_power, power_lambda, test_sizes, block_sums, deviance_change
    public :: tight_jacobian, sandwich_covariance, noise_variance, held_rate, ratio_beyond_doubt, &
@@ -365,6 +366,29 @@ contains
       end do
    end function softening_starts
 
+   !> Starts (H3 in the stress unit, gamma3: columns) of a fit of the second back stress: near
+   !> zero (saturation H3/gamma3 of 5e-5 of the peak) at the rate gamma3, then saturations of
+   !> 3 and 10 % of the peak at rates half, twice and ten times it. Its rate has no gradient
+   !> near zero, and a fit stays in the basin of the rate it starts from: on the Alloy 617
+   !> tests every start at gamma3 = 200 ended near the baseline (dBIC -76), one at 2000 went
+   !> on to gamma3 = 3800 (dBIC -2346); on one specimen a single start ended at 48 % of a gap
+   !> the injected back stress removes whole
+   pure function backstress2_starts(peak, gamma3) result(ps)
+      !> peak stress of the tests (stress unit)
+      real(dp), intent(in) :: peak
+      !> the screening's recovery rate (-)
+      real(dp), intent(in) :: gamma3
+      real(dp) :: ps(2, 7)
+      real(dp), parameter :: sats(2) = [0.03_dp, 0.1_dp], rates(3) = [0.5_dp, 2.0_dp, 10.0_dp]
+      real(dp) :: g3
+      integer :: j
+      ps(:, 1) = [0.01_dp*peak, gamma3]
+      do j = 1, 6
+         g3 = gamma3*rates(mod(j - 1, 3) + 1)
+         ps(:, j + 1) = [sats((j - 1)/3 + 1)*peak*g3, g3]
+      end do
+   end function backstress2_starts
+
    !> Share of the drag the saturating softening a, b (catalogue effect 7) takes away by the
    !> end of the tests of ep at x: |a|(1 - exp(-b p_end)), p_end the largest accumulated
    !> inelastic strain a test reaches (the sum of its inelastic strain's changes between
@@ -511,7 +535,7 @@ contains
    !> The fit of the constants with effect k on the fit tests, from the baseline constants
    !> and zero effect (the second back stress from a small modulus, so that its rate has a
    !> gradient; the softening at the rate soften_rate0)
-   subroutine effect_fit(ctx, k, ep, held)
+   subroutine effect_fit(ctx, k, ep, held, rate)
       type(diagnose_context), intent(in) :: ctx
       !> Catalogue effect
       integer, intent(in) :: k
@@ -519,12 +543,18 @@ contains
       !> The rates that screening holds (the parameters without a gradient at zero: the
       !> second back stress's gamma3, the softening's b) held at their start (see refit)
       logical, intent(in), optional :: held
+      !> That start, where positive (see effect_outcome's rate_start); else the screening's
+      real(dp), intent(in), optional :: rate
       call new_effect_problem(ctx%prob, ctx%ifit, k, ctx%eff_base, ctx%peak, ep)
       ep%pfree = free_params(ep, ctx%ifit, .false.)
       if (k == 8) ep%p0 = [0.01_dp*ctx%peak, ctx%opts%gamma3]
       if (k == 7) ep%p0 = [0.0_dp, soften_rate0]
+      if (held_rate(ctx%cat(k)) == 0) return
+      if (present(rate)) then
+         if (rate > 0.0_dp) ep%p0(held_rate(ctx%cat(k))) = rate
+      end if
       if (present(held)) then
-         if (held .and. held_rate(ctx%cat(k)) > 0) ep%pfree(held_rate(ctx%cat(k))) = .false.
+         if (held) ep%pfree(held_rate(ctx%cat(k))) = .false.
       end if
    end subroutine effect_fit
 

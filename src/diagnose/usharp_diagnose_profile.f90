@@ -297,7 +297,7 @@ contains
          e%p_lo_open = spread(.false., 1, size(e%p))
          e%p_hi_open = spread(.false., 1, size(e%p))
          f_lower = e%f_after
-         call effect_fit(ctx, e%k, ep, e%held)
+         call effect_fit(ctx, e%k, ep, e%held, e%rate_start)
          if (size(e%x_fit) /= ep%nx()) return
          nc = size(ctx%prob%idx)
          call ep%bounds(lo, hi)

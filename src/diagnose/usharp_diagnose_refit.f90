@@ -29,7 +29,7 @@ module usharp_diagnose_refit
    private
 
    public :: refit, refit_candidates, refit_global, global_baseline_starts, refit_deciding, judge, &
-             rate_undetermined, with_params, other_sign
+             rate_undetermined, with_params, other_sign, rate_rungs
 
 contains
 
@@ -205,7 +205,7 @@ contains
       class(model_type), allocatable :: mdl
       real(dp), allocatable :: p(:)
       logical :: moved
-      call effect_fit(ctx, e%k, ep, e%held)
+      call effect_fit(ctx, e%k, ep, e%held, e%rate_start)
       call fit_constants(ctx, res, ep, e, opt, moved, error, starts, from)
       if (allocated(error)) return
       if (.not. moved) then
@@ -250,11 +250,13 @@ contains
    end function rate_undetermined
 
 
-   !> e's refit again with its rate (see held_rate) held at the screening's value (the
-   !> other parameters and the constants fitted, from the screening end point and from the
-   !> free refit's constants); taken in place of the free refit (ep, opt, mdl, p and e) when
-   !> its magnitude is within the limit, so that the verdict judges an effect of a size the
-   !> data allow, not the runaway
+   !> e's refit again with its rate (see held_rate) held, at the rate of each screening
+   !> start's basin (rate_rungs: a fit stays in the basin of the rate it starts from, see
+   !> backstress2_starts), the other parameters and the constants fitted from that basin's
+   !> screening end point (the leading one's also from the free refit's constants); the
+   !> lowest of them whose magnitude is within the limit is taken in place of the free
+   !> refit (ep, opt, mdl, p and e), so that the verdict judges an effect of a size the data
+   !> allow, not the runaway
    subroutine refit_held(ctx, res, e, ep, opt, mdl, p, error)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
@@ -264,50 +266,99 @@ contains
       class(model_type), allocatable, intent(inout) :: mdl
       real(dp), allocatable, intent(inout) :: p(:)
       type(error_type), allocatable, intent(out) :: error
-      type(effect_problem) :: eh
-      type(effect_outcome) :: trial
-      type(optimum_type) :: oh
-      class(model_type), allocatable :: mh
-      real(dp), allocatable :: ph(:), lo(:), hi(:), x0(:), x1(:, :)
-      real(dp) :: fs1(1)
-      integer :: nc
+      type(effect_problem) :: eh, eh_best
+      type(effect_outcome) :: trial, best
+      type(optimum_type) :: oh, oh_best
+      class(model_type), allocatable :: mh, mh_best
+      real(dp), allocatable :: ph(:), ph_best(:), lo(:), hi(:), x0(:), x1(:, :), xr(:)
+      real(dp) :: fs1(1), rate
+      integer, allocatable :: rungs(:)
+      integer :: nc, r, nevals, nfailed
+      logical :: found
       nc = size(ctx%prob%idx)
-      call effect_fit(ctx, e%k, eh, .true.)
-      call eh%bounds(lo, hi)
-      ! x holds the constants, then the effect's parameters (its rate is the last of the free
-      ! refit's layout)
-      x0 = min(max(e%x(1:nc + 1), lo), hi)
-      x1 = reshape(min(max([opt%x(1:nc), x0(nc + 1)], lo), hi), [nc + 1, 1])
-      trial = e
-      call lm_unit(ctx%journal, eh, x0, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, oh, &
-                   error, memo=ctx%memo)
-      if (allocated(error)) return
-      trial%nevals = trial%nevals + oh%nevals
-      call starts_unit(ctx%journal, eh, x1, lo, hi, ctx%h, ctx%opts%max_evals, oh, trial%nevals, error, &
-                       fs1, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
-      if (allocated(error)) return
-      ! Its start from the free refit's constants is one of the starts the report counts
-      trial%nstarts_failed = e%nstarts_failed + count(fs1 >= failed_objective)
-      trial%held = .true.
-      trial%rate_lo = e%p_lo(held_rate(ctx%cat(e%k)))
-      trial%rate_hi = e%p_hi(held_rate(ctx%cat(e%k)))
-      trial%x = x0
-      trial%x_fit = oh%x
-      trial%f_after = oh%f
-      trial%f_lo = oh%f
-      trial%f_hi = max(e%f_hi, oh%f)
-      trial%nstarts = e%nstarts + 2
-      trial%q = count(eh%pfree)
-      call magnitudes(ctx, res, eh, oh%x, trial, mh, ph)
-      ! The free refit's simulations count either way
-      e%nevals = trial%nevals
-      if (.not. trial%plausible) return
-      e = trial
-      ep = eh
-      opt = oh
-      call move_alloc(mh, mdl)
-      call move_alloc(ph, p)
+      nfailed = 0
+      rungs = rate_rungs(e)
+      found = .false.
+      nevals = e%nevals
+      do r = 1, size(rungs)
+         if (rungs(r) == 0) then
+            xr = e%x
+            rate = e%rate_start
+         else
+            xr = e%x_alt(:, rungs(r))
+            rate = e%rate_alt(rungs(r))
+         end if
+         call effect_fit(ctx, e%k, eh, .true., rate)
+         call eh%bounds(lo, hi)
+         ! x holds the constants, then the effect's parameters (its rate is the last of the
+         ! free refit's layout)
+         x0 = min(max(xr(1:nc + 1), lo), hi)
+         trial = e
+         call lm_unit(ctx%journal, eh, x0, lo, hi, ctx%h, lm_ftol, lm_itermax, ctx%opts%max_evals, oh, &
+                      error, memo=ctx%memo)
+         if (allocated(error)) return
+         nevals = nevals + oh%nevals
+         x1 = reshape(min(max([opt%x(1:nc), x0(nc + 1)], lo), hi), [nc + 1, 1])
+         call starts_unit(ctx%journal, eh, x1, lo, hi, ctx%h, ctx%opts%max_evals, oh, nevals, error, &
+                          fs1, over_ranks=ctx%opts%over_ranks, memo=ctx%memo)
+         if (allocated(error)) return
+         ! Its start from the free refit's constants is one of the starts the report counts
+         nfailed = nfailed + count(fs1 >= failed_objective)
+         trial%nstarts_failed = e%nstarts_failed + nfailed
+         trial%nevals = nevals
+         trial%held = .true.
+         trial%rate_start = rate
+         trial%rate_lo = e%p_lo(held_rate(ctx%cat(e%k)))
+         trial%rate_hi = e%p_hi(held_rate(ctx%cat(e%k)))
+         trial%x = x0
+         ! The screening's other end points in the held layout (the rate, last, left out)
+         if (allocated(trial%x_alt)) trial%x_alt = trial%x_alt(1:nc + 1, :)
+         trial%x_fit = oh%x
+         trial%f_after = oh%f
+         trial%f_lo = oh%f
+         trial%f_hi = max(e%f_hi, oh%f)
+         trial%nstarts = e%nstarts + 2*size(rungs)
+         trial%q = count(eh%pfree)
+         call magnitudes(ctx, res, eh, oh%x, trial, mh, ph)
+         if (.not. trial%plausible) cycle
+         if (found) then
+            if (.not. oh%f < best%f_after) cycle
+         end if
+         found = .true.
+         best = trial
+         eh_best = eh
+         oh_best = oh
+         call move_alloc(mh, mh_best)
+         call move_alloc(ph, ph_best)
+      end do
+      ! The free refit's simulations and every held one's count either way
+      e%nevals = nevals
+      if (.not. found) return
+      e = best
+      e%nevals = nevals
+      ep = eh_best
+      opt = oh_best
+      call move_alloc(mh_best, mdl)
+      call move_alloc(ph_best, p)
    end subroutine refit_held
+
+   !> The screening end points that start a basin of the rate (see held_rate): 0 for e%x,
+   !> then each column of x_alt whose start's rate no earlier one had (x_alt is best first,
+   !> so each is the lowest of its rate's); 0 alone where the screening kept no rates
+   pure function rate_rungs(e) result(cols)
+      type(effect_outcome), intent(in) :: e
+      integer, allocatable :: cols(:)
+      real(dp), allocatable :: seen(:)
+      integer :: j
+      cols = [0]
+      if (.not. allocated(e%rate_alt) .or. .not. allocated(e%x_alt)) return
+      seen = [e%rate_start]
+      do j = 1, min(size(e%rate_alt), size(e%x_alt, 2))
+         if (any(abs(seen - e%rate_alt(j)) <= 1.0e-9_dp*abs(e%rate_alt(j)))) cycle
+         seen = [seen, e%rate_alt(j)]
+         cols = [cols, j]
+      end do
+   end function rate_rungs
 
    !> Levenberg-Marquardt runs of ep: the first refit from the screening end point (and its
    !> other screening end points, and the global starts); a refit again from further starts
@@ -325,7 +376,8 @@ contains
       !> A refitted effect's point (x of ep) to go on from in place of its own end point
       real(dp), intent(in), optional :: from(:)
       real(dp), allocatable :: lo(:), hi(:), fs(:), xs(:, :), xe(:, :), x0(:)
-      integer :: k
+      integer, allocatable :: cols(:), rungs(:)
+      integer :: k, j
       call ep%bounds(lo, hi)
       moved = .true.
       if (e%refitted .and. (present(starts) .or. present(from))) then
@@ -367,9 +419,15 @@ contains
          ! Also from the next screening end points and the global starts; the lowest
          ! objective is kept
          if (allocated(e%x_alt)) then
-            xs = e%x_alt(:, :min(ctx%opts%refit_starts - 1, size(e%x_alt, 2)))
+            ! and from the other sign's basin and each other rate's (rate_rungs)
+            cols = [(j, j=1, min(ctx%opts%refit_starts - 1, size(e%x_alt, 2)))]
             k = other_sign(e, size(ctx%prob%idx))
-            if (k > size(xs, 2)) xs = reshape([xs, e%x_alt(:, k)], [size(e%x), size(xs, 2) + 1])
+            if (k > size(cols)) cols = [cols, k]
+            rungs = rate_rungs(e)
+            do j = 2, size(rungs)
+               if (.not. any(cols == rungs(j))) cols = [cols, rungs(j)]
+            end do
+            xs = e%x_alt(:, cols)
             allocate (fs(size(xs, 2)), xe(size(xs, 1), size(xs, 2)))
             call starts_unit(ctx%journal, ep, xs, lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals, error, &
                              fs, over_ranks=ctx%opts%over_ranks, memo=ctx%memo, xe=xe)

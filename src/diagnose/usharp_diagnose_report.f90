@@ -297,7 +297,7 @@ contains
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
          if (k > 0) call add_line(lines, '- '//trim(cat(e%k)%pname(k))//' held at '// &
-            real_str(e%p_all(k), 'es11.4')//' (the screening''s value): fitted free, its interval ['// &
+            real_str(e%p_all(k), 'es11.4')//' (the best of its screening starts'' rates): fitted free, its interval ['// &
             real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')//'] spans zero or is '// &
             'open and '//trim(e%worst_what)//' ran beyond its limit')
       end if

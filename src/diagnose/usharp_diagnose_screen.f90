@@ -15,8 +15,8 @@ module usharp_diagnose_screen
    use usharp_diagnose_units, only: lm_unit
    use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
-                                       softening_starts, soften_rate0, low_end_deltas, bic_power, &
-                                       test_sizes, block_sums, deviance_change, screening_steps, power_lambda
+                                       softening_starts, backstress2_starts, soften_rate0, low_end_deltas, bic_power, &
+                                       test_sizes, block_sums, deviance_change, screening_steps, power_lambda, held_rate
    use usharp_diagnose_separate, only: finding_test, fit_amplitude, fit_rel_noise
    implicit none
    private
@@ -127,7 +127,7 @@ contains
       ! The baseline constants have already bent towards the effect, so zero can be a
       ! local minimum of a global effect: its short runs also start from a tenth of the
       ! physical limit with every sign, and the lowest end point is kept
-      xs = screening_starts(ep, ctx%cat(k))
+      xs = screening_starts(ep, ctx%cat(k), ctx%peak)
       allocate (xe(size(xs, 1), 0), x_from(size(xs, 1), 0), fe(0))
       do j = 1, size(xs, 2)
          ! From a start away from zero the constants first have to come back: 5 steps
@@ -163,6 +163,12 @@ contains
       ! the cost, so 1 by default)
       idx = order_of(fe)
       e%x = xe(:, idx(1))
+      ! The rates the end points started from (see rate_rungs)
+      j = held_rate(ctx%cat(k))
+      if (j > 0 .and. count(ep%pfree) == size(ep%p0)) then
+         e%rate_start = x_from(nc + j, idx(1))*ep%pscale(j)
+         e%rate_alt = x_from(nc + j, idx(2:))*ep%pscale(j)
+      end if
       xe = basin_points(xe, x_from, fe, s)
       e%x_alt = xe(:, idx(2:))
       e%q = count(ep%pfree)
@@ -275,27 +281,22 @@ contains
    !> Starts of the screening runs of a global effect with a physical limit: zero, then every
    !> sign combination of a tenth of the limit (non-negative parameters only positive); other
    !> effects start from zero only. Columns: x of ep.
-   pure function screening_starts(ep, info) result(xs)
+   pure function screening_starts(ep, info, peak) result(xs)
       type(effect_problem), intent(in) :: ep
       type(effect_info), intent(in) :: info
+      !> peak stress of the tests (stress unit)
+      real(dp), intent(in) :: peak
       real(dp), allocatable :: xs(:, :)
       real(dp), allocatable :: x0(:), ps(:, :)
       integer :: nc, np, j, s, nsign, combo
       x0 = ep%start()
       nc = size(x0) - count(ep%pfree)
       np = count(ep%pfree)
-      if (ep%k == 8 .and. np == 2) then
-         ! The second back stress starts near zero (saturation H3/gamma3 of 5e-5 of the peak
-         ! at gamma3 = 200); also from saturations of 3 % and 10 % of the peak
-         allocate (xs(size(x0), 3))
-         xs = spread(x0, 2, 3)
-         xs(nc + 1, 2) = 0.03_dp*ep%p0(2)
-         xs(nc + 1, 3) = 0.10_dp*ep%p0(2)
-         return
-      end if
-      if (ep%k == 7 .and. np == 2) then
-         ! The saturating softening of either sign at three rates (softening_starts)
-         ps = softening_starts(info)
+      if ((ep%k == 7 .or. ep%k == 8) .and. np == 2) then
+         ! The saturating softening of either sign, the second back stress of two
+         ! saturations, each at three rates (softening_starts, backstress2_starts)
+         if (ep%k == 7) ps = softening_starts(info)
+         if (ep%k == 8) ps = backstress2_starts(peak, ep%p0(2))
          allocate (xs(size(x0), size(ps, 2)))
          xs = spread(x0, 2, size(ps, 2))
          xs(nc + 1, :) = ps(1, :)/ep%pscale(1)

@@ -10,7 +10,7 @@ module usharp_diagnose_specimen
    use usharp_lapack, only: mat_mul, svd
    use usharp_math, only: log_dp, exp_dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end, interval_format
+   use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end, interval_format, csv_field
    use usharp_config, only: run_config
    use usharp_history, only: control_strain
    use usharp_input_test, only: name_len
@@ -27,7 +27,7 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
-                                       soften_rate0, low_end_deltas, bic_power, power_lambda, &
+                                       backstress2_starts, soften_rate0, low_end_deltas, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end
@@ -40,7 +40,13 @@ module usharp_diagnose_specimen
    private
 
    public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
+   public :: specimen_csv, specimen_csv_header
    public :: specimen_deviance, profiled_deviance, constants_directions, specimen_noncentrality
+
+   !> The first line of specimen-<name>.csv (see specimen_csv)
+   character(len=*), parameter :: specimen_csv_header = 'specimen,rank,effect,parameters,objective_after,'// &
+      'dbic,gap_removed,significant,plausible,leads,parameter,value,lower_95,upper_95,lower_open,upper_open,'// &
+      'unit,at_search_bound,chi_square_low_end,power_low_end'
 
    !> One effect fitted to the specimen
    type :: specimen_effect
@@ -340,9 +346,8 @@ contains
          logical :: lower
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
          real(dp), allocatable :: starts(:, :)
-         real(dp) :: scale, g3, reach, saturation
+         real(dp) :: scale, reach, saturation
          integer, allocatable :: grp(:)
-         real(dp), parameter :: sats(2) = [0.03_dp, 0.1_dp], rates(3) = [0.5_dp, 2.0_dp, 10.0_dp]
          ! Figures and intervals again from a lower point that a profile met, at most twice
          integer, parameter :: max_passes = 3
          integer :: jj, g, np
@@ -353,16 +358,10 @@ contains
          np = size(ek%p0)
          se_out%q = count(ek%pfree)
          call ek%bounds(lo, hi)
-         ! The second back stress also from saturations of 3 and 10 % of the peak at three
-         ! recovery rates (from one start its refit ended at 48 % of a gap that the injected
-         ! one removes whole); the lowest end point is kept
+         ! The second back stress from saturations and rates apart (backstress2_starts); the
+         ! lowest end point is kept
          starts = reshape(ek%p0, [np, 1])
-         if (k == 8) then
-            do jj = 1, 6
-               g3 = opts%gamma3*rates(mod(jj - 1, 3) + 1)
-               starts = reshape([starts, [sats((jj - 1)/3 + 1)*peak*g3, g3]], [np, size(starts, 2) + 1])
-            end do
-         end if
+         if (k == 8) starts = backstress2_starts(peak, opts%gamma3)
          ! The saturating softening of either sign at three rates (the first is the zero start)
          if (k == 7) starts = softening_starts(cat(k))
          se_out%nevals = 0
@@ -1013,4 +1012,44 @@ contains
          end if
       end function bound_at
    end function specimen_report
+
+   !> The report's table of effects as rows of specimen-<name>.csv, one per parameter of each
+   !> effect in the report's order (rank: by BIC; leads: the verdict's effect; value, 95 %
+   !> interval and unit as the report gives them, the stress in the model's unit; an open end
+   !> or a parameter at its search bound as the report says; power -1: not computed)
+   pure function specimen_csv(sr) result(rows)
+      type(specimen_result), intent(in) :: sr
+      character(len=:), allocatable :: rows(:)
+      ! (long enough for a test name of its greatest length, quoted, and the numbers)
+      integer, parameter :: row_len = 600
+      character(len=row_len), allocatable :: r(:)
+      character(len=:), allocatable :: side
+      integer :: j, g, lead, best
+      call specimen_lead(sr, lead, best)
+      allocate (r(0))
+      r = [character(len=row_len) :: r, specimen_csv_header]
+      do j = 1, size(sr%effects)
+         associate (e => sr%effects(j))
+            do g = 1, size(e%p)
+               side = ''
+               if (allocated(e%p_bound)) then
+                  if (g <= size(e%p_bound)) then
+                     if (e%p_bound(g) /= 0) side = side_word(e%p_bound(g))
+                  end if
+               end if
+               r = [character(len=row_len) :: r, csv_field(trim(sr%name))//','//str(j)//','// &
+                  csv_field(trim(e%name))//','//str(e%q)//','//real_str(e%f_after, 'es14.7')//','// &
+                  real_str(e%dbic, 'f0.2')//','//real_str(e%removed, 'f0.4')//','// &
+                  trim(merge('yes', 'no ', e%significant))//','//trim(merge('yes', 'no ', e%plausible))//','// &
+                  trim(merge('yes', 'no ', j == lead))//','//csv_field(trim(e%pname(g)))//','// &
+                  real_str(e%p(g), 'es14.7')//','//real_str(e%p_lo(g), 'es14.7')//','// &
+                  real_str(e%p_hi(g), 'es14.7')//','//trim(merge('yes', 'no ', e%lo_open(g)))//','// &
+                  trim(merge('yes', 'no ', e%hi_open(g)))//','// &
+                  csv_field(trim(adjustl(unit_text(e%punit(g), sr%stress_unit))))//','//side//','// &
+                  real_str(e%lambda_low, 'es12.5')//','//real_str(e%power_low, 'f0.4')]
+            end do
+         end associate
+      end do
+      rows = r
+   end function specimen_csv
 end module usharp_diagnose_specimen

@@ -142,10 +142,15 @@ module usharp_diagnose_types
       logical :: significant = .false., confirmed = .false.
       logical :: plausible = .true.          !< every magnitude within the effect's physical limit
       !> Refitted with its rate (the second back stress's gamma3, the softening's b) held at
-      !> the screening's value: free, the fit tests left the rate undetermined and the
+      !> its screening start's value (rate_start): free, the fit tests left the rate undetermined and the
       !> magnitude beyond its limit (see refit)
       logical :: held = .false.
       real(dp) :: rate_lo = 0.0_dp, rate_hi = 0.0_dp  !< the rate's interval when free
+      !> The rate (see held_rate) of the screening start whose end point led (0: the
+      !> screening's own), and of each x_alt column's start; a refit that holds the rate
+      !> holds it at its start's (see rate_rungs)
+      real(dp) :: rate_start = 0.0_dp
+      real(dp), allocatable :: rate_alt(:)
       !> Of its free parameters, those at a search bound (their intervals do not hold)
       integer, allocatable :: p_bound(:)
       real(dp) :: worst = 0.0_dp             !< largest |parameter|/limit of the fit tests
