@@ -1959,6 +1959,14 @@ contains
       e%p_hi(2) = 40.0_dp
       call check(error, .not. rate_undetermined(ctx, e), 'gamma3 the data fix held')
       if (allocated(error)) return
+      ! A closed interval about a rate at the end of its search box does not hold
+      e%p_bound = [0, 1]
+      call check(error, rate_undetermined(ctx, e), 'gamma3 at the end of its box not held')
+      if (allocated(error)) return
+      e%p_bound = [1, 0]
+      call check(error, .not. rate_undetermined(ctx, e), 'held for H3 at its bound')
+      if (allocated(error)) return
+      deallocate (e%p_bound)
       e%p_lo(2) = -2.84_dp
       e%plausible = .true.
       call check(error, .not. rate_undetermined(ctx, e), 'a plausible refit held')

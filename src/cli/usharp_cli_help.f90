@@ -136,8 +136,8 @@ contains
             'Writes <out_dir>/diagnose/report.md, regions.csv, effects.csv, residuals.csv,'//nl// &
             'steps.csv (simulations and time of each step), plots and diagnose.journal'//nl// &
             '(each optimisation''s outcome: a diagnosis stopped by SIGTERM continues with'//nl// &
-            '--resume to the same report; the per-specimen mode keeps each specimen''s'//nl// &
-            'report in specimen.journal alike). With --selfcheck:'//nl// &
+            '--resume to the same report; the per-specimen mode writes specimen-<name>.md'//nl// &
+            'and .csv, kept in specimen.journal alike). With --selfcheck:'//nl// &
             'injects each effect into synthetic data (the built-in matrix, or the given'//nl// &
             'file), diagnoses it and writes <out_dir>/selfcheck.md and selfcheck.journal'//nl// &
             '(every repetition; under mpirun or srun spread over the ranks). A file of the'//nl// &

@@ -234,7 +234,7 @@ contains
 
    !> An effect beyond its limit whose rate (a global parameter that screening holds, see
    !> held_rate) the fit tests leave undetermined (its 95 % interval spans zero or is not
-   !> finite): the refit wandered along a valley the data do not close (with the LCF test held
+   !> finite, or it sits at an end of its search box): the refit wandered along a valley the data do not close (with the LCF test held
    !> out, a second back stress of 2.23 ksi came out as 27 ksi, gamma3 25 [-2.8, 52.7]), and
    !> its magnitude says nothing
    pure logical function rate_undetermined(ctx, e) result(undetermined)
@@ -247,6 +247,10 @@ contains
       if (j == 0 .or. size(e%p_lo) < j) return
       undetermined = .not. (e%p_lo(j)*e%p_hi(j) > 0.0_dp .and. ieee_is_finite(e%p_lo(j)) .and. &
                             ieee_is_finite(e%p_hi(j)))
+      ! At an end of its search box its interval does not hold (the data do not bound it there)
+      if (allocated(e%p_bound)) then
+         if (j <= size(e%p_bound)) undetermined = undetermined .or. e%p_bound(j) /= 0
+      end if
    end function rate_undetermined
 
 
