@@ -243,7 +243,7 @@ contains
       type(effect_outcome), intent(in) :: e
       integer, allocatable :: order(:)
       integer :: i, k, g
-      character(len=:), allocatable :: what, unit
+      character(len=:), allocatable :: what, unit, why
       real(dp), allocatable :: before(:)
       logical :: lo_open, hi_open
       type(effect_info) :: cat(n_effects)
@@ -296,10 +296,19 @@ contains
       end do
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
+         ! (see rate_undetermined: an interval that spans zero or is open, or a rate at the
+         ! end of its search box, about which a closed interval does not hold)
+         if (e%rate_lo*e%rate_hi > 0.0_dp .and. abs(e%rate_lo) < huge(1.0_dp) .and. &
+             abs(e%rate_hi) < huge(1.0_dp)) then
+            why = 'it ran to the end of its search box, where its interval ['// &
+                  real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')//'] does not hold,'
+         else
+            why = 'its interval ['//real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')// &
+                  '] spans zero or is open'
+         end if
          if (k > 0) call add_line(lines, '- '//trim(cat(e%k)%pname(k))//' held at '// &
-            real_str(e%p_all(k), 'es11.4')//' (the best of its screening starts'' rates): fitted free, its interval ['// &
-            real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')//'] spans zero or is '// &
-            'open and '//trim(e%worst_what)//' ran beyond its limit')
+            real_str(e%p_all(k), 'es11.4')//' (the best of its screening starts'' rates): fitted free, '// &
+            why//' and '//trim(e%worst_what)//' ran beyond its limit')
       end if
       ! The held-out tests' own values of a per-test effect (fitted to each with the constants
       ! fixed)
