@@ -126,7 +126,7 @@ contains
          own_name = [character(len=256) :: name//'.md', name//'.csv']
          own_mark = [character(len=256) :: '# Per-specimen diagnosis: '//trim(cfg%tests(which(i))%name), &
                      specimen_csv_header]
-         call check_overwrite(dir, own_name, own_mark, 'diagnose', mode == 'force', error)
+         call check_overwrite_each(dir, own_name, own_mark, 'diagnose', mode == 'force', error)
          if (allocated(error)) return
          do k = 1, size(own_name)
             report = join_path(dir, trim(own_name(k)))

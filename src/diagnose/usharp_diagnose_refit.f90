@@ -275,12 +275,13 @@ contains
       type(optimum_type) :: oh, oh_best
       class(model_type), allocatable :: mh, mh_best
       real(dp), allocatable :: ph(:), ph_best(:), lo(:), hi(:), x0(:), x1(:, :), xr(:)
-      real(dp) :: fs1(1), rate
+      real(dp) :: fs1(1), rate, f_hi
       integer, allocatable :: rungs(:)
       integer :: nc, r, nevals, nfailed
       logical :: found
       nc = size(ctx%prob%idx)
       nfailed = 0
+      f_hi = e%f_hi
       rungs = rate_rungs(e)
       found = .false.
       nevals = e%nevals
@@ -308,7 +309,7 @@ contains
          if (allocated(error)) return
          ! Its start from the free refit's constants is one of the starts the report counts
          nfailed = nfailed + count(fs1 >= failed_objective)
-         trial%nstarts_failed = e%nstarts_failed + nfailed
+         if (oh%f < failed_objective) f_hi = max(f_hi, oh%f)
          trial%nevals = nevals
          trial%held = .true.
          trial%rate_start = rate
@@ -320,8 +321,6 @@ contains
          trial%x_fit = oh%x
          trial%f_after = oh%f
          trial%f_lo = oh%f
-         trial%f_hi = max(e%f_hi, oh%f)
-         trial%nstarts = e%nstarts + 2*size(rungs)
          trial%q = count(eh%pfree)
          call magnitudes(ctx, res, eh, oh%x, trial, mh, ph)
          if (.not. trial%plausible) cycle
@@ -335,9 +334,13 @@ contains
          call move_alloc(mh, mh_best)
          call move_alloc(ph, ph_best)
       end do
-      ! The free refit's simulations and every held one's count either way
+      ! The free refit's simulations and every held one's count either way; the held runs'
+      ! starts, failures and objectives all count in what the report says of the one taken
       e%nevals = nevals
       if (.not. found) return
+      best%nstarts_failed = e%nstarts_failed + nfailed
+      best%nstarts = e%nstarts + 2*size(rungs)
+      best%f_hi = max(f_hi, best%f_after)
       e = best
       e%nevals = nevals
       ep = eh_best

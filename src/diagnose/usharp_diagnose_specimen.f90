@@ -1020,8 +1020,8 @@ contains
    pure function specimen_csv(sr) result(rows)
       type(specimen_result), intent(in) :: sr
       character(len=:), allocatable :: rows(:)
-      ! (long enough for a test name of its greatest length, quoted, and the numbers)
-      integer, parameter :: row_len = 600
+      ! (long enough for two names of their greatest length, quoted, and the numbers)
+      integer, parameter :: row_len = 4*name_len + 600
       character(len=row_len), allocatable :: r(:)
       character(len=:), allocatable :: side
       integer :: j, g, lead, best
@@ -1039,7 +1039,7 @@ contains
                end if
                r = [character(len=row_len) :: r, csv_field(trim(sr%name))//','//str(j)//','// &
                   csv_field(trim(e%name))//','//str(e%q)//','//real_str(e%f_after, 'es14.7')//','// &
-                  real_str(e%dbic, 'f0.2')//','//real_str(e%removed, 'f0.4')//','// &
+                  number(e%dbic, 'f0.2')//','//real_str(e%removed, 'f0.4')//','// &
                   trim(merge('yes', 'no ', e%significant))//','//trim(merge('yes', 'no ', e%plausible))//','// &
                   trim(merge('yes', 'no ', j == lead))//','//csv_field(trim(e%pname(g)))//','// &
                   real_str(e%p(g), 'es14.7')//','//real_str(e%p_lo(g), 'es14.7')//','// &
@@ -1051,5 +1051,14 @@ contains
          end associate
       end do
       rows = r
+   contains
+      !> x in format fmt; empty where it is no number (a joint fit that failed leaves huge)
+      pure function number(x, fmt) result(text)
+         real(dp), intent(in) :: x
+         character(len=*), intent(in) :: fmt
+         character(len=:), allocatable :: text
+         text = ''
+         if (abs(x) < 0.1_dp*huge(1.0_dp)) text = real_str(x, fmt)
+      end function number
    end function specimen_csv
 end module usharp_diagnose_specimen
