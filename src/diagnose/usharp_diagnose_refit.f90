@@ -234,9 +234,9 @@ contains
 
    !> An effect beyond its limit whose rate (a global parameter that screening holds, see
    !> held_rate) the fit tests leave undetermined (its 95 % interval spans zero or is not
-   !> finite, or it sits at an end of its search box): the refit wandered along a valley the data do not close (with the LCF test held
-   !> out, a second back stress of 2.23 ksi came out as 27 ksi, gamma3 25 [-2.8, 52.7]), and
-   !> its magnitude says nothing
+   !> finite, or it sits at an end of its search box): the refit wandered along a valley the
+   !> data do not close (with the LCF test held out, a second back stress of 2.23 ksi came out
+   !> as 27 ksi, gamma3 25 [-2.8, 52.7]), and its magnitude says nothing
    pure logical function rate_undetermined(ctx, e) result(undetermined)
       type(diagnose_context), intent(in) :: ctx
       type(effect_outcome), intent(in) :: e
@@ -257,7 +257,7 @@ contains
    !> e's refit again with its rate (see held_rate) held, at the rate of each screening
    !> start's basin (rate_rungs: a fit stays in the basin of the rate it starts from, see
    !> backstress2_starts), the other parameters and the constants fitted from that basin's
-   !> screening end point (the leading one's also from the free refit's constants); the
+   !> screening end point and from the free refit's constants; the
    !> lowest of them whose magnitude is within the limit is taken in place of the free
    !> refit (ep, opt, mdl, p and e), so that the verdict judges an effect of a size the data
    !> allow, not the runaway
