@@ -370,9 +370,9 @@ contains
    !> zero (saturation H3/gamma3 of 5e-5 of the peak) at the rate gamma3, then saturations of
    !> 3 and 10 % of the peak at rates half, twice and ten times it. Its rate has no gradient
    !> near zero, and a fit stays in the basin of the rate it starts from: on the Alloy 617
-   !> tests every start at gamma3 = 200 ended near the baseline (dBIC -76), one at 2000 went
-   !> on to gamma3 = 3800 (dBIC -2346); on one specimen a single start ended at 48 % of a gap
-   !> the injected back stress removes whole
+   !> tests every start at gamma3 = 200 ended near the baseline (dBIC -76), starts at 2000
+   !> reached dBIC -2346 (gamma3 held there) and, every test fitted, gamma3 = 3800; on one
+   !> specimen a single start ended at 48 % of a gap the injected back stress removes whole
    pure function backstress2_starts(peak, gamma3) result(ps)
       !> peak stress of the tests (stress unit)
       real(dp), intent(in) :: peak
