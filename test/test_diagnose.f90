@@ -1912,15 +1912,16 @@ contains
    subroutine test_rate_rungs(error)
       type(error_type), allocatable, intent(out) :: error
       type(effect_outcome) :: e
-      real(dp) :: ps(2, 7), sat(6)
+      real(dp), allocatable :: ps(:, :), sat(:)
       ps = backstress2_starts(150.0_dp, 200.0_dp)
       call check(error, all(ps(:, 1) == [1.5_dp, 200.0_dp]), 'the first start is not the near-zero one')
       if (allocated(error)) return
       sat = ps(1, 2:)/ps(2, 2:)/150.0_dp
-      call check(error, minval(ps(2, 2:)) <= 100.0_dp .and. maxval(ps(2, 2:)) >= 2000.0_dp .and. &
+      ! (a fast second back stress, gamma3 4474 and 4898, was missed from rates up to 2000)
+      call check(error, minval(ps(2, 2:)) <= 100.0_dp .and. maxval(ps(2, 2:)) >= 5000.0_dp .and. &
                  all(abs(sat - 0.03_dp) < 1.0e-12_dp .or. abs(sat - 0.1_dp) < 1.0e-12_dp) .and. &
-                 count(abs(sat - 0.1_dp) < 1.0e-12_dp) == 3, 'starts do not span rates 100-2000 at '// &
-                 'saturations of 3 and 10 % of the peak')
+                 count(abs(sat - 0.1_dp) < 1.0e-12_dp) == count(abs(sat - 0.03_dp) < 1.0e-12_dp), &
+                 'starts do not span rates 100-5000 at saturations of 3 and 10 % of the peak')
       if (allocated(error)) return
       e%x = [0.1_dp, 0.5_dp, 0.4_dp]
       e%x_alt = reshape([0.2_dp, 0.6_dp, 0.1_dp, 0.3_dp, 7.0_dp, 2.0_dp, 0.4_dp, 0.1_dp, 0.4_dp, &

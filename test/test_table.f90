@@ -4,7 +4,7 @@ module test_table
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_table, only: read_columns, merge_repeated_times
-   use usharp_strings, only: csv_field, split_fields, add_line, str
+   use usharp_strings, only: csv_field, split_fields, add_line, str, report_line_len
    use test_util, only: write_text, check_message
    implicit none
    private
@@ -64,7 +64,25 @@ contains
       if (allocated(error)) return
       call check_wrap(error, 'the value 51.43219 % now', [character(len=20) :: 'the value ', '  51.43219 % now'], &
                       'a number kept with its percent sign')
+      if (allocated(error)) return
+      call check_table_row(error)
    end subroutine test_add_line
+
+   !> In report lines, a Markdown table's row of 700 characters (a verdict naming five tests
+   !> of long names) stays on one line, where prose of that length is wrapped
+   subroutine check_table_row(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=report_line_len), allocatable :: lines(:)
+      character(len=:), allocatable :: row
+      row = '| drift | '//repeat('lowers BIC, but ', 43)//'|'
+      allocate (lines(0))
+      call add_line(lines, row)
+      call check(error, size(lines) == 1 .and. lines(1) == row, 'a table row of '//str(len(row))// &
+                 ' characters wrapped onto '//str(size(lines))//' lines')
+      if (allocated(error)) return
+      call add_line(lines, row(3:))
+      call check(error, size(lines) == 3, 'prose of '//str(len(row) - 2)//' characters not wrapped')
+   end subroutine check_table_row
 
    !> text added to lines of 20 characters gives the lines expected
    subroutine check_wrap(error, text, expected, what)

@@ -294,7 +294,7 @@ contains
       np = count(ep%pfree)
       if ((ep%k == 7 .or. ep%k == 8) .and. np == 2) then
          ! The saturating softening of either sign, the second back stress of two
-         ! saturations, each at three rates (softening_starts, backstress2_starts)
+         ! saturations, each at a ladder of rates (softening_starts, backstress2_starts)
          if (ep%k == 7) ps = softening_starts(info)
          if (ep%k == 8) ps = backstress2_starts(peak, ep%p0(2))
          allocate (xs(size(x0), size(ps, 2)))

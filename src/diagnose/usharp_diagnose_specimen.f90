@@ -27,7 +27,7 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
-                                       backstress2_starts, soften_rate0, low_end_deltas, bic_power, power_lambda, &
+                                       backstress2_starts, rate_effect_start, low_end_deltas, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end
@@ -501,8 +501,7 @@ contains
          do jj = 1, size(ek%p0)
             if (cat(k)%sharing == param_per_test) ek%pfree(jj) = mod(jj - 1, nt) + 1 == ispec .and. ek%pacts(jj)
          end do
-         if (k == 8) ek%p0 = [0.01_dp*peak, opts%gamma3]
-         if (k == 7) ek%p0 = [0.0_dp, soften_rate0]
+         if (k == 7 .or. k == 8) ek%p0 = rate_effect_start(cat(k), k, peak, opts%gamma3)
       end subroutine specimen_problem
 
       !> The same effect on the specimen beside its replicates, the constants free and each

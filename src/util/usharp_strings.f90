@@ -7,9 +7,12 @@ module usharp_strings
    public :: interval_end, interval_format
    public :: lower, str, real_str, split_fields, shell_quote, shell_word, gnuplot_string, pad, csv_field, join, add_line
 
-   !> Length of a line of the program's reports and summaries (Markdown tables keep a row on
-   !> one line; prose longer than this is wrapped)
-   integer, parameter, public :: report_line_len = 400
+   !> Length of a line of the program's reports and summaries: a Markdown table's row stays on
+   !> one line up to it (a row wrapped would end the table; a refit's verdict naming the tests
+   !> it makes worse takes up to 140 characters a test)
+   integer, parameter, public :: report_line_len = 1000
+   !> Width at which prose is wrapped (see add_line)
+   integer, parameter :: report_wrap = 400
    !> Characters enough for any real in any edit descriptor real_str is given (f0.d writes up
    !> to 309 digits before the point)
    integer, parameter :: real_buffer = 400
@@ -28,17 +31,23 @@ module usharp_strings
 
 contains
 
-   !> Append text to lines; text longer than a line is wrapped at a space, its continuation
-   !> lines indented by two spaces (a paragraph to Markdown)
+   !> Append text to lines; prose longer than a line or than report_wrap is wrapped at a
+   !> space, its continuation lines indented by two spaces (a paragraph to Markdown); a table
+   !> row (text beginning with '|') only where longer than a line
    pure recursive subroutine add_line(lines, text)
       character(len=*), allocatable, intent(inout) :: lines(:)
       character(len=*), intent(in) :: text
-      integer :: cut
-      if (len(text) <= len(lines)) then
+      integer :: cut, width
+      ! A table row is wrapped only where it would not fit the line
+      width = len(lines)
+      if (len(text) > 0) then
+         if (text(1:1) /= '|') width = min(width, report_wrap)
+      end if
+      if (len(text) <= width) then
          lines = [character(len=len(lines)) :: lines, text]
          return
       end if
-      cut = index(text(1:len(lines)), ' ', back=.true.)
+      cut = index(text(1:width), ' ', back=.true.)
       ! Not between a name and its value ("B = 1.030E+12") nor a number and its percent sign:
       ! the space before
       do while (cut > 2)
@@ -46,7 +55,7 @@ contains
          cut = index(text(1:cut - 1), ' ', back=.true.)
       end do
       ! (no space after a continuation's indent: cut the word, or the next call gets the same)
-      if (cut <= 1 .or. (cut == 2 .and. text(1:2) == '  ')) cut = len(lines)
+      if (cut <= 1 .or. (cut == 2 .and. text(1:2) == '  ')) cut = width
       lines = [character(len=len(lines)) :: lines, text(1:cut)]
       call add_line(lines, '  '//text(cut + 1:))
    end subroutine add_line
