@@ -974,8 +974,8 @@ contains
    end subroutine test_loose_constants
 
    !> A fast second back stress (independent data: H3/gamma3 1.55 ksi at gamma3 = 1266; the
-   !> LCF test held out): its screening runs start from recovery rates half, twice and ten
-   !> times the screening's 200 (backstress2_starts) and its refit from the lowest end point
+   !> LCF test held out): its screening runs start from recovery rates half, twice, ten and
+   !> fifty times the screening's 200 (backstress2_starts) and its refit from the lowest end point
    !> of each rate's (rate_rungs); from gamma3 = 200 alone the refit stayed in that rate's basin
    !> and a softening was named. The second back stress is named, with an interval of gamma3
    !> that holds the injected one

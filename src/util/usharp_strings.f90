@@ -8,8 +8,9 @@ module usharp_strings
    public :: lower, str, real_str, split_fields, shell_quote, shell_word, gnuplot_string, pad, csv_field, join, add_line
 
    !> Length of a line of the program's reports and summaries: a Markdown table's row stays on
-   !> one line up to it (a row wrapped would end the table; a refit's verdict naming the tests
-   !> it makes worse takes up to 140 characters a test)
+   !> one line up to it (a row wrapped ends the table). A refit's verdict takes up to 140
+   !> characters for each test it makes worse: a row naming seven of 128-character names still
+   !> wraps
    integer, parameter, public :: report_line_len = 1000
    !> Width at which prose is wrapped (see add_line)
    integer, parameter :: report_wrap = 400
