@@ -10,7 +10,8 @@
 # run started side by side take T2s; two ranks that each did half the work at that pace
 # would take T2s/2, so no split of the work does better than 2 T1/T2s over the 1-rank run
 # (2.00 on two cores that do not slow each other).
-# usage: bash bench/mpi.sh   (release build; Open MPI's mpirun)
+# usage: bash bench/mpi.sh   (release build; Open MPI's mpirun). Its folders are made under
+# $TMPDIR (/tmp if unset): TMPDIR=/dev/shm keeps the fit's 147 MB fit.cache off the disk
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/release-flags.sh
