@@ -26,10 +26,10 @@ module test_diagnose
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
-                                    joint_not_carried, &
+                                    joint_not_carried, rate_open, rate_at_end, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note
-   use usharp_diagnose_refit, only: judge, rate_undetermined, with_params, other_sign, global_baseline_starts, &
+   use usharp_diagnose_refit, only: judge, rate_undetermined, rate_doubt, with_params, other_sign, global_baseline_starts, &
                                     rate_rungs
    use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
@@ -1950,7 +1950,8 @@ contains
       e%p = [673.4_dp, 24.9_dp]
       e%p_lo = [513.6_dp, -2.84_dp]
       e%p_hi = [833.2_dp, 52.7_dp]
-      call check(error, rate_undetermined(ctx, e), 'gamma3 spanning zero not held')
+      call check(error, rate_undetermined(ctx, e) .and. rate_doubt(ctx, e) == rate_open, &
+                 'gamma3 spanning zero not held, or not for that')
       if (allocated(error)) return
       e%p_hi(2) = ieee_value(1.0_dp, ieee_quiet_nan)
       e%p_lo(2) = 10.0_dp
@@ -1962,7 +1963,8 @@ contains
       if (allocated(error)) return
       ! A closed interval about a rate at the end of its search box does not hold
       e%p_bound = [0, 1]
-      call check(error, rate_undetermined(ctx, e), 'gamma3 at the end of its box not held')
+      call check(error, rate_undetermined(ctx, e) .and. rate_doubt(ctx, e) == rate_at_end, &
+                 'gamma3 at the end of its box not held, or not for that')
       if (allocated(error)) return
       e%p_bound = [1, 0]
       call check(error, .not. rate_undetermined(ctx, e), 'held for H3 at its bound')

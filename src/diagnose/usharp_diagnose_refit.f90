@@ -18,7 +18,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_options, only: bic_margin
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, &
                                     fit_structured, held_quiet, tell, explains_most, most, &
-                                    delay_precision, gap_fit_ref, per_test_ref
+                                    delay_precision, gap_fit_ref, per_test_ref, rate_open, rate_at_end
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, &
                                        block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures, &
@@ -29,7 +29,7 @@ module usharp_diagnose_refit
    private
 
    public :: refit, refit_candidates, refit_global, global_baseline_starts, refit_deciding, judge, &
-             rate_undetermined, with_params, other_sign, rate_rungs
+             rate_undetermined, rate_doubt, with_params, other_sign, rate_rungs
 
 contains
 
@@ -240,18 +240,30 @@ contains
    pure logical function rate_undetermined(ctx, e) result(undetermined)
       type(diagnose_context), intent(in) :: ctx
       type(effect_outcome), intent(in) :: e
+      undetermined = rate_doubt(ctx, e) /= 0
+   end function rate_undetermined
+
+   !> Why rate_undetermined holds: rate_open (first), rate_at_end, or 0 where it does not
+   pure integer function rate_doubt(ctx, e) result(why)
+      type(diagnose_context), intent(in) :: ctx
+      type(effect_outcome), intent(in) :: e
       integer :: j
-      undetermined = .false.
+      why = 0
       if (e%held .or. e%plausible) return
       j = held_rate(ctx%cat(e%k))
       if (j == 0 .or. size(e%p_lo) < j) return
-      undetermined = .not. (e%p_lo(j)*e%p_hi(j) > 0.0_dp .and. ieee_is_finite(e%p_lo(j)) .and. &
-                            ieee_is_finite(e%p_hi(j)))
+      if (.not. (e%p_lo(j)*e%p_hi(j) > 0.0_dp .and. ieee_is_finite(e%p_lo(j)) .and. &
+                 ieee_is_finite(e%p_hi(j)))) then
+         why = rate_open
+         return
+      end if
       ! At an end of its search box its interval does not hold (the data do not bound it there)
       if (allocated(e%p_bound)) then
-         if (j <= size(e%p_bound)) undetermined = undetermined .or. e%p_bound(j) /= 0
+         if (j <= size(e%p_bound)) then
+            if (e%p_bound(j) /= 0) why = rate_at_end
+         end if
       end if
-   end function rate_undetermined
+   end function rate_doubt
 
 
    !> e's refit again with its rate (see held_rate) held, at the rate of each screening
@@ -315,6 +327,7 @@ contains
          trial%rate_start = rate
          trial%rate_lo = e%p_lo(held_rate(ctx%cat(e%k)))
          trial%rate_hi = e%p_hi(held_rate(ctx%cat(e%k)))
+         trial%rate_why = rate_doubt(ctx, e)
          trial%x = x0
          ! The screening's other end points in the held layout (the rate, last, left out)
          if (allocated(trial%x_alt)) trial%x_alt = trial%x_alt(1:nc + 1, :)

@@ -14,7 +14,8 @@ module usharp_diagnose_report
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
-                                    fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet, side_word
+                                    fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet, side_word, &
+                                    rate_at_end
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -296,10 +297,7 @@ contains
       end do
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
-         ! (see rate_undetermined: an interval that spans zero or is open, or a rate at the
-         ! end of its search box, about which a closed interval does not hold)
-         if (e%rate_lo*e%rate_hi > 0.0_dp .and. abs(e%rate_lo) < huge(1.0_dp) .and. &
-             abs(e%rate_hi) < huge(1.0_dp)) then
+         if (e%rate_why == rate_at_end) then
             why = 'it ran to the end of its search box, where its interval ['// &
                   real_str(e%rate_lo, 'es11.4')//', '//real_str(e%rate_hi, 'es11.4')//'] does not hold,'
          else

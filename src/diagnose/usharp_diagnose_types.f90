@@ -146,6 +146,8 @@ module usharp_diagnose_types
       !> magnitude beyond its limit (see refit)
       logical :: held = .false.
       real(dp) :: rate_lo = 0.0_dp, rate_hi = 0.0_dp  !< the rate's interval when free
+      !> Why the rate was held: rate_open or rate_at_end (see rate_doubt)
+      integer :: rate_why = 0
       !> The rate (see held_rate) of the screening start whose end point led (0: the
       !> screening's own), and of each x_alt column's start; a refit that holds the rate
       !> holds it at its start's (see rate_rungs)
@@ -242,6 +244,9 @@ module usharp_diagnose_types
    !> leader, the fit tests leave an effect's form open (see form_open); effects they show
    !> carry to no held-out test while those have a gap; or they carry nothing an effect
    !> could be fitted to while the held-out tests have a gap
+   !> Why the data leave a rate undetermined: its 95 % interval spans zero or is open, or it
+   !> is closed about a rate at the end of its search box, where it does not hold
+   integer, parameter, public :: rate_open = 1, rate_at_end = 2
    integer, parameter, public :: joint_none = 0, joint_bic_only = 1, joint_held_fit = 2, &
                                  joint_form_beats = 3, joint_loose = 4, joint_partial = 5, &
                                  joint_form_open = 6, joint_held_only = 7, joint_not_carried = 8
