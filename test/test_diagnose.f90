@@ -111,6 +111,7 @@ contains
          new_unittest('refit-starts-in-each-rates-basin', test_rate_rungs), &
          new_unittest('held-out-prediction-open-between-end-points', test_alike_note), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
+         new_unittest('second-back-stress-box-holds-the-peak-saturation', test_backstress2_box), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
          new_unittest('interval-that-leaves-out-its-estimate-opens', test_open_beyond_estimate), &
          new_unittest('gap-shares-of-the-lower-baseline', test_gap_fit_ref), &
@@ -1647,9 +1648,47 @@ contains
    end subroutine test_open_below_floor
 
    !> An effect parameter is flagged at its search box's outer ends (a second back stress's H3
-   !> of 1000 times the peak, a temperature offset at its negative end), not at a lower end of
+   !> at its upper end, a temperature offset at its negative end), not at a lower end of
    !> zero that a parameter which cannot be negative may reach (no lag); a constant at its
    !> &fit bound is flagged within 1e-3 of its box in log10 units
+   !> The second back stress's search box holds a saturation H3/gamma3 of the peak stress up
+   !> to gamma3's own box end: H3's box stopped at 1000 times the peak, which capped the
+   !> saturation at 0.1 of it for gamma3 = 1e4 (the Alloy 617 tests want 0.26 at gamma3 4200,
+   !> and the refit ran to that end). Every parameter's box is the catalogue's.
+   subroutine test_backstress2_box(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(uerror), allocatable :: e
+      type(effect_info) :: cat(n_effects)
+      real(dp), allocatable :: lo(:), hi(:)
+      real(dp), parameter :: peak = 176.0_dp
+      integer :: nc, k
+      call read_config('decks/thesis-run2.nml', cfg, e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      call check(error, .not. allocated(e), 'the thesis deck is set up')
+      if (allocated(error)) return
+      cat = effect_catalogue(peak)
+      k = effect_index('backstress2')
+      call new_effect_problem(prob, [1], k, test_effects(), peak, ep)
+      call ep%bounds(lo, hi)
+      nc = size(prob%idx)
+      call check(error, size(hi) == nc + 2 .and. all(lo(nc + 1:) == 0.0_dp), 'H3 and gamma3 free, from zero')
+      if (allocated(error)) return
+      call check(error, hi(nc + 1)*ep%pscale(1) >= peak*hi(nc + 2)*ep%pscale(2), 'H3''s box ends at '// &
+                 real_str(hi(nc + 1)*ep%pscale(1), 'es10.3')//' MPa: a saturation of the peak at gamma3 = '// &
+                 real_str(hi(nc + 2)*ep%pscale(2), 'es10.3')//' is out of reach')
+      if (allocated(error)) return
+      call check(error, all(hi(nc + 1:) == cat(k)%box), 'the box is not the catalogue''s')
+      if (allocated(error)) return
+      k = effect_index('temperature')
+      call new_effect_problem(prob, [1], k, test_effects(), peak, ep)
+      call ep%bounds(lo, hi)
+      call check(error, all(lo(nc + 1:) == -cat(k)%box(1)) .and. all(hi(nc + 1:) == cat(k)%box(1)), &
+                 'a signed parameter''s box is not the catalogue''s both ways')
+   end subroutine test_backstress2_box
+
    subroutine test_box_end(error)
       type(error_type), allocatable, intent(out) :: error
       integer :: got(6)

@@ -98,7 +98,7 @@ contains
       key = 'effect '//str(ep%k)//' tests'//ints_text(ep%tests)//' constants'//ints_text(ep%prob%idx)// &
             ' free '//merge('1', '0', ep%free_constants)//' pfree'//ints_text(merge(1, 0, ep%pfree))// &
             ' pnonneg'//ints_text(merge(1, 0, ep%pnonneg))//' made of '//hash_hex(hash_text(made_of))// &
-            ' parameters '//hex_text([ep%p0, ep%pscale, effect_reals(ep%base)])
+            ' parameters '//hex_text([ep%p0, ep%pscale, ep%pbox, effect_reals(ep%base)])
    end function problem_key
 
    !> The values of e, in order, component by component: a copy of the whole type would take

@@ -372,9 +372,8 @@ contains
 
    !> Starts (H3 in the stress unit, gamma3: columns) of a fit of the second back stress: near
    !> zero (saturation H3/gamma3 of 5e-5 of the peak) at the rate gamma3, then saturations of
-   !> 3 and 10 % of the peak at each rate of b2_rates times it (a start beyond H3's search box,
-   !> 1000 times the peak, is taken at its end: at the screening's 200 the 10 % at fifty times
-   !> it lies on that end). Its rate has no gradient
+   !> 3 and 10 % of the peak at each rate of b2_rates times it (inside H3's search box, which
+   !> reaches the peak's saturation at gamma3's box end). Its rate has no gradient
    !> near zero, and a fit stays in the basin of the rate it starts from: on the Alloy 617
    !> tests every start at gamma3 = 200 ended near the baseline (dBIC -76), starts at 2000
    !> reached dBIC -2346 (gamma3 held there) and, every test fitted, gamma3 = 3800; on one

@@ -36,6 +36,7 @@ module usharp_effect_problem
       !> which of them act on the model (effect_acts): the others stay at zero, never free
       logical, allocatable :: pacts(:)
       real(dp), allocatable :: pscale(:)       !< unit of x for each parameter
+      real(dp), allocatable :: pbox(:)         !< half-width of its search box (unit of x)
       logical, allocatable :: pnonneg(:)
       type(test_effects) :: base               !< dlnE_dT, gamma3 held fixed
       !> When > 0, the effect acts on this test (an index into prob's tests) alone, a global
@@ -85,7 +86,7 @@ contains
          cat = effect_catalogue(peak)
          np = effect_nparams(cat(k), nt)
       end if
-      allocate (ep%p0(np), ep%pfree(np), ep%pscale(np), ep%pnonneg(np), ep%pacts(np))
+      allocate (ep%p0(np), ep%pfree(np), ep%pscale(np), ep%pbox(np), ep%pnonneg(np), ep%pacts(np))
       ep%p0 = 0.0_dp
       if (present(p0)) ep%p0 = p0
       do j = 1, np
@@ -96,6 +97,7 @@ contains
             g = j
          end if
          ep%pscale(j) = cat(k)%scale(g)
+         ep%pbox(j) = cat(k)%box(g)
          ep%pnonneg(j) = cat(k)%nonneg(g)
          ep%pacts(j) = effect_acts(prob%cfg%model, k, g)
       end do
@@ -131,13 +133,14 @@ contains
       x = [x, pack(self%p0/self%pscale, self%pfree)]
    end function ep_start
 
-   !> Bounds of x: the &fit bounds for the constants, sign limits for the parameters
+   !> Bounds of x: the &fit bounds for the constants, each parameter's search box (the
+   !> catalogue's, in units of its scale; from zero where it is kept >= 0)
    pure subroutine ep_bounds(self, lo, hi)
       class(effect_problem), intent(in) :: self
       real(dp), allocatable, intent(out) :: lo(:), hi(:)
       real(dp), allocatable :: plo(:), phi(:)
-      plo = merge(0.0_dp, -1.0e3_dp, self%pnonneg)
-      phi = spread(1.0e3_dp, 1, size(self%p0))
+      plo = merge(0.0_dp, -self%pbox, self%pnonneg)
+      phi = self%pbox
       allocate (lo(0), hi(0))
       if (self%free_constants) then
          lo = log10_dp(self%prob%cfg%fit%lower(self%prob%idx))
