@@ -70,7 +70,7 @@ def draw(row, u, rng, tests):
         return {t: {'H3': sat * g3, 'gamma3': g3} for t in tests}, f'H3/gamma3 {sat:.2f} ksi'
     if row == 'backstress2-fast':
         # A fast-saturating one (fitted per specimen to Alloy 617's cycles 1-2, gamma3 came out
-        # at 2100-10300), within the diagnosis's box of H3 (1000 times the peak)
+        # at 2100-10300)
         g3 = 1000.0 * 5.0 ** rng.uniform()
         sat = lo_hi(1.0, 2.5)
         return {t: {'H3': sat * g3, 'gamma3': g3} for t in tests}, f'H3/gamma3 {sat:.2f} ksi, gamma3 {g3:.0f}'

@@ -549,7 +549,7 @@ contains
       e%c = [(mdl%get_constant(ctx%prob%idx(j)), j=1, nc)]
       pscale = pack(ep%pscale, ep%pfree)
       e%p = pack(p, ep%pfree)
-      ! At the search box's outer ends (1000 times the parameter's unit)
+      ! At the search box's outer ends (the catalogue's box, in units of the parameter's scale)
       e%p_bound = at_box_end(x(nc + 1:), lo(nc + 1:), hi(nc + 1:))
       e%p_lo = e%p - 1.959964_dp*se(nc + 1:)*pscale
       e%p_hi = e%p + 1.959964_dp*se(nc + 1:)*pscale
