@@ -236,6 +236,10 @@ module usharp_diagnose_types
       type(diagnose_result), allocatable :: joint
    end type diagnose_result
 
+   !> Why the data leave a rate undetermined: its 95 % interval spans zero or is open, or it
+   !> is closed about a rate at the end of its search box, where it does not hold
+   integer, parameter, public :: rate_open = 1, rate_at_end = 2
+
    !> Why a diagnosis goes on to fit every test together (see joint_reason): none; the
    !> leader rests on BIC alone (see bic_only); on a fit of the held-out tests (see
    !> held_fit_only); an effect of open form fitted the fit tests better (see
@@ -244,9 +248,6 @@ module usharp_diagnose_types
    !> leader, the fit tests leave an effect's form open (see form_open); effects they show
    !> carry to no held-out test while those have a gap; or they carry nothing an effect
    !> could be fitted to while the held-out tests have a gap
-   !> Why the data leave a rate undetermined: its 95 % interval spans zero or is open, or it
-   !> is closed about a rate at the end of its search box, where it does not hold
-   integer, parameter, public :: rate_open = 1, rate_at_end = 2
    integer, parameter, public :: joint_none = 0, joint_bic_only = 1, joint_held_fit = 2, &
                                  joint_form_beats = 3, joint_loose = 4, joint_partial = 5, &
                                  joint_form_open = 6, joint_held_only = 7, joint_not_carried = 8

@@ -121,7 +121,8 @@ contains
       ! saturation at 0.1 of the peak for gamma3 = 1e4 and 0.2 for 5000, below Alloy 617's
       ! fast back stress (0.26 of the peak at gamma3 4200): refits ran to that end and only
       ! a start near gamma3 = 4000 came close (objective 240.9 there, 360.8 from 1e4)
-      cat(8)%box = [1.0e6_dp, 1.0e3_dp]
+      ! (H3's unit is the peak: its box is gamma3's largest value, 1e6)
+      cat(8)%box(1) = cat(8)%box(2)*cat(8)%scale(2)
    end function effect_catalogue
 
    !> Catalogue index of an effect by name, 0 when there is none
