@@ -998,15 +998,17 @@ contains
                  'only the test of the run''s summary.txt plotted')
    end subroutine test_plot_script
 
-   !> Levenberg-Marquardt from 2 starts, stopped after 90 % of its evaluations and resumed:
-   !> the resumed run simulates at most 15 % of the evaluations and ends bit for bit as the
-   !> uninterrupted one; without its fit.cache it simulates them all, and counts none replayed
+   !> Levenberg-Marquardt from 2 starts, stopped after 90 % of its evaluations (in its second
+   !> start) and resumed: the resumed run simulates at most 15 % of the evaluations and ends bit
+   !> for bit as the uninterrupted one; without its fit.cache it simulates only the second
+   !> start's evaluations again (the journal closes the first), and counts them not replayed;
+   !> with the line closing the first start torn, it simulates both starts again
    subroutine test_resume_cost(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       character(len=report_line_len), allocatable :: summary(:)
-      character(len=:), allocatable :: input, full, part
-      integer :: ntotal, nkept, nrep, nsim, stat, m
+      character(len=:), allocatable :: input, full, part, cut
+      integer :: ntotal, nkept, nrep, nsim, stat, m, k1
       input = deck('lmresume.nml', "method='lm', multistart=2, seed=3, identify=.false.", &
                    ", dt_out=4.0")
       full = scratch_dir//'/lmresume-full'
@@ -1016,14 +1018,21 @@ contains
       call counts(summary(3), ntotal, nrep, nsim)
       call check(error, ntotal > 40 .and. nsim == ntotal, 'uninterrupted run: '//trim(summary(3)))
       if (allocated(error)) return
-      ! The journal and the cache as a kill after 90 % of the evaluations leaves them: the
-      ! fingerprint line and nkept records; the cache's header (16 bytes) and nkept records
-      ! of 4 + 4 bytes, 2 constants and m residuals
+      ! The first start's last evaluation, from the line that closes it in the journal
+      k1 = closing_evaluation(full//'/fit.journal', 1)
       nkept = (9*ntotal)/10
-      m = residual_count(full//'/fit.cache', ntotal)
-      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n '//str(nkept + 1)//' '//full// &
-                   '/fit.journal > '//part//'/fit.journal && head -c '//str(16 + nkept*(8 + 8*(2 + m)))// &
-                   ' '//full//'/fit.cache > '//part//'/fit.cache')
+      call check(error, k1 > 0 .and. k1 < nkept, 'the first start does not end before 90 % of '// &
+                 'the evaluations: '//str(k1)//' of '//str(ntotal))
+      if (allocated(error)) return
+      ! The journal and the cache as a kill after 90 % of the evaluations leaves them: the
+      ! journal's lines up to its nkept-th record; fit.cache holds the second start only (each
+      ! start begins it anew): its header (16 bytes) and the second start's records up to
+      ! nkept, each of 4 + 4 bytes, 2 constants and m residuals
+      m = residual_count(full//'/fit.cache', ntotal - k1)
+      cut = 'awk -v n='//str(nkept)//' ''!/^#/ { k++ } k > n { exit } { print }'' '//full//'/fit.journal > '// &
+            part//'/fit.journal'
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && '//cut//' && head -c '// &
+                   str(16 + (nkept - k1)*(8 + 8*(2 + m)))//' '//full//'/fit.cache > '//part//'/fit.cache')
       call run_command(input, part, '', .true., summary, e)
       if (allocated(e)) then
          call test_failed(error, 'resumed run: '//e%message)
@@ -1038,17 +1047,35 @@ contains
       call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
                  'best.nml identical')
       if (allocated(error)) return
-      ! Without fit.cache the journal gives no residual vector: every evaluation is simulated
-      ! again, and the summary does not count one as replayed
-      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && head -n '//str(nkept + 1)//' '//full// &
-                   '/fit.journal > '//part//'/fit.journal')
+      ! Without fit.cache the journal gives no residual vector of the second start: its
+      ! evaluations are simulated again, and the summary counts only the first start's replayed
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && '//cut)
       call run_command(input, part, '', .true., summary, e)
       if (allocated(e)) then
          call test_failed(error, 'resumed without fit.cache: '//e%message)
          return
       end if
       call counts(summary(3), ntotal, nrep, nsim)
-      call check(error, nrep == 0 .and. nsim == ntotal, 'resumed without fit.cache: '//trim(summary(3)))
+      call check(error, nrep == k1 .and. nsim == ntotal - k1, 'resumed without fit.cache: '//trim(summary(3)))
+      if (allocated(error)) return
+      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), &
+                 'journal identical without fit.cache')
+      if (allocated(error)) return
+      ! The line closing the first start torn by a kill (its reason cut short) closes nothing:
+      ! the first start's search is replayed, here simulated again (no cache), to the same end
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && awk ''/^# start-done 1 / { printf "%s", '// &
+                   'substr($0, 1, length($0) - 3); exit } { print }'' '//full//'/fit.journal > '//part//'/fit.journal')
+      call run_command(input, part, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resumed after a torn start-done line: '//e%message)
+         return
+      end if
+      call counts(summary(3), ntotal, nrep, nsim)
+      call check(error, nrep == 0 .and. nsim == ntotal, 'resumed after a torn start-done line: '// &
+                 trim(summary(3)))
+      if (allocated(error)) return
+      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), &
+                 'journal identical after a torn start-done line')
       if (allocated(error)) return
       call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
                  'best.nml identical without fit.cache')
@@ -1242,6 +1269,27 @@ contains
       read (w(5), *, iostat=ios) ns
    end subroutine counts
    !> Residuals per record of a fit.cache of nrec residual records and 2 constants
+   !> The last evaluation of start s, from the line of the journal at path that closes it
+   !> ('# start-done s first last ...'; 0 if there is none)
+   integer function closing_evaluation(path, s) result(last)
+      character(len=*), intent(in) :: path
+      integer, intent(in) :: s
+      character(len=4096) :: line
+      integer :: unit, ios, start, first
+      last = 0
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         read (unit, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         if (index(line, '# start-done ') /= 1) cycle
+         read (line(14:), *, iostat=ios) start, first, last
+         if (ios == 0 .and. start == s) exit
+         last = 0
+      end do
+      close (unit)
+   end function closing_evaluation
+
    integer function residual_count(path, nrec) result(mm)
       character(len=*), intent(in) :: path
       integer, intent(in) :: nrec

@@ -16,7 +16,7 @@ module usharp_fit
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
    use usharp_fit_log, only: fit_log, journal_record, cached_jacobian, read_journal, read_cache, &
-                             journal_name, cache_name
+                             journal_name, cache_name, start_done
    use usharp_journal, only: fingerprint_mismatch, fingerprint_damaged
    use usharp_filesys, only: join_path, file_exists, file_hash, hash_hex, hash_text, read_line
    use usharp_signal, only: catch_stop_signals, release_stop_signals, stop_signal
@@ -66,6 +66,8 @@ module usharp_fit
       type(fit_log) :: log
       type(journal_record), allocatable :: replay(:)
       type(cached_jacobian), allocatable :: replay_jac(:)
+      !> The starts the journal closes: replayed from its records alone (see replay_start)
+      type(start_done), allocatable :: replay_done(:)
       integer :: nevals = 0
       integer :: nsens = 0              !< sensitivity Jacobians (one simulation each)
       integer :: nsimulated = 0         !< evaluations simulated (not replayed) in this run
@@ -192,7 +194,9 @@ contains
       if (self%prob%cfg%fit%jacobian /= 'sensitivity') return
       i = self%nsens + 1
       if (i <= size(self%replay_jac)) then
-         if (all(self%replay_jac(i)%x == x)) then
+         if (.not. allocated(self%replay_jac(i)%x)) then
+            ! Not kept (a finished start's): simulated again
+         else if (all(self%replay_jac(i)%x == x)) then
             jac = self%replay_jac(i)%jac
             done = .true.
             self%cache_used = .true.
@@ -750,7 +754,7 @@ contains
       logical :: overwrite, resuming, parallel
       integer :: k
       obj%prob = prob
-      allocate (obj%replay(0), obj%replay_jac(0))
+      allocate (obj%replay(0), obj%replay_jac(0), obj%replay_done(0))
       overwrite = .false.
       if (present(force)) overwrite = force
       if (present(constants_file)) then
@@ -766,7 +770,7 @@ contains
       end if
       if (resuming) then
          call read_journal(journal, size(prob%targets), size(prob%idx), obj%replay, &
-                           old_fingerprint, error)
+                           obj%replay_done, old_fingerprint, error)
          if (allocated(error)) return
          if (len_trim(old_fingerprint) == 0) then
             call fatal_error(error, journal//': cannot resume: the file has no fingerprint line '// &
@@ -873,6 +877,7 @@ contains
       dry = worker(obj)
       dry%replay = obj%replay
       dry%replay_jac = obj%replay_jac
+      dry%replay_done = obj%replay_done
       dry%replay_only = .true.
       call search(dry, one, n, e)
       if (.not. allocated(e)) return
@@ -979,7 +984,7 @@ contains
       type(optimum_type) :: one
       type(rng_type) :: rng
       real(dp), allocatable :: u(:, :), lo(:), hi(:), blo(:), bhi(:), x0(:)
-      integer :: s, n, s1, s2
+      integer :: s, n, s1, s2, k
       associate (fc => obj%prob%cfg%fit, idx => obj%prob%idx)
          n = size(idx)
          lo = log10_dp(fc%lower(idx))
@@ -1012,6 +1017,27 @@ contains
             else
                x0 = obj%prob%start_point()
             end if
+            ! fit.cache keeps the start under way only
+            if (.not. obj%capture) call obj%log%new_cache(error)
+            if (allocated(error)) return
+            k = closed_start(obj, s)
+            if (k > 0) then
+               call replay_start(obj, obj%replay_done(k), one, error)
+            else
+               call one_search()
+            end if
+            if (allocated(error)) return
+            if (.not. obj%capture) call obj%log%start_done(s, obj%start_eval(s), obj%nevals, &
+                                                           obj%nsens - obj%start_sens(s) + 1, one, error)
+            if (allocated(error)) return
+            if (s == s1 .or. one%f < opt%f) opt = one
+         end do
+         if (fc%multistart > 0) opt%reason = 'best of '//str(nstarts)//' starts: '//opt%reason
+      end associate
+   contains
+      !> The configured method from x0
+      subroutine one_search()
+         associate (fc => obj%prob%cfg%fit)
             select case (fc%method)
             case ('lm')
                call levenberg_marquardt(obj, x0, lo, hi, fc%fd_step, fc%eps, fc%itermax, fc%max_evals, &
@@ -1024,12 +1050,53 @@ contains
             case default
                call hooke_jeeves(obj, x0, fc%rho, fc%eps, fc%itermax, fc%max_evals, one, error)
             end select
-            if (allocated(error)) return
-            if (s == s1 .or. one%f < opt%f) opt = one
-         end do
-         if (fc%multistart > 0) opt%reason = 'best of '//str(nstarts)//' starts: '//opt%reason
-      end associate
+         end associate
+      end subroutine one_search
    end subroutine search
+
+   !> The index in obj%replay_done of start s when the journal closes it at the evaluation
+   !> the search has reached (0: it does not)
+   pure integer function closed_start(obj, s) result(k)
+      type(fit_objective), intent(in) :: obj
+      integer, intent(in) :: s
+      integer :: j
+      k = 0
+      do j = 1, size(obj%replay_done)
+         associate (d => obj%replay_done(j))
+            if (d%start == s .and. d%first == obj%nevals + 1 .and. d%last <= size(obj%replay)) then
+               k = j
+               return
+            end if
+         end associate
+      end do
+   end function closed_start
+
+   !> A start the journal closes, taken from it as it was made: its evaluations logged again
+   !> (without residuals: no search will ask for them) and the optimum it reached, no search
+   !> run and nothing simulated (a finished start needs nothing of fit.cache)
+   subroutine replay_start(obj, done, opt, error)
+      type(fit_objective), intent(inout) :: obj
+      type(start_done), intent(in) :: done
+      type(optimum_type), intent(out) :: opt
+      type(error_type), allocatable, intent(out) :: error
+      type(cached_jacobian), allocatable :: none(:)
+      integer :: k
+      do k = done%first, done%last
+         associate (rec => obj%replay(k))
+            call obj%record(rec%x, rec%f, rec%per_test, rec%status, replay_message(obj, k), error)
+         end associate
+         if (allocated(error)) return
+         obj%nreplayed = obj%nreplayed + 1
+      end do
+      ! Its Jacobians keep their numbers, not kept (a capturing objective's are counted by
+      ! their place in kept_jac)
+      if (obj%capture) then
+         allocate (none(done%njac))
+         obj%kept_jac = [obj%kept_jac, none]
+      end if
+      obj%nsens = obj%nsens + done%njac
+      opt = done%opt
+   end subroutine replay_start
 
    !> One search, made by rank 0 with its logs written as it goes; the other ranks help with
    !> its batches of points (the columns of a difference Jacobian, see shared_batch). The
@@ -1090,6 +1157,7 @@ contains
          dry = worker(obj)
          dry%replay = obj%replay
          dry%replay_jac = obj%replay_jac
+         dry%replay_done = obj%replay_done
          dry%replay_only = .true.
          call search(dry, one, n, e)
          first_open = nstarts + 1
@@ -1460,7 +1528,7 @@ contains
       w%prob = obj%prob
       if (allocated(obj%journal)) w%journal = obj%journal
       w%capture = .true.
-      allocate (w%replay(0), w%replay_jac(0), w%kept_jac(0))
+      allocate (w%replay(0), w%replay_jac(0), w%kept_jac(0), w%replay_done(0))
       w%clock0 = obj%clock0
    end function worker
 end module usharp_fit

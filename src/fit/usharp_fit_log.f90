@@ -1,25 +1,32 @@
 !> The fit's logs: the original's GUESS.TXT, FOM.TXT and SUMS.TXT (E12.5), and a journal with
 !> every evaluation at full precision from which a killed run is resumed. The journal's first
 !> line is the fingerprint of everything that decides the result (program version, input
-!> file, constants file, data files); fit.cache beside it keeps, in binary at full precision,
-!> the residual vectors and sensitivity Jacobians a least-squares fit computed, so that a
-!> resumed Levenberg-Marquardt run replays them instead of simulating again.
+!> file, constants file, data files), and a line closes each start of the search with the
+!> optimum it reached, so that a resumed run takes a finished start from the journal alone.
+!> fit.cache beside it keeps, in binary at full precision, the residual vectors and
+!> sensitivity Jacobians of the start under way (a least-squares search's), so that a
+!> resumed Levenberg-Marquardt run replays that start instead of simulating it again; each
+!> start begins a new one, so that it holds one start's worth, not the whole fit's.
 module usharp_fit_log
    use, intrinsic :: iso_fortran_env, only: int32
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_io, stat_input
+   use usharp_optimiser, only: optimum_type
    use usharp_strings, only: str
    use usharp_filesys, only: join_path, file_exists, raw_file, read_line, remove_file
    implicit none
    private
 
    public :: fit_log, journal_record, cached_jacobian, read_journal, read_cache, journal_name
-   public :: cache_name
+   public :: cache_name, start_done
 
    character(len=*), parameter :: journal_name = 'fit.journal'
    character(len=*), parameter :: cache_name = 'fit.cache'
    character(len=*), parameter :: rec_fmt = '(i10,1x,i2,*(1x,es25.17e3))'
    character(len=*), parameter :: fingerprint_tag = '# fingerprint'
+   !> The line that closes a start: '# start-done s first last njac nevals iterations
+   !> len(reason) f x : reason' (see log_start_done)
+   character(len=*), parameter :: done_tag = '# start-done'
    character(len=8), parameter :: cache_magic = 'USHARPC1'
    !> Kinds of record in fit.cache
    integer(int32), parameter :: cache_residuals = 1, cache_jacobian = 2
@@ -34,19 +41,30 @@ module usharp_fit_log
       character(len=:), allocatable :: message
    end type journal_record
 
-   !> A sensitivity Jacobian as fit.cache keeps it
+   !> A sensitivity Jacobian as fit.cache keeps it (x unallocated: not kept, a finished
+   !> start's)
    type :: cached_jacobian
       real(dp), allocatable :: x(:), jac(:, :)
    end type cached_jacobian
+
+   !> A start of the search that ended, as the journal closes it: its evaluations first to
+   !> last, its number of sensitivity Jacobians, and the optimum it reached
+   type :: start_done
+      integer :: start = 0, first = 0, last = 0, njac = 0
+      type(optimum_type) :: opt
+   end type start_done
 
    !> Open log files of a fit (written through the C library: a full disk is noticed)
    type :: fit_log
       type(raw_file) :: guess, fom, sums, journal, events, cache
       character(len=:), allocatable :: dir
+      integer :: m = 0, n = 0  !< residuals and fitted constants (fit.cache's header)
    contains
       procedure :: open => log_open
       procedure :: record => log_record
       procedure :: record_jacobian => log_record_jacobian
+      procedure :: start_done => log_start_done
+      procedure :: new_cache => log_new_cache
       procedure :: event => log_event
       procedure :: close => log_close
    end type fit_log
@@ -62,27 +80,55 @@ contains
       integer, intent(in) :: m, n
       type(error_type), allocatable, intent(out) :: error
       self%dir = dir
-      call replace(self%guess, 'GUESS.TXT')
-      if (.not. allocated(error)) call replace(self%fom, 'FOM.TXT')
-      if (.not. allocated(error)) call replace(self%sums, 'SUMS.TXT')
-      if (.not. allocated(error)) call replace(self%events, 'fit.log')
-      if (.not. allocated(error)) call replace(self%journal, journal_name)
-      if (.not. allocated(error)) call replace(self%cache, cache_name)
+      self%m = m
+      self%n = n
+      call replace_file(self%guess, dir, 'GUESS.TXT', error)
+      if (.not. allocated(error)) call replace_file(self%fom, dir, 'FOM.TXT', error)
+      if (.not. allocated(error)) call replace_file(self%sums, dir, 'SUMS.TXT', error)
+      if (.not. allocated(error)) call replace_file(self%events, dir, 'fit.log', error)
+      if (.not. allocated(error)) call replace_file(self%journal, dir, journal_name, error)
       if (.not. allocated(error)) call self%journal%put(fingerprint_tag//' '//fingerprint// &
                                                         new_line('a'), error)
-      if (.not. allocated(error)) call self%cache%put(cache_magic//bytes_i([m, n]), error)
-   contains
-      !> The old file is removed, not truncated: ext4 writes out a truncated and rewritten
-      !> file when it is closed (to keep it across a crash), which for fit.cache's hundreds
-      !> of megabytes costs more than writing them
-      subroutine replace(file, name)
-         type(raw_file), intent(inout) :: file
-         character(len=*), intent(in) :: name
-         logical :: gone
-         gone = remove_file(join_path(dir, name))
-         call file%create(join_path(dir, name), error)
-      end subroutine replace
+      if (.not. allocated(error)) call self%new_cache(error)
    end subroutine log_open
+
+   !> Begin fit.cache anew (its header only): at the start of each search of a multi-start
+   !> fit, the residuals of the starts before are not needed again (the journal closes them)
+   subroutine log_new_cache(self, error)
+      class(fit_log), intent(inout) :: self
+      type(error_type), allocatable, intent(out) :: error
+      call self%cache%close(error)
+      if (.not. allocated(error)) call replace_file(self%cache, self%dir, cache_name, error)
+      if (.not. allocated(error)) call self%cache%put(cache_magic//bytes_i([self%m, self%n]), error)
+   end subroutine log_new_cache
+
+   !> Create the file name in dir for writing, an old one removed first, not truncated: ext4
+   !> writes out a truncated and rewritten file when it is closed (to keep it across a
+   !> crash), which for a large fit.cache costs more than writing it
+   subroutine replace_file(file, dir, name, error)
+      type(raw_file), intent(inout) :: file
+      character(len=*), intent(in) :: dir, name
+      type(error_type), allocatable, intent(out) :: error
+      logical :: gone
+      gone = remove_file(join_path(dir, name))
+      call file%create(join_path(dir, name), error)
+   end subroutine replace_file
+
+   !> Close start s in the journal: its evaluations first to last, its njac sensitivity
+   !> Jacobians and the optimum opt it reached (x in the search space, at full precision)
+   subroutine log_start_done(self, s, first, last, njac, opt, error)
+      class(fit_log), intent(inout) :: self
+      integer, intent(in) :: s, first, last, njac
+      type(optimum_type), intent(in) :: opt
+      type(error_type), allocatable, intent(out) :: error
+      character(len=len(done_tag) + 7*12 + 26*(1 + size(opt%x))) :: rec
+      character(len=:), allocatable :: reason
+      reason = ''
+      if (allocated(opt%reason)) reason = opt%reason
+      write (rec, '(a,7(1x,i0),*(1x,es25.17e3))') done_tag, s, first, last, njac, opt%nevals, &
+         opt%iterations, len(reason), opt%f, opt%x
+      call self%journal%put(trim(rec)//' : '//reason//new_line('a'), error)
+   end subroutine log_start_done
 
    !> Log evaluation k: x (search space) goes to the journal, constants (physical) to GUESS,
    !> the residuals r (when given) to fit.cache. Every write is checked; a failure is an
@@ -169,20 +215,25 @@ contains
       end subroutine close_one
    end subroutine log_close
 
-   !> Read the complete records of a journal (a torn last line from a kill is dropped) and
-   !> its fingerprint ('' if it has none)
-   subroutine read_journal(path, ntest, nx, records, fingerprint, error)
+   !> Read the complete records of a journal (a torn last line from a kill is dropped), the
+   !> starts it closes (see log_start_done; a line whose evaluations it does not hold, or torn,
+   !> closes none) and its fingerprint ('' if it has none)
+   subroutine read_journal(path, ntest, nx, records, starts, fingerprint, error)
       character(len=*), intent(in) :: path
       integer, intent(in) :: ntest, nx
       type(journal_record), allocatable, intent(out) :: records(:)
+      type(start_done), allocatable, intent(out) :: starts(:)
       character(len=:), allocatable, intent(out) :: fingerprint
       type(error_type), allocatable, intent(out) :: error
       type(journal_record), allocatable :: grown(:)
       type(journal_record) :: rec
+      type(start_done) :: done
       character(len=:), allocatable :: line
       integer :: unit, ios, k, kk, nrec
+      logical :: ok
       fingerprint = ''
       nrec = 0
+      allocate (starts(0))
       if (.not. file_exists(path)) then
          call fatal_error(error, path//': no journal to resume from: start the run afresh, '// &
             'without --resume (with --force over files of an earlier run there)')
@@ -198,6 +249,12 @@ contains
          if (ios /= 0) exit
          if (index(line, fingerprint_tag) == 1) then
             fingerprint = trim(adjustl(line(len(fingerprint_tag) + 1:)))
+            cycle
+         end if
+         if (index(line, done_tag) == 1) then
+            call parse_done(line(len(done_tag) + 1:), nx, done, ok)
+            if (ok) ok = done%first >= 1 .and. done%first <= done%last + 1 .and. done%last == nrec
+            if (ok) starts = [starts, done]
             cycle
          end if
          read (line, *, iostat=ios) kk, rec%status, rec%f, rec%per_test, rec%x
@@ -221,6 +278,25 @@ contains
       end do
       close (unit)
       records = records(:nrec)
+   contains
+      !> A start-done line after its tag; ok false where it is torn (its reason is not as
+      !> long as the line says) or not one
+      subroutine parse_done(text, nx, done, ok)
+         character(len=*), intent(in) :: text
+         integer, intent(in) :: nx
+         type(start_done), intent(out) :: done
+         logical, intent(out) :: ok
+         integer :: colon, nreason, ios
+         ok = .false.
+         colon = index(text, ' : ')
+         if (colon == 0) return
+         allocate (done%opt%x(nx))
+         read (text(:colon - 1), *, iostat=ios) done%start, done%first, done%last, done%njac, &
+            done%opt%nevals, done%opt%iterations, nreason, done%opt%f, done%opt%x
+         if (ios /= 0) return
+         done%opt%reason = text(colon + 3:)
+         ok = len(done%opt%reason) == nreason
+      end subroutine parse_done
    end subroutine read_journal
 
 
@@ -261,7 +337,10 @@ contains
          case (cache_jacobian)
             read (unit, iostat=ios) x, jac
             if (ios /= 0) exit
-            if (k /= size(jacobians) + 1) exit
+            ! Jacobian k at index k: the cache begins with the start under way, whose first
+            ! Jacobian need not be the fit's first
+            if (k <= size(jacobians)) exit
+            if (k > size(jacobians) + 1) call grow_jacobians(jacobians, k - 1)
             jacobians = [jacobians, cached_jacobian(x, jac)]
          case default
             exit
@@ -269,6 +348,15 @@ contains
       end do
       close (unit)
    contains
+      !> jacobians grown to n entries with empty ones (not kept)
+      subroutine grow_jacobians(jacobians, n)
+         type(cached_jacobian), allocatable, intent(inout) :: jacobians(:)
+         integer, intent(in) :: n
+         type(cached_jacobian), allocatable :: grown(:)
+         allocate (grown(n))
+         grown(:size(jacobians)) = jacobians
+         call move_alloc(grown, jacobians)
+      end subroutine grow_jacobians
       !> Whether residuals r give the objective f (a failed evaluation's are all 0, its f a
       !> penalty); the journal keeps f to 17 digits, the sum's order may differ
       pure logical function agrees(r, f)
