@@ -11,7 +11,8 @@
 # would take T2s/2, so no split of the work does better than 2 T1/T2s over the 1-rank run
 # (2.00 on two cores that do not slow each other).
 # usage: bash bench/mpi.sh   (release build; Open MPI's mpirun). Its folders are made under
-# $TMPDIR (/tmp if unset): TMPDIR=/dev/shm keeps the fit's 147 MB fit.cache off the disk
+# $TMPDIR (/tmp if unset): TMPDIR=/dev/shm keeps the fit's files (fit.cache: up to 22.5 MB, one
+# start's residuals) off the disk
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/release-flags.sh
@@ -30,7 +31,7 @@ export OMP_NUM_THREADS=1 OMP_WAIT_POLICY=passive
 wall() { # tag command...: wall seconds of the command; its processor time (user + system of
   # every process it started, the ranks under mpirun too) in $out/cpu.<tag>
   local s e
-  # The last run's files (a fit.cache of 112 MB) written out first: their write-back would
+  # The last run's files (a fit.cache of 22 MB) written out first: their write-back would
   # otherwise take a core from this run
   sync
   s=$(date +%s.%N)

@@ -818,8 +818,9 @@ contains
       if (size(obj%replay) > 0 .and. .not. parallel) call obj%log%event('resumed: '// &
          str(size(obj%replay))//' evaluations in '//journal_name//', '// &
          str(count([(allocated(obj%replay(k)%r), k=1, size(obj%replay))]))// &
-         ' of them with their residual vectors in '//cache_name// &
-         ' (a least-squares search replays only those)')
+         ' of them with their residual vectors in '//cache_name//'; starts it closes: '// &
+         str(size(obj%replay_done))//' (a least-squares search replays those starts whole, and '// &
+         'of the start under way the evaluations with residuals)')
       if (present(progress)) obj%progress => progress
       call system_clock(obj%clock0, rate)
       if (parallel) then
