@@ -35,8 +35,7 @@ module usharp_diagnose
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin, rival_share
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     rest_at_noise, fit_structured, diagnose_progress, tell, step_done, &
-                                    joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
-                                    baseline_left_behind
+                                    joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
@@ -123,9 +122,8 @@ contains
       ! level, the refits may all sit in the baseline's basin of the constants (data made
       ! with an initial state other than the virgin one: refits end at 83-97 % of the gap,
       ! the injected effect from other constants at 100 %): the baseline and every refit run
-      ! again from Latin-hypercube starts of the constants. So too when a refit's constants
-      ! alone fit better than the baseline: it was not the optimum of the constants
-      if (opts%global_starts > 0 .and. (fit_gap_left(res) .or. baseline_left_behind(res))) then
+      ! again from Latin-hypercube starts of the constants.
+      if (opts%global_starts > 0 .and. fit_gap_left(res)) then
          call tell(ctx, 'global starts', res%nevals)
          call refit_global(ctx, res, error)
          if (allocated(error)) return

@@ -697,7 +697,7 @@ contains
       class(model_type), intent(in) :: mdl
       real(dp), intent(in) :: p(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp), allocatable :: r(:), y(:), per(:)
+      real(dp), allocatable :: r(:), y(:)
       logical :: ok
       call every_test(ctx, mdl, e%k, p, r, y, ok)
       e%per_test_after = per_test(ctx%prob, r)
@@ -708,18 +708,12 @@ contains
       ! (its share of the reference baseline's gap: see judge)
       e%gap_fit_after = max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
       ! The same constants without the effect: what of the held-out share they carry alone
-      ! (see judge), and how they fit the fit tests against the baseline (see
-      ! baseline_left_behind)
+      ! (see judge)
       e%shrink_held_constants = -huge(1.0_dp)
-      e%dev_constants = 0.0_dp
-      if (e%k > 0) then
+      if (res%gap_held > 0.0_dp .and. e%k > 0) then
          call every_test(ctx, mdl, 0, [real(dp) ::], r, y, ok)
-         if (ok .and. res%gap_held > 0.0_dp) e%shrink_held_constants = 1.0_dp - &
+         if (ok) e%shrink_held_constants = 1.0_dp - &
             max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)/res%gap_held
-         if (ok) then
-            per = per_test(ctx%prob, r)
-            e%dev_constants = deviance_change(res%npts(ctx%ifit), res%per_test0(ctx%ifit), per(ctx%ifit))
-         end if
       end if
    end subroutine with_effect
 

@@ -20,7 +20,7 @@ module usharp_diagnose_types
    public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
-             partial_carry, joint_reason, fit_effect_not_carried, baseline_left_behind
+             partial_carry, joint_reason, fit_effect_not_carried
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -138,10 +138,6 @@ module usharp_diagnose_types
       !> The held-out gap the refit's constants remove with the effect off: where they alone
       !> leave none above its floor, their prediction is no evidence of the effect
       real(dp) :: shrink_held_constants = -huge(1.0_dp)
-      !> The deviance change on the fit tests of the refit's constants with the effect off,
-      !> against the first baseline: well below zero (see baseline_left_behind), the
-      !> constants alone fit better than the baseline, which then was not the optimum
-      real(dp) :: dev_constants = 0.0_dp
       logical :: carried_by_constants = .false.
       logical :: significant = .false., confirmed = .false.
       logical :: plausible = .true.          !< every magnitude within the effect's physical limit
@@ -410,19 +406,6 @@ contains
                      .not. any(res%effects%refitted .and. res%effects%significant .and. &
                                (1.0_dp - res%effects%shrink_fit)*gap_fit_ref(res) <= res%floor_fit)
    end function fit_gap_left
-
-   !> True when a refit's constants with its effect off fit the fit tests better than the
-   !> baseline by the significance margin of BIC (a parameter-free improvement): the
-   !> baseline was not the optimum of the constants, and every effect's gain against it is
-   !> in part, or all, that of the better basin (thesis tests, LCF held out, a fast second
-   !> back stress injected: the baseline's one start ended at 2.45, refits of a delay of
-   !> 7 ms and of a machine compliance at 0.64, their constants alone as low, and both were
-   !> confirmed on 93 % of the held-out gap while the injected effect's refit, in another
-   !> basin, made the held-out test worse)
-   pure logical function baseline_left_behind(res)
-      type(diagnose_result), intent(in) :: res
-      baseline_left_behind = any(res%effects%refitted .and. res%effects%dev_constants < -bic_margin)
-   end function baseline_left_behind
 
    !> True when the candidates the screening ranked lower are to be refitted too: the fit
    !> tests have a structured gap that nothing confirmed, or nothing significant, takes to
