@@ -1033,52 +1033,39 @@ contains
             part//'/fit.journal'
       stat = shell('rm -rf '//part//'; mkdir -p '//part//' && '//cut//' && head -c '// &
                    str(16 + (nkept - k1)*(8 + 8*(2 + m)))//' '//full//'/fit.cache > '//part//'/fit.cache')
-      call run_command(input, part, '', .true., summary, e)
-      if (allocated(e)) then
-         call test_failed(error, 'resumed run: '//e%message)
-         return
-      end if
-      call counts(summary(3), ntotal, nrep, nsim)
-      call check(error, nrep == nkept .and. real(nsim, dp) <= 0.15_dp*real(ntotal, dp), &
-                 'resumed at 90 %: '//trim(summary(3)))
-      if (allocated(error)) return
-      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), 'journal identical')
-      if (allocated(error)) return
-      call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
-                 'best.nml identical')
+      call resumed('resumed at 90 %', nkept, 0, (15*ntotal)/100)
       if (allocated(error)) return
       ! Without fit.cache the journal gives no residual vector of the second start: its
       ! evaluations are simulated again, and the summary counts only the first start's replayed
       stat = shell('rm -rf '//part//'; mkdir -p '//part//' && '//cut)
-      call run_command(input, part, '', .true., summary, e)
-      if (allocated(e)) then
-         call test_failed(error, 'resumed without fit.cache: '//e%message)
-         return
-      end if
-      call counts(summary(3), ntotal, nrep, nsim)
-      call check(error, nrep == k1 .and. nsim == ntotal - k1, 'resumed without fit.cache: '//trim(summary(3)))
-      if (allocated(error)) return
-      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), &
-                 'journal identical without fit.cache')
+      call resumed('resumed without fit.cache', k1, ntotal - k1, ntotal - k1)
       if (allocated(error)) return
       ! The line closing the first start torn by a kill (its reason cut short) closes nothing:
       ! the first start's search is replayed, here simulated again (no cache), to the same end
       stat = shell('rm -rf '//part//'; mkdir -p '//part//' && awk ''/^# start-done 1 / { printf "%s", '// &
                    'substr($0, 1, length($0) - 3); exit } { print }'' '//full//'/fit.journal > '//part//'/fit.journal')
-      call run_command(input, part, '', .true., summary, e)
-      if (allocated(e)) then
-         call test_failed(error, 'resumed after a torn start-done line: '//e%message)
-         return
-      end if
-      call counts(summary(3), ntotal, nrep, nsim)
-      call check(error, nrep == 0 .and. nsim == ntotal, 'resumed after a torn start-done line: '// &
-                 trim(summary(3)))
-      if (allocated(error)) return
-      call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), &
-                 'journal identical after a torn start-done line')
-      if (allocated(error)) return
-      call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
-                 'best.nml identical without fit.cache')
+      call resumed('resumed after a torn start-done line', 0, ntotal, ntotal)
+   contains
+      !> Resume the run in part: nrep evaluations replayed, nsim_lo to nsim_hi simulated, and
+      !> the journal and best.nml of the uninterrupted run
+      subroutine resumed(what, nrep_want, nsim_lo, nsim_hi)
+         character(len=*), intent(in) :: what
+         integer, intent(in) :: nrep_want, nsim_lo, nsim_hi
+         call run_command(input, part, '', .true., summary, e)
+         if (allocated(e)) then
+            call test_failed(error, what//': '//e%message)
+            return
+         end if
+         call counts(summary(3), ntotal, nrep, nsim)
+         call check(error, nrep == nrep_want .and. nsim_lo <= nsim .and. nsim <= nsim_hi, &
+                    what//': '//trim(summary(3)))
+         if (allocated(error)) return
+         call check(error, read_text(part//'/fit.journal') == read_text(full//'/fit.journal'), &
+                    what//': journal not identical')
+         if (allocated(error)) return
+         call check(error, body(read_text(part//'/best.nml')) == body(read_text(full//'/best.nml')), &
+                    what//': best.nml not identical')
+      end subroutine resumed
    end subroutine test_resume_cost
 
    !> fit.log of a Hooke-Jeeves fit resumed half-way names every penalised evaluation with
