@@ -1002,7 +1002,8 @@ contains
    !> start) and resumed: the resumed run simulates at most 15 % of the evaluations and ends bit
    !> for bit as the uninterrupted one; without its fit.cache it simulates only the second
    !> start's evaluations again (the journal closes the first), and counts them not replayed;
-   !> with the line closing the first start torn, it simulates both starts again
+   !> with the line closing the first start torn, it simulates both starts again, and with
+   !> that line's optimum damaged the first start
    subroutine test_resume_cost(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -1045,6 +1046,12 @@ contains
       stat = shell('rm -rf '//part//'; mkdir -p '//part//' && awk ''/^# start-done 1 / { printf "%s", '// &
                    'substr($0, 1, length($0) - 3); exit } { print }'' '//full//'/fit.journal > '//part//'/fit.journal')
       call resumed('resumed after a torn start-done line', 0, ntotal, ntotal)
+      if (allocated(error)) return
+      ! Its optimum damaged (the first digit of f): none of the start's evaluations, so it
+      ! closes nothing either; the second start's line still closes it
+      stat = shell('rm -rf '//part//'; mkdir -p '//part//' && awk ''/^# start-done 1 / { $10 = "9" '// &
+                   'substr($10, 2) } { print }'' '//full//'/fit.journal > '//part//'/fit.journal')
+      call resumed('resumed after a damaged start-done line', ntotal - k1, k1, k1)
    contains
       !> Resume the run in part: nrep evaluations replayed, nsim_lo to nsim_hi simulated, and
       !> the journal and best.nml of the uninterrupted run
@@ -1255,7 +1262,7 @@ contains
       read (w(3)(2:), *, iostat=ios) nr
       read (w(5), *, iostat=ios) ns
    end subroutine counts
-   !> Residuals per record of a fit.cache of nrec residual records and 2 constants
+
    !> The last evaluation of start s, from the line of the journal at path that closes it
    !> ('# start-done s first last ...'; 0 if there is none)
    integer function closing_evaluation(path, s) result(last)
@@ -1277,6 +1284,7 @@ contains
       close (unit)
    end function closing_evaluation
 
+   !> Residuals per record of a fit.cache of nrec residual records and 2 constants
    integer function residual_count(path, nrec) result(mm)
       character(len=*), intent(in) :: path
       integer, intent(in) :: nrec

@@ -795,7 +795,8 @@ contains
          call carry_penalty_reasons(join_path(dir, 'fit.log'), obj%replay)
          ! The search replayed alone first, before the logs are started anew: a journal it
          ! cannot follow (damaged, or written from other inputs than its fingerprint names)
-         ! is refused with the run's files as they were
+         ! is refused with the run's files as they were (a start the journal closes is
+         ! taken as it is, where its optimum is one of its evaluations: see closed_start)
          call dry_replay(obj, error)
          if (allocated(error)) return
       else if (.not. overwrite .and. journal_has_records(journal)) then
@@ -1056,18 +1057,23 @@ contains
    end subroutine search
 
    !> The index in obj%replay_done of start s when the journal closes it at the evaluation
-   !> the search has reached (0: it does not)
+   !> the search has reached (0: it does not). A closing line whose optimum is none of the
+   !> start's evaluations (every optimiser ends at a point it evaluated) is damaged and
+   !> closes nothing: the start's search is replayed instead
    pure integer function closed_start(obj, s) result(k)
       type(fit_objective), intent(in) :: obj
       integer, intent(in) :: s
-      integer :: j
+      integer :: j, i
       k = 0
       do j = 1, size(obj%replay_done)
          associate (d => obj%replay_done(j))
-            if (d%start == s .and. d%first == obj%nevals + 1 .and. d%last <= size(obj%replay)) then
-               k = j
-               return
-            end if
+            if (d%start /= s .or. d%first /= obj%nevals + 1 .or. d%last > size(obj%replay)) cycle
+            do i = d%first, d%last
+               if (obj%replay(i)%f == d%opt%f .and. all(obj%replay(i)%x == d%opt%x)) then
+                  k = j
+                  return
+               end if
+            end do
          end associate
       end do
    end function closed_start
@@ -1254,6 +1260,8 @@ contains
       if (allocated(live_error)) then
          call move_alloc(live_error, error)
          obj%nsimulated = obj%nsimulated + nsim
+         ! The logs as the replay left them (it began fit.cache anew): run_fit closes these
+         obj%log = live%log
          return
       end if
       if (next <= nstarts) then

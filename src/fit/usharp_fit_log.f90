@@ -338,8 +338,9 @@ contains
             read (unit, iostat=ios) x, jac
             if (ios /= 0) exit
             ! Jacobian k at index k: the cache begins with the start under way, whose first
-            ! Jacobian need not be the fit's first
-            if (k <= size(jacobians)) exit
+            ! Jacobian need not be the fit's first. Each is taken at an evaluated point, so
+            ! a number beyond the evaluations is damage, not a Jacobian
+            if (k <= size(jacobians) .or. k > size(records) + 1) exit
             if (k > size(jacobians) + 1) call grow_jacobians(jacobians, k - 1)
             jacobians = [jacobians, cached_jacobian(x, jac)]
          case default
