@@ -876,11 +876,7 @@ contains
       type(error_type), allocatable :: e
       integer :: n
       if (size(obj%replay) == 0) return
-      dry = worker(obj)
-      dry%replay = obj%replay
-      dry%replay_jac = obj%replay_jac
-      dry%replay_done = obj%replay_done
-      dry%replay_only = .true.
+      dry = dry_worker(obj)
       call search(dry, one, n, e)
       if (.not. allocated(e)) return
       if (e%stat == stat_input) call move_alloc(e, error)
@@ -1161,11 +1157,7 @@ contains
       first_open = 1
       if (size(obj%replay) > 0) then
          ! Replay the journal alone to find where each start's evaluations lie in it
-         dry = worker(obj)
-         dry%replay = obj%replay
-         dry%replay_jac = obj%replay_jac
-         dry%replay_done = obj%replay_done
-         dry%replay_only = .true.
+         dry = dry_worker(obj)
          call search(dry, one, n, e)
          first_open = nstarts + 1
          if (allocated(e)) first_open = dry%start_now
@@ -1540,4 +1532,16 @@ contains
       allocate (w%replay(0), w%replay_jac(0), w%kept_jac(0), w%replay_done(0))
       w%clock0 = obj%clock0
    end function worker
+
+   !> A worker that replays obj's journal (its records, cached Jacobians and closed starts)
+   !> and stops where a simulation would be needed: the search's dry run
+   function dry_worker(obj) result(w)
+      type(fit_objective), intent(in) :: obj
+      type(fit_objective) :: w
+      w = worker(obj)
+      w%replay = obj%replay
+      w%replay_jac = obj%replay_jac
+      w%replay_done = obj%replay_done
+      w%replay_only = .true.
+   end function dry_worker
 end module usharp_fit
