@@ -47,6 +47,7 @@ contains
          new_unittest('lm-resume-at-90-percent-replays', test_resume_cost), &
          new_unittest('resumed-fit-log-names-every-penalty', test_resume_log), &
          new_unittest('damaged-fit-cache-resimulated-or-named', test_damaged_cache), &
+         new_unittest('unwritable-cache-refused-journal-kept', test_unwritable_cache), &
          new_unittest('external-resume-reruns-no-journalled-command', test_external_resume), &
          new_unittest('sigterm-stops-with-a-note', test_sigterm)]
    end subroutine collect_safety
@@ -1103,6 +1104,35 @@ contains
                  'constant A1 must be" '//part//'/penalties'), 0, &
                  'the penalised evaluations in the resumed fit.log')
    end subroutine test_resume_log
+
+   !> A resume where fit.cache cannot be written (a folder of that name with a file in it):
+   !> refused with exit 4 naming the file, before the journal is started anew, so that the
+   !> journal is as it was and resumes once the folder is gone
+   subroutine test_unwritable_cache(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir, journal
+      integer :: stat
+      input = deck('unwritable-cache.nml', "method='lm', identify=.false.", ", dt_out=4.0")
+      dir = scratch_dir//'/unwritable-cache'
+      call uninterrupted_run(input, dir, summary, error)
+      if (allocated(error)) return
+      journal = read_text(dir//'/fit.journal')
+      stat = shell('rm -f '//dir//'/fit.cache && mkdir -p '//dir//'/fit.cache/kept')
+      call run_command(input, dir, '', .true., summary, e)
+      call check_message(error, e, dir//'/fit.cache: cannot write')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_io, 'exit code 4')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/fit.journal') == journal, 'the journal changed')
+      if (allocated(error)) return
+      stat = shell('rm -rf '//dir//'/fit.cache')
+      call run_command(input, dir, '', .true., summary, e)
+      call check(error, .not. allocated(e), 'resume after the folder is gone failed')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/fit.journal') == journal, 'the resumed journal differs')
+   end subroutine test_unwritable_cache
 
    !> A fit.cache with damaged bytes: a residual vector that does not give its evaluation's
    !> objective is simulated again (the resumed journal is the uninterrupted one); a damaged

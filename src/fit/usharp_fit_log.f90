@@ -82,14 +82,16 @@ contains
       self%dir = dir
       self%m = m
       self%n = n
-      call replace_file(self%guess, dir, 'GUESS.TXT', error)
+      ! fit.cache first: a folder where it cannot be written is refused before the journal
+      ! of the run to resume is replaced
+      call self%new_cache(error)
+      if (.not. allocated(error)) call replace_file(self%guess, dir, 'GUESS.TXT', error)
       if (.not. allocated(error)) call replace_file(self%fom, dir, 'FOM.TXT', error)
       if (.not. allocated(error)) call replace_file(self%sums, dir, 'SUMS.TXT', error)
       if (.not. allocated(error)) call replace_file(self%events, dir, 'fit.log', error)
       if (.not. allocated(error)) call replace_file(self%journal, dir, journal_name, error)
       if (.not. allocated(error)) call self%journal%put(fingerprint_tag//' '//fingerprint// &
                                                         new_line('a'), error)
-      if (.not. allocated(error)) call self%new_cache(error)
    end subroutine log_open
 
    !> Begin fit.cache anew (its header only): at the start of each search of a multi-start
