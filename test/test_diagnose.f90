@@ -25,6 +25,7 @@ module test_diagnose
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
+                                    baseline_left_behind, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_not_carried, rate_open, rate_at_end, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
@@ -98,6 +99,8 @@ contains
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('sub-sample-delay-confirmed-when-measured', test_measured_delay), &
+         new_unittest('prediction-of-loose-constants-confirms-nothing', test_loose_prediction), &
+         new_unittest('baseline-left-behind-by-a-refits-constants', test_left_behind), &
          new_unittest('bic-in-each-tests-own-variance', test_bic_per_test), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('partial-prediction-fitted-with-every-test', test_partial_carry), &
@@ -1050,6 +1053,72 @@ contains
 
    !> A diagnosis whose fit tests (npts points, baseline sums of squares f0) and held-out
    !> tests both lie below their floors
+   !> The fit tests without a structured gap, the held-out tests with one (5 against a floor
+   !> of 1): a significant, plausible effect that removes the held-out gap is confirmed while
+   !> its refit's constants alone remove none of it, and not when they alone remove all of it
+   !> (they wandered along what the fit tests leave loose: no evidence of the effect)
+   subroutine test_loose_prediction(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_outcome) :: e
+      call below_floors_case([1000], [1.0_dp], ctx, res)
+      res%gap_held = 5.0_dp
+      res%floor_held = 1.0_dp
+      e%q = 1
+      e%f_after = exp(-(50.0_dp + log(1000.0_dp))/1000.0_dp)
+      e%per_test_after = [e%f_after]
+      e%shrink_held = 1.0_dp
+      e%held_gap = 0.0_dp
+      e%shrink_held_constants = 0.0_dp
+      call judge(ctx, res, e)
+      call check(error, e%confirmed .and. .not. e%carried_by_constants, &
+                 'a prediction its constants alone do not make not confirmed')
+      if (allocated(error)) return
+      e%shrink_held_constants = 1.0_dp
+      call judge(ctx, res, e)
+      call check(error, e%carried_by_constants .and. .not. e%confirmed, &
+                 'a prediction its constants alone make confirmed')
+      if (allocated(error)) return
+      ! With a structured gap on the fit tests the effect sets the constants right: its own
+      res%gap_fit = 10.0_dp
+      res%floor_fit = 1.0_dp
+      e%shrink_fit = 1.0_dp
+      call judge(ctx, res, e)
+      call check(error, e%confirmed .and. .not. e%carried_by_constants, &
+                 'a prediction of constants the effect set right not confirmed')
+   end subroutine test_loose_prediction
+
+   !> A refit whose constants with the effect off fit the fit tests better than the baseline
+   !> (deviance -30 and a lower objective) leaves it behind; not at a deviance of -5 (within
+   !> the BIC margin), nor with a higher objective (per-test variances can lower the deviance
+   !> while the sum of squares the baseline minimises rises), nor when it was not refitted;
+   !> of two, the lower deviance
+   subroutine test_left_behind(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      res%f0 = 2.0_dp
+      allocate (res%effects(3))
+      res%effects%refitted = .true.
+      res%effects%dev_constants = [-5.0_dp, -30.0_dp, 0.0_dp]
+      res%effects%f_constants = [1.99_dp, 1.9_dp, 2.0_dp]
+      call check(error, baseline_left_behind(res) == 2, 'a refit''s better constants not seen')
+      if (allocated(error)) return
+      res%effects(3)%dev_constants = -40.0_dp
+      res%effects(3)%f_constants = 1.5_dp
+      call check(error, baseline_left_behind(res) == 3, 'not the lowest deviance')
+      if (allocated(error)) return
+      res%effects(3)%refitted = .false.
+      call check(error, baseline_left_behind(res) == 2, 'an effect not refitted counted')
+      if (allocated(error)) return
+      res%effects(2)%f_constants = 2.01_dp
+      call check(error, baseline_left_behind(res) == 0, 'a higher objective counted as better')
+      if (allocated(error)) return
+      res%effects(2)%f_constants = 1.9_dp
+      res%effects(2)%dev_constants = -5.0_dp
+      call check(error, baseline_left_behind(res) == 0, 'a deviance within the BIC margin counted')
+   end subroutine test_left_behind
+
    subroutine below_floors_case(npts, f0, ctx, res)
       integer, intent(in) :: npts(:)
       real(dp), intent(in) :: f0(:)
@@ -1688,7 +1757,7 @@ contains
    !> An effect parameter is flagged at its search box's outer ends (a second back stress's H3
    !> at its upper end, a temperature offset at its negative end), not at a lower end of
    !> zero that a parameter which cannot be negative may reach (no lag); a constant at its
-   !> &fit bound is flagged within 1e-3 of its box in log10 units
+   !> &fit bound is flagged within 1e-6 of it in log10 units (where a search that ran away ends)
    subroutine test_box_end(error)
       type(error_type), allocatable, intent(out) :: error
       integer :: got(6)
@@ -1697,9 +1766,10 @@ contains
                        [1.7463e5_dp, 1.7463e5_dp, 70.0_dp, 50.0_dp, 50.0_dp, 70.0_dp])
       call check(error, all(got == [1, 0, 0, -1, 0, 0]), 'effect parameters at the box''s ends')
       if (allocated(error)) return
-      got(1:4) = at_bound([2.0_dp, 2.9995_dp, 2.99_dp, -2.9995_dp], [-3.0_dp, -3.0_dp, -3.0_dp, -3.0_dp], &
-                          [3.0_dp, 3.0_dp, 3.0_dp, 3.0_dp])
-      call check(error, all(got(1:4) == [0, 1, 0, -1]), 'constants at a bound of &fit, and which')
+      ! A constant 1.5 % inside its bound (0.0065 in log10) is not at it; one on it is
+      got(1:5) = at_bound([2.0_dp, 3.0_dp, 3.0_dp - 0.0065_dp, -3.0_dp, -3.0_dp + 5.0e-7_dp], &
+                          spread(-3.0_dp, 1, 5), spread(3.0_dp, 1, 5))
+      call check(error, all(got(1:5) == [0, 1, 0, -1, -1]), 'constants at a bound of &fit, and which')
    end subroutine test_box_end
 
    !> One rule of plausibility for both diagnoses: a temperature offset of 177 K [150, 204] is

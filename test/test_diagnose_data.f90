@@ -68,6 +68,7 @@ contains
          new_unittest('softening-refitted-in-the-basin-of-its-sign', test_softening_sign), &
          new_unittest('held-out-prediction-of-loose-constants-confirms-nothing', test_loose_constants), &
          new_unittest('fast-second-back-stress-found-at-its-rate', test_fast_backstress), &
+         new_unittest('baseline-left-behind-is-fitted-again', test_baseline_left_behind), &
          new_unittest('lag-screened-at-a-realistic-step', test_lag_screening), &
          new_unittest('serrated-flow-named-in-the-verdict', test_serrated_verdict), &
          new_unittest('held-out-floor-holds-the-constants-uncertainty', test_prediction_spread)]
@@ -944,8 +945,12 @@ contains
    !> and ratcheting show no structured gap and leave the constants loose, so refits of a
    !> delay of 6.55 ms, a compliance and a softening wandered to constants that predict the
    !> LCF test by themselves (100 % of its gap without the effect) and were "confirmed"; a lag
-   !> below the sampling interval then led. Such a prediction is no evidence: nothing is
-   !> confirmed on the fit tests, and every test fitted together names the second back stress
+   !> below the sampling interval then led. Such a prediction is no evidence. The compliance
+   !> refit's constants alone fit the fit tests better than the baseline (0.689 -> 0.678), so
+   !> the baseline is fitted again from them; against it no delay or compliance is
+   !> significant, nothing is confirmed on the fit tests, and every test fitted together names
+   !> the second back stress. (Where the baseline stays, judge's carried_by_constants is what
+   !> refuses such a prediction: test prediction-of-loose-constants-confirms-nothing.)
    subroutine test_loose_constants(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
@@ -956,16 +961,12 @@ contains
       call check(error, res%leading == 0 .and. .not. any(res%effects%confirmed), &
                  'an effect confirmed by the held-out prediction of loose constants: '//res%verdict)
       if (allocated(error)) return
-      call check(error, any(res%effects%carried_by_constants), &
-                 'no refit''s prediction was found to be its constants''')
+      call check(error, allocated(res%rebased_by), 'the baseline was not fitted again from a refit''s constants')
       if (allocated(error)) return
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
-            if (e%carried_by_constants) then
-               ! (a delay below the sampling interval says that first)
-               call check(error, e%shrink_held_constants >= 0.5_dp .and. (.not. e%resolved .or. &
-                          index(verdict_of(e, res), 'constants carry the held-out tests without it') > 0), &
-                          trim(e%name)//': '//verdict_of(e, res))
+            if (any(e%k == [effect_index('shift'), effect_index('lag'), effect_index('compliance')])) then
+               call check(error, .not. e%significant, trim(e%name)//': '//verdict_of(e, res))
                if (allocated(error)) return
             end if
          end associate
@@ -997,6 +998,45 @@ contains
                     'does not hold the injected 1266')
       end associate
    end subroutine test_fast_backstress
+
+   !> A fast second back stress (independent data: H3/gamma3 1.38 ksi at gamma3 = 4898; the
+   !> LCF test held out) whose baseline, one start, converges at an objective of 2.42 on the
+   !> fit tests, where refits of effects that do next to nothing (a delay of 7 ms, a machine
+   !> compliance) end at 0.64 with their constants alone as low: a shift was named. Such a
+   !> refit shows that the baseline was not the optimum of the constants
+   !> (baseline_left_behind): the baseline is fitted again from its constants and ends lower
+   !> (below 0.7), the delay and the compliance are not significant against it, and the
+   !> second back stress is named with an interval of gamma3 that holds the injected one
+   subroutine test_baseline_left_behind(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      integer :: k, j
+      call diagnose_deck('data/independent-lcf-backstress2-basin/diagnose.nml', res, error)
+      if (allocated(error)) return
+      write (*, '(4x,a)') res%verdict
+      write (*, '(4x,a,2es12.4)') 'first baseline, baseline:', res%f0_left, res%f0
+      call check(error, allocated(res%rebased_by), 'the baseline was not fitted again')
+      if (allocated(error)) return
+      call check(error, res%f0_left > 2.0_dp .and. res%f0 < 0.7_dp, 'the baseline fitted again did not end lower')
+      if (allocated(error)) return
+      do j = 1, size(res%effects)
+         if (res%effects(j)%k == effect_index('shift') .or. res%effects(j)%k == effect_index('compliance')) then
+            call check(error, .not. res%effects(j)%significant, trim(res%effects(j)%name)// &
+                       ' still significant against the baseline fitted again')
+            if (allocated(error)) return
+         end if
+      end do
+      call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
+      if (allocated(error)) return
+      k = findloc(res%effects%k, effect_index('backstress2'), dim=1)
+      associate (e => res%effects(k))
+         call check(error, .not. e%held .and. size(e%p) == 2, 'gamma3 held or not fitted')
+         if (allocated(error)) return
+         write (*, '(4x,a,3es11.3)') 'gamma3 and its interval:', e%p(2), e%p_lo(2), e%p_hi(2)
+         call check(error, e%p_lo(2) <= 4898.0_dp .and. 4898.0_dp <= e%p_hi(2), 'the interval of gamma3 '// &
+                    'does not hold the injected 4898')
+      end associate
+   end subroutine test_baseline_left_behind
 
    !> Extensometer drifts of 8.3e-8, 1.7e-8 and -1.7e-8 1/s (independent data,
    !> data/independent-drift; the relaxation test held out): the walks of the leading drift's

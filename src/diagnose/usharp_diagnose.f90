@@ -35,7 +35,8 @@ module usharp_diagnose
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin, rival_share
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     rest_at_noise, fit_structured, diagnose_progress, tell, step_done, &
-                                    joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted
+                                    joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
+                                    baseline_left_behind
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
    use usharp_diagnose_screen, only: screen
@@ -58,6 +59,10 @@ module usharp_diagnose
 
    !> Latin-hypercube starts of the constants for each refit that decides the verdict
    integer, parameter :: deciding_lhs = 2
+   !> Most times the baseline is fitted again from a refit's better constants (see rebaseline)
+   integer, parameter :: rebaseline_rounds = 2
+   !> The steps made against an earlier baseline are named so in the report
+   character(len=*), parameter :: earlier_tag = 'against an earlier baseline: '
 
 contains
 
@@ -75,10 +80,18 @@ contains
       type(diagnose_journal), intent(inout), target, optional :: journal
       type(diagnose_context) :: ctx
       type(run_memo), target :: memo
+      integer :: round
+      logical :: lower
       call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
       if (allocated(error)) return
       call diagnose_effects(ctx, res, error)
       if (allocated(error)) return
+      do round = 1, rebaseline_rounds
+         if (baseline_left_behind(res) == 0) exit
+         call rebaseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo, lower)
+         if (allocated(error)) return
+         if (.not. lower) exit
+      end do
       if (joint_wanted(res, opts%joint)) then
          call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
          if (allocated(error)) return
@@ -208,6 +221,65 @@ contains
       call step_done(res, 'refits of simpler candidates')
       call conclude(res)
    end subroutine refit_simpler
+
+   !> The baseline fitted again from the constants of the refit that, with its effect off,
+   !> fits the fit tests better than it (see baseline_left_behind), and every step after
+   !> the baseline again from there: each effect is judged against the optimum of the
+   !> constants that the refits found, not against a basin they left. The first round's
+   !> simulations and steps count in this one's. lower: the baseline ended lower (else
+   !> nothing after it ran and ctx, res are as they were, but for its simulations).
+   subroutine rebaseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo, lower)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(diagnose_context), intent(inout) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
+      procedure(diagnose_progress), optional :: progress
+      type(diagnose_journal), intent(inout), target, optional :: journal
+      type(run_memo), intent(inout), target :: memo
+      logical, intent(out) :: lower
+      type(run_config) :: rcfg
+      type(diagnose_context) :: rctx
+      type(diagnose_result) :: rres
+      integer :: j, k
+      k = baseline_left_behind(res)
+      call tell(ctx, 'baseline again from the constants of the '//trim(res%effects(k)%name)// &
+                ' refit', res%nevals)
+      rcfg = cfg
+      do j = 1, size(ctx%prob%idx)
+         call rcfg%model%set_constant(ctx%prob%idx(j), res%effects(k)%c(j))
+      end do
+      ! A start from a better basin than the multi-start's best: one local search
+      rcfg%fit%multistart = 0
+      call diagnose_baseline(rcfg, opts, rctx, rres, error, experiments, progress, journal, memo)
+      if (allocated(error)) return
+      ! From constants that fit better it ends lower: if not, nothing is gained by going on
+      lower = rres%f0 < res%f0
+      if (.not. lower) then
+         res%nevals = res%nevals + rres%nevals
+         return
+      end if
+      rctx%clock0 = ctx%clock0
+      allocate (rctx%earlier(size(ctx%cat)))
+      if (allocated(ctx%earlier)) rctx%earlier = ctx%earlier
+      do j = 1, size(res%effects)
+         if (res%effects(j)%refitted) rctx%earlier(res%effects(j)%k)%x = res%effects(j)%x_fit
+      end do
+      call diagnose_effects(rctx, rres, error)
+      if (allocated(error)) return
+      rres%f0_left = res%f0
+      rres%rebased_by = trim(res%effects(k)%name)
+      rres%c0 = res%c0
+      rres%nevals = res%nevals + rres%nevals
+      do j = 1, size(res%steps)
+         if (index(res%steps(j)%name, earlier_tag) /= 1) res%steps(j)%name = earlier_tag//res%steps(j)%name
+      end do
+      rres%steps = [res%steps, rres%steps]
+      rres%mark_nevals = rres%nevals
+      res = rres
+      ctx = rctx
+   end subroutine rebaseline
 
    !> The held-out tests fitted too (see joint_wanted): the whole diagnosis again with every
    !> test fitted, from the baseline's constants; its verdict becomes this one's, worded for

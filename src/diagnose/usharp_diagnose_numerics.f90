@@ -52,6 +52,8 @@ module usharp_diagnose_numerics
    !> took 82813 simulations in place of 115790 (bench/diagnose.sh)
    real(dp), parameter :: lm_ftol = 1.0e-9_dp
    integer, parameter :: lm_itermax = 100, lm_updates = 4
+   !> How near a bound (log10 units for the constants) a fitted value is at it (see at_bound)
+   real(dp), parameter :: bound_tol = 1.0e-6_dp
 
    !> Integrator tolerances (rtol, atol on strain) of the Jacobians behind the constants'
    !> covariance and what it adds to a prediction (tight_jacobian): at the working tolerance
@@ -817,15 +819,18 @@ contains
       end do
    end function pseudo_inverse
 
-   !> Which components of x lie at a bound (within 1e-3 of the box, log10 units for the
-   !> constants): -1 at the lower, 1 at the upper, 0 at neither. A fit that ends there has
-   !> run away rather than converged, and which end says which way.
+   !> Which components of x lie at a bound (within 1e-6, log10 units for the constants, as
+   !> usharp_identify judges them): -1 at the lower, 1 at the upper, 0 at neither. A fit
+   !> that ends there has run away rather than converged, and which end says which way. A
+   !> search's steps are projected onto the box, so one that ran away ends on the bound; a
+   !> tolerance of a share of the box (1e-3 of it had called C2 at its bound 1.5 % inside
+   !> it) names converged constants.
    pure function at_bound(x, lo, hi) result(side)
       real(dp), intent(in) :: x(:), lo(:), hi(:)
       integer :: side(size(x))
       side = 0
-      where (x >= hi - 1.0e-3_dp*max(hi - lo, 1.0_dp)) side = 1
-      where (x <= lo + 1.0e-3_dp*max(hi - lo, 1.0_dp)) side = -1
+      where (x >= hi - bound_tol) side = 1
+      where (x <= lo + bound_tol) side = -1
    end function at_bound
 
    !> Which effect parameters x lie at an outer end of their search box [lo, hi] (within 1e-6

@@ -381,7 +381,8 @@ contains
    end function rate_rungs
 
    !> Levenberg-Marquardt runs of ep: the first refit from the screening end point (and its
-   !> other screening end points, and the global starts); a refit again from further starts
+   !> other screening end points, the global starts and its end point against an earlier
+   !> baseline); a refit again from further starts
    !> continues its own end point and tries those. moved is false when a refit again found
    !> nothing lower (only the verdict is then redone: the reference objective may have fallen)
    subroutine fit_constants(ctx, res, ep, e, opt, moved, error, starts, from)
@@ -456,6 +457,12 @@ contains
             deallocate (fs, xe)
          end if
          xs = with_params(e, res%x_global)
+         if (allocated(ctx%earlier)) then
+            if (allocated(ctx%earlier(e%k)%x)) then
+               if (size(ctx%earlier(e%k)%x) == size(xs, 1)) xs = reshape([xs, ctx%earlier(e%k)%x], &
+                                                                        [size(xs, 1), size(xs, 2) + 1])
+            end if
+         end if
          allocate (fs(size(xs, 2)), xe(size(xs, 1), size(xs, 2)))
          call starts_unit(ctx%journal, ep, xs, lo, hi, ctx%h, ctx%opts%max_evals, &
                           opt, e%nevals, error, fs, over_ranks=ctx%opts%over_ranks, memo=ctx%memo, xe=xe)
@@ -697,7 +704,7 @@ contains
       class(model_type), intent(in) :: mdl
       real(dp), intent(in) :: p(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp), allocatable :: r(:), y(:)
+      real(dp), allocatable :: r(:), y(:), per(:)
       logical :: ok
       call every_test(ctx, mdl, e%k, p, r, y, ok)
       e%per_test_after = per_test(ctx%prob, r)
@@ -708,12 +715,20 @@ contains
       ! (its share of the reference baseline's gap: see judge)
       e%gap_fit_after = max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
       ! The same constants without the effect: what of the held-out share they carry alone
-      ! (see judge)
+      ! (see judge), and how they fit the fit tests against the baseline (see
+      ! baseline_left_behind)
       e%shrink_held_constants = -huge(1.0_dp)
-      if (res%gap_held > 0.0_dp .and. e%k > 0) then
+      e%dev_constants = 0.0_dp
+      e%f_constants = huge(1.0_dp)
+      if (e%k > 0) then
          call every_test(ctx, mdl, 0, [real(dp) ::], r, y, ok)
-         if (ok) e%shrink_held_constants = 1.0_dp - &
+         if (ok .and. res%gap_held > 0.0_dp) e%shrink_held_constants = 1.0_dp - &
             max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)/res%gap_held
+         if (ok) then
+            per = per_test(ctx%prob, r)
+            e%dev_constants = deviance_change(res%npts(ctx%ifit), res%per_test0(ctx%ifit), per(ctx%ifit))
+            e%f_constants = sum(per(ctx%ifit))
+         end if
       end if
    end subroutine with_effect
 

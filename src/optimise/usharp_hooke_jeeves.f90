@@ -4,7 +4,7 @@
 module usharp_hooke_jeeves
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_optimiser, only: objective_type, optimum_type
+   use usharp_optimiser, only: reason_itermax, objective_type, optimum_type
    implicit none
    private
 
@@ -82,7 +82,7 @@ contains
             delta = delta*rho
          end if
       end do
-      if (iters >= itermax .and. steplength > eps) opt%reason = 'itermax reached'
+      if (iters >= itermax .and. steplength > eps) opt%reason = reason_itermax
       if (nevals >= max_evals .and. steplength > eps) opt%reason = 'max_evals reached'
       opt%x = xbefore
       opt%f = fbefore

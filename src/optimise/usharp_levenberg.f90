@@ -6,7 +6,7 @@
 module usharp_levenberg
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_optimiser, only: least_squares_type, optimum_type
+   use usharp_optimiser, only: reason_itermax, least_squares_type, optimum_type
    use usharp_lapack, only: solve_dense, mat_mul
    implicit none
    private
@@ -100,7 +100,7 @@ contains
       if (present(updates)) max_updates = max(updates, 0)
       nupd = max_updates
       by_sens = .false.
-      opt%reason = 'itermax reached'
+      opt%reason = reason_itermax
       do iter = 1, itermax
          if (nevals + n >= max_evals) then
             opt%reason = 'max_evals reached'

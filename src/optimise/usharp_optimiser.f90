@@ -5,7 +5,10 @@ module usharp_optimiser
    implicit none
    private
 
-   public :: objective_type, optimum_type, least_squares_type
+   public :: objective_type, optimum_type, least_squares_type, reason_itermax
+
+   !> optimum_type%reason of a search that stopped at its iteration limit
+   character(len=*), parameter :: reason_itermax = 'itermax reached'
 
    !> A scalar objective of a parameter vector. An error stops the optimiser at once.
    type, abstract :: objective_type
