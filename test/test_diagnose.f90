@@ -1051,8 +1051,6 @@ contains
                  'a 15 % fall in the quiet test: dBIC '//real_str(e%dbic, 'es12.5'))
    end subroutine test_bic_per_test
 
-   !> A diagnosis whose fit tests (npts points, baseline sums of squares f0) and held-out
-   !> tests both lie below their floors
    !> The fit tests without a structured gap, the held-out tests with one (5 against a floor
    !> of 1): a significant, plausible effect that removes the held-out gap is confirmed while
    !> its refit's constants alone remove none of it, and not when they alone remove all of it
@@ -1119,6 +1117,8 @@ contains
       call check(error, baseline_left_behind(res) == 0, 'a deviance within the BIC margin counted')
    end subroutine test_left_behind
 
+   !> A diagnosis whose fit tests (npts points, baseline sums of squares f0) and held-out
+   !> tests both lie below their floors
    subroutine below_floors_case(npts, f0, ctx, res)
       integer, intent(in) :: npts(:)
       real(dp), intent(in) :: f0(:)

@@ -38,7 +38,7 @@ module usharp_diagnose
                                     joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     baseline_left_behind
    use usharp_diagnose_numerics, only: gn_decrease
-   use usharp_diagnose_baseline, only: fit_baseline, baseline_regions
+   use usharp_diagnose_baseline, only: fit_baseline, baseline_regions, baseline_step
    use usharp_diagnose_screen, only: screen
    use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding, refit
    use usharp_diagnose_verdict, only: conclude, joint_verdict
@@ -67,7 +67,8 @@ module usharp_diagnose
 contains
 
    !> Diagnose the fit of cfg's tests from cfg's constants (a start: the baseline is fitted to
-   !> the fit tests); experiments: the data given directly; progress: told of each step;
+   !> the fit tests, and fitted again where a refit's constants fit them better: see
+   !> rebaseline); experiments: the data given directly; progress: told of each step;
    !> journal: an open journal its units are kept in and replayed from (every rank runs the
    !> diagnosis with it; a stop signal ends it with an error naming --resume)
    subroutine diagnose_run(cfg, opts, res, error, experiments, progress, journal)
@@ -258,6 +259,8 @@ contains
       lower = rres%f0 < res%f0
       if (.not. lower) then
          res%nevals = res%nevals + rres%nevals
+         call step_done(res, 'baseline again from the constants of the '//trim(res%effects(k)%name)// &
+                        ' refit: not lower')
          return
       end if
       rctx%clock0 = ctx%clock0
@@ -274,6 +277,10 @@ contains
       rres%nevals = res%nevals + rres%nevals
       do j = 1, size(res%steps)
          if (index(res%steps(j)%name, earlier_tag) /= 1) res%steps(j)%name = earlier_tag//res%steps(j)%name
+      end do
+      do j = 1, size(rres%steps)
+         if (rres%steps(j)%name == baseline_step) rres%steps(j)%name = 'baseline from the constants of the '// &
+            trim(res%effects(k)%name)//' refit'
       end do
       rres%steps = [res%steps, rres%steps]
       rres%mark_nevals = rres%nevals

@@ -12,7 +12,7 @@ module usharp_diagnose_baseline
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_regions, only: region_stat, region_of, point_classes, class_names, gap_se, &
                              inelastic_points, serration_in_runs, serration_stat, serration_p
-   use usharp_optimiser, only: optimum_type, reason_itermax
+   use usharp_optimiser, only: optimum_type, reason_itermax, reason_max_evals
    use usharp_diagnose_options, only: gap_z
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, tell, step_done
    use usharp_diagnose_units, only: lm_unit, starts_unit
@@ -22,7 +22,10 @@ module usharp_diagnose_baseline
    implicit none
    private
 
-   public :: fit_baseline, baseline_regions, per_test, all_regions
+   public :: fit_baseline, baseline_regions, per_test, all_regions, baseline_step
+
+   !> The name of the baseline's step from the given constants (see diagnose_result%steps)
+   character(len=*), parameter :: baseline_step = 'baseline from the given constants'
 
    !> Most rounds of lm_itermax iterations the baseline's search runs (see converge_baseline)
    integer, parameter :: baseline_rounds = 10
@@ -34,7 +37,8 @@ contains
 
    !> Baseline: the fit tests without any effect, from the given constants (a start) and,
    !> when &fit asks for multi-start, from its Latin-hypercube points too (the lowest end
-   !> point is kept); ctx's constants become the baseline's
+   !> point is kept, its search continued while it stopped at its iteration limit: see
+   !> converge_baseline); ctx's constants become the baseline's
    subroutine fit_baseline(ctx, res, error)
       type(diagnose_context), intent(inout) :: ctx
       type(diagnose_result), intent(inout) :: res
@@ -51,7 +55,7 @@ contains
       res%nevals = res%nevals + opt%nevals
       res%baseline_starts = 1 + max(ctx%prob%cfg%fit%multistart, 0)
       if (ctx%prob%cfg%fit%multistart > 0) then
-         call step_done(res, 'baseline from the given constants')
+         call step_done(res, baseline_step)
          call tell(ctx, 'baseline fit from '//str(res%baseline_starts)//' starts', res%nevals)
          call starts_unit(ctx%journal, base, global_points(ctx%prob%cfg, ctx%prob, ctx%prob%cfg%fit%multistart), &
                           lo, hi, ctx%h, ctx%opts%max_evals, opt, res%nevals, error, &
@@ -71,7 +75,7 @@ contains
       if (ctx%prob%cfg%fit%multistart > 0) then
          call step_done(res, 'baseline multi-start')
       else
-         call step_done(res, 'baseline from the given constants')
+         call step_done(res, baseline_step)
       end if
    end subroutine fit_baseline
 
@@ -97,7 +101,11 @@ contains
                       ctx%opts%max_evals, more, error, memo=ctx%memo)
          if (allocated(error)) return
          res%nevals = res%nevals + more%nevals
-         if (.not. more%f < opt%f) exit
+         if (.not. more%f < opt%f) then
+            ! a stationary point: a search from it finds nothing lower
+            opt%reason = more%reason
+            exit
+         end if
          more%iterations = more%iterations + opt%iterations
          more%nevals = more%nevals + opt%nevals
          if (opt%f - more%f < creep_share*opt%f) then
@@ -107,7 +115,7 @@ contains
          opt = more
       end do
       res%baseline_iterations = opt%iterations
-      res%baseline_converged = opt%reason /= reason_itermax
+      res%baseline_converged = opt%reason /= reason_itermax .and. opt%reason /= reason_max_evals
    end subroutine converge_baseline
 
    !> Baseline residuals of every test (held-out ones: the prediction), their regions, the

@@ -93,18 +93,24 @@ contains
       type(diagnose_result), intent(in) :: res
       integer, allocatable :: order(:)
       integer :: i, k
+      character(len=:), allocatable :: starts
       call add_line(lines, '## 1. Where the gap lies')
       call add_line(lines, '')
+      if (allocated(res%rebased_by)) then
+         starts = 'from the constants of the '//res%rebased_by//' refit'
+      else
+         starts = 'best of '//str(res%baseline_starts)//' start'//trim(merge('s', ' ', res%baseline_starts > 1))
+      end if
       call add_line(lines, 'Baseline: the model without any effect fitted to the fit tests (objective '// &
-               real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals, best of '//str(res%baseline_starts)// &
-               ' start'//trim(merge('s', ' ', res%baseline_starts > 1))//', its search '// &
+               real_str(res%f0, 'es11.4')//', '//str(res%m)//' residuals, '//starts//', its search '// &
                str(res%baseline_iterations)//' iterations); held-out tests predicted.')
       if (allocated(res%rebased_by)) call add_line(lines, 'The baseline was fitted again from the '// &
          'constants of the '//res%rebased_by//' refit: without their effect they fit the fit tests '// &
          'better than the earlier baseline (objective '//real_str(res%f0_left, 'es11.4')//'), which '// &
-         'was therefore not the optimum of the constants; every step below starts from this one.')
+         'was therefore not the optimum of the constants; every step below starts from this one (which '// &
+         'refits ran against the earlier baseline depended on the held-out tests'' prediction too).')
       if (.not. res%baseline_converged) call add_line(lines, '**Flag:** the baseline fit had not '// &
-         'converged when its iterations ran out; every effect below is judged against it, and '// &
+         'converged when its iterations or evaluations ran out; every effect below is judged against it, and '// &
          'a refit may owe part of its fall to the constants alone.')
       if (allocated(res%c_bound)) then
          if (any(res%c_bound /= 0)) call add_line(lines, '**Flag:** the baseline fit ran away: '// &

@@ -98,11 +98,11 @@ module usharp_diagnose_types
       type(run_memo), pointer :: memo => null()
       !> The end point of each catalogue effect's refit against an earlier baseline (see
       !> rebaseline in usharp_diagnose; x unallocated: none): a further start of its refit
-      !> against this one, so that a better baseline never leaves a refit above an end point
-      !> found before
+      !> against this one where that refit has the same free parameters (not where one of
+      !> them held the effect's rate), so that a better baseline does not leave it above an
+      !> end point found before
       type(end_point), allocatable :: earlier(:)
    end type diagnose_context
-
 
    !> One effect: screening, and the refit when it led
    type :: effect_outcome
@@ -212,10 +212,12 @@ module usharp_diagnose_types
       integer :: baseline_iterations = 0          !< iterations of its search that was kept
       !> The baseline's objective before it was fitted again from the constants of a refit
       !> that fit the fit tests better without their effect (see baseline_left_behind), and
-      !> that refit's effect ('': it was not)
+      !> that refit's effect (unallocated: it was not)
       real(dp) :: f0_left = 0.0_dp
       character(len=:), allocatable :: rebased_by
-      logical :: baseline_converged = .true.      !< that search ended otherwise than at its limit
+      !> That search ended otherwise than at its iteration or evaluation limit, or a further
+      !> search from its end found nothing lower
+      logical :: baseline_converged = .true.
       character(len=:), allocatable :: cnames(:)
       real(dp) :: f0 = 0.0_dp                     !< baseline objective on the fit tests
       real(dp), allocatable :: per_test0(:)       !< baseline per test (held-out: prediction)

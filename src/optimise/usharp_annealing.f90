@@ -8,7 +8,7 @@ module usharp_annealing
    use usharp_kinds, only: dp
    use usharp_math, only: exp_dp
    use usharp_error, only: error_type
-   use usharp_optimiser, only: objective_type, optimum_type
+   use usharp_optimiser, only: reason_max_evals, objective_type, optimum_type
    use usharp_rng, only: rng_type
    implicit none
    private
@@ -44,7 +44,7 @@ contains
       if (t <= 0.0_dp) t = max(abs(f), tiny(1.0_dp))
       fstar = huge(1.0_dp)
       ntemp = 0
-      opt%reason = 'max_evals reached'
+      opt%reason = reason_max_evals
       outer: do
          nacc = 0
          do m = 1, nt

@@ -4,7 +4,7 @@
 module usharp_hooke_jeeves
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_optimiser, only: reason_itermax, objective_type, optimum_type
+   use usharp_optimiser, only: reason_itermax, reason_max_evals, objective_type, optimum_type
    implicit none
    private
 
@@ -83,7 +83,7 @@ contains
          end if
       end do
       if (iters >= itermax .and. steplength > eps) opt%reason = reason_itermax
-      if (nevals >= max_evals .and. steplength > eps) opt%reason = 'max_evals reached'
+      if (nevals >= max_evals .and. steplength > eps) opt%reason = reason_max_evals
       opt%x = xbefore
       opt%f = fbefore
       opt%nevals = nevals

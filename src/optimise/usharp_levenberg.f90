@@ -6,7 +6,7 @@
 module usharp_levenberg
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_optimiser, only: reason_itermax, least_squares_type, optimum_type
+   use usharp_optimiser, only: reason_itermax, reason_max_evals, least_squares_type, optimum_type
    use usharp_lapack, only: solve_dense, mat_mul
    implicit none
    private
@@ -103,7 +103,7 @@ contains
       opt%reason = reason_itermax
       do iter = 1, itermax
          if (nevals + n >= max_evals) then
-            opt%reason = 'max_evals reached'
+            opt%reason = reason_max_evals
             exit
          end if
          if (iter == 1 .and. present(jac0)) then
@@ -140,7 +140,7 @@ contains
          if (lambda < 0.0_dp) lambda = 1.0e-3_dp
          do
             if (nevals >= max_evals) then
-               opt%reason = 'max_evals reached'
+               opt%reason = reason_max_evals
                done = .true.
                exit
             end if

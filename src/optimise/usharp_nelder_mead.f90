@@ -3,7 +3,7 @@
 module usharp_nelder_mead
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_optimiser, only: objective_type, optimum_type
+   use usharp_optimiser, only: reason_max_evals, objective_type, optimum_type
    implicit none
    private
 
@@ -39,7 +39,7 @@ contains
          call evaluate(p(:, j), f(j))
          if (allocated(error)) return
       end do
-      opt%reason = 'max_evals reached'
+      opt%reason = reason_max_evals
       do while (nevals < max_evals)
          iter = iter + 1
          call sort_simplex()

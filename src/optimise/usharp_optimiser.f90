@@ -5,10 +5,11 @@ module usharp_optimiser
    implicit none
    private
 
-   public :: objective_type, optimum_type, least_squares_type, reason_itermax
+   public :: objective_type, optimum_type, least_squares_type, reason_itermax, reason_max_evals
 
-   !> optimum_type%reason of a search that stopped at its iteration limit
-   character(len=*), parameter :: reason_itermax = 'itermax reached'
+   !> optimum_type%reason of a search that stopped at its iteration limit, at its limit of
+   !> evaluations
+   character(len=*), parameter :: reason_itermax = 'itermax reached', reason_max_evals = 'max_evals reached'
 
    !> A scalar objective of a parameter vector. An error stops the optimiser at once.
    type, abstract :: objective_type
