@@ -983,20 +983,10 @@ contains
    subroutine test_fast_backstress(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      integer :: k
       call diagnose_deck('data/independent-lcf-backstress2-fast/diagnose.nml', res, error)
       if (allocated(error)) return
       write (*, '(4x,a)') res%verdict
-      call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
-      if (allocated(error)) return
-      k = findloc(res%effects%k, effect_index('backstress2'), dim=1)
-      associate (e => res%effects(k))
-         call check(error, .not. e%held .and. size(e%p) == 2, 'gamma3 held or not fitted')
-         if (allocated(error)) return
-         write (*, '(4x,a,3es11.3)') 'gamma3 and its interval:', e%p(2), e%p_lo(2), e%p_hi(2)
-         call check(error, e%p_lo(2) <= 1266.0_dp .and. 1266.0_dp <= e%p_hi(2), 'the interval of gamma3 '// &
-                    'does not hold the injected 1266')
-      end associate
+      call check_gamma3(res, 1266.0_dp, error)
    end subroutine test_fast_backstress
 
    !> A fast second back stress (independent data: H3/gamma3 1.38 ksi at gamma3 = 4898; the
@@ -1010,7 +1000,7 @@ contains
    subroutine test_baseline_left_behind(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      integer :: k, j
+      integer :: j
       call diagnose_deck('data/independent-lcf-backstress2-basin/diagnose.nml', res, error)
       if (allocated(error)) return
       write (*, '(4x,a)') res%verdict
@@ -1026,16 +1016,7 @@ contains
             if (allocated(error)) return
          end if
       end do
-      call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
-      if (allocated(error)) return
-      k = findloc(res%effects%k, effect_index('backstress2'), dim=1)
-      associate (e => res%effects(k))
-         call check(error, .not. e%held .and. size(e%p) == 2, 'gamma3 held or not fitted')
-         if (allocated(error)) return
-         write (*, '(4x,a,3es11.3)') 'gamma3 and its interval:', e%p(2), e%p_lo(2), e%p_hi(2)
-         call check(error, e%p_lo(2) <= 4898.0_dp .and. 4898.0_dp <= e%p_hi(2), 'the interval of gamma3 '// &
-                    'does not hold the injected 4898')
-      end associate
+      call check_gamma3(res, 4898.0_dp, error)
    end subroutine test_baseline_left_behind
 
    !> Extensometer drifts of 8.3e-8, 1.7e-8 and -1.7e-8 1/s (independent data,
@@ -1119,6 +1100,25 @@ contains
    end subroutine test_lag_screening
 
    !> The diagnosis of the deck at path, with its own options, into res
+   !> The second back stress named, its rate fitted (not held) and its 95 % interval holding
+   !> the injected rate gamma3
+   subroutine check_gamma3(res, gamma3, error)
+      type(diagnose_result), intent(in) :: res
+      real(dp), intent(in) :: gamma3
+      type(error_type), allocatable, intent(out) :: error
+      integer :: k
+      call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
+      if (allocated(error)) return
+      k = findloc(res%effects%k, effect_index('backstress2'), dim=1)
+      associate (e => res%effects(k))
+         call check(error, .not. e%held .and. size(e%p) == 2, 'gamma3 held or not fitted')
+         if (allocated(error)) return
+         write (*, '(4x,a,3es11.3)') 'gamma3 and its interval:', e%p(2), e%p_lo(2), e%p_hi(2)
+         call check(error, e%p_lo(2) <= gamma3 .and. gamma3 <= e%p_hi(2), 'the interval of gamma3 '// &
+                    'does not hold the injected '//real_str(gamma3, 'f0.0'))
+      end associate
+   end subroutine check_gamma3
+
    subroutine diagnose_deck(path, res, error)
       character(len=*), intent(in) :: path
       type(diagnose_result), intent(out) :: res

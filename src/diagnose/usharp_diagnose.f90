@@ -247,12 +247,8 @@ contains
       k = baseline_left_behind(res)
       call tell(ctx, 'baseline again from the constants of the '//trim(res%effects(k)%name)// &
                 ' refit', res%nevals)
-      rcfg = cfg
-      do j = 1, size(ctx%prob%idx)
-         call rcfg%model%set_constant(ctx%prob%idx(j), res%effects(k)%c(j))
-      end do
       ! A start from a better basin than the multi-start's best: one local search
-      rcfg%fit%multistart = 0
+      rcfg = config_at(cfg, ctx%prob%idx, res%effects(k)%c)
       call diagnose_baseline(rcfg, opts, rctx, rres, error, experiments, progress, journal, memo)
       if (allocated(error)) return
       ! From constants that fit better it ends lower: if not, nothing is gained by going on
@@ -308,12 +304,8 @@ contains
       type(diagnose_result) :: jres
       integer :: j
       call tell(ctx, 'the held-out tests fitted too', res%nevals)
-      jcfg = cfg
-      do j = 1, size(ctx%prob%idx)
-         call jcfg%model%set_constant(ctx%prob%idx(j), res%c(j))
-      end do
       ! The baseline's multi-start has searched the constants already
-      jcfg%fit%multistart = 0
+      jcfg = config_at(cfg, ctx%prob%idx, res%c)
       jcfg%diagnose%holdout = .false.
       jopts = opts
       jopts%joint = .true.
@@ -333,6 +325,21 @@ contains
       call joint_verdict(res, jres)
       res%joint = jres
    end subroutine joint_stage
+
+   !> cfg with its fitted constants idx at c and no multi-start: a baseline fitted from
+   !> constants that a search has reached is one local search from them
+   function config_at(cfg, idx, c) result(at)
+      type(run_config), intent(in) :: cfg
+      integer, intent(in) :: idx(:)
+      real(dp), intent(in) :: c(:)   !< the constants' values, in the model's units
+      type(run_config) :: at
+      integer :: j
+      at = cfg
+      do j = 1, size(idx)
+         call at%model%set_constant(idx(j), c(j))
+      end do
+      at%fit%multistart = 0
+   end function config_at
 
    !> How many of the screened effects to refit: the leading n_refit and those the screening
    !> cannot tell from them (significant, and a predicted BIC within 10 % of the last one or
