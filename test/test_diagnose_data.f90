@@ -28,7 +28,7 @@ module test_diagnose_data
    use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context, &
                               named_effect, joint_decides
    use usharp_diagnose_verdict, only: conclude, verdict_of
-   use usharp_diagnose_numerics, only: bic_power, power_lambda
+   use usharp_diagnose_numerics, only: bic_power, power_lambda, lm_itermax
    use test_util, only: write_text
    implicit none
    private
@@ -69,6 +69,7 @@ contains
          new_unittest('held-out-prediction-of-loose-constants-confirms-nothing', test_loose_constants), &
          new_unittest('fast-second-back-stress-found-at-its-rate', test_fast_backstress), &
          new_unittest('baseline-left-behind-is-fitted-again', test_baseline_left_behind), &
+         new_unittest('baseline-searched-past-its-iteration-limit', test_baseline_continued), &
          new_unittest('lag-screened-at-a-realistic-step', test_lag_screening), &
          new_unittest('serrated-flow-named-in-the-verdict', test_serrated_verdict), &
          new_unittest('held-out-floor-holds-the-constants-uncertainty', test_prediction_spread)]
@@ -1018,6 +1019,31 @@ contains
       end do
       call check_gamma3(res, 4898.0_dp, error)
    end subroutine test_baseline_left_behind
+
+   !> The baseline's search goes on past its iteration limit while it still descends (see
+   !> converge_baseline): on the data of data/independent-lcf-backstress2-basin one search
+   !> from the deck's constants stops at lm_itermax iterations at an objective of 2.453 on
+   !> the fit tests, and continued it converges at 2.4248
+   subroutine test_baseline_continued(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(uerror), allocatable :: e
+      call read_config('data/independent-lcf-backstress2-basin/diagnose.nml', cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_baseline(cfg, opts, ctx, res, e)
+      if (allocated(e)) then
+         call test_failed(error, 'baseline failed: '//e%message)
+         return
+      end if
+      write (*, '(4x,a,i0,a,es12.5)') 'baseline: ', res%baseline_iterations, ' iterations, objective ', res%f0
+      call check(error, res%baseline_iterations > lm_itermax .and. res%baseline_converged, &
+                 'the baseline stopped at its iteration limit: '//str(res%baseline_iterations)//' iterations')
+      if (allocated(error)) return
+      call check(error, res%f0 < 2.44_dp, 'the baseline did not descend past the limit: '//real_str(res%f0, 'es12.5'))
+   end subroutine test_baseline_continued
 
    !> Extensometer drifts of 8.3e-8, 1.7e-8 and -1.7e-8 1/s (independent data,
    !> data/independent-drift; the relaxation test held out): the walks of the leading drift's
