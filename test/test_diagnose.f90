@@ -1088,33 +1088,46 @@ contains
    end subroutine test_loose_prediction
 
    !> A refit whose constants with the effect off fit the fit tests better than the baseline
-   !> (deviance -30 and a lower objective) leaves it behind; not at a deviance of -5 (within
-   !> the BIC margin), nor with a higher objective (per-test variances can lower the deviance
-   !> while the sum of squares the baseline minimises rises), nor when it was not refitted;
-   !> of two, the lower deviance
+   !> (a lower objective and a deviance lower by more than the BIC margin) leaves it behind;
+   !> not within the margin, nor with a higher objective (per-test variances can lower the
+   !> deviance while the sum of squares the baseline minimises rises), nor when it was not
+   !> refitted, nor where the global stage found a baseline as low as those constants (every
+   !> effect was judged against that one); of two, the lower deviance. Two fit tests of 100
+   !> and 1000 points, a held-out one whose sums count for nothing
    subroutine test_left_behind(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
+      res%npts = [100, 1000, 500]
+      res%held = [.false., .false., .true.]
+      res%per_test0 = [1.0_dp, 1.0_dp, 5.0_dp]
       res%f0 = 2.0_dp
       allocate (res%effects(3))
       res%effects%refitted = .true.
-      res%effects%dev_constants = [-5.0_dp, -30.0_dp, 0.0_dp]
-      res%effects%f_constants = [1.99_dp, 1.9_dp, 2.0_dp]
+      ! deviances 1100 ln(0.997) = -3.3, 1000 ln(0.98) = -20.2; a held-out test far worse
+      res%effects(1)%per_constants = [0.997_dp, 0.997_dp, 9.0_dp]
+      res%effects(2)%per_constants = [1.0_dp, 0.98_dp, 9.0_dp]
+      res%effects(3)%per_constants = [1.0_dp, 1.0_dp, 1.0_dp]
       call check(error, baseline_left_behind(res) == 2, 'a refit''s better constants not seen')
       if (allocated(error)) return
-      res%effects(3)%dev_constants = -40.0_dp
-      res%effects(3)%f_constants = 1.5_dp
+      res%effects(3)%per_constants = [0.9_dp, 0.95_dp, 1.0_dp]
       call check(error, baseline_left_behind(res) == 3, 'not the lowest deviance')
       if (allocated(error)) return
       res%effects(3)%refitted = .false.
       call check(error, baseline_left_behind(res) == 2, 'an effect not refitted counted')
       if (allocated(error)) return
-      res%effects(2)%f_constants = 2.01_dp
+      ! deviance 100 ln(1.5) + 1000 ln(0.95) = -10.8, but a sum of 2.45 against 2.0
+      res%effects(2)%per_constants = [1.5_dp, 0.95_dp, 1.0_dp]
       call check(error, baseline_left_behind(res) == 0, 'a higher objective counted as better')
       if (allocated(error)) return
-      res%effects(2)%f_constants = 1.9_dp
-      res%effects(2)%dev_constants = -5.0_dp
+      res%effects(2)%per_constants = [1.0_dp, 0.995_dp, 1.0_dp]
       call check(error, baseline_left_behind(res) == 0, 'a deviance within the BIC margin counted')
+      if (allocated(error)) return
+      res%effects(2)%per_constants = [1.0_dp, 0.98_dp, 1.0_dp]
+      res%global = .true.
+      res%f0_global = 1.97_dp
+      res%per_test_global = [0.99_dp, 0.98_dp, 5.0_dp]
+      call check(error, baseline_left_behind(res) == 0, 'left behind by constants no lower than '// &
+                 'the global stage''s baseline')
    end subroutine test_left_behind
 
    !> A diagnosis whose fit tests (npts points, baseline sums of squares f0) and held-out

@@ -81,10 +81,35 @@ contains
       type(diagnose_journal), intent(inout), target, optional :: journal
       type(diagnose_context) :: ctx
       type(run_memo), target :: memo
+      call diagnose_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
+      if (allocated(error)) return
+      if (joint_wanted(res, opts%joint)) then
+         call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
+         if (allocated(error)) return
+      end if
+      call tell(ctx, 'done', res%nevals)
+   end subroutine diagnose_run
+
+   !> One stage of a diagnosis, of the fit tests or of every test fitted together: the
+   !> baseline, the steps after it, and the baseline fitted again from a refit's constants
+   !> while they leave it behind (see rebaseline). clock0: the clock the steps are timed
+   !> from (absent: the stage's own start)
+   subroutine diagnose_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo, clock0)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(diagnose_context), intent(out) :: ctx
+      type(diagnose_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(experiment_type), intent(in), optional :: experiments(:)
+      procedure(diagnose_progress), optional :: progress
+      type(diagnose_journal), intent(inout), target, optional :: journal
+      type(run_memo), intent(inout), target :: memo
+      integer(int64), intent(in), optional :: clock0
       integer :: round
       logical :: lower
       call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
       if (allocated(error)) return
+      if (present(clock0)) ctx%clock0 = clock0
       call diagnose_effects(ctx, res, error)
       if (allocated(error)) return
       do round = 1, rebaseline_rounds
@@ -93,12 +118,7 @@ contains
          if (allocated(error)) return
          if (.not. lower) exit
       end do
-      if (joint_wanted(res, opts%joint)) then
-         call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
-         if (allocated(error)) return
-      end if
-      call tell(ctx, 'done', res%nevals)
-   end subroutine diagnose_run
+   end subroutine diagnose_stage
 
    !> The steps after the baseline: screening, refits, the verdict, the leading effect's
    !> profile intervals and the test that would separate effects alike
@@ -309,10 +329,7 @@ contains
       jcfg%diagnose%holdout = .false.
       jopts = opts
       jopts%joint = .true.
-      call diagnose_baseline(jcfg, jopts, jctx, jres, error, experiments, progress, journal, memo)
-      if (allocated(error)) return
-      jctx%clock0 = ctx%clock0
-      call diagnose_effects(jctx, jres, error)
+      call diagnose_stage(jcfg, jopts, jctx, jres, error, experiments, progress, journal, memo, ctx%clock0)
       if (allocated(error)) return
       res%nevals = res%nevals + jres%nevals
       res%steps = [res%steps, jres%steps]

@@ -17,7 +17,7 @@ module usharp_diagnose_numerics
    use usharp_lapack, only: svd, mat_mul
    use usharp_sampling, only: latin_hypercube
    use usharp_rng, only: rng_type
-   use usharp_diagnose_types, only: diagnose_context
+   use usharp_diagnose_types, only: diagnose_context, deviance_change
    use usharp_diagnose_options, only: bic_margin
    use usharp_distributions, only: ncx2_sf
    use usharp_mpi, only: n_ranks, this_rank, share, sum_over_ranks, task_deal, ranks_that_ran
@@ -314,19 +314,6 @@ contains
          k0 = k0 + n(i)
       end do
    end function block_sums
-
-   !> Change of -2 ln(likelihood) when the tests' residual sums of squares go from before to
-   !> after, each test's residuals of a variance of their own (profiled per test: n_i points,
-   !> sum_i n_i ln(after_i/before_i)). The weighted residuals of Eq. 7 do not share one
-   !> variance (a test's points carry 1/n of its weight), and one pooled variance overrates a
-   !> change concentrated in a test of few points by the ratio of that test's variance to
-   !> the mean (2.3 for the LCF test of a clean thesis case, which pooled gave a false alarm)
-   pure real(dp) function deviance_change(n, before, after) result(d)
-      integer, intent(in) :: n(:)
-      !> Sums of squares per test (weighted residuals of Eq. 7), before and after
-      real(dp), intent(in) :: before(:), after(:)
-      d = sum(n*log_dp(max(after, tiny(1.0_dp))/max(before, tiny(1.0_dp))))
-   end function deviance_change
 
    !> Power of the significance rule (BIC falls by more than bic_margin on nres residuals
    !> with df parameters more) against a signal of expected chi-square lambda: the tail of

@@ -704,7 +704,7 @@ contains
       class(model_type), intent(in) :: mdl
       real(dp), intent(in) :: p(:)
       type(effect_outcome), intent(inout) :: e
-      real(dp), allocatable :: r(:), y(:), per(:)
+      real(dp), allocatable :: r(:), y(:)
       logical :: ok
       call every_test(ctx, mdl, e%k, p, r, y, ok)
       e%per_test_after = per_test(ctx%prob, r)
@@ -718,17 +718,12 @@ contains
       ! (see judge), and how they fit the fit tests against the baseline (see
       ! baseline_left_behind)
       e%shrink_held_constants = -huge(1.0_dp)
-      e%dev_constants = 0.0_dp
-      e%f_constants = huge(1.0_dp)
+      if (allocated(e%per_constants)) deallocate (e%per_constants)
       if (e%k > 0) then
          call every_test(ctx, mdl, 0, [real(dp) ::], r, y, ok)
          if (ok .and. res%gap_held > 0.0_dp) e%shrink_held_constants = 1.0_dp - &
             max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)/res%gap_held
-         if (ok) then
-            per = per_test(ctx%prob, r)
-            e%dev_constants = deviance_change(res%npts(ctx%ifit), res%per_test0(ctx%ifit), per(ctx%ifit))
-            e%f_constants = sum(per(ctx%ifit))
-         end if
+         if (ok) e%per_constants = per_test(ctx%prob, r)
       end if
    end subroutine with_effect
 

@@ -530,6 +530,10 @@ contains
       do i = 1, size(jres%names)
          call add_line(lines, '- '//trim(jres%names(i))//': '//real_str(jres%per_test0(i), 'es10.3'))
       end do
+      if (allocated(jres%rebased_by)) call add_line(lines, 'This baseline was fitted again from the '// &
+         'constants of the '//jres%rebased_by//' refit of this stage: without their effect they fit every '// &
+         'test better than the stage''s first baseline (objective '//real_str(jres%f0_left, 'es10.3')// &
+         '), and every effect here is judged against the optimum of the constants.')
       call add_line(lines, '')
       call add_line(lines, '**Verdict of this stage:** '//jres%verdict)
       call add_line(lines, '')
