@@ -64,6 +64,16 @@ module usharp_diagnose
    !> The steps made against an earlier baseline are named so in the report
    character(len=*), parameter :: earlier_tag = 'against an earlier baseline: '
 
+   !> What every baseline of one diagnosis is fitted with (see diagnose_run): the data given
+   !> directly (unallocated: read from the deck's files), who is told of each step, the
+   !> journal and the runs made so far (null: none)
+   type :: stage_sources
+      type(experiment_type), allocatable :: experiments(:)
+      procedure(diagnose_progress), pointer, nopass :: progress => null()
+      type(diagnose_journal), pointer :: journal => null()
+      type(run_memo), pointer :: memo => null()
+   end type stage_sources
+
 contains
 
    !> Diagnose the fit of cfg's tests from cfg's constants (a start: the baseline is fitted to
@@ -81,10 +91,12 @@ contains
       type(diagnose_journal), intent(inout), target, optional :: journal
       type(diagnose_context) :: ctx
       type(run_memo), target :: memo
-      call diagnose_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
+      type(stage_sources) :: src
+      call sources_of(src, experiments, progress, journal, memo)
+      call diagnose_stage(cfg, opts, src, ctx, res, error)
       if (allocated(error)) return
       if (joint_wanted(res, opts%joint)) then
-         call joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
+         call joint_stage(cfg, opts, src, ctx, res, error)
          if (allocated(error)) return
       end if
       call tell(ctx, 'done', res%nevals)
@@ -94,27 +106,24 @@ contains
    !> baseline, the steps after it, and the baseline fitted again from a refit's constants
    !> while they leave it behind (see rebaseline). clock0: the clock the steps are timed
    !> from (absent: the stage's own start)
-   subroutine diagnose_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo, clock0)
+   subroutine diagnose_stage(cfg, opts, src, ctx, res, error, clock0)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
+      type(stage_sources), intent(in) :: src
       type(diagnose_context), intent(out) :: ctx
       type(diagnose_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
-      type(experiment_type), intent(in), optional :: experiments(:)
-      procedure(diagnose_progress), optional :: progress
-      type(diagnose_journal), intent(inout), target, optional :: journal
-      type(run_memo), intent(inout), target :: memo
       integer(int64), intent(in), optional :: clock0
       integer :: round
       logical :: lower
-      call diagnose_baseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
+      call baseline_stage(cfg, opts, src, ctx, res, error)
       if (allocated(error)) return
       if (present(clock0)) ctx%clock0 = clock0
       call diagnose_effects(ctx, res, error)
       if (allocated(error)) return
       do round = 1, rebaseline_rounds
          if (baseline_left_behind(res) == 0) exit
-         call rebaseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo, lower)
+         call rebaseline(cfg, opts, src, ctx, res, error, lower)
          if (allocated(error)) return
          if (.not. lower) exit
       end do
@@ -249,16 +258,13 @@ contains
    !> constants that the refits found, not against a basin they left. The first round's
    !> simulations and steps count in this one's. lower: the baseline ended lower (else
    !> nothing after it ran and ctx, res are as they were, but for its simulations).
-   subroutine rebaseline(cfg, opts, ctx, res, error, experiments, progress, journal, memo, lower)
+   subroutine rebaseline(cfg, opts, src, ctx, res, error, lower)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
+      type(stage_sources), intent(in) :: src
       type(diagnose_context), intent(inout) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
-      type(experiment_type), intent(in), optional :: experiments(:)
-      procedure(diagnose_progress), optional :: progress
-      type(diagnose_journal), intent(inout), target, optional :: journal
-      type(run_memo), intent(inout), target :: memo
       logical, intent(out) :: lower
       type(run_config) :: rcfg
       type(diagnose_context) :: rctx
@@ -269,7 +275,7 @@ contains
                 ' refit', res%nevals)
       ! A start from a better basin than the multi-start's best: one local search
       rcfg = config_at(cfg, ctx%prob%idx, res%effects(k)%c)
-      call diagnose_baseline(rcfg, opts, rctx, rres, error, experiments, progress, journal, memo)
+      call baseline_stage(rcfg, opts, src, rctx, rres, error)
       if (allocated(error)) return
       ! From constants that fit better it ends lower: if not, nothing is gained by going on
       lower = rres%f0 < res%f0
@@ -308,16 +314,13 @@ contains
    !> test fitted, from the baseline's constants; its verdict becomes this one's, worded for
    !> the weaker evidence (an effect found so was fitted to the tests it explains, not
    !> predicted), and its simulations and steps count in this one's
-   subroutine joint_stage(cfg, opts, ctx, res, error, experiments, progress, journal, memo)
+   subroutine joint_stage(cfg, opts, src, ctx, res, error)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
+      type(stage_sources), intent(in) :: src
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
-      type(experiment_type), intent(in), optional :: experiments(:)
-      procedure(diagnose_progress), optional :: progress
-      type(diagnose_journal), intent(inout), target, optional :: journal
-      type(run_memo), intent(inout), target :: memo
       type(run_config) :: jcfg
       type(diagnose_options) :: jopts
       type(diagnose_context) :: jctx
@@ -329,7 +332,7 @@ contains
       jcfg%diagnose%holdout = .false.
       jopts = opts
       jopts%joint = .true.
-      call diagnose_stage(jcfg, jopts, jctx, jres, error, experiments, progress, journal, memo, ctx%clock0)
+      call diagnose_stage(jcfg, jopts, src, jctx, jres, error, ctx%clock0)
       if (allocated(error)) return
       res%nevals = res%nevals + jres%nevals
       res%steps = [res%steps, jres%steps]
@@ -396,24 +399,52 @@ contains
       type(diagnose_journal), intent(inout), target, optional :: journal
       !> The runs made so far, which it adds to (absent: each run is made)
       type(run_memo), intent(inout), target, optional :: memo
+      type(stage_sources) :: src
+      call sources_of(src, experiments, progress, journal, memo)
+      call baseline_stage(cfg, opts, src, ctx, res, error)
+   end subroutine diagnose_baseline
+
+   !> The sources of a diagnosis from the optional arguments of diagnose_run and
+   !> diagnose_baseline (the pointers valid while those arguments are)
+   subroutine sources_of(src, experiments, progress, journal, memo)
+      type(stage_sources), intent(out) :: src
+      type(experiment_type), intent(in), optional :: experiments(:)
+      procedure(diagnose_progress), optional :: progress
+      type(diagnose_journal), intent(inout), target, optional :: journal
+      type(run_memo), intent(inout), target, optional :: memo
+      if (present(experiments)) src%experiments = experiments
+      if (present(progress)) src%progress => progress
+      if (present(journal)) src%journal => journal
+      if (present(memo)) src%memo => memo
+   end subroutine sources_of
+
+   !> diagnose_baseline with the sources of the whole diagnosis
+   subroutine baseline_stage(cfg, opts, src, ctx, res, error)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(stage_sources), intent(in) :: src
+      type(diagnose_context), intent(out) :: ctx
+      type(diagnose_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
       integer(int64) :: clock0
       call system_clock(clock0)
       call step_done(res, '')
-      call prepare(cfg, opts, ctx, res, error, experiments)
+      ! An unallocated src%experiments is an absent argument: the data are read
+      call prepare(cfg, opts, ctx, res, error, src%experiments)
       if (allocated(error)) return
       call step_done(res, 'setup: data and problem')
       ! after prepare, which makes ctx anew
       ctx%clock0 = clock0
-      if (present(progress)) ctx%progress => progress
-      if (present(journal)) ctx%journal => journal
-      if (present(memo)) ctx%memo => memo
+      ctx%progress => src%progress
+      ctx%journal => src%journal
+      ctx%memo => src%memo
       call tell(ctx, 'baseline fit', res%nevals)
       call fit_baseline(ctx, res, error)
       if (allocated(error)) return
       call baseline_regions(ctx, res, error)
       if (allocated(error)) return
       call step_done(res, 'baseline regions')
-   end subroutine diagnose_baseline
+   end subroutine baseline_stage
 
    !> What keeps a diagnosis of cfg from starting (an input error), checked too before its
    !> folder and journal are made: a test simulated otherwise than by an internal integrator
