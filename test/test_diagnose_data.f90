@@ -624,13 +624,7 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
       if (allocated(error)) return
-      allocate (exps(3))
-      do i = 1, 3
-         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
-         exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
-      end do
-      call setup_problem(cfg, prob, e, exps)
-      call check(error, .not. allocated(e), 'setup failed')
+      call placeholder_problem(cfg, prob, exps, error)
       if (allocated(error)) return
       call new_effect_problem(prob, [1, 2, 3], 9, base, 1.0_dp, ep, free_constants=.false., &
                               p0=[0.0_dp, 0.0_dp, d])
@@ -807,13 +801,7 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
       if (allocated(error)) return
-      allocate (clean(2))
-      do i = 1, 2
-         clean(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
-         clean(i)%y = spread(1.0_dp, 1, size(clean(i)%t))
-      end do
-      call setup_problem(cfg, prob, e, clean)
-      call check(error, .not. allocated(e), 'setup failed')
+      call placeholder_problem(cfg, prob, clean, error)
       if (allocated(error)) return
       call new_effect_problem(prob, [1, 2], 1, base, 1.0_dp, ep, free_constants=.false., p0=[0.0_dp])
       allocate (r(ep%nres()), y(ep%nres()))
@@ -1146,6 +1134,24 @@ contains
       call check(error, named_effect(res) == effect_index('lag') .or. &
                  index(res%verdict, 'lag explains it equally well') > 0, res%verdict)
    end subroutine test_lag_screening
+
+   !> The fit problem of cfg's tests on placeholder data (ones at each test's output times),
+   !> whose simulations then make the data
+   subroutine placeholder_problem(cfg, prob, exps, error)
+      type(run_config), intent(in) :: cfg
+      type(fit_problem), intent(out) :: prob
+      type(experiment_type), allocatable, intent(out) :: exps(:)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      integer :: i
+      allocate (exps(size(cfg%tests)))
+      do i = 1, size(cfg%tests)
+         exps(i)%t = output_times(cfg%tests(i)%hist, cfg%tests(i)%dt_out)
+         exps(i)%y = spread(1.0_dp, 1, size(exps(i)%t))
+      end do
+      call setup_problem(cfg, prob, e, exps)
+      call check(error, .not. allocated(e), 'setup failed')
+   end subroutine placeholder_problem
 
    !> The diagnosis of the deck at path, with its own options, into res
    !> The second back stress named, its rate fitted (not held) and its 95 % interval holding
