@@ -96,6 +96,7 @@ contains
          new_unittest('runs-made-before-are-not-made-again', test_memo), &
          new_unittest('resume-refuses-a-unit-made-for-another-request', test_unit_request), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
+         new_unittest('verdict-of-no-effect-names-weak-evidence', test_weak_evidence), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('sub-sample-delay-confirmed-when-measured', test_measured_delay), &
@@ -889,14 +890,7 @@ contains
    subroutine test_parsimony(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
-      res%names = [character(len=64) :: 'a', 'b', 'c']
-      res%held = [.false., .false., .true.]
-      res%gap_fit = 10.0_dp
-      res%floor_fit = 1.0_dp
-      res%gap_held = 5.0_dp
-      res%floor_held = 1.0_dp
-      allocate (res%regions(0))
-      allocate (res%effects(2))
+      call verdict_case(10.0_dp, 5.0_dp, 2, res)
       res%effects(1) = outcome(4, 'scatter', 4, -114.0_dp, 0.999_dp, 0.01_dp)
       res%effects(2) = outcome(1, 'compliance', 1, -100.0_dp, 0.999_dp, 0.01_dp)
       call conclude(res)
@@ -953,6 +947,58 @@ contains
          e%worse = [.false., .false., .false.]
       end function outcome
    end subroutine test_parsimony
+
+   !> A result to draw a verdict on: tests a and b fitted, c held out, their structured gaps
+   !> gap_fit and gap_held against floors of 1, no regions, n effects to be set
+   subroutine verdict_case(gap_fit, gap_held, n, res)
+      real(dp), intent(in) :: gap_fit, gap_held
+      integer, intent(in) :: n
+      type(diagnose_result), intent(out) :: res
+      res%names = [character(len=64) :: 'a', 'b', 'c']
+      res%held = [.false., .false., .true.]
+      res%gap_fit = gap_fit
+      res%floor_fit = 1.0_dp
+      res%gap_held = gap_held
+      res%floor_held = 1.0_dp
+      allocate (res%regions(0))
+      allocate (res%effects(n))
+   end subroutine verdict_case
+
+   !> Nothing significant, yet a refit that lowers BIC by 6 to 10 (strong evidence, short of
+   !> bic_margin): the verdict of no effect names it as a hint (the lowest such; not one that
+   !> lowers BIC by less than 6, nor one that raises it), and says nothing when none does
+   subroutine test_weak_evidence(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      call verdict_case(0.5_dp, 0.5_dp, 3, res)
+      res%effects(1) = weak(1, 'compliance', 3.0_dp, -1.0_dp)
+      res%effects(2) = weak(9, 'drift', -8.3_dp, -26.2_dp)
+      res%effects(3) = weak(2, 'lag', -2.0_dp, -7.9_dp)
+      call conclude(res)
+      call check(error, res%leading == 0 .and. index(res%verdict, 'no significant effect') == 1, res%verdict)
+      if (allocated(error)) return
+      call check(error, index(res%verdict, '; drift lowers BIC by 8.3 (AIC by 26.2), short of the 10 a '// &
+                 'finding needs: a hint, not a finding') > 0 .and. index(res%verdict, 'lag lowers') == 0 .and. &
+                 index(res%verdict, 'compliance lowers') == 0, res%verdict)
+      if (allocated(error)) return
+      res%effects(2)%dbic = -5.5_dp
+      call conclude(res)
+      call check(error, index(res%verdict, 'a hint') == 0, 'no refit lowers BIC by 6: '//res%verdict)
+   contains
+      function weak(k, name, dbic, daic) result(e)
+         integer, intent(in) :: k
+         character(len=*), intent(in) :: name
+         real(dp), intent(in) :: dbic, daic
+         type(effect_outcome) :: e
+         e%k = k
+         e%name = name
+         e%q = 1
+         e%dbic = dbic
+         e%daic = daic
+         e%refitted = .true.
+         e%worse = [.false., .false., .false.]
+      end function weak
+   end subroutine test_weak_evidence
 
    !> Both sets' gaps below their floors: an effect that lowers BIC by 30, plausible and
    !> keeping the held-out tests at their noise level is confirmed; the same effect opening a
