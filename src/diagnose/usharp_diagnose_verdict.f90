@@ -410,20 +410,12 @@ contains
    function suggested_note(res) result(text)
       type(diagnose_result), intent(in) :: res
       character(len=:), allocatable :: text
-      integer :: j, k
+      logical, allocatable :: weak(:)
+      integer :: k
       text = ''
-      k = 0
-      do j = 1, size(res%effects)
-         associate (e => res%effects(j))
-            if (.not. e%refitted .or. e%significant .or. .not. e%dbic <= -hint_margin) cycle
-            if (k == 0) then
-               k = j
-            else if (e%dbic < res%effects(k)%dbic) then
-               k = j
-            end if
-         end associate
-      end do
-      if (k == 0) return
+      weak = res%effects%refitted .and. .not. res%effects%significant .and. res%effects%dbic <= -hint_margin
+      if (.not. any(weak)) return
+      k = minloc(res%effects%dbic, 1, mask=weak)
       associate (e => res%effects(k))
          text = '; '//trim(e%name)//' lowers BIC by '//real_str(-e%dbic, 'f0.1')//' (AIC by '// &
                 real_str(-e%daic, 'f0.1')//'), short of the '//str(nint(bic_margin))// &
