@@ -4,7 +4,8 @@ module test_fit
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type, stat_failure
    use usharp_experiment, only: interpolate
-   use usharp_weighting, only: threshold_weights, relaxation_weights
+   use usharp_weighting, only: threshold_weights, relaxation_weights, rate_signal
+   use usharp_rng, only: rng_type
    use usharp_objective, only: test_objective, fit_problem, setup_problem, eval_ok, eval_failed, &
                                eval_invalid, penalty_failed
    use usharp_simulation, only: sim_result
@@ -45,6 +46,7 @@ contains
          new_unittest('interpolation-hand-values', test_interp), &
          new_unittest('threshold-weights-hand-values', test_threshold), &
          new_unittest('relaxation-weights-hand-values', test_relax_weights), &
+         new_unittest('relaxation-weights-blind-to-noise', test_relax_noise), &
          new_unittest('eq7-invariant-to-resampling-eq13-not', test_resampling), &
          new_unittest('hooke-jeeves-rosenbrock', test_hj_rosenbrock), &
          new_unittest('hooke-jeeves-quadratic', test_hj_quadratic), &
@@ -113,6 +115,49 @@ contains
       call check(error, maxval(abs(w - [0.0_dp, 2.5_dp, 17.0_dp/11.0_dp, 31.0_dp/25.0_dp, &
                  0.0_dp])) < 1e-14_dp, 'relaxation weights by hand')
    end subroutine test_relax_weights
+
+   !> A relaxation hold (10 + 5 exp(-t/20) MPa, 600 s at 1 s) with Gaussian noise of sd
+   !> 0.05 MPa, 64 draws: weighted by its own differences, the weighted noise sum(w e**2)
+   !> (Eq. 7's sum) stands 18 % above sigma**2 sum(w), since a sample its noise moves gets a
+   !> larger weight; weighted by the rates of rate_signal it is sigma**2 sum(w) within the
+   !> draws' scatter (0.7 %, below 1 % one standard error). Noise-free data are their own rate
+   !> signal, bit for bit.
+   subroutine test_relax_noise(error)
+      type(error_type), allocatable, intent(out) :: error
+      integer, parameter :: n = 601, ndraw = 64
+      real(dp), parameter :: sigma = 0.05_dp
+      real(dp) :: t(n), y(n), e(n), w(n), sum_raw, sum_new, ref_raw, ref_new
+      logical :: hold(n)
+      type(rng_type) :: rng
+      character(len=80) :: buf
+      integer :: i, k
+      t = [(real(i, dp), i=0, n - 1)]
+      y = 10.0_dp + 5.0_dp*exp(-t/20.0_dp)
+      hold = .true.
+      call check(error, all(rate_signal(t, y, [0.0_dp, 600.0_dp]) == y), 'noise-free data kept as they are')
+      if (allocated(error)) return
+      call rng%seed(11)
+      sum_raw = 0.0_dp
+      sum_new = 0.0_dp
+      ref_raw = 0.0_dp
+      ref_new = 0.0_dp
+      do k = 1, ndraw
+         do i = 1, n
+            e(i) = sigma*rng%normal()
+         end do
+         w = relaxation_weights(t, y + e, hold)
+         sum_raw = sum_raw + sum(w*e**2)
+         ref_raw = ref_raw + sigma**2*sum(w)
+         w = relaxation_weights(t, rate_signal(t, y + e, [0.0_dp, 600.0_dp]), hold)
+         sum_new = sum_new + sum(w*e**2)
+         ref_new = ref_new + sigma**2*sum(w)
+      end do
+      write (buf, '(a,f6.3,a,f6.3)') 'weighted noise over its expectation: raw ', &
+         sum_raw/ref_raw, ', rate signal ', sum_new/ref_new
+      call check(error, sum_raw/ref_raw > 1.1_dp, 'the raw differences favour noisy samples: '//trim(buf))
+      if (allocated(error)) return
+      call check(error, abs(sum_new/ref_new - 1.0_dp) < 0.03_dp, trim(buf))
+   end subroutine test_relax_noise
 
    subroutine test_resampling(error)
       type(error_type), allocatable, intent(out) :: error

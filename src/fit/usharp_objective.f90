@@ -14,7 +14,7 @@ module usharp_objective
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_config, only: run_config, test_config
    use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain, check_scale
-   use usharp_weighting, only: threshold_weights, relaxation_weights
+   use usharp_weighting, only: threshold_weights, relaxation_weights, rate_signal
    use usharp_external, only: run_external
    use usharp_filesys, only: join_path
    use usharp_strings, only: str
@@ -157,7 +157,8 @@ contains
       case ('threshold')
          wd = threshold_weights(yd, test%sig)
       case ('relaxation')
-         wd = relaxation_weights(td, yd, hold_points(test%hist%t, test%hist%v, td))
+         wd = relaxation_weights(td, rate_signal(td, yd, test%hist%t(test%hist%corners())), &
+                                 hold_points(test%hist%t, test%hist%v, td))
       case ('column')
          if (nd > 0) call interpolate(tg%exp%t, tg%exp%weight, td, wd, error)
          if (allocated(error)) return

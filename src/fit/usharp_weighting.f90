@@ -1,13 +1,18 @@
 !> Weighting functions of the objective (thesis Section 4 and Appendix B)
 module usharp_weighting
    use usharp_kinds, only: dp
+   use usharp_forcing, only: noise_sd, smooth_branch
    implicit none
    private
 
-   public :: threshold_weights, relaxation_weights
+   public :: threshold_weights, relaxation_weights, rate_signal
 
    !> Largest weight of both weighting functions
    real(dp), parameter, public :: w_max = 2.5_dp
+
+   !> Data whose noise (robust, from second differences) is below this share of their peak
+   !> are their own rate signal (rate_signal): a simulation's values written to a file
+   real(dp), parameter :: noise_free = 1.0e-4_dp
 
 contains
 
@@ -65,4 +70,43 @@ contains
          end if
       end do
    end function relaxation_weights
+
+   !> The stress whose rates the relaxation weighting takes (relaxation_weights): the data
+   !> themselves where they are free of noise to noise_free of their peak; else each piece
+   !> of the control history (a ramp, a hold; corners tc) smoothed to the data's noise
+   !> (smooth_branch). Differenced as they are, noisy data give rates of the noise: a sample
+   !> that its noise moved got a larger weight, so the weighted objective of a fit to data
+   !> without any unmodelled effect stood 19 % above its noise part on average (1.04 to
+   !> 1.45 over 44 tests with 0.5 % noise), which a diagnosis read as a structured gap
+   pure function rate_signal(t, y, tc) result(z)
+      real(dp), intent(in) :: t(:)   !< times of the data, s, increasing
+      real(dp), intent(in) :: y(:)   !< the measured stress at t
+      real(dp), intent(in) :: tc(:)  !< the corners of the control history, s, increasing
+      real(dp) :: z(size(y))
+      real(dp) :: sigma
+      integer :: piece(size(t)), i, i0, k, n
+      z = y
+      n = size(y)
+      if (n < 5) return
+      sigma = noise_sd(y)
+      if (.not. sigma > noise_free*maxval(abs(y))) return
+      ! Each sample's piece: the first corner at or after it (a sample at a corner ends the
+      ! piece before it)
+      k = 1
+      do i = 1, n
+         do while (k < size(tc))
+            if (tc(k) >= t(i)) exit
+            k = k + 1
+         end do
+         piece(i) = k
+      end do
+      i0 = 1
+      do i = 1, n
+         if (i < n) then
+            if (piece(i + 1) == piece(i)) cycle
+         end if
+         z(i0:i) = smooth_branch(t(i0:i), y(i0:i), sigma)
+         i0 = i + 1
+      end do
+   end function rate_signal
 end module usharp_weighting
