@@ -30,7 +30,6 @@ module usharp_diagnose
    use usharp_objective, only: setup_problem
    use usharp_experiment, only: experiment_type, fits_strain
    use usharp_effects, only: effect_catalogue, param_per_test
-   use usharp_regions, only: noise_sd
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin, rival_share
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
@@ -489,7 +488,8 @@ contains
       do i = 1, nt
          res%names(i) = cfg%tests(i)%name
          res%unit(i) = merge('strain (-)     ', 'stress ('//cfg%units//')   ', fits_strain(cfg%tests(i)))
-         res%noise(i) = noise_sd(ctx%prob%targets(i)%exp%y)
+         ! (from the baseline's residual, see baseline_regions)
+         res%noise(i) = 0.0_dp
          res%peak(i) = ctx%prob%targets(i)%y_ex_max
          strain_fit(i) = fits_strain(cfg%tests(i))
       end do

@@ -18,7 +18,7 @@ module usharp_diagnose_baseline
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, lm_ftol, lm_itermax, &
                                        jacobian, test_sizes, block_sums, tight_jacobian, sandwich_covariance, &
-                                      noise_variance
+                                      noise_variance, residual_noise
    implicit none
    private
 
@@ -141,7 +141,9 @@ contains
       end if
       call points_of(ctx%prob, res, eps, eps_in)
       res%y_base = yb
-      ctx%nv = noise_variance(ctx%prob, [(i, i=1, size(ctx%prob%targets))], res%noise)
+      ctx%noise = residual_noise(ctx%prob, [(i, i=1, nt)], yb)
+      res%noise = ctx%noise
+      ctx%nv = noise_variance(ctx%prob, [(i, i=1, nt)], res%noise)
       associate (nv => ctx%nv)
          res%per_test0 = per_test(ctx%prob, r0)
          res%regions = all_regions(ctx%prob, res, r0, yb, nv)

@@ -20,6 +20,7 @@ module usharp_diagnose_numerics
    use usharp_diagnose_types, only: diagnose_context, deviance_change
    use usharp_diagnose_options, only: bic_margin
    use usharp_distributions, only: ncx2_sf
+   use usharp_forcing, only: noise_sd
    use usharp_mpi, only: n_ranks, this_rank, share, sum_over_ranks, task_deal, ranks_that_ran
    use omp_lib, only: omp_get_max_threads
    implicit none
@@ -32,7 +33,7 @@ module usharp_diagnose_numerics
              backstress2_starts, rate_effect_start
    public :: limit_measures
    public :: low_end_deltas, screening_steps, bic_power, power_lambda, test_sizes, block_sums, deviance_change
-   public :: tight_jacobian, sandwich_covariance, noise_variance, held_rate, ratio_beyond_doubt, &
+   public :: tight_jacobian, sandwich_covariance, noise_variance, residual_noise, held_rate, ratio_beyond_doubt, &
              beyond_limit
 
    !> 1/strain, rate of the saturating softening where its screening holds it (it has no
@@ -761,6 +762,32 @@ contains
       end do
       cov = mat_mul(ai, mat_mul(mat_mul(transpose(jn), jn), ai))
    end function sandwich_covariance
+
+   !> The noise standard deviation of each test tests(k) of prob (response unit) from the
+   !> second differences (noise_sd) of its residual against ysim, the simulated response at
+   !> its compared points (the tests' points in that order); the points without data (the
+   !> peaks of a peaks target) left out. The model takes out the response's own curvature,
+   !> which second differences of the data alone read as noise where the sampling is coarse
+   !> (thesis LCF at 0.5 s with 0.5 % noise: 12 % more than the noise, the residual's 0.0 %)
+   function residual_noise(prob, tests, ysim) result(sd)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: tests(:)
+      real(dp), intent(in) :: ysim(:)    !< response unit
+      real(dp) :: sd(size(tests))
+      integer :: k, n, k0
+      k0 = 0
+      do k = 1, size(tests)
+         associate (tg => prob%targets(tests(k)), test => prob%cfg%tests(tests(k)))
+            n = size(tg%t)
+            if (test%has_peaks()) then
+               sd(k) = noise_sd(pack(tg%y_ex - ysim(k0 + 1:k0 + n), test%point_kind == 0))
+            else
+               sd(k) = noise_sd(tg%y_ex - ysim(k0 + 1:k0 + n))
+            end if
+            k0 = k0 + n
+         end associate
+      end do
+   end function residual_noise
 
    !> The noise variance of each residual of the tests tests of prob (objective units, test
    !> after test in that order) for noises of standard deviation sd(k) in test tests(k)'s

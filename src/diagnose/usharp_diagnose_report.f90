@@ -117,8 +117,9 @@ contains
             bound_list(res%cnames, res%c, res%c_bound)//' at a search bound of &fit; '// &
             'its figures describe a fit that did not converge inside the bounds.')
       end if
-      call add_line(lines, 'Noise: estimated from each test''s data (second differences, robust); the objective it')
-      call add_line(lines, 'explains is set against the residual. Structured gap = objective - noise part.')
+      call add_line(lines, 'Noise: estimated from each test''s residual at the baseline (second differences, robust: the')
+      call add_line(lines, 'model takes out the response''s own curvature); the objective it explains is set against the')
+      call add_line(lines, 'residual. Structured gap = objective - noise part.')
       call add_line(lines, '')
       call add_line(lines, '| test | role | response | noise sd | % of peak | objective | noise part | structured gap |')
       call add_line(lines, '|---|---|---|---|---|---|---|---|')

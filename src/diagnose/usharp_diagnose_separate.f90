@@ -17,7 +17,6 @@ module usharp_diagnose_separate
    use usharp_simulation, only: sim_result, solver_options
    use usharp_effects, only: test_effects, effects_of, param_per_test, effect_nparams
    use usharp_effect_problem, only: simulate_effect
-   use usharp_regions, only: noise_sd
    use usharp_diagnose_numerics, only: bic_power
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, &
                                     separation_type, n_candidates
@@ -178,14 +177,14 @@ contains
       if (emax <= 0.0_dp) emax = 0.005_dp
    end function fit_amplitude
 
-   !> The fit tests' noise relative to their peak, their mean
+   !> The fit tests' noise (from the baseline's residual) relative to their peak, their mean
    real(dp) function fit_rel_noise(ctx) result(rel)
       type(diagnose_context), intent(in) :: ctx
       integer :: i
       rel = 0.0_dp
       do i = 1, size(ctx%ifit)
          associate (tg => ctx%prob%targets(ctx%ifit(i)))
-            rel = rel + noise_sd(tg%exp%y)/tg%y_ex_max
+            rel = rel + ctx%noise(ctx%ifit(i))/tg%y_ex_max
          end associate
       end do
       rel = rel/max(size(ctx%ifit), 1)

@@ -23,12 +23,12 @@ module usharp_diagnose_specimen
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
    use usharp_identify, only: robust_covariance
-   use usharp_regions, only: noise_sd, gap_se
+   use usharp_regions, only: gap_se
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
                                        backstress2_starts, rate_effect_start, low_end_deltas, bic_power, power_lambda, &
-                                       tight_jacobian, sandwich_covariance, noise_variance, at_bound, &
+                                       tight_jacobian, sandwich_covariance, noise_variance, residual_noise, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end
    use usharp_diagnose_verdict, only: power_cells, missed_note
@@ -150,6 +150,7 @@ contains
       type(test_effects) :: base
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:), jc(:, :), cov(:, :)
+      real(dp), allocatable :: yfit(:), ysim(:)
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
       integer :: i, nt, j, lead
@@ -190,7 +191,13 @@ contains
          call tight_jacobian(ep, opt%x, cfg%fit%fd_step, rr, jr, ok)
          sr%nevals = sr%nevals + size(jr, 2) + 1
          if (ok) then
-            nvr = noise_variance(prob, reps, [(noise_sd(prob%targets(reps(i))%exp%y), i=1, size(reps))])
+            ! (their noise from their residuals at these constants, as the specimen's below)
+            allocate (yfit(ep%nres()))
+            call ep%residual_at(opt%x, rr, ok, yfit)
+            sr%nevals = sr%nevals + 1
+         end if
+         if (ok) then
+            nvr = noise_variance(prob, reps, residual_noise(prob, reps, yfit))
             cov = sandwich_covariance(jr, nvr)
          end if
       else
@@ -202,15 +209,15 @@ contains
       ! The specimen predicted, and its noise part
       call new_effect_problem(prob, [ispec], 0, base, peak, ep, free_constants=.false.)
       sr%m = ep%nres()
-      allocate (r0(sr%m))
-      call ep%residual_at(ep%start(), r0, ok)
+      allocate (r0(sr%m), ysim(sr%m))
+      call ep%residual_at(ep%start(), r0, ok, ysim)
       if (.not. ok) then
          call fatal_error(error, "the replicates' constants fail to simulate specimen '"// &
             trim(sr%name)//"'")
          return
       end if
       sr%f0 = sum(r0**2)
-      sr%noise_sd = noise_sd(prob%targets(ispec)%exp%y)
+      sr%noise_sd = sum(residual_noise(prob, [ispec], ysim))
       sr%nv = noise_variance(prob, [ispec], [sr%noise_sd])
       ! (data without noise leave no covariance to weigh by)
       if (allocated(cov) .and. any(sr%nv > 0.0_dp)) then

@@ -90,6 +90,7 @@ module usharp_diagnose_types
       real(dp) :: peak = 0.0_dp              !< largest |response| of any test
       real(dp) :: h = 0.0_dp                 !< forward-difference step of the fit (log10 units)
       real(dp), allocatable :: nv(:)         !< noise variance of each weighted residual, all tests
+      real(dp), allocatable :: noise(:)      !< each test's noise sd (response unit, residual_noise)
       type(effect_info), allocatable :: cat(:)  !< the catalogue scaled to peak
       !> Told of each step (null: nobody listens)
       procedure(diagnose_progress), pointer, nopass :: progress => null()
