@@ -738,28 +738,21 @@ contains
    !> minimum); from one draw to the next it stays within a factor 3
    subroutine test_prediction_spread(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
       type(run_config) :: cfg
       type(diagnose_options) :: opts
-      type(diagnose_context) :: ctx
-      type(diagnose_result) :: res
-      type(experiment_type), allocatable :: clean(:), exps(:)
-      type(rng_type) :: rng
-      integer, parameter :: ndraw = 40
-      real(dp) :: excess(ndraw), pred(ndraw), se
-      integer :: k
+      type(diagnose_result) :: res(40)
+      type(experiment_type), allocatable :: clean(:)
+      real(dp) :: excess(size(res)), pred(size(res)), se, sd(2, size(res))
+      integer :: k, ndraw
       call model_data('diag-spread.nml', "fitted = 'B', 'n'", 0.1_dp, 0.012_dp, 1.0e-4_dp, 1, cfg, opts, clean, &
                       error)
       if (allocated(error)) return
-      call rng%seed(41)
+      call baseline_draws(cfg, opts, clean, [.true., .false.], 0.01_dp, 41, res, sd, error)
+      if (allocated(error)) return
+      ndraw = size(res)
       do k = 1, ndraw
-         exps = clean
-         exps(1:1) = with_noise(clean(1:1), 0.01_dp, rng)
-         call diagnose_baseline(cfg, opts, ctx, res, e, exps)
-         call check(error, .not. allocated(e), 'baseline failed')
-         if (allocated(error)) return
-         pred(k) = res%pred_held
-         excess(k) = res%per_test0(2)
+         pred(k) = res(k)%pred_held
+         excess(k) = res(k)%per_test0(2)
       end do
       se = sqrt(sum((excess - sum(excess)/ndraw)**2)/(ndraw - 1)/ndraw)
       write (*, '(4x,a)') 'held-out objective (prediction error) '//real_str(sum(excess)/ndraw, 'es10.3')//' +- '// &
@@ -777,31 +770,23 @@ contains
    !> the baseline, the diagnosis's estimate, come within 2 %
    subroutine test_residual_noise(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
       type(run_config) :: cfg
       type(diagnose_options) :: opts
-      type(diagnose_context) :: ctx
-      type(diagnose_result) :: res
-      type(experiment_type), allocatable :: clean(:), exps(:)
-      type(rng_type) :: rng
-      integer, parameter :: ndraw = 48
-      real(dp) :: from_data(2), from_residual(2), truth(2)
+      type(diagnose_result) :: res(48)
+      type(experiment_type), allocatable :: clean(:)
+      real(dp) :: from_data(2), from_residual(2), truth(2), sd(2, size(res))
       character(len=120) :: buf
       integer :: k, i
       call model_data('diag-noise.nml', "fitted = 'B', 'n'", 0.5_dp, 0.02_dp, 1.0e-3_dp, 3, cfg, opts, clean, &
                       error)
       if (allocated(error)) return
+      call baseline_draws(cfg, opts, clean, [.true., .true.], 0.005_dp, 43, res, sd, error)
+      if (allocated(error)) return
       truth = [(0.005_dp*maxval(abs(clean(i)%y)), i=1, 2)]
-      call rng%seed(43)
-      from_data = 0.0_dp
+      from_data = sum(sd, 2)/size(res)/truth
       from_residual = 0.0_dp
-      do k = 1, ndraw
-         exps = with_noise(clean, 0.005_dp, rng)
-         call diagnose_baseline(cfg, opts, ctx, res, e, exps)
-         call check(error, .not. allocated(e), 'baseline failed')
-         if (allocated(error)) return
-         from_data = from_data + [(noise_sd(exps(i)%y), i=1, 2)]/truth/ndraw
-         from_residual = from_residual + res%noise/truth/ndraw
+      do k = 1, size(res)
+         from_residual = from_residual + res(k)%noise/truth/size(res)
       end do
       write (buf, '(a,2f7.3,a,2f7.3)') 'noise estimate over the truth (fitted, held out): data', &
          from_data, ', residual', from_residual
@@ -810,6 +795,37 @@ contains
       if (allocated(error)) return
       call check(error, all(abs(from_residual - 1.0_dp) < 0.02_dp), trim(buf))
    end subroutine test_residual_noise
+
+   !> The baseline of each of size(res) draws of Gaussian noise (sd rel times the test's peak)
+   !> on the tests of clean marked noisy, the others as they are (rng seeded with seed); sd:
+   !> each test's noise estimated from its data alone (noise_sd), per draw
+   subroutine baseline_draws(cfg, opts, clean, noisy, rel, seed, res, sd, error)
+      type(run_config), intent(in) :: cfg
+      type(diagnose_options), intent(in) :: opts
+      type(experiment_type), intent(in) :: clean(:)
+      logical, intent(in) :: noisy(:)
+      real(dp), intent(in) :: rel
+      integer, intent(in) :: seed
+      type(diagnose_result), intent(out) :: res(:)
+      real(dp), intent(out) :: sd(:, :)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(diagnose_context) :: ctx
+      type(experiment_type), allocatable :: exps(:)
+      type(rng_type) :: rng
+      integer :: k, i
+      call rng%seed(seed)
+      do k = 1, size(res)
+         exps = clean
+         do i = 1, size(clean)
+            if (noisy(i)) exps(i:i) = with_noise(clean(i:i), rel, rng)
+            sd(i, k) = noise_sd(exps(i)%y)
+         end do
+         call diagnose_baseline(cfg, opts, ctx, res(k), e, exps)
+         call check(error, .not. allocated(e), 'baseline failed')
+         if (allocated(error)) return
+      end do
+   end subroutine baseline_draws
 
    !> A deck of two cyclic tests (c1: 1 % range at 1e-3/s, 3 cycles, fitted; c2 held out:
    !> range2 at rate2, cycles2) sampled every dt s, the Table 4 constants, &fit's list of
