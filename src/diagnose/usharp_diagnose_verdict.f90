@@ -303,9 +303,12 @@ contains
       character(len=:), allocatable :: text
       associate (e => res%effects(res%leading), o => res%effects(form_beats_leader(res)))
          text = 'on the fit tests alone '//trim(e%name)//' led, removing '// &
-                real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap, while '// &
-                trim(o%name)//' fitted them better by BIC '//real_str(o%dbic - e%dbic, 'f0.1')// &
-                ' but did not carry to the held-out tests'
+                real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap'
+         if (e%shrink_fit >= most .and. (1.0_dp - e%shrink_held)*res%gap_held > res%floor_held) &
+            text = text//' and '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out '// &
+                   'tests'', short of their floor'
+         text = text//', while '//trim(o%name)//' fitted them better by BIC '// &
+                real_str(o%dbic - e%dbic, 'f0.1')//' but did not carry to the held-out tests'
       end associate
    end function beaten_note
 
