@@ -769,7 +769,7 @@ contains
    !> peaks of a peaks target) left out. The model takes out the response's own curvature,
    !> which second differences of the data alone read as noise where the sampling is coarse
    !> (thesis LCF at 0.5 s with 0.5 % noise: 12 % more than the noise, the residual's 0.0 %)
-   function residual_noise(prob, tests, ysim) result(sd)
+   pure function residual_noise(prob, tests, ysim) result(sd)
       type(fit_problem), intent(in) :: prob
       integer, intent(in) :: tests(:)
       real(dp), intent(in) :: ysim(:)    !< response unit
