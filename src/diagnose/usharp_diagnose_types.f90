@@ -22,7 +22,7 @@ module usharp_diagnose_types
    public :: deviance_change
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
-             partial_carry, joint_reason, fit_effect_not_carried, baseline_left_behind
+             partial_carry, held_rest_open, joint_reason, fit_effect_not_carried, baseline_left_behind
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -653,9 +653,17 @@ contains
       associate (e => res%effects(res%leading))
          if (e%held_fitted) return
          if ((1.0_dp - e%shrink_fit)*gap_fit_ref(res) > res%floor_fit) return
-         partial_carry = e%shrink_held < most .and. (1.0_dp - e%shrink_held)*res%gap_held > res%floor_held
+         partial_carry = e%shrink_held < most .and. held_rest_open(res)
       end associate
    end function partial_carry
+
+   !> The leader's prediction leaves the held-out tests a structured gap above their floor
+   pure logical function held_rest_open(res)
+      type(diagnose_result), intent(in) :: res
+      held_rest_open = .false.
+      if (res%leading == 0) return
+      held_rest_open = (1.0_dp - res%effects(res%leading)%shrink_held)*res%gap_held > res%floor_held
+   end function held_rest_open
 
    !> An effect that explains the fit tests better than the leader by BIC (by more than
    !> bic_margin) and leaves their form open (see form_open), while the leader explains
@@ -674,8 +682,7 @@ contains
       k = 0
       if (res%leading == 0) return
       associate (e => res%effects(res%leading))
-         if (fit_structured(res) .and. e%shrink_fit >= most .and. &
-             (1.0_dp - e%shrink_held)*res%gap_held <= res%floor_held) return
+         if (fit_structured(res) .and. e%shrink_fit >= most .and. .not. held_rest_open(res)) return
          do j = 1, size(res%effects)
             if (.not. form_open(res%effects(j), res)) cycle
             if (res%effects(j)%dbic >= e%dbic - bic_margin) cycle

@@ -13,7 +13,7 @@ module usharp_diagnose_verdict
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
                                     joint_partial, hidden_effect, bound_list, params_bound_note, &
-                                    hardening_note, joint_not_carried
+                                    hardening_note, joint_not_carried, held_rest_open
    implicit none
    private
 
@@ -304,7 +304,7 @@ contains
       associate (e => res%effects(res%leading), o => res%effects(form_beats_leader(res)))
          text = 'on the fit tests alone '//trim(e%name)//' led, removing '// &
                 real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap'
-         if (e%shrink_fit >= most .and. (1.0_dp - e%shrink_held)*res%gap_held > res%floor_held) &
+         if (e%shrink_fit >= most .and. held_rest_open(res)) &
             text = text//' and '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out '// &
                    'tests'', short of their floor'
          text = text//', while '//trim(o%name)//' fitted them better by BIC '// &
