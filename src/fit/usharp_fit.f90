@@ -40,6 +40,9 @@ module usharp_fit
       type(cached_jacobian), allocatable :: jacs(:)
       integer :: stat = 0        !< the stat of the error that ended it (0: none)
       integer :: nsimulated = 0
+      !> An ended start that rank 0 logs from its records and optimum alone (see close_log)
+      logical :: closed = .false.
+      type(start_done) :: done
       !> On its way between its rank and rank 0: the packed fields and the transfers
       integer, allocatable :: ints(:)
       real(dp), allocatable :: reals(:)
@@ -49,6 +52,9 @@ module usharp_fit
 
    !> MPI tags of a start's evaluations sent to rank 0: the header (sizes), then the data
    integer, parameter :: tag_head = 71, tag_data = 72
+   !> A start's header: s, records, Jacobians, stat, simulated, closed (1) and its optimum's
+   !> evaluations, iterations and reason's length; then three per record
+   integer, parameter :: nhead = 9
 
 
    abstract interface
@@ -94,6 +100,8 @@ module usharp_fit
       integer :: nkept = 0
       integer, allocatable :: start_eval(:), start_sens(:)  !< first evaluation, Jacobian of each start
       integer :: start_now = 0  !< the start being searched
+      !> The last start the search ended, as its journal line closes it (see replay_start)
+      type(start_done) :: closed
       character(len=:), allocatable :: fingerprint  !< of the inputs, for the logs' first line
       character(len=:), allocatable :: journal  !< the journal's path, for messages
       !> Residual vectors or Jacobians were replayed from fit.cache (beside the journal)
@@ -1025,8 +1033,9 @@ contains
                call one_search()
             end if
             if (allocated(error)) return
-            if (.not. obj%capture) call obj%log%start_done(s, obj%start_eval(s), obj%nevals, &
-                                                           obj%nsens - obj%start_sens(s) + 1, one, error)
+            obj%closed = start_done(s, obj%start_eval(s), obj%nevals, obj%nsens - obj%start_sens(s) + 1, one)
+            if (.not. obj%capture) call obj%log%start_done(s, obj%closed%first, obj%closed%last, &
+                                                           obj%closed%njac, one, error)
             if (allocated(error)) return
             if (s == s1 .or. one%f < opt%f) opt = one
          end do
@@ -1213,6 +1222,7 @@ contains
             logs(s)%nsimulated = w%nsimulated
             logs(s)%stat = 0
             if (allocated(e)) logs(s)%stat = e%stat
+            call close_log(logs(s), w%closed, s == nstarts)
             if (is_root()) then
                ready(s) = .true.
                call take_arrived(.false.)
@@ -1285,12 +1295,21 @@ contains
       subroutine replay_ready()
          type(error_type), allocatable :: err
          type(optimum_type) :: got
+         type(start_done) :: done
          integer :: nn, k
          do while (streaming .and. next <= nstarts)
             if (.not. ready(next)) exit
             if (logs(next)%stat /= 0) then
                streaming = .false.
                exit
+            end if
+            if (logs(next)%closed) then
+               ! Closed where its evaluations fall among the whole fit's, as a journal
+               ! would close it: logged from its records, its search not run again
+               done = logs(next)%done
+               done%first = live%nevals + 1
+               done%last = live%nevals + size(logs(next)%recs)
+               live%replay_done = [live%replay_done, done]
             end if
             call append_starts(logs(next:next), live%replay, live%replay_jac)
             call search(live, got, nn, err, next, next)
@@ -1310,11 +1329,12 @@ contains
          end do
       end subroutine replay_ready
 
-      !> Another rank: start sending start s to rank 0 (its header, then its fields and
-      !> residual vectors in order)
+      !> Another rank: start sending start s to rank 0 (its header, then its fields in order:
+      !> each record's, and a closed start's optimum, or the Jacobians and residual vectors
+      !> of one rank 0 searches again)
       subroutine send_start(s)
          integer, intent(in) :: s
-         integer :: k, nrec, njac, pos, at, nmsg, nx, ntest, m, n_r
+         integer :: k, nrec, njac, pos, at, nmsg, nx, ntest, m, n_r, nreason
          nx = size(obj%prob%idx)
          ntest = size(obj%prob%targets)
          m = obj%prob%nres()
@@ -1329,38 +1349,58 @@ contains
             do k = 1, nrec
                if (allocated(sl%recs(k)%r)) n_r = n_r + 1
             end do
-            allocate (sl%ints(5 + 3*nrec), sl%reals(nrec*(1 + ntest + nx) + njac*(nx + m*nx) + n_r*m))
-            allocate (character(len=nmsg) :: sl%text)
-            sl%ints(1:5) = [s, nrec, njac, sl%stat, sl%nsimulated]
+            nreason = 0
+            if (sl%closed) nreason = len(sl%done%opt%reason)
+            allocate (sl%ints(nhead + 3*nrec), sl%reals(nrec*(1 + ntest + nx) + data_size(sl%closed, njac, n_r)))
+            allocate (character(len=nmsg + nreason) :: sl%text)
+            sl%ints(1:nhead) = [s, nrec, njac, sl%stat, sl%nsimulated, merge(1, 0, sl%closed), &
+                                sl%done%opt%nevals, sl%done%opt%iterations, nreason]
             pos = 0
             at = 0
             do k = 1, nrec
                associate (rec => sl%recs(k))
-                  sl%ints(5 + 3*(k - 1) + 1:5 + 3*k) = [rec%status, merge(1, 0, allocated(rec%r)), &
-                                                        len(rec%message)]
+                  sl%ints(nhead + 3*(k - 1) + 1:nhead + 3*k) = [rec%status, merge(1, 0, allocated(rec%r)), &
+                                                                len(rec%message)]
                   sl%reals(pos + 1:pos + 1 + ntest + nx) = [rec%f, rec%per_test, rec%x]
                   pos = pos + 1 + ntest + nx
                   sl%text(at + 1:at + len(rec%message)) = rec%message
                   at = at + len(rec%message)
                end associate
             end do
-            do k = 1, njac
-               sl%reals(pos + 1:pos + nx + m*nx) = [sl%jacs(k)%x, reshape(sl%jacs(k)%jac, [m*nx])]
-               pos = pos + nx + m*nx
-            end do
-            ! Each residual vector freed once packed: its memory serves the next start
-            do k = 1, nrec
-               if (allocated(sl%recs(k)%r)) then
-                  sl%reals(pos + 1:pos + m) = sl%recs(k)%r
-                  pos = pos + m
-                  deallocate (sl%recs(k)%r)
-               end if
-            end do
+            if (sl%closed) then
+               sl%reals(pos + 1:pos + 1 + nx) = [sl%done%opt%f, sl%done%opt%x]
+               sl%text(at + 1:at + nreason) = sl%done%opt%reason
+            else
+               do k = 1, njac
+                  sl%reals(pos + 1:pos + nx + m*nx) = [sl%jacs(k)%x, reshape(sl%jacs(k)%jac, [m*nx])]
+                  pos = pos + nx + m*nx
+               end do
+               ! Each residual vector freed once packed: its memory serves the next start
+               do k = 1, nrec
+                  if (allocated(sl%recs(k)%r)) then
+                     sl%reals(pos + 1:pos + m) = sl%recs(k)%r
+                     pos = pos + m
+                     deallocate (sl%recs(k)%r)
+                  end if
+               end do
+            end if
             call post_send(sl%ints, tag_head, sl%moving)
             call post_send(sl%reals, tag_data, sl%moving)
             call post_send(sl%text, tag_data, sl%moving)
          end associate
       end subroutine send_start
+
+      !> The reals sent after a start's records: a closed start's optimum (f and x), or njac
+      !> Jacobians and n_r residual vectors
+      pure integer function data_size(closed, njac, n_r) result(n)
+         logical, intent(in) :: closed
+         integer, intent(in) :: njac, n_r
+         if (closed) then
+            n = 1 + size(obj%prob%idx)
+         else
+            n = njac*(size(obj%prob%idx)*(1 + obj%prob%nres())) + n_r*obj%prob%nres()
+         end if
+      end function data_size
 
       !> Rank 0: the headers of starts that have arrived (wait: at least one), each start's
       !> data received into its records as they come; the starts whose data are complete
@@ -1380,18 +1420,19 @@ contains
                call move_alloc(head, sl%ints)
                sl%stat = sl%ints(4)
                sl%nsimulated = sl%ints(5)
-               nmsg = 0
+               sl%closed = sl%ints(6) == 1
+               nmsg = sl%ints(9)
                do k = 1, nrec
-                  nmsg = nmsg + sl%ints(5 + 3*k)
+                  nmsg = nmsg + sl%ints(nhead + 3*k)
                end do
                deallocate (sl%recs, sl%jacs)
                allocate (sl%recs(nrec), sl%jacs(sl%ints(3)))
                n_r = 0
                do k = 1, nrec
-                  n_r = n_r + sl%ints(5 + 3*(k - 1) + 2)
+                  n_r = n_r + sl%ints(nhead + 3*(k - 1) + 2)
                end do
                allocate (sl%reals(nrec*(1 + size(obj%prob%targets) + size(obj%prob%idx)) + &
-                                  sl%ints(3)*(size(obj%prob%idx)*(1 + obj%prob%nres())) + n_r*obj%prob%nres()))
+                                  data_size(sl%closed, sl%ints(3), n_r)))
                allocate (character(len=nmsg) :: sl%text)
                call post_receive(sl%reals, from, tag_data, sl%moving)
                call post_receive(sl%text, from, tag_data, sl%moving)
@@ -1416,7 +1457,7 @@ contains
             pos = 0
             at = 0
             do k = 1, size(sl%recs)
-               associate (rec => sl%recs(k), meta => sl%ints(5 + 3*(k - 1) + 1:5 + 3*k))
+               associate (rec => sl%recs(k), meta => sl%ints(nhead + 3*(k - 1) + 1:nhead + 3*k))
                   rec%status = meta(1)
                   rec%f = sl%reals(pos + 1)
                   rec%per_test = sl%reals(pos + 2:pos + 1 + ntest)
@@ -1427,22 +1468,52 @@ contains
                   at = at + nmsg
                end associate
             end do
-            do k = 1, size(sl%jacs)
-               sl%jacs(k)%x = sl%reals(pos + 1:pos + nx)
-               sl%jacs(k)%jac = reshape(sl%reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
-               pos = pos + nx + m*nx
-            end do
-            do k = 1, size(sl%recs)
-               if (sl%ints(5 + 3*(k - 1) + 2) == 1) then
-                  sl%recs(k)%r = sl%reals(pos + 1:pos + m)
-                  pos = pos + m
-               end if
-            end do
+            if (sl%closed) then
+               ! Its Jacobians' places only (see close_log)
+               sl%done = start_done(s, 1, size(sl%recs), size(sl%jacs), &
+                                    optimum_type(sl%reals(pos + 2:pos + 1 + nx), sl%reals(pos + 1), &
+                                                 sl%ints(7), sl%ints(8), sl%text(at + 1:at + sl%ints(9))))
+            else
+               do k = 1, size(sl%jacs)
+                  sl%jacs(k)%x = sl%reals(pos + 1:pos + nx)
+                  sl%jacs(k)%jac = reshape(sl%reals(pos + nx + 1:pos + nx + m*nx), [m, nx])
+                  pos = pos + nx + m*nx
+               end do
+               do k = 1, size(sl%recs)
+                  if (sl%ints(nhead + 3*(k - 1) + 2) == 1) then
+                     sl%recs(k)%r = sl%reals(pos + 1:pos + m)
+                     pos = pos + m
+                  end if
+               end do
+            end if
             deallocate (sl%ints, sl%reals, sl%text)
          end associate
          ready(s) = .true.
       end subroutine unpack_start
    end subroutine parallel_search
+
+   !> An ended start other than the fit's last, made ready for rank 0 to log from its records
+   !> and its optimum (replay_start) instead of searching it again: its residual vectors and
+   !> Jacobians are dropped (the Jacobians' places stay, so that a later start's keep their
+   !> numbers), and nothing of them travels between ranks. The last start keeps them: fit.cache
+   !> holds them when the fit ends, as one process leaves it. A start that stopped keeps them
+   !> for the search that goes on from it.
+   pure subroutine close_log(sl, done, last)
+      type(start_log), intent(inout) :: sl
+      type(start_done), intent(in) :: done
+      logical, intent(in) :: last
+      integer :: k, njac
+      if (sl%stat /= 0 .or. last) return
+      sl%closed = .true.
+      sl%done = done
+      if (.not. allocated(sl%done%opt%reason)) sl%done%opt%reason = ''
+      do k = 1, size(sl%recs)
+         if (allocated(sl%recs(k)%r)) deallocate (sl%recs(k)%r)
+      end do
+      njac = size(sl%jacs)
+      deallocate (sl%jacs)
+      allocate (sl%jacs(njac))
+   end subroutine close_log
 
    !> Append the starts' evaluations to recs and jacs in the order of the starts, up to the
    !> first start that stopped. Everything is moved, not copied (a start's residual vectors
