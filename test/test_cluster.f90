@@ -26,7 +26,7 @@ contains
          new_unittest('job-scripts-parse', test_syntax), &
          new_unittest('job-stopped-by-term-resumes-to-same-result', test_restart), &
          new_unittest('job-script-run-as-a-copy-finds-its-helper', test_job_copy), &
-         new_unittest('mpi-multistart-same-on-1-and-2-ranks', test_mpi_multistart), &
+         new_unittest('mpi-multistart-same-on-1-2-and-3-ranks', test_mpi_multistart), &
          new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume), &
          new_unittest('mpi-selfcheck-same-on-1-and-2-ranks', test_mpi_selfcheck), &
          new_unittest('mpi-design-same-on-1-and-2-ranks', test_mpi_design), &
@@ -232,13 +232,16 @@ contains
       call check(error, stat == 0, 'the fit on 1 rank')
    end subroutine reference_fit
 
-   !> A multi-start fit on 1 rank and on 2 ranks: the same journal, cache, logs and result
+   !> A multi-start fit on 1, 2 and 3 ranks: the same journal, cache, logs and result (on 3
+   !> ranks two of them send rank 0 the starts they ended, which it logs without searching
+   !> them again, the fit's last start apart)
    subroutine test_mpi_multistart(error)
       type(error_type), allocatable, intent(out) :: error
-      character(len=:), allocatable :: exe, mpirun, deck, a, b
+      character(len=:), allocatable :: exe, mpirun, deck, a, b, c
       integer :: stat
       a = scratch_dir//'/mpi-ms-1'
       b = scratch_dir//'/mpi-ms-2'
+      c = scratch_dir//'/mpi-ms-3'
       call reference_fit(exe, mpirun, deck, 20, a, b, error)
       if (allocated(error)) return
       call execute_command_line(mpirun//exe//' run -q -o '//b//' '//deck//' > /dev/null', exitstat=stat)
@@ -249,6 +252,24 @@ contains
       call check_same_fit(error, a, b)
       if (allocated(error)) return
       call check(error, same_file(a//'/fit.log', b//'/fit.log'), 'fit.log differs')
+      if (allocated(error)) return
+      call execute_command_line('rm -rf '//c//'; '//replace_ranks(mpirun, 3)//exe//' run -q -o '//c//' '// &
+                                deck//' > /dev/null', exitstat=stat)
+      call check(error, stat == 0, '3 ranks')
+      if (allocated(error)) return
+      call check_same_fit(error, a, c)
+      if (allocated(error)) return
+      call check(error, same_file(a//'/fit.log', c//'/fit.log'), 'fit.log differs on 3 ranks')
+   contains
+      !> The mpirun command with np ranks in place of 2
+      function replace_ranks(cmd, np) result(out)
+         character(len=*), intent(in) :: cmd
+         integer, intent(in) :: np
+         character(len=:), allocatable :: out
+         integer :: at
+         at = index(cmd, '-np 2 ')
+         out = cmd(:at + 3)//str(np)//cmd(at + 5:)
+      end function replace_ranks
    end subroutine test_mpi_multistart
 
    !> A 2-rank multi-start fit started by the job script (usharp-job.sh through mpirun), stopped
