@@ -31,7 +31,7 @@ module test_diagnose
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
    use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note
    use usharp_diagnose_refit, only: judge, rate_undetermined, rate_doubt, with_params, other_sign, global_baseline_starts, &
-                                    rate_rungs
+                                    rate_rungs, shown_groups
    use usharp_diagnose_screen, only: basin_points
    use usharp_diagnose_separate, only: separate
    use usharp_rng, only: rng_type
@@ -103,6 +103,7 @@ contains
          new_unittest('prediction-of-loose-constants-confirms-nothing', test_loose_prediction), &
          new_unittest('baseline-left-behind-by-a-refits-constants', test_left_behind), &
          new_unittest('bic-in-each-tests-own-variance', test_bic_per_test), &
+         new_unittest('per-test-effect-counted-on-the-tests-that-show-it', test_bic_shown), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('partial-prediction-fitted-with-every-test', test_partial_carry), &
          new_unittest('specimen-residual-covariance-with-the-constants', test_specimen_quad), &
@@ -1096,6 +1097,73 @@ contains
       call check(error, e%significant .and. abs(e%dbic - (900.0_dp*log(0.85_dp) + log(1000.0_dp))) < 1.0e-9_dp, &
                  'a 15 % fall in the quiet test: dBIC '//real_str(e%dbic, 'es12.5'))
    end subroutine test_bic_per_test
+
+   !> A per-test effect's BIC counts the parameters of the tests that show it: three tests,
+   !> one parameter each at 4.9, 0.03 and 1.0 standard errors (Wald 24, 0.0009, 1 against
+   !> ln N = 7.7): the first counted, the others' chi-square 1.0009. A test of two correlated
+   !> parameters (correlation 0.9, each at 1 standard error) is left out on Wald 2/1.9, not
+   !> the 2 of the diagonal; two tests left out whose parameters correlate (0.9) take 2/1.9
+   !> together, not 2. Where no test shows it, every parameter is counted. judge then takes
+   !> the lower of the BIC with every parameter and with the counted ones and the others'
+   !> chi-square: a fall of the deviance by 25 with three parameters, of which one is
+   !> counted, lowers BIC by 25 - 1.0009 - 6.9 = 17.1, not by 25 - 3 x 6.9 = 4.3
+   subroutine test_bic_shown(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_context) :: ctx
+      type(diagnose_result) :: res
+      type(effect_outcome) :: e
+      logical, allocatable :: counted(:)
+      real(dp) :: wald, cp(3, 3), lnm
+      lnm = 7.7_dp
+      cp = 0.0_dp
+      cp(1, 1) = 1.0_dp
+      cp(2, 2) = 1.0_dp
+      cp(3, 3) = 1.0_dp
+      call shown_groups([1, 2, 3], 3, [4.9_dp, 0.03_dp, 1.0_dp], cp, lnm, counted, wald)
+      call check(error, all(counted .eqv. [.true., .false., .false.]) .and. &
+                 abs(wald - (0.03_dp**2 + 1.0_dp)) < 1.0e-12_dp, &
+                 'one parameter per test: counted '//merge('T', 'F', counted(1))//merge('T', 'F', counted(2))// &
+                 merge('T', 'F', counted(3))//', Wald '//real_str(wald, 'es12.5'))
+      if (allocated(error)) return
+      ! test 1 at 5 standard errors; test 2's two parameters correlated 0.9, each at 1
+      cp(2, 3) = 0.9_dp
+      cp(3, 2) = 0.9_dp
+      call shown_groups([1, 2, 2], 2, [5.0_dp, 1.0_dp, 1.0_dp], cp, lnm, counted, wald)
+      call check(error, all(counted .eqv. [.true., .false., .false.]) .and. abs(wald - 2.0_dp/1.9_dp) < 1.0e-12_dp, &
+                 'two correlated parameters of one test: Wald '//real_str(wald, 'es12.5')//' (2/1.9 from the block)')
+      if (allocated(error)) return
+      ! the same covariance, tests 2 and 3 one parameter each: left out together
+      call shown_groups([1, 2, 3], 3, [5.0_dp, 1.0_dp, 1.0_dp], cp, lnm, counted, wald)
+      call check(error, all(counted .eqv. [.true., .false., .false.]) .and. abs(wald - 2.0_dp/1.9_dp) < 1.0e-12_dp, &
+                 'two tests left out whose parameters correlate: Wald '//real_str(wald, 'es12.5')//' (2/1.9)')
+      if (allocated(error)) return
+      ! no test shows it: every parameter counted
+      call shown_groups([1, 2, 3], 3, [1.0_dp, 1.0_dp, 1.0_dp], cp, lnm, counted, wald)
+      call check(error, all(counted) .and. wald == 0.0_dp, 'no test shows the effect, and not every parameter counted')
+      if (allocated(error)) return
+      ! judge: one test of 1000 points whose deviance falls by 25
+      call below_floors_case([1000], [1.0_dp], ctx, res)
+      e%q = 3
+      e%per_test_after = [exp(-25.0_dp/1000.0_dp)]
+      e%f_after = sum(e%per_test_after)
+      e%held_gap = 0.01_dp
+      call judge(ctx, res, e)
+      call check(error, abs(e%dbic - (-25.0_dp + 3.0_dp*log(1000.0_dp))) < 1.0e-9_dp .and. .not. e%significant, &
+                 'not computed: dBIC '//real_str(e%dbic, 'es12.5')//' is not that of every parameter')
+      if (allocated(error)) return
+      e%q_bic = 1
+      e%wald_dropped = 1.0009_dp
+      call judge(ctx, res, e)
+      call check(error, abs(e%dbic - (-25.0_dp + 1.0009_dp + log(1000.0_dp))) < 1.0e-9_dp .and. e%significant .and. &
+                 abs(e%dbic_all - (-25.0_dp + 3.0_dp*log(1000.0_dp))) < 1.0e-9_dp, &
+                 'one of three counted: dBIC '//real_str(e%dbic, 'es12.5'))
+      if (allocated(error)) return
+      ! never above the BIC with every parameter counted
+      e%wald_dropped = 30.0_dp
+      call judge(ctx, res, e)
+      call check(error, abs(e%dbic - e%dbic_all) < 1.0e-12_dp, &
+                 'left-out groups that take more than they cost: dBIC '//real_str(e%dbic, 'es12.5'))
+   end subroutine test_bic_shown
 
    !> The fit tests without a structured gap, the held-out tests with one (5 against a floor
    !> of 1): a significant, plausible effect that removes the held-out gap is confirmed while

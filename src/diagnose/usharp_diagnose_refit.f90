@@ -6,7 +6,7 @@
 module usharp_diagnose_refit
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
-   use usharp_lapack, only: mat_mul
+   use usharp_lapack, only: mat_mul, solve_dense
    use usharp_math, only: log_dp, log10_dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type
@@ -29,7 +29,7 @@ module usharp_diagnose_refit
    private
 
    public :: refit, refit_candidates, refit_global, global_baseline_starts, refit_deciding, judge, &
-             rate_undetermined, rate_doubt, with_params, other_sign, rate_rungs
+             rate_undetermined, rate_doubt, with_params, other_sign, rate_rungs, shown_groups
 
 contains
 
@@ -563,9 +563,91 @@ contains
       ! A parameter that cannot be negative (a lag, a softening rate) ends its interval at 0
       ! (the leading effect's such intervals are profiled, see profile_leading)
       where (pack(ep%pnonneg, ep%pfree) .and. e%p_lo < 0.0_dp) e%p_lo = 0.0_dp
+      call count_shown(ctx, res, ep, x(nc + 1:), cov(nc + 1:, nc + 1:), e)
       call name_params(ctx, res, ep, e)
       call judge_magnitude(ctx, res, ep, x, p, e)
    end subroutine magnitudes
+
+   !> The parameters of a per-test effect that its BIC counts: those of the tests that show
+   !> it. A specimen's artefact (an extensometer's drift) need not be in every test: where
+   !> one test carried a drift of 8.3e-8 1/s and the others none to speak of, the values
+   !> of those others cost BIC ln N each for a fall of the objective of about 1 (every test
+   !> fitted together: dBIC -1.9 with three, where the one test's alone makes it -16). A
+   !> test's parameters are left out of the count where their Wald chi-square against zero
+   !> (from the refit's covariance, xp' inv(cp) xp over the test's group) is below ln N per
+   !> parameter, so that they do not pay their share; the effect's BIC without them is
+   !> its deviance plus that chi-square (what they take away, to first order) with the
+   !> others' parameters counted (see judge). A global effect counts all its parameters.
+   subroutine count_shown(ctx, res, ep, xp, cp, e)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(in) :: res
+      type(effect_problem), intent(in) :: ep
+      !> the free parameters at the refit (unit of x) and their covariance
+      real(dp), intent(in) :: xp(:), cp(:, :)
+      type(effect_outcome), intent(inout) :: e
+      logical, allocatable :: counted(:)
+      integer, allocatable :: test_of(:)
+      integer :: i, j, nt
+      e%q_bic = count(ep%pfree)
+      e%wald_dropped = 0.0_dp
+      if (allocated(e%shown_on)) deallocate (e%shown_on)
+      if (ctx%cat(e%k)%sharing /= param_per_test) return
+      ! per-test parameters are parameter-major: test mod(j - 1, nt) + 1
+      nt = size(ctx%prob%targets)
+      test_of = pack([(mod(j - 1, nt) + 1, j=1, size(ep%p0))], ep%pfree)
+      call shown_groups(test_of, nt, xp, cp, log_dp(real(res%m, dp)), counted, e%wald_dropped)
+      e%q_bic = count(counted)
+      if (all(counted)) return
+      e%shown_on = ''
+      do i = 1, nt
+         if (.not. any(counted .and. test_of == i)) cycle
+         if (len(e%shown_on) > 0) e%shown_on = e%shown_on//', '
+         e%shown_on = e%shown_on//trim(res%names(i))
+      end do
+   end subroutine count_shown
+
+   !> Which parameters of a per-test effect BIC counts (see count_shown): those of each test
+   !> i (test_of, 1 to nt) whose Wald chi-square against zero, xp' inv(cp) xp over the
+   !> test's group, is at least ln N (lnm) per parameter; wald: the Wald chi-square of the
+   !> groups left out taken together (their covariance with one another included). A group
+   !> whose covariance is singular is counted (it says nothing of the size). Where no group
+   !> is counted, all are: an effect without parameters is the baseline, and an effect whose
+   !> evidence is spread thinly over the tests is judged with all of them (its groups'
+   !> chi-squares, each below ln N, did not add up to a fall that the Wald approximation
+   !> tells: a drift with constants run to their bounds read dBIC -26 that way).
+   pure subroutine shown_groups(test_of, nt, xp, cp, lnm, counted, wald)
+      integer, intent(in) :: test_of(:), nt
+      real(dp), intent(in) :: xp(:), cp(:, :), lnm
+      logical, allocatable, intent(out) :: counted(:)
+      real(dp), intent(out) :: wald
+      integer, allocatable :: idx(:)
+      real(dp), allocatable :: b(:, :)
+      real(dp) :: w
+      integer :: i, j, info
+      allocate (counted(size(test_of)))
+      counted = .true.
+      wald = 0.0_dp
+      do i = 1, nt
+         idx = pack([(j, j=1, size(test_of))], test_of == i)
+         if (size(idx) == 0) cycle
+         b = reshape(xp(idx), [size(idx), 1])
+         call solve_dense(cp(idx, idx), b, info)
+         if (info /= 0) cycle
+         w = dot_product(xp(idx), b(:, 1))
+         if (w >= 0.0_dp .and. w < size(idx)*lnm) counted(idx) = .false.
+      end do
+      if (.not. any(counted)) counted = .true.
+      if (all(counted)) return
+      idx = pack([(j, j=1, size(test_of))], .not. counted)
+      b = reshape(xp(idx), [size(idx), 1])
+      call solve_dense(cp(idx, idx), b, info)
+      if (info == 0) wald = dot_product(xp(idx), b(:, 1))
+      ! (the left-out groups together singular, or not positive: nothing left out)
+      if (info /= 0 .or. .not. wald >= 0.0_dp) then
+         counted = .true.
+         wald = 0.0_dp
+      end if
+   end subroutine shown_groups
 
    !> Names of e's free parameters (per-test ones with their test's name)
    subroutine name_params(ctx, res, ep, e)
@@ -841,6 +923,10 @@ contains
       end if
       e%daic = dev + 2.0_dp*e%q
       e%dbic = dev + e%q*log_dp(real(res%m, dp))
+      ! A per-test effect on the tests that show it (see count_shown)
+      e%dbic_all = e%dbic
+      if (e%q_bic >= 0 .and. e%q_bic < e%q) &
+         e%dbic = min(e%dbic, dev + e%wald_dropped + e%q_bic*log_dp(real(res%m, dp)))
       ! The share of the fit tests' structured gap removed, of the gap at the same reference
       ! (a refit that the global starts left where it was kept the first baseline's share)
       if (e%refitted .and. gap_fit_ref(res) > 0.0_dp) e%shrink_fit = 1.0_dp - e%gap_fit_after/gap_fit_ref(res)

@@ -347,6 +347,10 @@ contains
          'removes most of the structured gap on both sets, or when the data measure it (its 95 % '// &
          'interval within '//real_str(100.0_dp*delay_precision, 'f0.0')//' % of it'// &
          trim(merge(': so here ', ': not here', e%measured))//') and it removes most of the fit tests'' gap')
+      if (allocated(e%shown_on) .and. e%dbic < e%dbic_all) call add_line(lines, '- its BIC counts the '// &
+         'parameters of the tests that show it, '//e%shown_on//' ('//str(e%q_bic)//' of '//str(e%q)// &
+         '): the others'' values are within what the noise allows (Wald chi-square below ln N per '// &
+         'parameter); with every test''s counted, dBIC '//real_str(e%dbic_all, 'f0.1'))
       if (allocated(e%c_bound)) then
          if (any(e%c_bound /= 0)) call add_line(lines, '- **flag:** the refit ran away: '// &
             bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit')

@@ -146,6 +146,13 @@ module usharp_diagnose_types
       real(dp) :: shrink_alike_lo = 0.0_dp, shrink_alike_hi = 0.0_dp
       integer, allocatable :: c_bound(:)     !< its constants at a search bound (see bound_list)
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
+      !> A per-test effect's BIC counts the parameters of the tests that show it (see
+      !> count_shown in usharp_diagnose_refit): q_bic of q (-1: not computed), the Wald
+      !> chi-square of the groups left out (the deviance they take away), the names of the
+      !> tests counted, and dBIC with every test's parameters counted
+      integer :: q_bic = -1
+      real(dp) :: wald_dropped = 0.0_dp, dbic_all = 0.0_dp
+      character(len=:), allocatable :: shown_on
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
       real(dp) :: gap_fit_after = 0.0_dp  !< the fit tests' structured gap left with the effect
