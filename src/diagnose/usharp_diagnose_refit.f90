@@ -571,8 +571,8 @@ contains
    !> The parameters of a per-test effect that its BIC counts: those of the tests that show
    !> it. A specimen's artefact (an extensometer's drift) need not be in every test: where
    !> one test carried a drift of 8.3e-8 1/s and the others none to speak of, the values
-   !> of those others cost BIC ln N each for a fall of the objective of about 1 (every test
-   !> fitted together: dBIC -1.9 with three, where the one test's alone makes it -16). A
+   !> of those others cost BIC ln N each for a fall of the deviance of about 1 (every test
+   !> fitted together: dBIC -1.9 with three, -17.9 with the one test's alone). A
    !> test's parameters are left out of the count where their Wald chi-square against zero
    !> (from the refit's covariance, xp' inv(cp) xp over the test's group) is below ln N per
    !> parameter, so that they do not pay their share; the effect's BIC without them is
@@ -616,10 +616,13 @@ contains
    !> chi-squares, each below ln N, did not add up to a fall that the Wald approximation
    !> tells: a drift with constants run to their bounds read dBIC -26 that way).
    pure subroutine shown_groups(test_of, nt, xp, cp, lnm, counted, wald)
-      integer, intent(in) :: test_of(:), nt
-      real(dp), intent(in) :: xp(:), cp(:, :), lnm
-      logical, allocatable, intent(out) :: counted(:)
-      real(dp), intent(out) :: wald
+      integer, intent(in) :: test_of(:)              !< each parameter's test
+      integer, intent(in) :: nt                      !< number of tests
+      real(dp), intent(in) :: xp(:)                  !< the parameters (unit of x)
+      real(dp), intent(in) :: cp(:, :)               !< their covariance
+      real(dp), intent(in) :: lnm                    !< ln N, N the points of the fit tests
+      logical, allocatable, intent(out) :: counted(:)  !< which parameters BIC counts
+      real(dp), intent(out) :: wald                  !< Wald chi-square of those left out
       integer, allocatable :: idx(:)
       real(dp), allocatable :: b(:, :)
       real(dp) :: w
