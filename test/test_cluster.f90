@@ -146,12 +146,15 @@ contains
                  'PBS copy, USHARP_JOB: '//read_text(d//'/out5'))
    end subroutine test_job_copy
 
-   !> mpirun for 2 ranks of one thread each, or a skip when there is none
-   subroutine require_mpirun(mpirun, error)
+   !> mpirun for np ranks (2 when absent) of one thread each, or a skip when there is none
+   subroutine require_mpirun(mpirun, error, np)
       character(len=:), allocatable, intent(out) :: mpirun
       type(error_type), allocatable, intent(out) :: error
-      integer :: stat
-      mpirun = 'OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -np 2 '
+      integer, intent(in), optional :: np
+      integer :: stat, n
+      n = 2
+      if (present(np)) n = np
+      mpirun = 'OMP_NUM_THREADS=1 mpirun --allow-run-as-root --oversubscribe -np '//str(n)//' '
       call execute_command_line('command -v mpirun > /dev/null 2>&1', exitstat=stat)
       if (stat /= 0) call skip_test(error, 'mpirun not found (Open MPI: openmpi-bin)')
    end subroutine require_mpirun
@@ -237,7 +240,7 @@ contains
    !> them again, the fit's last start apart)
    subroutine test_mpi_multistart(error)
       type(error_type), allocatable, intent(out) :: error
-      character(len=:), allocatable :: exe, mpirun, deck, a, b, c
+      character(len=:), allocatable :: exe, mpirun, mpirun3, deck, a, b, c
       integer :: stat
       a = scratch_dir//'/mpi-ms-1'
       b = scratch_dir//'/mpi-ms-2'
@@ -253,23 +256,15 @@ contains
       if (allocated(error)) return
       call check(error, same_file(a//'/fit.log', b//'/fit.log'), 'fit.log differs')
       if (allocated(error)) return
-      call execute_command_line('rm -rf '//c//'; '//replace_ranks(mpirun, 3)//exe//' run -q -o '//c//' '// &
+      call require_mpirun(mpirun3, error, 3)
+      if (allocated(error)) return
+      call execute_command_line('rm -rf '//c//'; '//mpirun3//exe//' run -q -o '//c//' '// &
                                 deck//' > /dev/null', exitstat=stat)
       call check(error, stat == 0, '3 ranks')
       if (allocated(error)) return
       call check_same_fit(error, a, c)
       if (allocated(error)) return
       call check(error, same_file(a//'/fit.log', c//'/fit.log'), 'fit.log differs on 3 ranks')
-   contains
-      !> The mpirun command with np ranks in place of 2
-      function replace_ranks(cmd, np) result(out)
-         character(len=*), intent(in) :: cmd
-         integer, intent(in) :: np
-         character(len=:), allocatable :: out
-         integer :: at
-         at = index(cmd, '-np 2 ')
-         out = cmd(:at + 3)//str(np)//cmd(at + 5:)
-      end function replace_ranks
    end subroutine test_mpi_multistart
 
    !> A 2-rank multi-start fit started by the job script (usharp-job.sh through mpirun), stopped

@@ -624,32 +624,36 @@ contains
       logical, allocatable, intent(out) :: counted(:)  !< which parameters BIC counts
       real(dp), intent(out) :: wald                  !< Wald chi-square of those left out
       integer, allocatable :: idx(:)
-      real(dp), allocatable :: b(:, :)
       real(dp) :: w
-      integer :: i, j, info
+      integer :: i, j
       allocate (counted(size(test_of)))
       counted = .true.
       wald = 0.0_dp
       do i = 1, nt
          idx = pack([(j, j=1, size(test_of))], test_of == i)
          if (size(idx) == 0) cycle
-         b = reshape(xp(idx), [size(idx), 1])
-         call solve_dense(cp(idx, idx), b, info)
-         if (info /= 0) cycle
-         w = dot_product(xp(idx), b(:, 1))
+         w = wald_of(idx)
          if (w >= 0.0_dp .and. w < size(idx)*lnm) counted(idx) = .false.
       end do
       if (.not. any(counted)) counted = .true.
       if (all(counted)) return
-      idx = pack([(j, j=1, size(test_of))], .not. counted)
-      b = reshape(xp(idx), [size(idx), 1])
-      call solve_dense(cp(idx, idx), b, info)
-      if (info == 0) wald = dot_product(xp(idx), b(:, 1))
+      wald = wald_of(pack([(j, j=1, size(test_of))], .not. counted))
       ! (the left-out groups together singular, or not positive: nothing left out)
-      if (info /= 0 .or. .not. wald >= 0.0_dp) then
+      if (.not. (wald >= 0.0_dp .and. wald < huge(1.0_dp))) then
          counted = .true.
          wald = 0.0_dp
       end if
+   contains
+      !> xp' inv(cp) xp over the parameters idx; huge where their covariance is singular
+      pure real(dp) function wald_of(idx) result(w)
+         integer, intent(in) :: idx(:)
+         real(dp) :: b(size(idx), 1)
+         integer :: info
+         b(:, 1) = xp(idx)
+         call solve_dense(cp(idx, idx), b, info)
+         w = huge(1.0_dp)
+         if (info == 0) w = dot_product(xp(idx), b(:, 1))
+      end function wald_of
    end subroutine shown_groups
 
    !> Names of e's free parameters (per-test ones with their test's name)
