@@ -21,7 +21,7 @@ module test_diagnose
    use usharp_strings, only: real_str, interval_end, interval_format, str
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, &
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
-                             n_leading
+                             n_leading, simpler_rivals
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
@@ -98,6 +98,7 @@ contains
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
          new_unittest('verdict-of-no-effect-names-weak-evidence', test_weak_evidence), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
+         new_unittest('simpler-rivals-of-a-per-test-leader', test_simpler_rivals), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('sub-sample-delay-confirmed-when-measured', test_measured_delay), &
          new_unittest('prediction-of-loose-constants-confirms-nothing', test_loose_prediction), &
@@ -1291,6 +1292,46 @@ contains
       res%effects%pred_drop = 1.0_dp
       call check(error, n_leading(res, 3) == 3, 'insignificant predictions refitted beyond n_refit')
    end subroutine test_near_ties
+
+   !> A leader with parameters per test is checked against the simpler effects not yet
+   !> refitted that the screening found significant or whose predicted fall is at least
+   !> rival_share of the leader's (thesis tests, ratcheting held out, a temperature offset of
+   !> -22.4 K: scatter led, the temperature offset screened 8th at +14.9 with a fall of 0.88)
+   subroutine test_simpler_rivals(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      logical :: s(5)
+      allocate (res%effects(5))
+      ! softening, scatter (leads), lag, temperature, drift
+      res%effects%q = [2, 4, 1, 2, 2]
+      res%effects%refitted = [.true., .true., .false., .false., .false.]
+      res%effects%pred_dbic = [-221.0_dp, -118.6_dp, -21.8_dp, 14.9_dp, 14.9_dp]
+      res%effects%pred_drop = [2.545_dp, 0.553_dp, 0.065_dp, 0.878_dp, 0.024_dp]
+      res%leading = 2
+      s = simpler_rivals(res, .true.)
+      call check(error, all(s .eqv. [.false., .false., .true., .true., .false.]), &
+                 'simpler rivals: a significant one or a fall as large as the leader''s')
+      if (allocated(error)) return
+      call check(error, .not. any(simpler_rivals(res, .false.)), 'rivals of a leader without per-test parameters')
+      if (allocated(error)) return
+      ! At rival_share of the leader's fall exactly it is tried, below it not
+      res%effects(4)%pred_drop = 0.8_dp*0.553_dp
+      s = simpler_rivals(res, .true.)
+      call check(error, s(4), 'a fall at rival_share of the leader''s not tried')
+      if (allocated(error)) return
+      res%effects(4)%pred_drop = 0.79_dp*0.553_dp
+      s = simpler_rivals(res, .true.)
+      call check(error, .not. s(4), 'a fall below rival_share of the leader''s tried')
+      if (allocated(error)) return
+      ! Not simpler: as many parameters as the leader
+      res%effects(4)%pred_drop = 0.878_dp
+      res%effects(4)%q = 4
+      s = simpler_rivals(res, .true.)
+      call check(error, .not. s(4), 'an effect as free as the leader tried as simpler')
+      if (allocated(error)) return
+      res%leading = 0
+      call check(error, .not. any(simpler_rivals(res, .true.)), 'rivals without a leader')
+   end subroutine test_simpler_rivals
 
    !> The separating step: two refits that predict alike give D = 0 on every candidate; a
    !> compliance of 0.2 against none is told apart (D far above 10) by the best candidate,

@@ -52,7 +52,7 @@ module usharp_diagnose
    public :: diagnose_options, diagnose_result, effect_outcome, diagnose_run, diagnose_report
    public :: write_report, gn_decrease, diagnose_options_of, held_quiet, rest_at_noise, named_effect
    public :: fit_structured
-   public :: joint_decides
+   public :: joint_decides, simpler_rivals
    public :: diagnose_baseline, diagnose_context, diagnose_progress, n_leading, diagnose_journal
    public :: check_diagnosable
 
@@ -230,26 +230,42 @@ contains
    end subroutine diagnose_effects
 
    !> The simplest of the effects that explain the gap alike leads, but only refitted ones
-   !> can be compared. A leader with parameters per test is checked against every simpler
-   !> effect the screening found significant: its parameters grow with the tests, and on a
-   !> held-out test they are fitted to it, not predicted, so it can lead by its freedom alone
-   !> (a scatter of 4 parameters had led for a temperature offset of -21.1 K that screened
-   !> 4th, an effect of 2)
+   !> can be compared. A leader with parameters per test is checked against the simpler
+   !> effects that could explain as much (see simpler_rivals)
    subroutine refit_simpler(ctx, res, error)
       type(diagnose_context), intent(inout) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       logical, allocatable :: simpler(:)
       if (res%leading == 0) return
-      if (ctx%cat(res%effects(res%leading)%k)%sharing /= param_per_test) return
-      simpler = .not. res%effects%refitted .and. res%effects%pred_dbic < -bic_margin .and. &
-                res%effects%q < res%effects(res%leading)%q
+      simpler = simpler_rivals(res, ctx%cat(res%effects(res%leading)%k)%sharing == param_per_test)
       if (.not. any(simpler)) return
       call refit_candidates(ctx, res, 1, size(res%effects), error, only=simpler)
       if (allocated(error)) return
       call step_done(res, 'refits of simpler candidates')
       call conclude(res)
    end subroutine refit_simpler
+
+   !> The effects not yet refitted that a leader with parameters per test (per_test) is
+   !> checked against: those with fewer parameters that the screening found significant, or
+   !> whose predicted fall is at least rival_share of the leader's. Its parameters grow with
+   !> the tests, and on a held-out test they are fitted to it, not predicted, so it can lead
+   !> by its freedom alone (a scatter of 4 parameters had led for a temperature offset of
+   !> -21.1 K that screened 4th, an effect of 2). The screening's BIC is not enough: at a
+   !> baseline whose constants ran to their bounds a temperature offset of -22.4 K was
+   !> predicted to fall by 0.88, more than the leading scatter's 0.55, but at a BIC of +14.9
+   !> (the linear step made the test already fitted worse); refitted, it led at -1271.5
+   pure function simpler_rivals(res, per_test) result(simpler)
+      type(diagnose_result), intent(in) :: res
+      logical, intent(in) :: per_test  !< the leader's parameters are per test
+      logical :: simpler(size(res%effects))
+      simpler = .false.
+      if (res%leading == 0 .or. .not. per_test) return
+      associate (lead => res%effects(res%leading))
+         simpler = .not. res%effects%refitted .and. res%effects%q < lead%q .and. &
+                   (res%effects%pred_dbic < -bic_margin .or. res%effects%pred_drop >= rival_share*lead%pred_drop)
+      end associate
+   end function simpler_rivals
 
    !> The baseline fitted again from the constants of the refit that, with its effect off,
    !> fits the fit tests better than it (see baseline_left_behind), and every step after
