@@ -37,7 +37,7 @@ module test_diagnose
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
                                        at_box_end, at_bound, beyond_limit, limit_measures, judge_held_values, &
-                                       backstress2_starts
+                                       backstress2_starts, below_resolved, resolved_share
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -99,6 +99,7 @@ contains
          new_unittest('verdict-of-no-effect-names-weak-evidence', test_weak_evidence), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('simpler-rivals-of-a-per-test-leader', test_simpler_rivals), &
+         new_unittest('effect-below-what-is-resolved', test_below_resolved), &
          new_unittest('confirmed-below-the-floors', test_below_floors), &
          new_unittest('sub-sample-delay-confirmed-when-measured', test_measured_delay), &
          new_unittest('prediction-of-loose-constants-confirms-nothing', test_loose_prediction), &
@@ -1332,6 +1333,44 @@ contains
       res%leading = 0
       call check(error, .not. any(simpler_rivals(res, .true.)), 'rivals without a leader')
    end subroutine test_simpler_rivals
+
+   !> An effect is below what the diagnosis resolves only where every parameter with a low
+   !> end has a bounded 95 % interval inside resolved_share (a quarter) of it: a temperature
+   !> offset of -0.65 K [-0.92, -0.35] (low end 5 K) is; one of -5.10 K [-5.49, -4.65] at the
+   !> low end is not, nor Alloy 617 specimen 435's lag of 88 ms [77, 99] (low end 0.1 s)
+   subroutine test_below_resolved(error)
+      type(error_type), allocatable, intent(out) :: error
+      call check(error, resolved_share == 0.25_dp, 'resolved_share is not a quarter')
+      if (allocated(error)) return
+      call check(error, below_resolved([-0.92_dp], [-0.35_dp], [.false.], [5.0_dp]), &
+                 'an offset of -0.65 K [-0.92, -0.35] resolved against a low end of 5 K')
+      if (allocated(error)) return
+      call check(error, .not. below_resolved([-5.49_dp], [-4.65_dp], [.false.], [5.0_dp]), &
+                 'an offset at the low end taken as unresolved')
+      if (allocated(error)) return
+      call check(error, .not. below_resolved([-1.3_dp], [-0.2_dp], [.false.], [5.0_dp]), &
+                 'an interval beyond a quarter of the low end taken as unresolved')
+      if (allocated(error)) return
+      call check(error, .not. below_resolved([0.0767_dp], [0.0989_dp], [.false.], [0.1_dp]), &
+                 'a lag of 88 ms [77, 99] taken as unresolved')
+      if (allocated(error)) return
+      call check(error, .not. below_resolved([-0.9_dp], [-0.3_dp], [.true.], [5.0_dp]), &
+                 'an interval the data do not bound taken as unresolved')
+      if (allocated(error)) return
+      ! Two parameters (R0 or dD0 2 % of a peak of 20 MPa): unresolved only if both are
+      call check(error, below_resolved([-0.05_dp, 0.0_dp], [0.05_dp, 0.08_dp], [.false., .false.], &
+                                       [0.4_dp, 0.4_dp]), 'R0 and dD0 both within a quarter of the low end resolved')
+      if (allocated(error)) return
+      call check(error, .not. below_resolved([-0.05_dp, 0.0_dp], [0.05_dp, 0.3_dp], [.false., .false.], &
+                                              [0.4_dp, 0.4_dp]), 'dD0 beyond a quarter of the low end taken as unresolved')
+      if (allocated(error)) return
+      ! A parameter without a low end (softening's b) is not judged; none at all: resolved
+      call check(error, below_resolved([0.01_dp, 10.0_dp], [0.012_dp, 1.0e4_dp], [.false., .true.], [0.05_dp, 0.0_dp]), &
+                 'a softening of 0.011 resolved against a low end of 0.05')
+      if (allocated(error)) return
+      call check(error, .not. below_resolved([0.001_dp], [0.002_dp], [.false.], [0.0_dp]), &
+                 'an effect without a low end taken as unresolved')
+   end subroutine test_below_resolved
 
    !> The separating step: two refits that predict alike give D = 0 on every candidate; a
    !> compliance of 0.2 against none is told apart (D far above 10) by the best candidate,

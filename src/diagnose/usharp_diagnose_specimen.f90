@@ -30,7 +30,7 @@ module usharp_diagnose_specimen
                                        backstress2_starts, rate_effect_start, low_end_deltas, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, residual_noise, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
-                                       block_sums, at_box_end
+                                       block_sums, at_box_end, below_resolved, resolved_share
    use usharp_diagnose_verdict, only: power_cells, missed_note
    use usharp_diagnose_types, only: most, hidden_effect, magnitude_text, bound_list, unit_text, &
                                     params_bound_note, side_word, hardening_note
@@ -62,6 +62,8 @@ module usharp_diagnose_specimen
       !> at an outer end of its search box: not determined by the data, its interval void
       integer, allocatable :: p_bound(:)                 !< -1, 1: at the lower, upper end
       logical :: plausible = .true.                      !< within the effect's physical limit
+      !> Each free parameter's low end of its range (0: none; see below_resolved)
+      real(dp), allocatable :: p_low(:)
       logical :: significant = .false.                   !< BIC falls by more than bic_margin
       !> Expected chi-square of the effect at the low end of its range on the specimen, and
       !> the power of the significance rule against it (negative: not computed)
@@ -352,7 +354,7 @@ contains
          integer :: pass
          logical :: lower
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
-         real(dp), allocatable :: starts(:, :)
+         real(dp), allocatable :: starts(:, :), d(:, :)
          real(dp) :: scale, reach, saturation
          integer, allocatable :: grp(:)
          ! Figures and intervals again from a lower point that a profile met, at most twice
@@ -496,6 +498,12 @@ contains
          call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
                                          se_out%lo_open .or. se_out%hi_open, reach, saturation) <= 1.0_dp
+         ! The low ends its intervals are set against (a second back stress's is one of its
+         ! saturation, which no interval here bounds)
+         d = low_end_deltas(ek, cat(k), [ispec])
+         allocate (se_out%p_low(size(p)))
+         se_out%p_low = 0.0_dp
+         if (size(d, 2) > 0 .and. cat(k)%name /= 'backstress2') se_out%p_low = pack(maxval(abs(d), 2), ek%pfree)
       end subroutine fit_effect
 
       !> Effect k on the specimen alone, the constants fixed: per-test parameters only the
@@ -825,16 +833,30 @@ contains
       integer :: j
       lead = 0
       do j = 1, size(sr%effects)
-         if (lead == 0 .and. sr%effects(j)%significant .and. sr%effects(j)%plausible) lead = j
+         if (lead == 0 .and. finding(sr%effects(j))) lead = j
       end do
       best = lead
       if (best == 0) return
       do j = best + 1, size(sr%effects)
-         if (sr%effects(j)%significant .and. sr%effects(j)%plausible .and. &
-             sr%effects(j)%dbic < sr%effects(best)%dbic + bic_margin .and. &
+         if (finding(sr%effects(j)) .and. sr%effects(j)%dbic < sr%effects(best)%dbic + bic_margin .and. &
              sr%effects(j)%q < sr%effects(lead)%q) lead = j
       end do
    end subroutine specimen_lead
+
+   !> A significant effect of plausible magnitude that the diagnosis resolves
+   pure logical function finding(e)
+      type(specimen_effect), intent(in) :: e
+      finding = e%significant .and. e%plausible .and. .not. unresolved(e)
+   end function finding
+
+   !> Its magnitude below what the diagnosis resolves at 95 % (see below_resolved)
+   pure logical function unresolved(e)
+      type(specimen_effect), intent(in) :: e
+      unresolved = .false.
+      if (.not. (allocated(e%p_low) .and. allocated(e%p_lo) .and. allocated(e%p_hi))) return
+      if (size(e%p_low) /= size(e%p_lo)) return
+      unresolved = below_resolved(e%p_lo, e%p_hi, e%lo_open .or. e%hi_open, e%p_low)
+   end function unresolved
 
    !> The per-specimen report (Markdown)
    function specimen_report(sr) result(lines)
@@ -933,7 +955,9 @@ contains
                        interval_end(e%p_hi(g), e%hi_open(g), fmt)//']'//unit_text(e%punit(g), sr%stress_unit)
                end if
             end do
-            if (e%significant .and. e%plausible) then
+            if (e%significant .and. e%plausible .and. unresolved(e)) then
+               verdict = 'significant, below what is resolved'
+            else if (e%significant .and. e%plausible) then
                verdict = 'significant'
             else if (e%significant) then
                verdict = 'significant, implausible magnitude'
@@ -971,7 +995,7 @@ contains
          ! Effects within bic_margin of the best explain the difference as well
          ln = ''
          do j = best, size(sr%effects)
-            if (j /= lead .and. sr%effects(j)%significant .and. sr%effects(j)%plausible .and. &
+            if (j /= lead .and. finding(sr%effects(j)) .and. &
                 sr%effects(j)%dbic < sr%effects(best)%dbic + bic_margin) ln = ln//', '//trim(sr%effects(j)%name)
          end do
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
@@ -991,6 +1015,17 @@ contains
          end if
       end if
       if (lead == 0) then
+         ! The best significant effect below what is resolved, said as what it is
+         do j = 1, size(sr%effects)
+            associate (e => sr%effects(j))
+               if (e%significant .and. e%plausible .and. unresolved(e)) then
+                  verdict = verdict//'; '//trim(e%name)//' lowers BIC by '//real_str(-e%dbic, 'f0.1')// &
+                            ' but lies within '//real_str(resolved_share, 'f0.2')//' of the low end of its range ('// &
+                            trim(e%low_what)//') at 95 %: below what the diagnosis resolves, not a finding'
+                  exit
+               end if
+            end associate
+         end do
          ! (copied: a component of an array of derived type is not contiguous)
          names = sr%effects%name
          power = sr%effects%power_low
