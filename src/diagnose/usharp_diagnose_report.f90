@@ -206,7 +206,8 @@ contains
          'or a predicted fall at least '//str(nint(100.0_dp*rival_share))//' % of the largest); the lower-ranked '// &
          'where none of the leading was confirmed or took the fit tests'' structured gap to its floor, '// &
          'or where only the held-out tests had one; '// &
-         'those simpler than a leader with parameters per test that the screening found significant)')
+         'those simpler than a leader with parameters per test that the screening found significant or '// &
+         'whose predicted fall is at least '//str(nint(100.0_dp*rival_share))//' % of the leader''s)')
       if (res%global) call add_line(lines, '(no significant local refit brought the fit tests'' structured gap '// &
          'down to the noise level, '//real_str(res%floor_fit, 'es9.2')//': the baseline and the refits also ran from '// &
          str(size(res%x_global, 2))//' Latin-hypercube starts of the constants; baseline from them and from '// &
