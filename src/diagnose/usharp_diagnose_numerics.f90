@@ -458,9 +458,6 @@ contains
       end if
    end subroutine limit_measures
 
-   !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the
-   !> end of the value's 95 % interval nearest zero where the interval is finite and of one
-   !> sign, else (a value the data leave undetermined) the fitted ratio itself
    !> Whether an effect's magnitude lies below what the diagnosis resolves at 95 %: every
    !> free parameter with a low end has both ends of its interval bounded and inside
    !> resolved_share of it, and at least one has a low end. The low ends are those of the
@@ -488,6 +485,9 @@ contains
       end do
    end function below_resolved
 
+   !> The ratio of a fitted value to its limit that the plausibility judgement uses: at the
+   !> end of the value's 95 % interval nearest zero where the interval is finite and of one
+   !> sign, else (a value the data leave undetermined) the fitted ratio itself
    pure real(dp) function ratio_beyond_doubt(ratio, p, p_lo, p_hi) result(r)
       real(dp), intent(in) :: ratio        !< |p|/limit
       real(dp), intent(in) :: p, p_lo, p_hi  !< fitted value and its interval
