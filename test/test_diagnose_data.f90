@@ -68,6 +68,7 @@ contains
          new_unittest('lcf-held-out-softening-found-with-every-test-fitted', test_joint), &
          new_unittest('softening-refitted-in-the-basin-of-its-sign', test_softening_sign), &
          new_unittest('held-out-prediction-of-loose-constants-confirms-nothing', test_loose_constants), &
+         new_unittest('drift-in-one-fit-test-stated-as-missable', test_drift_one_test), &
          new_unittest('fast-second-back-stress-found-at-its-rate', test_fast_backstress), &
          new_unittest('baseline-left-behind-is-fitted-again', test_baseline_left_behind), &
          new_unittest('baseline-searched-past-its-iteration-limit', test_baseline_continued), &
@@ -1025,6 +1026,35 @@ contains
       end do
       call check(error, named_effect(res) == effect_index('backstress2'), res%verdict)
    end subroutine test_loose_constants
+
+   !> A drift at the low end of its range, strongest in one fit test (independent data: 2e-5
+   !> strain over each test, -8.3e-8 1/s in the LCF test; ratcheting held out): the constants
+   !> take it up and nothing is significant. The power the verdict states against a per-test
+   !> effect is the least over the fit tests together and each alone: with the drift at its low
+   !> end in both fit tests the power was 1.00 and the verdict said nothing of a drift it had
+   !> missed; it now names the drift as one the fit tests could miss, up to a multiple of the
+   !> low end that holds the injected one (1.0)
+   subroutine test_drift_one_test(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      integer :: j
+      call diagnose_deck('data/independent-ratchet-drift-low/diagnose.nml', res, error)
+      if (allocated(error)) return
+      write (*, '(4x,a)') res%verdict
+      call check(error, res%leading == 0, 'an effect named: '//res%verdict)
+      if (allocated(error)) return
+      j = findloc(res%effects%k, effect_index('drift'), 1)
+      call check(error, j > 0, 'drift not screened')
+      if (allocated(error)) return
+      write (*, '(4x,a)') 'drift: power at the low end '//real_str(res%effects(j)%power_low, 'f0.2')// &
+         ', found with power 0.95 from '//real_str(res%effects(j)%hidden%times, 'f0.2')//' times it'
+      call check(error, res%effects(j)%power_low < 0.95_dp .and. res%effects(j)%hidden%times >= 1.0_dp, &
+                 'drift at the low end in one fit test: power '//real_str(res%effects(j)%power_low, 'f0.2')// &
+                 ', hidden up to '//real_str(res%effects(j)%hidden%times, 'f0.2')//' times the low end')
+      if (allocated(error)) return
+      call check(error, index(res%verdict, 'could miss: ') > 0 .and. index(res%verdict, 'drift (power') > 0, &
+                 'the verdict does not name the drift as one it could miss: '//res%verdict)
+   end subroutine test_drift_one_test
 
    !> A fast second back stress (independent data: H3/gamma3 1.55 ksi at gamma3 = 1266; the
    !> LCF test held out): its screening runs start from recovery rates half, twice, ten and
