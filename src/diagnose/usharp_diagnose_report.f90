@@ -179,7 +179,8 @@ contains
       call add_line(lines, 'Power: of the significance rule (dBIC < -'//real_str(bic_margin, 'f0.0')//') against the '// &
          'effect at the low end of its realistic range on the fit tests, from the expected chi-square of '// &
          'its signal there beyond what the constants take up, at the baseline''s residual (linear in the '// &
-         'effect; a per-test effect at that magnitude in every fit test; of two parameters the weaker).')
+         'effect; a per-test effect at that magnitude in every fit test and in each alone, the least; '// &
+         'of two parameters the weaker).')
       call add_line(lines, '')
       call add_line(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC | '// &
          'low end | chi-square there | power |')
