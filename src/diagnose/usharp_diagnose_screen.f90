@@ -206,11 +206,11 @@ contains
       ! Each test's residual variance, its baseline mean square
       var = block_sums(npts, r0)/max(npts, 1)
       d = low_end_deltas(ep, ctx%cat(ep%k), ctx%ifit)
-      ! A per-test effect is often one specimen's (a drift, a lag): at its low end in one fit
-      ! test alone the others carry no signal and the constants take up more of it, so the
-      ! power stated is the least over every fit test together and each alone (a drift of
-      ! -8.3e-8 1/s in the LCF test only was missed where the power with it in both fit
-      ! tests was 1.00)
+      ! A per-test effect is often one specimen's (a drift, a temperature offset): at its low
+      ! end in one fit test alone the others carry no signal and the constants take up more
+      ! of it, so the power stated is the least over every fit test together and each alone
+      ! (a drift of -8.3e-8 1/s in the LCF test only was missed where the power with it in
+      ! both fit tests was 1.00)
       if (ctx%cat(ep%k)%sharing == param_per_test .and. size(ctx%ifit) > 1) then
          do i = 1, size(ctx%ifit)
             d1 = low_end_deltas(ep, ctx%cat(ep%k), [ctx%ifit(i)])
