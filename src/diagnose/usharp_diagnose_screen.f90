@@ -201,8 +201,8 @@ contains
       !> simulations made (the candidate tests' added)
       integer, intent(inout) :: nevals
       real(dp), allocatable :: d(:, :), d1(:, :), sig(:), w(:), var(:)
-      real(dp) :: proj
-      integer :: g, i
+      real(dp) :: proj, lam
+      integer :: g, i, gmin
       ! Each test's residual variance, its baseline mean square
       var = block_sums(npts, r0)/max(npts, 1)
       d = low_end_deltas(ep, ctx%cat(ep%k), ctx%ifit)
@@ -220,10 +220,14 @@ contains
       if (any(var <= 0.0_dp) .or. size(d, 2) == 0) return
       w = [(spread(1.0_dp/sqrt(var(i)), 1, npts(i)), i=1, size(npts))]
       e%lambda_low = huge(1.0_dp)
+      gmin = 1
       do g = 1, size(d, 2)
          sig = w*mat_mul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
          call gn_decrease(jc*spread(w, 2, size(jc, 2)), sig, proj)
-         e%lambda_low = min(e%lambda_low, max(sum(sig**2) - proj, 0.0_dp))
+         lam = max(sum(sig**2) - proj, 0.0_dp)
+         ! the weakest low end: the (last) column of the least chi-square
+         if (lam <= e%lambda_low) gmin = g
+         e%lambda_low = min(e%lambda_low, lam)
       end do
       e%power_low = bic_power(e%lambda_low, count(free_params(ep, ctx%ifit, .false.)), size(r0))
       if (e%power_low < 0.95_dp) call hidden_bound()
@@ -235,20 +239,12 @@ contains
       !> mean)
       subroutine hidden_bound()
          real(dp), allocatable :: dg(:), p(:), p1(:)
-         real(dp) :: lam
          integer :: q, nt, j, gp, i
          integer, allocatable :: idx(:)
          logical, allocatable :: nz(:)
          q = count(free_params(ep, ctx%ifit, .false.))
          if (.not. e%lambda_low > 0.0_dp) return
-         ! the weakest low end: the column of the least chi-square
-         dg = d(:, 1)
-         do g = 1, size(d, 2)
-            sig = w*mat_mul(jp, pack(d(:, g)/ep%pscale, ep%pfree))
-            call gn_decrease(jc*spread(w, 2, size(jc, 2)), sig, proj)
-            lam = max(sum(sig**2) - proj, 0.0_dp)
-            if (lam <= e%lambda_low) dg = d(:, g)
-         end do
+         dg = d(:, gmin)
          e%hidden%times = min(sqrt(power_lambda(0.95_dp, q, size(r0))/e%lambda_low), 1.0e4_dp)
          p = ep%p0 + e%hidden%times*dg
          nt = size(ctx%prob%targets)
