@@ -63,6 +63,7 @@ contains
          new_unittest('per-specimen-names-a-drifting-extensometer', test_specimen_drift), &
          new_unittest('power-against-monte-carlo', test_power_monte_carlo), &
          new_unittest('clean-specimen-against-loose-replicates', test_specimen_clean), &
+         new_unittest('specimen-temperature-at-low-end-named', test_specimen_temperature_low), &
          new_unittest('clean-specimen-noisier-than-its-replicates', test_specimen_noisier), &
          new_unittest('independent-data-clean-modulus-temperature', test_independent), &
          new_unittest('lcf-held-out-softening-found-with-every-test-fitted', test_joint), &
@@ -545,6 +546,32 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_specimen_clean
+
+   !> One specimen 5 K colder than its replicates, the low end of the temperature offset's
+   !> range (independent data). Refitted from a zero offset alone, the offset stayed at
+   !> -0.004 K and scatter was named; from plus and minus the low end as well, the
+   !> temperature leads, with an interval that holds the injected offset
+   subroutine test_specimen_temperature_low(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(specimen_result) :: sr
+      real(dp), parameter :: dt_true = -5.0_dp
+      call read_config('data/independent-specimen-temperature-low/diagnose.nml', cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call specimen_run(cfg, 2, opts, .true., sr, e)
+      if (allocated(e)) call test_failed(error, 'per-specimen diagnosis failed: '//e%message)
+      if (allocated(error)) return
+      associate (lead => sr%effects(1))
+         write (*, '(4x,a)') trim(sr%name)//': leading '//trim(lead%name)//', BIC '//real_str(lead%dbic, 'f0.1')
+         call check(error, lead%name == 'temperature' .and. lead%significant, 'ranked first: '//trim(lead%name))
+         if (allocated(error)) return
+         call check(error, lead%p_lo(1) <= dt_true .and. dt_true <= lead%p_hi(1), &
+                    'dT '//real_str(lead%p(1), 'f0.3')//' ['//real_str(lead%p_lo(1), 'f0.3')//', '// &
+                    real_str(lead%p_hi(1), 'f0.3')//'] K misses -5 K')
+      end associate
+   end subroutine test_specimen_temperature_low
 
    !> The drift case without a drift, the specimen's data six times noisier (3 % of its peak
    !> against 0.5 %), three noise seeds: no effect is significant. Fitted with every test

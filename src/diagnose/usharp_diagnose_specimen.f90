@@ -354,7 +354,7 @@ contains
          integer :: pass
          logical :: lower
          real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
-         real(dp), allocatable :: starts(:, :), d(:, :)
+         real(dp), allocatable :: starts(:, :), d(:, :), x_tried(:, :)
          real(dp) :: scale, reach, saturation
          integer, allocatable :: grp(:)
          ! Figures and intervals again from a lower point that a profile met, at most twice
@@ -369,15 +369,25 @@ contains
          call ek%bounds(lo, hi)
          ! The second back stress from saturations and rates apart (backstress2_starts); the
          ! lowest end point is kept
-         starts = reshape(ek%p0, [np, 1])
+         ! Any other effect from its zero and from plus and minus its low end on the specimen
+         ! (low_end_deltas): a temperature offset of -5 K on one specimen, refitted from
+         ! zero alone, stayed at -0.004 K and left the specimen to scatter
+         d = low_end_deltas(ek, cat(k), [ispec])
+         starts = reshape([ek%p0, spread(ek%p0, 2, size(d, 2)) + d, spread(ek%p0, 2, size(d, 2)) - d], &
+                          [np, 1 + 2*size(d, 2)])
          if (k == 8) starts = backstress2_starts(peak, opts%gamma3)
          ! The saturating softening of either sign at three rates (the first is the zero start)
          if (k == 7) starts = softening_starts(cat(k))
          se_out%nevals = 0
          call low_end_power(ek, se_out)
+         allocate (x_tried(0, 0))
          do jj = 1, size(starts, 2)
             ek%p0 = starts(:, jj)
             x0 = min(max(ek%start(), lo), hi)
+            ! (a start its search box moves onto an earlier one, minus the low end of an
+            ! effect that cannot be negative, is not searched again)
+            if (any(count(spread(x0, 2, size(x_tried, 2)) /= x_tried, 1) == 0)) cycle
+            x_tried = reshape([x_tried, x0], [size(x0), size(x_tried, 2) + 1])
             call levenberg_marquardt(ek, x0, lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, opts%max_evals, o1, error, &
                                      updates=lm_updates)
             if (allocated(error)) return
