@@ -367,14 +367,14 @@ contains
          np = size(ek%p0)
          se_out%q = count(ek%pfree)
          call ek%bounds(lo, hi)
-         ! The second back stress from saturations and rates apart (backstress2_starts); the
-         ! lowest end point is kept
-         ! Any other effect from its zero and from plus and minus its low end on the specimen
-         ! (low_end_deltas): a temperature offset of -5 K on one specimen, refitted from
-         ! zero alone, stayed at -0.004 K and left the specimen to scatter
+         ! An effect from its zero and from plus and minus its low end on the specimen
+         ! (low_end_deltas), the lowest end point kept: a temperature offset of -5 K on one
+         ! specimen, refitted from zero alone, stayed at -0.004 K and left the specimen to
+         ! scatter
          d = low_end_deltas(ek, cat(k), [ispec])
          starts = reshape([ek%p0, spread(ek%p0, 2, size(d, 2)) + d, spread(ek%p0, 2, size(d, 2)) - d], &
                           [np, 1 + 2*size(d, 2)])
+         ! The second back stress from saturations and rates apart (backstress2_starts)
          if (k == 8) starts = backstress2_starts(peak, opts%gamma3)
          ! The saturating softening of either sign at three rates (the first is the zero start)
          if (k == 7) starts = softening_starts(cat(k))
