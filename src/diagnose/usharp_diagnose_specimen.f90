@@ -508,9 +508,8 @@ contains
          call limit_measures(cat(k), ek, o%x, p, peak, reach, saturation)
          se_out%plausible = beyond_limit(cat(k), grp, p, se_out%p_lo, se_out%p_hi, &
                                          se_out%lo_open .or. se_out%hi_open, reach, saturation) <= 1.0_dp
-         ! The low ends its intervals are set against (a second back stress's is one of its
-         ! saturation, which no interval here bounds)
-         d = low_end_deltas(ek, cat(k), [ispec])
+         ! The low ends its intervals are set against, d of the starts (a second back
+         ! stress's is one of its saturation, which no interval here bounds)
          allocate (se_out%p_low(size(p)))
          se_out%p_low = 0.0_dp
          if (size(d, 2) > 0 .and. cat(k)%name /= 'backstress2') se_out%p_low = pack(maxval(abs(d), 2), ek%pfree)
