@@ -37,7 +37,8 @@ module test_diagnose
    use usharp_rng, only: rng_type
    use usharp_diagnose_numerics, only: best_of_starts, global_points, lm_ftol, lm_itermax, held_rate, ratio_beyond_doubt, &
                                        at_box_end, at_bound, beyond_limit, limit_measures, judge_held_values, &
-                                       backstress2_starts, below_resolved, resolved_share
+                                       backstress2_starts, below_resolved, resolved_share, low_end_deltas, &
+                                       low_end_starts, distinct_starts
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
@@ -119,6 +120,7 @@ contains
          new_unittest('held-out-prediction-open-between-end-points', test_alike_note), &
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('second-back-stress-box-holds-the-peak-saturation', test_backstress2_box), &
+         new_unittest('one-test-effect-starts-at-zero-and-its-low-ends', test_low_end_starts), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
          new_unittest('interval-that-leaves-out-its-estimate-opens', test_open_beyond_estimate), &
          new_unittest('gap-shares-of-the-lower-baseline', test_gap_fit_ref), &
@@ -1977,6 +1979,49 @@ contains
       call check(error, size(hi) > nc .and. all(lo(nc + 1:) == -cat(k)%box(1)) .and. all(hi(nc + 1:) == cat(k)%box(1)), &
                  'a signed parameter''s box is not the catalogue''s both ways')
    end subroutine test_backstress2_box
+
+   !> An effect fitted to one test with the constants fixed (a held-out test's own parameters,
+   !> a specimen's) starts from zero and from plus and minus its low end in that test: three
+   !> starts for a temperature offset (5 K, either sign), two for a lag (0.1 s; minus it is
+   !> clipped onto zero, a start already taken); the problem's own parameters left as they were
+   subroutine test_low_end_starts(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep
+      type(uerror), allocatable :: e
+      type(effect_info) :: cat(n_effects)
+      real(dp), allocatable :: lo(:), hi(:), xs(:, :), p0(:)
+      real(dp), parameter :: peak = 20.0_dp  ! ksi, the deck's unit
+      integer :: k, nt
+      call read_config('decks/thesis-run2.nml', cfg, e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      call check(error, .not. allocated(e), 'the thesis deck is set up')
+      if (allocated(error)) return
+      cat = effect_catalogue(peak)
+      nt = size(prob%targets)
+      k = effect_index('temperature')
+      call new_effect_problem(prob, [1], k, test_effects(), peak, ep, free_constants=.false.)
+      call ep%bounds(lo, hi)
+      p0 = ep%p0
+      call distinct_starts(ep, low_end_starts(ep%p0, low_end_deltas(ep, cat(k), [1])), lo, hi, xs)
+      call check(error, size(xs, 2) == 3 .and. size(xs, 1) == nt, 'temperature: '//str(size(xs, 2))// &
+                 ' starts of '//str(size(xs, 1))//' parameters')
+      if (allocated(error)) return
+      call check(error, all(xs(:, 1) == 0.0_dp) .and. abs(xs(1, 2)*ep%pscale(1) - cat(k)%low(1)) < 1.0e-12_dp &
+                 .and. xs(1, 3) == -xs(1, 2) .and. all(xs(2:, 2:) == 0.0_dp), &
+                 'temperature: zero, then plus and minus '//real_str(cat(k)%low(1), 'f5.1')//' K in the first test only')
+      if (allocated(error)) return
+      call check(error, all(ep%p0 == p0), 'the problem''s parameters changed')
+      if (allocated(error)) return
+      k = effect_index('lag')
+      call new_effect_problem(prob, [1], k, test_effects(), peak, ep, free_constants=.false.)
+      call ep%bounds(lo, hi)
+      call distinct_starts(ep, low_end_starts(ep%p0, low_end_deltas(ep, cat(k), [1])), lo, hi, xs)
+      call check(error, size(xs, 2) == 2, 'lag: '//str(size(xs, 2))//' starts, not zero and its low end')
+      if (allocated(error)) return
+      call check(error, abs(xs(1, 2)*ep%pscale(1) - cat(k)%low(1)) < 1.0e-12_dp, 'lag: not its low end')
+   end subroutine test_low_end_starts
 
    !> An effect parameter is flagged at its search box's outer ends (a second back stress's H3
    !> at its upper end, a temperature offset at its negative end), not at a lower end of

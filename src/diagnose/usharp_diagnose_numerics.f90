@@ -32,7 +32,8 @@ module usharp_diagnose_numerics
    public :: free_params, effect_fit, at_bound, at_box_end, softening_starts, soften_rate0, softening_reached, &
              backstress2_starts, rate_effect_start
    public :: limit_measures, below_resolved, resolved_share
-   public :: low_end_deltas, screening_steps, bic_power, power_lambda, test_sizes, block_sums, deviance_change
+   public :: low_end_deltas, low_end_starts, distinct_starts
+   public :: screening_steps, bic_power, power_lambda, test_sizes, block_sums, deviance_change
    public :: tight_jacobian, sandwich_covariance, noise_variance, residual_noise, held_rate, ratio_beyond_doubt, &
              beyond_limit
 
@@ -270,6 +271,38 @@ contains
          end if
       end do
    end function low_end_deltas
+
+   !> Starts xs (columns: x of ep, inside lo..hi) of an effect fitted with the constants
+   !> fixed from the parameters ps (columns), each once: a start that the search box moves
+   !> onto an earlier one (minus the low end of an effect that cannot be negative) is left
+   !> out. ep%p0 is set to each column in turn and left as it was.
+   pure subroutine distinct_starts(ep, ps, lo, hi, xs)
+      type(effect_problem), intent(inout) :: ep
+      real(dp), intent(in) :: ps(:, :), lo(:), hi(:)
+      real(dp), allocatable, intent(out) :: xs(:, :)
+      real(dp), allocatable :: x(:), p0(:)
+      integer :: j
+      p0 = ep%p0
+      allocate (xs(size(lo), 0))
+      do j = 1, size(ps, 2)
+         ep%p0 = ps(:, j)
+         x = min(max(ep%start(), lo), hi)
+         if (any(count(spread(x, 2, size(xs, 2)) /= xs, 1) == 0)) cycle
+         xs = reshape([xs, x], [size(x), size(xs, 2) + 1])
+      end do
+      ep%p0 = p0
+   end subroutine distinct_starts
+
+   !> An effect's parameters p0 and p0 plus and minus each column of d (its low ends,
+   !> low_end_deltas), as columns, p0 first: where an effect is fitted to one test with the
+   !> constants fixed, a search from zero alone can stay near zero (a temperature offset of
+   !> -5 K on one specimen, refitted from zero, stayed at -0.004 K)
+   pure function low_end_starts(p0, d) result(ps)
+      real(dp), intent(in) :: p0(:), d(:, :)
+      real(dp), allocatable :: ps(:, :)
+      ps = reshape([p0, spread(p0, 2, size(d, 2)) + d, spread(p0, 2, size(d, 2)) - d], &
+                   [size(p0), 1 + 2*size(d, 2)])
+   end function low_end_starts
 
    !> Difference steps (units of the problem's x) of the screening's Jacobian at the effect's
    !> zero: a tenth of the low end of each parameter's realistic range (low_end_deltas), at

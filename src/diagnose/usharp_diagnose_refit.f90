@@ -22,7 +22,7 @@ module usharp_diagnose_refit
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, global_points, lm_ftol, lm_itermax, &
                                        free_params, effect_fit, at_bound, copy_constants, &
                                        block_sums, deviance_change, held_rate, beyond_limit, at_box_end, limit_measures, &
-                                       judge_held_values
+                                       judge_held_values, low_end_deltas, low_end_starts, distinct_starts
    use usharp_diagnose_baseline, only: per_test, all_regions
    use usharp_diagnose_units, only: lm_unit, starts_unit
    implicit none
@@ -765,7 +765,7 @@ contains
       type(optimum_type) :: opt
       type(fit_problem) :: pk
       class(model_type), allocatable :: m2
-      real(dp), allocatable :: x0(:), lo(:), hi(:)
+      real(dp), allocatable :: x0(:), lo(:), hi(:), xs(:, :)
       pk = ctx%prob
       call copy_constants(mdl, pk)
       call new_effect_problem(pk, ctx%ihold, e%k, ctx%eff_base, ctx%peak, eh, free_constants=.false., p0=p)
@@ -779,6 +779,15 @@ contains
                       error, memo=ctx%memo)
          if (allocated(error)) return
          e%nevals = e%nevals + opt%nevals
+         ! Then from plus and minus the low end in the held-out tests, as a specimen's
+         ! effect is fitted (low_end_starts), the lowest end point kept
+         call distinct_starts(eh, low_end_starts(eh%p0, low_end_deltas(eh, ctx%cat(e%k), ctx%ihold)), &
+                              lo, hi, xs)
+         if (size(xs, 2) > 1) then
+            call starts_unit(ctx%journal, eh, xs(:, 2:), lo, hi, ctx%h, ctx%opts%max_evals, opt, e%nevals, &
+                             error, memo=ctx%memo)
+            if (allocated(error)) return
+         end if
          x0 = opt%x
       end if
       call eh%unpack(x0, m2, p)

@@ -27,7 +27,8 @@ module usharp_diagnose_specimen
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
-                                       backstress2_starts, rate_effect_start, low_end_deltas, bic_power, power_lambda, &
+                                       backstress2_starts, rate_effect_start, low_end_deltas, low_end_starts, &
+                                       distinct_starts, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, residual_noise, at_bound, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end, below_resolved, resolved_share
@@ -353,8 +354,8 @@ contains
          type(profile_result) :: pr
          integer :: pass
          logical :: lower
-         real(dp), allocatable :: x0(:), lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
-         real(dp), allocatable :: starts(:, :), d(:, :), x_tried(:, :)
+         real(dp), allocatable :: lo(:), hi(:), r(:), jac(:, :), cov(:, :), naive(:, :), se(:), p(:)
+         real(dp), allocatable :: starts(:, :), d(:, :), xs(:, :)
          real(dp) :: scale, reach, saturation
          integer, allocatable :: grp(:)
          ! Figures and intervals again from a lower point that a profile met, at most twice
@@ -368,28 +369,21 @@ contains
          se_out%q = count(ek%pfree)
          call ek%bounds(lo, hi)
          ! An effect from its zero and from plus and minus its low end on the specimen
-         ! (low_end_deltas), the lowest end point kept: a temperature offset of -5 K on one
+         ! (low_end_starts), the lowest end point kept: a temperature offset of -5 K on one
          ! specimen, refitted from zero alone, stayed at -0.004 K and left the specimen to
          ! scatter
          d = low_end_deltas(ek, cat(k), [ispec])
-         starts = reshape([ek%p0, spread(ek%p0, 2, size(d, 2)) + d, spread(ek%p0, 2, size(d, 2)) - d], &
-                          [np, 1 + 2*size(d, 2)])
+         starts = low_end_starts(ek%p0, d)
          ! The second back stress from saturations and rates apart (backstress2_starts)
          if (k == 8) starts = backstress2_starts(peak, opts%gamma3)
          ! The saturating softening of either sign at three rates (the first is the zero start)
          if (k == 7) starts = softening_starts(cat(k))
          se_out%nevals = 0
          call low_end_power(ek, se_out)
-         allocate (x_tried(0, 0))
-         do jj = 1, size(starts, 2)
-            ek%p0 = starts(:, jj)
-            x0 = min(max(ek%start(), lo), hi)
-            ! (a start its search box moves onto an earlier one, minus the low end of an
-            ! effect that cannot be negative, is not searched again)
-            if (any(count(spread(x0, 2, size(x_tried, 2)) /= x_tried, 1) == 0)) cycle
-            x_tried = reshape([x_tried, x0], [size(x0), size(x_tried, 2) + 1])
-            call levenberg_marquardt(ek, x0, lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, opts%max_evals, o1, error, &
-                                     updates=lm_updates)
+         call distinct_starts(ek, starts, lo, hi, xs)
+         do jj = 1, size(xs, 2)
+            call levenberg_marquardt(ek, xs(:, jj), lo, hi, 1.0e-3_dp, 1.0e-10_dp, 100, opts%max_evals, &
+                                     o1, error, updates=lm_updates)
             if (allocated(error)) return
             se_out%nevals = se_out%nevals + o1%nevals
             call keep_lower(o, o1, jj == 1)
