@@ -1948,17 +1948,13 @@ contains
    !> and the refit ran to that end). Every parameter's box is the catalogue's.
    subroutine test_backstress2_box(error)
       type(error_type), allocatable, intent(out) :: error
-      type(run_config) :: cfg
       type(fit_problem) :: prob
       type(effect_problem) :: ep
-      type(uerror), allocatable :: e
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:)
       real(dp), parameter :: peak = 20.0_dp  ! ksi, the deck's unit
       integer :: nc, k
-      call read_config('decks/thesis-run2.nml', cfg, e)
-      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
-      call check(error, .not. allocated(e), 'the thesis deck is set up')
+      call thesis_problem(prob, error)
       if (allocated(error)) return
       cat = effect_catalogue(peak)
       k = effect_index('backstress2')
@@ -1986,17 +1982,13 @@ contains
    !> clipped onto zero, a start already taken); the problem's own parameters left as they were
    subroutine test_low_end_starts(error)
       type(error_type), allocatable, intent(out) :: error
-      type(run_config) :: cfg
       type(fit_problem) :: prob
       type(effect_problem) :: ep
-      type(uerror), allocatable :: e
       type(effect_info) :: cat(n_effects)
       real(dp), allocatable :: lo(:), hi(:), xs(:, :), p0(:)
       real(dp), parameter :: peak = 20.0_dp  ! ksi, the deck's unit
       integer :: k, nt
-      call read_config('decks/thesis-run2.nml', cfg, e)
-      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
-      call check(error, .not. allocated(e), 'the thesis deck is set up')
+      call thesis_problem(prob, error)
       if (allocated(error)) return
       cat = effect_catalogue(peak)
       nt = size(prob%targets)
@@ -2022,6 +2014,17 @@ contains
       if (allocated(error)) return
       call check(error, abs(xs(1, 2)*ep%pscale(1) - cat(k)%low(1)) < 1.0e-12_dp, 'lag: not its low end')
    end subroutine test_low_end_starts
+
+   !> The fit problem of the thesis's run 2 (decks/thesis-run2.nml)
+   subroutine thesis_problem(prob, error)
+      type(fit_problem), intent(out) :: prob
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: e
+      call read_config('decks/thesis-run2.nml', cfg, e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      call check(error, .not. allocated(e), 'the thesis deck is set up')
+   end subroutine thesis_problem
 
    !> An effect parameter is flagged at its search box's outer ends (a second back stress's H3
    !> at its upper end, a temperature offset at its negative end), not at a lower end of
