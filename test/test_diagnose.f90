@@ -121,6 +121,7 @@ contains
          new_unittest('parameters-at-the-end-of-their-box-flagged', test_box_end), &
          new_unittest('second-back-stress-box-holds-the-peak-saturation', test_backstress2_box), &
          new_unittest('one-test-effect-starts-at-zero-and-its-low-ends', test_low_end_starts), &
+         new_unittest('a-test-that-sees-the-same-point-is-not-simulated-again', test_rows_reused), &
          new_unittest('one-plausibility-rule-for-both-diagnoses', test_beyond_limit), &
          new_unittest('interval-that-leaves-out-its-estimate-opens', test_open_beyond_estimate), &
          new_unittest('gap-shares-of-the-lower-baseline', test_gap_fit_ref), &
@@ -2014,6 +2015,51 @@ contains
       if (allocated(error)) return
       call check(error, abs(xs(1, 2)*ep%pscale(1) - cat(k)%low(1)) < 1.0e-12_dp, 'lag: not its low end')
    end subroutine test_low_end_starts
+
+   !> A batch of points of a temperature offset per test (the thesis's two tests, the
+   !> constants free): each test is simulated only where the constants and its own offset
+   !> are new to the batch. Offsets [d, 0], [0, d], [d, d]: the first point simulates both
+   !> tests, the second both (each sees a new offset), the third none (test 1 sees the
+   !> first's, test 2 the second's): 4 simulations for 3 points, and the same residuals bit
+   !> for bit as each point evaluated alone; the second batch, the last point again, none
+   subroutine test_rows_reused(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_problem) :: prob
+      type(effect_problem) :: ep, alone
+      type(uerror), allocatable :: e
+      real(dp), allocatable :: x0(:), xs(:, :), rs(:, :), fs(:), r(:)
+      logical :: ok(3), ok1
+      integer :: j, nc
+      call thesis_problem(prob, error)
+      if (allocated(error)) return
+      call new_effect_problem(prob, [1, 2], effect_index('temperature'), test_effects(), 20.0_dp, ep)
+      alone = ep
+      x0 = ep%start()
+      nc = size(x0) - 2
+      call check(error, nc == size(prob%idx), 'not one offset per test beside the constants')
+      if (allocated(error)) return
+      xs = spread(x0, 2, 3)
+      xs(nc + 1, [1, 3]) = 0.5_dp
+      xs(nc + 2, [2, 3]) = 0.5_dp
+      allocate (rs(ep%nres(), 3), fs(3), r(ep%nres()))
+      call ep%residuals(xs, rs, fs, ok, e)
+      call check(error, .not. allocated(e) .and. all(ok), 'the batch failed')
+      if (allocated(error)) return
+      call check(error, ep%nsims == 4 .and. ep%nevals == 3, str(ep%nsims)//' tests simulated for '// &
+                 str(ep%nevals)//' points, not 4 for 3')
+      if (allocated(error)) return
+      do j = 1, 3
+         call alone%residual_at(xs(:, j), r, ok1)
+         call check(error, ok1 .and. all(r == rs(:, j)), 'point '//str(j)//': not the rows of its own simulation')
+         if (allocated(error)) return
+      end do
+      call check(error, any(rs(:, 3) /= rs(:, 1)) .and. any(rs(:, 3) /= rs(:, 2)), 'the offsets change nothing')
+      if (allocated(error)) return
+      call ep%residuals(xs(:, 3:3), rs(:, 1:1), fs(1:1), ok(1:1), e)
+      call ep%residuals(xs(:, 3:3), rs(:, 2:2), fs(1:1), ok(1:1), e)
+      call check(error, ep%nsims == 6 .and. all(rs(:, 2) == rs(:, 3)), str(ep%nsims - 4)// &
+                 ' tests simulated for a point twice alone, not 2')
+   end subroutine test_rows_reused
 
    !> The fit problem of the thesis's run 2 (decks/thesis-run2.nml)
    subroutine thesis_problem(prob, error)

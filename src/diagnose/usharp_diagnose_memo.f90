@@ -11,7 +11,7 @@ module usharp_diagnose_memo
    use usharp_strings, only: str
    use usharp_filesys, only: hash_text, hash_hex
    use usharp_optimiser, only: optimum_type
-   use usharp_effect_values, only: test_effects
+   use usharp_effect_values, only: test_effects, effect_reals
    use usharp_effect_problem, only: effect_problem
    implicit none
    private
@@ -100,16 +100,6 @@ contains
             ' pnonneg'//ints_text(merge(1, 0, ep%pnonneg))//' made of '//hash_hex(hash_text(made_of))// &
             ' parameters '//hex_text([ep%p0, ep%pscale, ep%pbox, effect_reals(ep%base)])
    end function problem_key
-
-   !> The values of e, in order, component by component: a copy of the whole type would take
-   !> the padding bytes of any component that is not real(dp) into the key, whose values no
-   !> run fixes (the key of one problem then differed between a run and its resumption)
-   pure function effect_reals(e) result(v)
-      type(test_effects), intent(in) :: e
-      real(dp), allocatable :: v(:)
-      v = [e%compliance, e%lag, e%dtemp, e%dlnE_dT, e%modulus, e%strength, e%r0, e%dd0, e%shift, &
-           e%soften, e%soften_rate, e%h3, e%gamma3, e%drift]
-   end function effect_reals
 
    pure function reals_bytes(x) result(bytes)
       real(dp), intent(in) :: x(:)

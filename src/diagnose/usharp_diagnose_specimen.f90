@@ -422,7 +422,6 @@ contains
                ! The specimen alone from here on: its objective, magnitudes and intervals at
                ! the joint fit's constants
                call set_constants_at(ek%prob, oj%x(:size(x_rep)))
-               if (allocated(ek%x_last)) deallocate (ek%x_last, ek%r_last)
                ! (the joint fit's stopping rule is on the objective of all the tests: the
                ! effect's parameters are finished on the specimen's own, where the profile
                ! starts)

@@ -9,6 +9,7 @@ module usharp_effect_problem
    use usharp_model, only: model_type
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, effects_of, &
                              effect_model, effect_nparams, n_effects, param_per_test, effect_acts
+   use usharp_effect_values, only: effect_reals
    use usharp_objective, only: fit_problem, test_residuals, simulated
    use usharp_optimiser, only: least_squares_type
    use usharp_simulation, only: sim_result, solver_options
@@ -46,12 +47,16 @@ module usharp_effect_problem
       !> tests against one another
       real(dp), allocatable :: test_scale(:)
       integer :: nevals = 0
-      !> The last point evaluated on its own and its residuals: a point that differs from it
-      !> only in one test's own parameters (a difference step of a per-test parameter)
-      !> simulates that test alone and copies the others' rows
-      real(dp), allocatable :: x_last(:), r_last(:)
+      !> Tests simulated (nevals counts points; a test whose rows were copied is not counted)
+      integer :: nsims = 0
+      !> What each test saw at the last point evaluated on its own (test_inputs), and that
+      !> point's residuals: a test that sees the same at a later point takes its rows from
+      !> there (see ep_residuals)
+      real(dp), allocatable :: seen_last(:, :), r_last(:)
    contains
       procedure :: residuals => ep_residuals
+      procedure :: test_inputs => ep_test_inputs
+      procedure :: effects_at => ep_effects_at
       procedure :: nres => ep_nres
       procedure :: eval => ep_eval
       procedure :: nx => ep_nx
@@ -195,18 +200,7 @@ contains
       call self%unpack(x, model, p)
       call model%setup(error)
       if (allocated(error)) return
-      nt = size(self%prob%targets)
-      if (self%k > 0) then
-         eff = effects_of(self%k, p, nt, self%base)
-         if (self%effect_test > 0) then
-            do it = 1, nt
-               if (it /= self%effect_test) eff(it) = self%base
-            end do
-         end if
-      else
-         allocate (eff(nt))
-         eff = self%base
-      end if
+      eff = self%effects_at(p)
       ! each test's first row less one
       allocate (k0(size(self%tests)), failed(size(self%tests)))
       k0(1) = 0
@@ -294,9 +288,11 @@ contains
    end subroutine simulate_effect
 
    !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty. A
-   !> point that differs from the last point evaluated alone, or from an earlier point of the
-   !> batch, only in one test's own parameters simulates that test alone (the others' rows are
-   !> the same numbers); nevals counts points
+   !> test's rows are made from what its simulation sees (see test_inputs): where that is
+   !> what it saw at the last point evaluated alone, or at an earlier point of the batch, its
+   !> rows are copied from there (the same numbers), else the test is simulated. A
+   !> difference column of one test's own parameter so simulates that test alone, from any
+   !> base point; nevals counts points, nsims the tests simulated
    subroutine ep_residuals(self, xs, rs, fs, ok, error)
       class(effect_problem), intent(inout) :: self
       real(dp), intent(in) :: xs(:, :)
@@ -304,134 +300,159 @@ contains
       real(dp), intent(out) :: fs(:)
       logical, intent(out) :: ok(:)
       type(error_type), allocatable, intent(out) :: error
-      integer, allocatable :: owner(:), ref(:), only(:)
-      integer :: j, b, n
+      real(dp), allocatable :: seen(:, :, :)
+      integer, allocatable :: src(:, :), row0(:), rows(:), jobs(:, :)
+      logical, allocatable :: tok(:, :)
+      integer :: j, b, n, it, ntr, q
       logical :: last_ok
       n = size(xs, 2)
-      owner = test_of_x(self)
-      ! ref(j): 0 the last point, b > 0 column b of the batch, -1 none (every test simulated)
-      allocate (ref(n), only(n))
-      ref = -1
-      only = 0
-      last_ok = .false.
-      if (allocated(self%x_last)) last_ok = size(self%x_last) == size(xs, 1)
+      ntr = size(self%tests)
+      allocate (row0(ntr), rows(ntr))
+      do it = 1, ntr
+         rows(it) = size(self%prob%targets(self%tests(it))%t)
+      end do
+      row0(1) = 0
+      do it = 2, ntr
+         row0(it) = row0(it - 1) + rows(it - 1)
+      end do
       do j = 1, n
-         if (last_ok) then
-            only(j) = single_test(xs(:, j), self%x_last, owner)
-            if (only(j) > 0) ref(j) = 0
+         if (j == 1) then
+            seen = spread(self%test_inputs(xs(:, 1)), 3, n)
+         else
+            seen(:, :, j) = self%test_inputs(xs(:, j))
          end if
-         do b = 1, j - 1
-            if (ref(j) >= 0) exit
-            if (ref(b) /= -1) cycle
-            only(j) = single_test(xs(:, j), xs(:, b), owner)
-            if (only(j) > 0) ref(j) = b
+      end do
+      last_ok = .false.
+      if (allocated(self%seen_last)) last_ok = all(shape(self%seen_last) == shape(seen(:, :, 1)))
+      ! src(it, j): where test it's rows of point j come from: -1 its simulation, 0 the last
+      ! point, b > 0 column b of the batch
+      allocate (src(ntr, n), tok(ntr, n))
+      src = -1
+      do j = 1, n
+         do it = 1, ntr
+            if (last_ok) then
+               if (all(seen(:, it, j) == self%seen_last(:, it))) then
+                  src(it, j) = 0
+                  cycle
+               end if
+            end if
+            do b = 1, j - 1
+               if (all(seen(:, it, j) == seen(:, it, b))) then
+                  src(it, j) = b
+                  exit
+               end if
+            end do
          end do
       end do
-      ! Inside a team already (the starts of best_of_starts run as its tasks) the points are
-      ! tasks too, which a thread whose own start waits or has ended takes up; otherwise a
-      ! team of their own. Each point is simulated alone either way: the same numbers.
+      allocate (jobs(2, count(src == -1)))
+      q = 0
+      do j = 1, n
+         do it = 1, ntr
+            if (src(it, j) /= -1) cycle
+            q = q + 1
+            jobs(:, q) = [it, j]
+         end do
+      end do
+      tok = .true.
+      self%nsims = self%nsims + size(jobs, 2)
+      ! Inside a team already (the starts of best_of_starts run as its tasks) the simulations
+      ! are tasks too, which a thread whose own start waits or has ended takes up; otherwise a
+      ! team of their own. Each test is simulated alone either way: the same numbers.
       if (omp_in_parallel()) then
          !$omp taskloop grainsize(1)
-         do j = 1, n
-            call whole(j)
-         end do
-         !$omp end taskloop
-         !$omp taskloop grainsize(1)
-         do j = 1, n
-            call one_test(j)
+         do q = 1, size(jobs, 2)
+            call simulate_job(q)
          end do
          !$omp end taskloop
       else
          !$omp parallel do schedule(dynamic)
-         do j = 1, n
-            call whole(j)
-         end do
-         !$omp end parallel do
-         !$omp parallel do schedule(dynamic)
-         do j = 1, n
-            call one_test(j)
+         do q = 1, size(jobs, 2)
+            call simulate_job(q)
          end do
          !$omp end parallel do
       end if
+      ! the copies, in the order of the points (an earlier column's rows are final)
       do j = 1, n
+         do it = 1, ntr
+            associate (r => rs(row0(it) + 1:row0(it) + rows(it), j))
+               if (src(it, j) == 0) then
+                  r = self%r_last(row0(it) + 1:row0(it) + rows(it))
+               else if (src(it, j) > 0) then
+                  r = rs(row0(it) + 1:row0(it) + rows(it), src(it, j))
+                  tok(it, j) = tok(it, src(it, j))
+               end if
+            end associate
+         end do
+         ok(j) = all(tok(:, j)) .and. all(abs(rs(:, j)) < huge(1.0_dp))
          fs(j) = merge(sum(rs(:, j)**2), failed_objective, ok(j))
       end do
       self%nevals = self%nevals + n
       if (n == 1 .and. ok(1)) then
-         self%x_last = xs(:, 1)
+         self%seen_last = seen(:, :, 1)
          self%r_last = rs(:, 1)
       end if
 
    contains
 
-      !> Point j with every test simulated (unless it is one test's own)
-      subroutine whole(j)
-         integer, intent(in) :: j
-         if (ref(j) == -1) call self%residual_at(xs(:, j), rs(:, j), ok(j))
-      end subroutine whole
-
-      !> Point j with its one test simulated, the other rows those of its reference
-      subroutine one_test(j)
-         integer, intent(in) :: j
-         if (ref(j) == -1) return
-         if (ref(j) == 0) then
-            rs(:, j) = self%r_last
-         else
-            rs(:, j) = rs(:, ref(j))
-         end if
-         call self%residual_at(xs(:, j), rs(:, j), ok(j), only=only(j))
-         ok(j) = ok(j) .and. all(abs(rs(:, j)) < huge(1.0_dp))
-      end subroutine one_test
+      !> Simulation q: test jobs(1, q) at point jobs(2, q), into its rows of rs
+      subroutine simulate_job(q)
+         integer, intent(in) :: q
+         real(dp), allocatable :: r(:)
+         associate (it => jobs(1, q), j => jobs(2, q))
+            allocate (r(size(rs, 1)))
+            r = 0.0_dp
+            call self%residual_at(xs(:, j), r, tok(it, j), only=it)
+            rs(row0(it) + 1:row0(it) + rows(it), j) = r(row0(it) + 1:row0(it) + rows(it))
+         end associate
+      end subroutine simulate_job
    end subroutine ep_residuals
 
-   !> For each component of x: the index (into the problem's tests) of the one test whose
-   !> residuals alone it changes (a per-test parameter of that test), 0 when it changes all
-   pure function test_of_x(self) result(owner)
+   !> The effects each test of prob sees (prob's tests) with the parameters p (physical units)
+   pure function ep_effects_at(self, p) result(eff)
       class(effect_problem), intent(in) :: self
-      integer, allocatable :: owner(:)
-      type(effect_info) :: cat(n_effects)
-      integer :: nc, j, jx, nt, it
-      nc = 0
-      if (self%free_constants) nc = size(self%prob%idx)
-      allocate (owner(nc + count(self%pfree)))
-      owner = 0
-      if (self%k == 0) return
+      real(dp), intent(in) :: p(:)
+      type(test_effects), allocatable :: eff(:)
+      integer :: it, nt
       nt = size(self%prob%targets)
-      if (self%effect_test > 0) then
-         ! every effect parameter is that test's own
-         do it = 1, size(self%tests)
-            if (self%tests(it) == self%effect_test) owner(nc + 1:) = it
-         end do
-         return
-      end if
-      cat = effect_catalogue(1.0_dp)
-      if (cat(self%k)%sharing /= param_per_test) return
-      jx = nc
-      do j = 1, size(self%p0)
-         if (.not. self%pfree(j)) cycle
-         jx = jx + 1
-         do it = 1, size(self%tests)
-            if (self%tests(it) == mod(j - 1, nt) + 1) owner(jx) = it
-         end do
-      end do
-   end function test_of_x
-
-   !> The one test (owner's index) in whose own parameters alone xa differs from xb; 0 when
-   !> they are equal, or differ elsewhere or in several tests' parameters
-   pure integer function single_test(xa, xb, owner) result(it)
-      real(dp), intent(in) :: xa(:), xb(:)
-      integer, intent(in) :: owner(:)
-      integer :: j
-      it = 0
-      do j = 1, size(xa)
-         if (xa(j) == xb(j)) cycle
-         if (owner(j) == 0 .or. (it > 0 .and. owner(j) /= it)) then
-            it = 0
-            return
+      if (self%k > 0) then
+         eff = effects_of(self%k, p, nt, self%base)
+         if (self%effect_test > 0) then
+            do it = 1, nt
+               if (it /= self%effect_test) eff(it) = self%base
+            end do
          end if
-         it = owner(j)
+      else
+         allocate (eff(nt))
+         eff = self%base
+      end if
+   end function ep_effects_at
+
+   !> What makes each test's residuals at x besides its data, as reals (a column per test of
+   !> the problem): the model's constants, the effects the test sees, the integrator's
+   !> settings and the test's factor on its residuals. The problem's set-up enters through
+   !> them (a start's p0, the constants held, a tighter tolerance), not through x alone.
+   function ep_test_inputs(self, x) result(seen)
+      class(effect_problem), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), allocatable :: seen(:, :)
+      class(model_type), allocatable :: model
+      type(test_effects), allocatable :: eff(:)
+      real(dp), allocatable :: p(:), c(:)
+      integer :: it, i, ic
+      call self%unpack(x, model, p)
+      eff = self%effects_at(p)
+      c = [(model%get_constant(ic), ic=1, model%n_constants())]
+      associate (s => self%prob%cfg%solver)
+         c = [c, s%rtol, s%atol_strain, s%max_step, real(s%max_steps, dp), &
+              merge(1.0_dp, 0.0_dp, s%integrator == 'cvode')]
+      end associate
+      allocate (seen(size(c) + size(effect_reals(eff(1))) + 1, size(self%tests)))
+      do it = 1, size(self%tests)
+         i = self%tests(it)
+         seen(:, it) = [c, effect_reals(eff(i)), 1.0_dp]
+         if (allocated(self%test_scale)) seen(size(seen, 1), it) = self%test_scale(i)
       end do
-   end function single_test
+   end function ep_test_inputs
 
    subroutine ep_eval(self, x, f, error)
       class(effect_problem), intent(inout) :: self

@@ -8,7 +8,7 @@ module usharp_effect_values
    implicit none
    private
 
-   public :: test_effects
+   public :: test_effects, effect_reals
 
    !> What one test's simulation sees (all zero: the plain model)
    type :: test_effects
@@ -31,4 +31,16 @@ module usharp_effect_values
       !> the test's start (a strain-controlled specimen sees the command less the drift)
       real(dp) :: drift = 0.0_dp
    end type test_effects
+
+contains
+
+   !> The values of e, in order, component by component: a copy of the whole type would take
+   !> the padding bytes of any component that is not real(dp) into a key, whose values no
+   !> run fixes (the key of one problem then differed between a run and its resumption)
+   pure function effect_reals(e) result(v)
+      type(test_effects), intent(in) :: e
+      real(dp), allocatable :: v(:)
+      v = [e%compliance, e%lag, e%dtemp, e%dlnE_dT, e%modulus, e%strength, e%r0, e%dd0, e%shift, &
+           e%soften, e%soften_rate, e%h3, e%gamma3, e%drift]
+   end function effect_reals
 end module usharp_effect_values
