@@ -194,7 +194,7 @@ contains
       real(dp), allocatable :: p(:)
       integer, allocatable :: k0(:)
       logical, allocatable :: failed(:)
-      integer :: it, nt, ntr
+      integer :: it, ntr
       ok = .false.
       if (.not. present(only)) r = 0.0_dp
       call self%unpack(x, model, p)
