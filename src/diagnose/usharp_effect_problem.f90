@@ -57,6 +57,7 @@ module usharp_effect_problem
       procedure :: residuals => ep_residuals
       procedure :: test_inputs => ep_test_inputs
       procedure :: effects_at => ep_effects_at
+      procedure :: first_rows => ep_first_rows
       procedure :: nres => ep_nres
       procedure :: eval => ep_eval
       procedure :: nx => ep_nx
@@ -201,12 +202,8 @@ contains
       call model%setup(error)
       if (allocated(error)) return
       eff = self%effects_at(p)
-      ! each test's first row less one
-      allocate (k0(size(self%tests)), failed(size(self%tests)))
-      k0(1) = 0
-      do it = 2, size(self%tests)
-         k0(it) = k0(it - 1) + size(self%prob%targets(self%tests(it - 1))%t)
-      end do
+      k0 = self%first_rows()
+      allocate (failed(size(self%tests)))
       failed = .false.
       ntr = size(self%tests)
       if (present(only)) then
@@ -307,20 +304,11 @@ contains
       logical :: last_ok
       n = size(xs, 2)
       ntr = size(self%tests)
-      allocate (row0(ntr), rows(ntr))
-      do it = 1, ntr
-         rows(it) = size(self%prob%targets(self%tests(it))%t)
-      end do
-      row0(1) = 0
-      do it = 2, ntr
-         row0(it) = row0(it - 1) + rows(it - 1)
-      end do
-      do j = 1, n
-         if (j == 1) then
-            seen = spread(self%test_inputs(xs(:, 1)), 3, n)
-         else
-            seen(:, :, j) = self%test_inputs(xs(:, j))
-         end if
+      row0 = self%first_rows()
+      rows = [(size(self%prob%targets(self%tests(it))%t), it=1, ntr)]
+      seen = spread(self%test_inputs(xs(:, 1)), 3, n)
+      do j = 2, n
+         seen(:, :, j) = self%test_inputs(xs(:, j))
       end do
       last_ok = .false.
       if (allocated(self%seen_last)) last_ok = all(shape(self%seen_last) == shape(seen(:, :, 1)))
@@ -406,6 +394,17 @@ contains
          end associate
       end subroutine simulate_job
    end subroutine ep_residuals
+
+   !> Each test's first row less one in the problem's residuals (its tests in order)
+   pure function ep_first_rows(self) result(k0)
+      class(effect_problem), intent(in) :: self
+      integer :: k0(size(self%tests))
+      integer :: it
+      k0(1) = 0
+      do it = 2, size(self%tests)
+         k0(it) = k0(it - 1) + size(self%prob%targets(self%tests(it - 1))%t)
+      end do
+   end function ep_first_rows
 
    !> The effects each test of prob sees (prob's tests) with the parameters p (physical units)
    pure function ep_effects_at(self, p) result(eff)
