@@ -4,13 +4,13 @@
 !> implementation of usharp_model's model_type.
 !>
 !> Units: stresses in the model's unit (ksi or MPa), time in s, temperature in K, Q in cal/mol.
-!> The scalar kernels (flow_rate, back_recovery, drag_recovery) act on equivalent
-!> quantities, so the uniaxial form and the multiaxial (J2) stress update share them.
+!> The scalar kernel (rate_laws: flow, back-stress and drag recovery) acts on equivalent
+!> quantities, so the uniaxial form and the multiaxial (J2) stress update share it.
 !>
 !> The 3-D update is backward Euler over substeps of an increment, in the style of a UMAT.
 !> State y = (inelastic strain (6), back stress R (6), drag stress D), Mandel vectors.
 !> The multiaxial form (Kagawa and Asada 1983): with S = dev(sigma) - R, x = sqrt(3/2 S:S),
-!> r = sqrt(3/2 R:R), f = flow_rate(x, D):
+!> r = sqrt(3/2 R:R), f = f(x, D) of rate_laws:
 !>    d(eps_in)/dt = 3/2 f S/x,   dR/dt = H1 f S/x - g(r) R/r,   dD/dt = H2 f (C2 + r - A2/A1 D^3) - h(D)
 !> which reduces to Eqs. 2-4 in uniaxial stress.
 module usharp_model_miller
@@ -32,7 +32,7 @@ module usharp_model_miller
    public :: gas_constant
    public :: theta_miller, model_setup, check_constants, initial_drag
    public :: get_constant, set_constant, constant_index
-   public :: flow_rate, back_recovery, drag_recovery, rate_terms, rate_terms_at
+   public :: rate_laws, rate_terms, rate_terms_at
    public :: n_state
 
    !> Universal gas constant in cal/(mol K), as the thesis uses it
@@ -277,84 +277,53 @@ contains
       end do
    end function constant_index
 
-   !> sinh(z)**n and (when asked) its derivative for z >= 0; non-finite beyond zmax. The
-   !> rates alone skip the derivative's power and cosh: they are most of a simulation's time.
-   elemental subroutine sinh_power(z, n, p, dp_dz)
-      real(dp), intent(in) :: z, n
-      real(dp), intent(out) :: p
-      real(dp), intent(out), optional :: dp_dz
-      if (z <= 0.0_dp) then
-         p = 0.0_dp
-         if (present(dp_dz)) dp_dz = merge(1.0_dp, 0.0_dp, abs(n - 1.0_dp) < epsilon(1.0_dp))
-      else if (z > zmax) then
-         p = ieee_value(1.0_dp, ieee_positive_inf)
-         if (present(dp_dz)) dp_dz = p
+   !> The three power laws of the rates, each B theta sinh(z)**n: the flow f = B theta
+   !> sinh((x/Df)**1.5)**n (1/s) at the equivalent overstress x >= 0 and the flow's drag
+   !> stress Df > 0; the back stress's static recovery g = H1 B theta sinh(A1 r)**n at
+   !> r = |R| >= 0; the drag stress's h = H2 C2 B theta sinh(A2 D**3)**n. With f_x, f_d, g_r
+   !> and h_d if asked (all or none): the rates alone skip the derivatives. The three sinh
+   !> powers are computed together (see sinh_power_dp): they are most of a simulation's time.
+   !> sinh(z)**n is 0 at z <= 0 (its derivative 1 for n = 1, else 0) and not finite beyond zmax.
+   pure subroutine rate_laws(model, x, df, r, d, f, g, h, f_x, f_d, g_r, h_d)
+      type(miller_model), intent(in) :: model
+      real(dp), intent(in) :: x, df, r, d
+      real(dp), intent(out) :: f, g, h
+      real(dp), intent(out), optional :: f_x, f_d, g_r, h_d
+      real(dp) :: z(3), p(3), pz(3)
+      logical :: inside(3)
+      ! (x/Df)**1.5 without pow
+      z(1) = 0.0_dp
+      if (x > 0.0_dp) z(1) = (x/df)*sqrt(x/df)
+      z(2) = model%c%a1*r
+      z(3) = model%c%a2*d**3
+      ! (NaN stays inside, and comes out as NaN)
+      inside = .not. (z <= 0.0_dp .or. z > zmax)
+      if (present(f_x)) then
+         call sinh_power_dp(merge(z, 1.0_dp, inside), model%c%n, p, pz)
       else
-         call sinh_power_dp(z, n, p, dp_dz)
+         call sinh_power_dp(merge(z, 1.0_dp, inside), model%c%n, p)
       end if
-   end subroutine sinh_power
-
-   !> Equivalent inelastic strain rate f = B*theta*sinh((x/D)**1.5)**n (1/s) for the
-   !> equivalent overstress x >= 0 and drag stress D > 0, with df/dx and df/dD if asked
-   !> (both or neither).
-   elemental subroutine flow_rate(model, x, d, f, f_x, f_d)
-      type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: x, d
-      real(dp), intent(out) :: f
-      real(dp), intent(out), optional :: f_x, f_d
-      real(dp) :: z, p, pz
-      if (x <= 0.0_dp) then
-         f = 0.0_dp
-         if (present(f_x)) f_x = 0.0_dp
-         if (present(f_d)) f_d = 0.0_dp
-         return
+      where (z <= 0.0_dp)
+         p = 0.0_dp
+         pz = merge(1.0_dp, 0.0_dp, abs(model%c%n - 1.0_dp) < epsilon(1.0_dp))
+      elsewhere (z > zmax)
+         p = ieee_value(1.0_dp, ieee_positive_inf)
+         pz = p
+      end where
+      f = 0.0_dp
+      if (x > 0.0_dp) f = model%btheta*p(1)
+      g = model%c%h1*model%btheta*p(2)
+      h = model%c%h2*model%c%c2*model%btheta*p(3)
+      if (.not. present(f_x)) return
+      f_x = 0.0_dp
+      f_d = 0.0_dp
+      if (x > 0.0_dp) then
+         f_x = model%btheta*pz(1)*1.5_dp*sqrt(x/df)/df
+         f_d = -model%btheta*pz(1)*1.5_dp*z(1)/df
       end if
-      ! (x/d)**1.5 without pow
-      z = (x/d)*sqrt(x/d)
-      if (.not. present(f_x)) then
-         call sinh_power(z, model%c%n, p)
-         f = model%btheta*p
-         return
-      end if
-      call sinh_power(z, model%c%n, p, pz)
-      f = model%btheta*p
-      f_x = model%btheta*pz*1.5_dp*sqrt(x/d)/d
-      f_d = -model%btheta*pz*1.5_dp*z/d
-   end subroutine flow_rate
-
-   !> Static recovery of the back stress, g = H1*B*theta*sinh(A1*r)**n for r = |R| >= 0
-   elemental subroutine back_recovery(model, r, g, g_r)
-      type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: r
-      real(dp), intent(out) :: g
-      real(dp), intent(out), optional :: g_r
-      real(dp) :: p, pz
-      if (.not. present(g_r)) then
-         call sinh_power(model%c%a1*r, model%c%n, p)
-         g = model%c%h1*model%btheta*p
-         return
-      end if
-      call sinh_power(model%c%a1*r, model%c%n, p, pz)
-      g = model%c%h1*model%btheta*p
-      g_r = model%c%h1*model%btheta*pz*model%c%a1
-   end subroutine back_recovery
-
-   !> Static recovery of the drag stress, h = H2*C2*B*theta*sinh(A2*D**3)**n
-   elemental subroutine drag_recovery(model, d, h, h_d)
-      type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: d
-      real(dp), intent(out) :: h
-      real(dp), intent(out), optional :: h_d
-      real(dp) :: p, pz
-      if (.not. present(h_d)) then
-         call sinh_power(model%c%a2*d**3, model%c%n, p)
-         h = model%c%h2*model%c%c2*model%btheta*p
-         return
-      end if
-      call sinh_power(model%c%a2*d**3, model%c%n, p, pz)
-      h = model%c%h2*model%c%c2*model%btheta*p
-      h_d = model%c%h2*model%c%c2*model%btheta*pz*3.0_dp*model%c%a2*d**2
-   end subroutine drag_recovery
+      g_r = model%c%h1*model%btheta*pz(2)*model%c%a1
+      h_d = model%c%h2*model%c%c2*model%btheta*pz(3)*3.0_dp*model%c%a2*d**2
+   end subroutine rate_laws
 
    !> Evaluate the shared scalar terms; with values_only the derivatives are left at zero
    !> (the values are the same bit for bit)
@@ -367,15 +336,11 @@ contains
       t%w = model%c%c2 + r - t%a*d**3
       if (present(values_only)) then
          if (values_only) then
-            call flow_rate(model, x, d, t%f)
-            call back_recovery(model, r, t%g)
-            call drag_recovery(model, d, t%h)
+            call rate_laws(model, x, d, r, d, t%f, t%g, t%h)
             return
          end if
       end if
-      call flow_rate(model, x, d, t%f, t%f_x, t%f_d)
-      call back_recovery(model, r, t%g, t%g_r)
-      call drag_recovery(model, d, t%h, t%h_d)
+      call rate_laws(model, x, d, r, d, t%f, t%g, t%h, t%f_x, t%f_d, t%g_r, t%h_d)
    end function rate_terms_at
 
    !> Uniaxial Miller rates (Eqs. 2-4) of the state y = (eps_in, R, D) at stress sigma,
@@ -840,13 +805,9 @@ contains
       end if
       d_flow = y(3)*soft
       if (present(jac)) then
-         call flow_rate(self, abs(s), d_flow, f, f_x, f_d)
-         call back_recovery(self, abs(y(2)), g, g_r)
-         call drag_recovery(self, y(3), h, h_d)
+         call rate_laws(self, abs(s), d_flow, abs(y(2)), y(3), f, g, h, f_x, f_d, g_r, h_d)
       else
-         call flow_rate(self, abs(s), d_flow, f)
-         call back_recovery(self, abs(y(2)), g)
-         call drag_recovery(self, y(3), h)
+         call rate_laws(self, abs(s), d_flow, abs(y(2)), y(3), f, g, h)
       end if
       w = self%c%c2 + abs(y(2)) - self%c%a2/self%c%a1*y(3)**3
       ydot(1) = sign(f, s)

@@ -333,17 +333,29 @@ contains
       y = sign(y, x)
    end function asinh_dp
 
-   !> sinh(z)**n for 0 < z <= 700, and (if asked) its derivative n sinh(z)**n coth z, as
-   !> exp(n ln sinh z) with ln sinh z = z - ln2 + ln(1 - e**-2z) and coth z from the same
-   !> e**-2z - 1: two of these functions where sinh, ln and exp would take four. The power
-   !> law of the Miller model's flow and recovery, most of a simulation's time.
-   elemental subroutine sinh_power_dp(z, n, p, dp_dz)
-      real(dp), intent(in) :: z, n
-      real(dp), intent(out) :: p
-      real(dp), intent(out), optional :: dp_dz
-      real(dp) :: m
-      m = expm1_dp(-2.0_dp*z)      ! e**-2z - 1, in (-1, 0)
-      p = exp_dp(n*((z - ln2) + log_dp(-m)))
+   !> sinh(z)**n for 0 < z <= 700, and (if asked) its derivative n sinh(z)**n coth z, for
+   !> each element of z: exp(n ln sinh z) with ln sinh z = z - ln2 + ln(1 - e**-2z) and coth z
+   !> from the same e**-2z - 1, two of these functions where sinh, ln and exp would take four.
+   !> The power law of the Miller model's flow and recovery, most of a simulation's time. The
+   !> elements go through each function together: one element's three functions depend on
+   !> one another, the elements' do not, and the processor overlaps them (the three laws of
+   !> one rate evaluation 1.5 times faster than one after another; each element the same
+   !> bit for bit as alone)
+   pure subroutine sinh_power_dp(z, n, p, dp_dz)
+      real(dp), intent(in) :: z(:), n
+      real(dp), intent(out) :: p(:)
+      real(dp), intent(out), optional :: dp_dz(:)
+      real(dp) :: m(size(z)), l(size(z))
+      integer :: i
+      do i = 1, size(z)
+         m(i) = expm1_dp(-2.0_dp*z(i))      ! e**-2z - 1, in (-1, 0)
+      end do
+      do i = 1, size(z)
+         l(i) = log_dp(-m(i))
+      end do
+      do i = 1, size(z)
+         p(i) = exp_dp(n*((z(i) - ln2) + l(i)))
+      end do
       if (present(dp_dz)) dp_dz = n*p*((2.0_dp + m)/(-m))
    end subroutine sinh_power_dp
 
