@@ -286,8 +286,14 @@ contains
    !> sinh(z)**n is 0 at z <= 0 (its derivative 1 for n = 1, else 0) and not finite beyond zmax.
    pure subroutine rate_laws(model, x, df, r, d, f, g, h, f_x, f_d, g_r, h_d)
       type(miller_model), intent(in) :: model
-      real(dp), intent(in) :: x, df, r, d
-      real(dp), intent(out) :: f, g, h
+      real(dp), intent(in) :: x    !< equivalent overstress (model unit)
+      real(dp), intent(in) :: df   !< drag stress of the flow law (model unit)
+      real(dp), intent(in) :: r    !< equivalent back stress (model unit)
+      real(dp), intent(in) :: d    !< drag stress of its recovery (model unit)
+      real(dp), intent(out) :: f   !< flow rate (1/s)
+      real(dp), intent(out) :: g   !< back-stress recovery (model unit/s)
+      real(dp), intent(out) :: h   !< drag recovery (model unit/s)
+      !> df/dx, df/dDf, dg/dr and dh/dD
       real(dp), intent(out), optional :: f_x, f_d, g_r, h_d
       real(dp) :: z(3), p(3), pz(3)
       logical :: inside(3)

@@ -342,9 +342,10 @@ contains
    !> one rate evaluation 1.5 times faster than one after another; each element the same
    !> bit for bit as alone)
    pure subroutine sinh_power_dp(z, n, p, dp_dz)
-      real(dp), intent(in) :: z(:), n
-      real(dp), intent(out) :: p(:)
-      real(dp), intent(out), optional :: dp_dz(:)
+      real(dp), intent(in) :: z(:)                   !< arguments, 0 < z <= 700
+      real(dp), intent(in) :: n                      !< the power
+      real(dp), intent(out) :: p(:)                  !< sinh(z)**n
+      real(dp), intent(out), optional :: dp_dz(:)    !< n sinh(z)**n coth z
       real(dp) :: m(size(z)), l(size(z))
       integer :: i
       do i = 1, size(z)
