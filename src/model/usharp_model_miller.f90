@@ -296,10 +296,12 @@ contains
       !> df/dx, df/dDf, dg/dr and dh/dD
       real(dp), intent(out), optional :: f_x, f_d, g_r, h_d
       real(dp) :: z(3), p(3), pz(3)
-      logical :: inside(3)
+      logical :: inside(3), flows
+      ! (a NaN overstress flows, and comes out as NaN rates)
+      flows = .not. x <= 0.0_dp
       ! (x/Df)**1.5 without pow
       z(1) = 0.0_dp
-      if (x > 0.0_dp) z(1) = (x/df)*sqrt(x/df)
+      if (flows) z(1) = (x/df)*sqrt(x/df)
       z(2) = model%c%a1*r
       z(3) = model%c%a2*d**3
       ! (NaN stays inside, and comes out as NaN)
@@ -317,13 +319,13 @@ contains
          pz = p
       end where
       f = 0.0_dp
-      if (x > 0.0_dp) f = model%btheta*p(1)
+      if (flows) f = model%btheta*p(1)
       g = model%c%h1*model%btheta*p(2)
       h = model%c%h2*model%c%c2*model%btheta*p(3)
       if (.not. present(f_x)) return
       f_x = 0.0_dp
       f_d = 0.0_dp
-      if (x > 0.0_dp) then
+      if (flows) then
          f_x = model%btheta*pz(1)*1.5_dp*sqrt(x/df)/df
          f_d = -model%btheta*pz(1)*1.5_dp*z(1)/df
       end if
