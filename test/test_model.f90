@@ -20,6 +20,7 @@ contains
          new_unittest('jacobian-fd-strain-control', test_jac_strain), &
          new_unittest('jacobian-fd-stress-control', test_jac_stress), &
          new_unittest('rates-sign-symmetry', test_symmetry), &
+         new_unittest('rates-at-the-ends-of-the-power-laws', test_rate_ends), &
          new_unittest('constant-checks-name-the-constant', test_checks)]
    end subroutine collect_model
 
@@ -143,6 +144,26 @@ contains
       if (allocated(error)) return
       call check(error, fp(1) > 0.0_dp, 'flow in the direction of the overstress')
    end subroutine test_symmetry
+
+   !> The power laws' special cases: no flow at zero overstress, none finite far beyond the
+   !> drag stress (z > 700) or from a NaN stress (the integrator then shortens the step; a
+   !> zero flow there would hide it)
+   subroutine test_rate_ends(error)
+      use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
+      type(error_type), allocatable, intent(out) :: error
+      type(miller_model) :: m
+      type(uerror), allocatable :: uerr
+      real(dp) :: f(3), jac(3, 3)
+      call model_setup(m, uerr)
+      call m%uniaxial_rates(5.0_dp, -m%youngs, [0.001_dp, 5.0_dp, 11.0_dp], f, jac)
+      call check(error, f(1) == 0.0_dp .and. jac(1, 1) == 0.0_dp, 'no flow at zero overstress')
+      if (allocated(error)) return
+      call m%uniaxial_rates(1.0e4_dp, -m%youngs, [0.001_dp, 5.0_dp, 11.0_dp], f)
+      call check(error, .not. ieee_is_finite(f(1)), 'flow not finite far beyond the drag stress')
+      if (allocated(error)) return
+      call m%uniaxial_rates(ieee_value(1.0_dp, ieee_quiet_nan), -m%youngs, [0.001_dp, 5.0_dp, 11.0_dp], f)
+      call check(error, .not. ieee_is_finite(f(1)), 'flow not finite from a NaN stress')
+   end subroutine test_rate_ends
 
    subroutine test_checks(error)
       type(error_type), allocatable, intent(out) :: error
