@@ -22,7 +22,7 @@ module usharp_diagnose_baseline
    implicit none
    private
 
-   public :: fit_baseline, baseline_regions, per_test, all_regions, baseline_step
+   public :: fit_baseline, converge_baseline, baseline_regions, per_test, all_regions, baseline_step
 
    !> The name of the baseline's step from the given constants (see diagnose_result%steps)
    character(len=*), parameter :: baseline_step = 'baseline from the given constants'
