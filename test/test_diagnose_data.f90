@@ -31,6 +31,7 @@ module test_diagnose_data
    use usharp_diagnose_types, only: baseline_left_behind
    use usharp_diagnose_numerics, only: bic_power, power_lambda, lm_ftol, lm_updates
    use usharp_diagnose_baseline, only: converge_baseline
+   use usharp_identify, only: chi2_quantile_95
    use test_util, only: write_text
    implicit none
    private
@@ -1240,11 +1241,9 @@ contains
          character(len=*), intent(in) :: stage
          logical, intent(in) :: all_tests
          logical, intent(out) :: moved
-         !> chi2 with 3 degrees of freedom at 95 %
-         real(dp), parameter :: chi2_3_95 = 7.814728_dp
          real(dp) :: wide
          integer :: g
-         wide = sqrt(chi2_3_95/chi2_95)
+         wide = sqrt(chi2_quantile_95(3)/chi2_quantile_95(1))
          moved = .false.
          call check(error, r%leading > 0, stage//': no leader')
          if (allocated(error)) return
