@@ -28,7 +28,7 @@ module test_diagnose_data
    use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context, &
                               named_effect, joint_decides
    use usharp_diagnose_verdict, only: conclude, verdict_of
-   use usharp_diagnose_types, only: baseline_left_behind
+   use usharp_diagnose_types, only: baseline_left_behind, prediction_open, separating_d
    use usharp_diagnose_numerics, only: bic_power, power_lambda, lm_ftol, lm_updates
    use usharp_diagnose_baseline, only: converge_baseline
    use usharp_identify, only: chi2_quantile_95
@@ -998,7 +998,10 @@ contains
    !> fit tests cannot tell apart (81 to 97 % of the held-out gap): the same case made where
    !> libm takes its FMA paths (data 3e-10 apart) ends at a point that carries 44 %, and every
    !> test fitted together names the softening. Hence data kept in data/ (see
-   !> bench/independent/test-data.sh), not made anew on each machine
+   !> bench/independent/test-data.sh), not made anew on each machine. The diagnosis's last
+   !> step names the candidate test that tells the two end points carrying the least and the
+   !> most of the held-out gap apart: two distinct points, the candidate of the largest
+   !> expected chi-square difference, named in the verdict where it reaches significance
    subroutine test_softening_sign(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
@@ -1016,6 +1019,17 @@ contains
          call check(error, e%p_lo(1) <= a_true .and. a_true <= e%p_hi(1) .and. &
                     e%p_lo(2) <= b_true .and. b_true <= e%p_hi(2), &
                     'the injected a = '//real_str(a_true, 'f0.3')//', b = 200 outside the 95 % intervals')
+         if (allocated(error)) return
+         call check(error, prediction_open(e) .and. allocated(e%c_open) .and. res%pin%best > 0, &
+                    'the open prediction has no candidate test: '//res%verdict)
+         if (allocated(error)) return
+         write (*, '(4x,a,5es10.2)') 'D of the candidates between the end points:', res%pin%d
+         call check(error, any(e%c_open(:, 1) /= e%c_open(:, 2)) .or. any(e%p_open(:, 1) /= e%p_open(:, 2)), &
+                    'the end points that carry the least and the most of the held-out gap are one point')
+         if (allocated(error)) return
+         call check(error, res%pin%d(res%pin%best) == maxval(res%pin%d) .and. res%pin%d(res%pin%best) >= separating_d &
+                    .and. index(res%verdict, 'a '//trim(res%pin%names(res%pin%best))// &
+                    ' would tell those end points apart') > 0, 'the best candidate not named: '//res%verdict)
       end associate
    end subroutine test_softening_sign
 

@@ -130,7 +130,7 @@ def verdict_of(text):
     m3 = re.search(r'([0-9.]+) %\s*on the held-out', v)
     alike = []
     m4 = re.search(r';\s*([a-z0-9, ]+?) explains? it equally well', v)
-    if m4 and 'would tell' in v:
+    if m4 and re.search(r'would tell \S+ from ', v):
         alike = [x.strip() for x in m4.group(1).split(',')]
     return lead, (float(m3.group(1)) if m3 else float('nan')), v, alike
 

@@ -866,9 +866,13 @@ contains
       e%n_alike = 0
       e%shrink_alike_lo = e%shrink_held
       e%shrink_alike_hi = e%shrink_held
+      if (allocated(e%c_open)) deallocate (e%c_open, e%p_open)
       if (.not. any(res%held) .or. e%held .or. e%held_fitted .or. res%gap_held <= 0.0_dp) return
       if (.not. allocated(e%x_ends)) return
       if (size(e%x_ends, 1) /= size(e%x_fit)) return
+      if (.not. (allocated(e%c) .and. allocated(e%p_all))) return
+      e%c_open = spread(e%c, 2, 2)
+      e%p_open = spread(e%p_all, 2, 2)
       ! Deviance within bic_margin needs the objective within about that share of its points
       ! (each test's residuals of a variance of their own): a wide first sieve
       fmax = e%f_after*(1.0_dp + 4.0_dp*bic_margin/real(ep%nres(), dp))
@@ -885,10 +889,24 @@ contains
          if (dev > bic_margin) cycle
          shrink = 1.0_dp - max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)/res%gap_held
          e%n_alike = e%n_alike + 1
-         e%shrink_alike_lo = min(e%shrink_alike_lo, shrink)
-         e%shrink_alike_hi = max(e%shrink_alike_hi, shrink)
+         if (shrink < e%shrink_alike_lo) then
+            e%shrink_alike_lo = shrink
+            call keep_open(1)
+         else if (shrink > e%shrink_alike_hi) then
+            e%shrink_alike_hi = shrink
+            call keep_open(2)
+         end if
       end do
    contains
+      !> The end point just met as column col of c_open and p_open
+      subroutine keep_open(col)
+         integer, intent(in) :: col
+         integer :: i
+         if (size(p2) /= size(e%p_open, 1)) return
+         e%c_open(:, col) = [(m2%get_constant(ctx%prob%idx(i)), i=1, size(e%c))]
+         e%p_open(:, col) = p2
+      end subroutine keep_open
+
       !> x is one of the columns of xs (several starts end at one point)
       pure logical function same_point(x, xs)
          real(dp), intent(in) :: x(:), xs(:, :)

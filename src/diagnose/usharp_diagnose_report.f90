@@ -15,7 +15,7 @@ module usharp_diagnose_report
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
                                     fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet, side_word, &
-                                    rate_at_end
+                                    rate_at_end, separation_type
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -452,11 +452,12 @@ contains
       end if
    end subroutine skip_note
 
-   !> Whether the report has section 4 (a test that would tell alike effects apart)
+   !> Whether the report has section 4 (a test that would tell alike effects, or the
+   !> leader's end points that leave its prediction open, apart)
    pure logical function has_separation(res)
       type(diagnose_result), intent(in) :: res
-      has_separation = .false.
-      if (allocated(res%seps)) has_separation = size(res%seps) > 0
+      has_separation = res%pin%best > 0
+      if (allocated(res%seps)) has_separation = has_separation .or. size(res%seps) > 0
    end function has_separation
 
    !> Section 5, when the prediction could not decide (see joint_reason): the
@@ -549,15 +550,14 @@ contains
       end associate
    end subroutine joint_section
 
-   !> Section 4, when effects explain the gap equally well: the candidate tests that would
-   !> separate them
+   !> Section 4, when effects explain the gap equally well or the fit tests leave the
+   !> leader's held-out prediction open: the candidate tests that would separate them
    subroutine separate_section(lines, res, heading)
       character(len=report_line_len), allocatable, intent(inout) :: lines(:)
       type(diagnose_result), intent(in) :: res
       character(len=*), intent(in), optional :: heading  !< instead of section 4's
       integer :: j, c
-      if (.not. allocated(res%seps)) return
-      if (size(res%seps) == 0) return
+      if (.not. has_separation(res)) return
       call add_line(lines, '')
       if (present(heading)) then
          call add_line(lines, heading)
@@ -570,18 +570,39 @@ contains
          'variance of the fit tests'' data scaled to the candidate''s peak (expected discrimination, '// &
          'a chi-square: above about 10 the test separates them at that noise; the constants are not '// &
          'refitted to the candidate, so D is an upper estimate).')
-      do j = 1, size(res%seps)
-         associate (sp => res%seps(j))
+      if (allocated(res%seps)) then
+         do j = 1, size(res%seps)
+            associate (sp => res%seps(j))
+               call candidate_table(sp, trim(res%effects(sp%a)%name)//' vs '//trim(res%effects(sp%b)%name))
+            end associate
+         end do
+      end if
+      if (res%pin%best > 0) then
+         associate (e => res%effects(res%pin%a))
             call add_line(lines, '')
-            call add_line(lines, '| candidate test | D: '//trim(res%effects(sp%a)%name)//' vs '// &
-                     trim(res%effects(sp%b)%name)//' |')
-            call add_line(lines, '|---|---|')
-            do c = 1, size(sp%d)
-               call add_line(lines, '| '//trim(sp%names(c))//trim(merge(' (best)', '       ', c == sp%best))// &
-                  ' | '//real_str(sp%d(c), 'es9.2')//' |')
-            end do
+            call add_line(lines, 'The fit tests leave the held-out prediction of '//trim(e%name)//' open: of the '// &
+               'end points of its refit they cannot tell apart, one carries '// &
+               real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')//' % of the held-out gap, one '// &
+               real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %. Each candidate simulated with both; '// &
+               'a test that tells them apart, added to the fit tests, would fix the parameters that '// &
+               'the held-out prediction depends on.')
+            call candidate_table(res%pin, trim(e%name)//' at '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &
+               ' vs '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %')
          end associate
-      end do
+      end if
+   contains
+      !> One table: each candidate's D for the pair named in what
+      subroutine candidate_table(sp, what)
+         type(separation_type), intent(in) :: sp
+         character(len=*), intent(in) :: what
+         call add_line(lines, '')
+         call add_line(lines, '| candidate test | D: '//what//' |')
+         call add_line(lines, '|---|---|')
+         do c = 1, size(sp%d)
+            call add_line(lines, '| '//trim(sp%names(c))//trim(merge(' (best)', '       ', c == sp%best))// &
+               ' | '//real_str(sp%d(c), 'es9.2')//' |')
+         end do
+      end subroutine candidate_table
    end subroutine separate_section
 
    !> Noise part of test i's objective

@@ -6,7 +6,10 @@
 !> the expected discrimination D = sum((y_a - y_b)**2)/s**2, s the noise the fit tests' data
 !> show (relative to their peak) times the candidate's peak: the T-optimal criterion of
 !> model discrimination (Atkinson and Fedorov 1975). D is a chi-square: above about 10 the
-!> candidate would separate the pair at the noise of the data.
+!> candidate would separate the pair at the noise of the data. The same ranking between two
+!> end points of the leader's refit that the fit tests cannot tell apart, where they carry
+!> different shares of the held-out gap, names the test that would fix what the fit tests
+!> leave open of the effect's parameters.
 module usharp_diagnose_separate
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
@@ -19,7 +22,7 @@ module usharp_diagnose_separate
    use usharp_effect_problem, only: simulate_effect
    use usharp_diagnose_numerics, only: bic_power
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, &
-                                    separation_type, n_candidates
+                                    separation_type, n_candidates, prediction_open, separating_d
    implicit none
    private
 
@@ -28,9 +31,19 @@ module usharp_diagnose_separate
 
 contains
 
+   !> The diagnosis's last step: the tests that would tell apart the effects that explain the
+   !> gap equally well (res%seps) and the leader's end points that leave its held-out
+   !> prediction open (res%pin)
+   subroutine separate(ctx, res)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      call separate_alike(ctx, res)
+      call pin_open(ctx, res)
+   end subroutine separate
+
    !> For each pair of the effects that explain the gap equally well (res%alike, at most the
    !> first three), the discrimination of each candidate test: res%seps
-   subroutine separate(ctx, res)
+   subroutine separate_alike(ctx, res)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(history_type) :: hist(n_candidates)
@@ -74,7 +87,53 @@ contains
             ' would tell '//trim(res%effects(sp%a)%name)//' from '//trim(res%effects(sp%b)%name)// &
             ' (expected chi-square difference '//real_str(sp%d(sp%best), 'es9.2')//')'
       end associate
-   end subroutine separate
+   end subroutine separate_alike
+
+   !> Where the fit tests leave the leader's held-out prediction open (end points of its
+   !> refit they cannot tell apart carry different shares of the held-out gap), the
+   !> discrimination of each candidate test between the end points that carry the least and
+   !> the most of it: the test that, added to the fit tests, would fix the effect's
+   !> parameters where they matter to the held-out tests (res%pin). The verdict names it
+   !> where its expected chi-square difference reaches separating_d, else says that no
+   !> candidate would
+   subroutine pin_open(ctx, res)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(inout) :: res
+      type(history_type) :: hist(n_candidates)
+      character(len=80) :: names(n_candidates)
+      type(effect_outcome) :: ends(2)
+      real(dp) :: rel_noise
+      integer :: c, j
+      res%pin = separation_type()
+      if (res%leading == 0) return
+      if (.not. prediction_open(res%effects(res%leading))) return
+      if (.not. allocated(res%effects(res%leading)%c_open)) return
+      call tell(ctx, 'which test would fix the held-out prediction', res%nevals)
+      call candidates(fit_amplitude(ctx), hist, names)
+      rel_noise = fit_rel_noise(ctx)
+      associate (e => res%effects(res%leading), pin => res%pin)
+         do j = 1, 2
+            ends(j)%k = e%k
+            ends(j)%c = e%c_open(:, j)
+            ends(j)%p_all = e%p_open(:, j)
+         end do
+         pin%a = res%leading
+         pin%b = res%leading
+         pin%names = names
+         do c = 1, n_candidates
+            call discrimination(ctx, res, hist(c), ends(1), ends(2), rel_noise, pin%d(c), res%nevals)
+         end do
+         pin%best = maxloc(pin%d, 1)
+         if (pin%d(pin%best) >= separating_d) then
+            res%verdict = res%verdict//'; a '//trim(names(pin%best))//' would tell those end points apart'
+         else
+            res%verdict = res%verdict//'; none of the candidate tests would tell those end points apart'
+         end if
+         res%verdict = res%verdict//' (expected chi-square difference '//real_str(pin%d(pin%best), 'es9.2')// &
+                       ' between the two that carry '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &
+                       ' and '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %)'
+      end associate
+   end subroutine pin_open
 
    !> The standard candidates scaled to a strain amplitude emax: tension at two rates to
    !> twice it, relaxation holds at half and whole of it, cycling with holds over it and

@@ -19,7 +19,7 @@ module usharp_diagnose_types
    public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text
    public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
-   public :: deviance_change
+   public :: deviance_change, prediction_open, open_spread, separating_d
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
              partial_carry, held_rest_open, joint_reason, fit_effect_not_carried, baseline_left_behind
@@ -36,6 +36,12 @@ module usharp_diagnose_types
 
    !> Candidate tests of the separation step
    integer, parameter :: n_candidates = 5
+   !> Shares of the held-out gap at least this far apart, at end points of a refit that the
+   !> fit tests cannot tell apart, leave its prediction open
+   real(dp), parameter :: open_spread = 0.05_dp
+   !> An expected chi-square difference at which a candidate test tells two responses apart:
+   !> one degree of freedom at 99.9 %
+   real(dp), parameter :: separating_d = 10.83_dp
 
    !> Which candidate test separates two effects that explain the gap equally well
    type :: separation_type
@@ -144,6 +150,10 @@ module usharp_diagnose_types
       !> bic_margin), and the least and most of the held-out gap they carry
       integer :: n_alike = 0
       real(dp) :: shrink_alike_lo = 0.0_dp, shrink_alike_hi = 0.0_dp
+      !> The two of those end points (its own among them) that carry the least and the most
+      !> of the held-out gap: their constants (columns 1 and 2, as c) and every parameter (as
+      !> p_all), for the test that would tell them apart (see prediction_open)
+      real(dp), allocatable :: c_open(:, :), p_open(:, :)
       integer, allocatable :: c_bound(:)     !< its constants at a search bound (see bound_list)
       real(dp) :: daic = 0.0_dp, dbic = 0.0_dp
       !> A per-test effect's BIC counts the parameters of the tests that show it (see
@@ -249,6 +259,10 @@ module usharp_diagnose_types
       integer, allocatable :: alike(:)
       real(dp) :: dt_sample = 0.0_dp              !< s, median sampling interval of the fit tests
       type(separation_type), allocatable :: seps(:)   !< tests that would separate alike effects
+      !> Where the leader's held-out prediction is open (prediction_open), the candidate tests'
+      !> discrimination between its end points that carry the least and the most of the
+      !> held-out gap (a = b = leading; best 0: not computed)
+      type(separation_type) :: pin
       character(len=:), allocatable :: verdict
       integer :: nevals = 0
       ! For the plots: every point of every test
@@ -287,6 +301,14 @@ module usharp_diagnose_types
                                  joint_form_open = 6, joint_held_only = 7, joint_not_carried = 8
 
 contains
+
+   !> Whether the fit tests leave e's prediction of the held-out tests open: end points of its
+   !> refit that they cannot tell apart carry shares of the held-out gap open_spread or more
+   !> apart
+   pure logical function prediction_open(e)
+      type(effect_outcome), intent(in) :: e
+      prediction_open = e%n_alike >= 1 .and. e%shrink_alike_hi - e%shrink_alike_lo >= open_spread
+   end function prediction_open
 
    !> A parameter's value with its unit ('stress': the model's stress unit; '-' or '': none)
    function magnitude_text(name, value, unit, stress_unit) result(text)

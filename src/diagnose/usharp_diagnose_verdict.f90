@@ -8,7 +8,7 @@ module usharp_diagnose_verdict
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin
-   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, &
+   use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, prediction_open, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
@@ -528,13 +528,12 @@ contains
    end function squash
 
    !> What the end points of the refit that the fit tests cannot tell apart carry of the
-   !> held-out gap, where they part by 5 % of it or more: the fit tests leave the prediction
-   !> open between them ('' otherwise)
+   !> held-out gap, where they leave the prediction open (prediction_open; '' otherwise)
    function alike_note(e) result(text)
       type(effect_outcome), intent(in) :: e
       character(len=:), allocatable :: text
       text = ''
-      if (e%n_alike < 1 .or. e%shrink_alike_hi - e%shrink_alike_lo < 0.05_dp) return
+      if (.not. prediction_open(e)) return
       text = ' ('//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')//' to '// &
              real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' % at '//str(e%n_alike + 1)// &
              ' end points of its refit that the fit tests cannot tell apart, BIC within '// &

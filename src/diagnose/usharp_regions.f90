@@ -344,8 +344,8 @@ contains
       integer, intent(in), optional :: max_period
       type(serration_stat) :: st
       integer, parameter :: nb = 12      ! neighbours each side for the background
-      real(dp), allocatable :: x(:), d(:), pg(:), ratio(:), nn(:)
-      real(dp) :: c, s, ck, sk
+      real(dp), allocatable :: x(:), d(:), pg(:), ratio(:), nn(:), tc(:), ts(:)
+      real(dp) :: c, s
       integer :: m, j, j0, j1, kk, jk, jmax, pmax, a, b
       pmax = serration_max_period
       if (present(max_period)) pmax = min(pmax, max_period)
@@ -357,7 +357,11 @@ contains
       j0 = max(1, ceiling(real(m, dp)/pmax))
       j1 = (m - 1)/2
       if (j1 - j0 < 2*nb) return
-      allocate (pg(max(1, j0 - nb):j1), ratio(j0:j1), nn(j0:j1))
+      allocate (pg(max(1, j0 - nb):j1), ratio(j0:j1), nn(j0:j1), tc(0:m - 1), ts(0:m - 1))
+      ! the m angles 2 pi jk/m once: every ordinate's terms are among them
+      do jk = 0, m - 1
+         call sincos_turn(real(jk, dp)/m, ts(jk), tc(jk))
+      end do
       do j = lbound(pg, 1), j1
          c = 0.0_dp
          s = 0.0_dp
@@ -366,12 +370,10 @@ contains
             ! the angle 2 pi j kk/m in turns, reduced exactly first: jk = j kk mod m
             jk = jk + j
             if (jk >= m) jk = jk - m
-            call sincos_turn(real(jk, dp)/m, sk, ck)
-            c = c + d(kk)*ck
-            s = s + d(kk)*sk
+            c = c + d(kk)*tc(jk)
+            s = s + d(kk)*ts(jk)
          end do
-         call sincos_turn(real(j, dp)/m, sk, ck)
-         pg(j) = (c**2 + s**2)/m/(2.0_dp - 2.0_dp*ck)
+         pg(j) = (c**2 + s**2)/m/(2.0_dp - 2.0_dp*tc(j))
       end do
       do j = j0, j1
          a = max(lbound(pg, 1), j - nb)
