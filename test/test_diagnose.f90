@@ -25,7 +25,7 @@ module test_diagnose
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
    use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
-                                    baseline_left_behind, &
+                                    baseline_left_behind, separating_d, open_spread, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_not_carried, rate_open, rate_at_end, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
@@ -1377,7 +1377,10 @@ contains
 
    !> The separating step: two refits that predict alike give D = 0 on every candidate; a
    !> compliance of 0.2 against none is told apart (D far above 10) by the best candidate,
-   !> which the verdict names
+   !> which the verdict names. The same between the end points of a leader that leave its
+   !> held-out prediction open: none told apart where they are one point, the best named
+   !> where they differ by a compliance of 0.2; not computed where the shares part by less
+   !> than open_spread
    subroutine test_separate(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
@@ -1409,6 +1412,36 @@ contains
                     index(res%verdict, trim(sp%names(sp%best))) > 0, 'compliance 0.2 not told apart: D '// &
                     real_str(sp%d(sp%best), 'es10.3')//'; '//res%verdict)
       end associate
+      if (allocated(error)) return
+      ! A leader whose end points alike on the fit tests carry 55 % and 90 % of the held-out gap
+      deallocate (res%alike)
+      res%leading = 1
+      res%effects(1)%n_alike = 2
+      res%effects(1)%shrink_alike_lo = 0.55_dp
+      res%effects(1)%shrink_alike_hi = 0.90_dp
+      res%effects(1)%c_open = reshape([res%c, res%c], [size(res%c), 2])
+      res%effects(1)%p_open = reshape([0.0_dp, 0.0_dp], [1, 2])
+      res%verdict = 'v'
+      call separate(ctx, res)
+      call check(error, res%pin%best > 0 .and. all(res%pin%d == 0.0_dp) .and. &
+                 res%verdict(2:) == '; none of the candidate tests would tell those end points apart '// &
+                 '(expected chi-square difference 0.00E+00 between the two that carry 55.0 and 90.0 %)', &
+                 'one point told apart from itself: '//res%verdict)
+      if (allocated(error)) return
+      res%effects(1)%p_open(1, 2) = 0.2_dp
+      res%verdict = 'v'
+      call separate(ctx, res)
+      associate (sp => res%pin)
+         call check(error, sp%a == 1 .and. sp%b == 1 .and. sp%d(sp%best) > separating_d .and. &
+                    sp%d(sp%best) == maxval(sp%d) .and. index(res%verdict, '; a '//trim(sp%names(sp%best))// &
+                    ' would tell those end points apart') > 0, 'end points a compliance of 0.2 apart not told '// &
+                    'apart: '//res%verdict)
+      end associate
+      if (allocated(error)) return
+      res%effects(1)%shrink_alike_hi = 0.55_dp + 0.9_dp*open_spread
+      res%verdict = 'v'
+      call separate(ctx, res)
+      call check(error, res%pin%best == 0 .and. res%verdict == 'v', 'shares closer than open_spread: '//res%verdict)
    end subroutine test_separate
 
    !> The saturating softening: at p = 0 the plain flow, at p >> 1/b the flow of the drag

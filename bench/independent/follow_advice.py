@@ -5,8 +5,9 @@ make that test's data with the case's own injected effect (its seed's stream rep
 case, checked against the label kept in truth.txt; miller_ref.py simulates, with a noise
 stream of its own), add it to the fit tests, diagnose again and compare: the leader, the
 held-out gap removed, and the range of it over the end points the fit tests cannot tell
-apart. The cases are copied to OUT/<case> and diagnosed there, JOBS at a time, one thread
-each; a case already diagnosed in OUT is not run again.
+apart. The added test carries the effect of the case's first test (the same in every test
+but a drift's rate, drawn per test). The cases are copied to OUT/<case> and diagnosed there,
+JOBS at a time, one thread each; a case already diagnosed in OUT is not run again.
 
 usage: follow_advice.py EXE OUT DIR:SEED [DIR:SEED ...] [--jobs N]
   DIR: a folder of kept cases (or of rediagnose.py's copies), SEED: the --seed it was made with
@@ -95,7 +96,7 @@ def one(exe, src, seed, out):
         kept = f.readline().split(': ', 1)[1].strip()
     if kept != label:
         raise RuntimeError(f'{name}: replayed {label!r}, kept {kept!r}')
-    case = os.path.join(out, name)
+    case = os.path.join(out, f'{name}@{seed}')
     report = os.path.join(case, 'report.md')
     if not os.path.exists(report):
         shutil.rmtree(case, ignore_errors=True)
@@ -119,7 +120,7 @@ def one(exe, src, seed, out):
     rng0 = f'{o0.group(1)}-{o0.group(2)}' if o0 else '-'
     rng1 = f'{o1.group(1)}-{o1.group(2)}' if o1 else '-'
     right = lead1 in sc.ACCEPT[row]
-    return (name, label, adv.group(1), lead0, share0, rng0, lead1, share1, rng1, right)
+    return (f'{name}@{seed}', label, adv.group(1), lead0, share0, rng0, lead1, share1, rng1, right)
 
 
 def main():
@@ -139,10 +140,10 @@ def main():
                 jobs.append((os.path.join(d, c), int(seed)))
     with ThreadPoolExecutor(a.jobs) as pool:
         rows = [r for r in pool.map(lambda j: one(exe, j[0], j[1], a.out), jobs) if r]
-    print(f'{"case":34s} {"injected":10s} {"before: leader":>16s} {"held %":>7s} {"open %":>11s}'
+    print(f'{"case@seed":39s} {"injected":10s} {"before: leader":>16s} {"held %":>7s} {"open %":>11s}'
           f' {"after: leader":>15s} {"held %":>7s} {"open %":>11s}  test added')
     for r in rows:
-        print(f'{r[0]:34s} {r[1]:10s} {r[3]:>16s} {r[4]:7.1f} {r[5]:>11s} {r[6]:>15s} {r[7]:7.1f} {r[8]:>11s}  {r[2]}')
+        print(f'{r[0]:39s} {r[1]:10s} {r[3]:>16s} {r[4]:7.1f} {r[5]:>11s} {r[6]:>15s} {r[7]:7.1f} {r[8]:>11s}  {r[2]}')
     n = len(rows)
     print(f'{n} cases: right after {sum(r[9] for r in rows)} of {n}; held-out gap removed >= 80 % before '
           f'{sum(r[4] >= 80.0 for r in rows)}, after {sum(r[7] >= 80.0 for r in rows)}; prediction open '
