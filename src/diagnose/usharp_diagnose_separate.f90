@@ -50,7 +50,7 @@ contains
       character(len=80) :: names(n_candidates)
       type(separation_type), allocatable :: seps(:)
       real(dp) :: rel_noise
-      integer :: na, i, j, c, npair
+      integer :: na, i, j, npair, n
       allocate (seps(0))
       res%seps = seps
       if (.not. allocated(res%alike)) return
@@ -68,20 +68,18 @@ contains
       deallocate (seps)
       allocate (seps(npair))
       npair = 0
+      n = 0
       do i = 1, na - 1
          do j = i + 1, na
             npair = npair + 1
             seps(npair)%a = res%alike(i)
             seps(npair)%b = res%alike(j)
-            seps(npair)%names = names
-            do c = 1, n_candidates
-               call discrimination(ctx, res, hist(c), res%effects(res%alike(i)), &
-                                   res%effects(res%alike(j)), rel_noise, seps(npair)%d(c), res%nevals)
-            end do
-            seps(npair)%best = maxloc(seps(npair)%d, 1)
+            call rank_candidates(ctx, res, hist, names, rel_noise, res%effects(res%alike(i)), &
+                                 res%effects(res%alike(j)), seps(npair), n)
          end do
       end do
       res%seps = seps
+      res%nevals = res%nevals + n
       associate (sp => seps(1))
          if (sp%d(sp%best) > 0.0_dp) res%verdict = res%verdict//'; a '//trim(sp%names(sp%best))// &
             ' would tell '//trim(res%effects(sp%a)%name)//' from '//trim(res%effects(sp%b)%name)// &
@@ -102,8 +100,9 @@ contains
       type(history_type) :: hist(n_candidates)
       character(len=80) :: names(n_candidates)
       type(effect_outcome) :: ends(2)
+      type(separation_type) :: pin
       real(dp) :: rel_noise
-      integer :: c, j
+      integer :: j, n
       res%pin = separation_type()
       if (res%leading == 0) return
       if (.not. prediction_open(res%effects(res%leading))) return
@@ -111,7 +110,7 @@ contains
       call tell(ctx, 'which test would fix the held-out prediction', res%nevals)
       call candidates(fit_amplitude(ctx), hist, names)
       rel_noise = fit_rel_noise(ctx)
-      associate (e => res%effects(res%leading), pin => res%pin)
+      associate (e => res%effects(res%leading))
          do j = 1, 2
             ends(j)%k = e%k
             ends(j)%c = e%c_open(:, j)
@@ -119,11 +118,10 @@ contains
          end do
          pin%a = res%leading
          pin%b = res%leading
-         pin%names = names
-         do c = 1, n_candidates
-            call discrimination(ctx, res, hist(c), ends(1), ends(2), rel_noise, pin%d(c), res%nevals)
-         end do
-         pin%best = maxloc(pin%d, 1)
+         n = 0
+         call rank_candidates(ctx, res, hist, names, rel_noise, ends(1), ends(2), pin, n)
+         res%nevals = res%nevals + n
+         res%pin = pin
          if (pin%d(pin%best) >= separating_d) then
             res%verdict = res%verdict//'; a '//trim(names(pin%best))//' would tell those end points apart'
          else
@@ -134,6 +132,25 @@ contains
                        ' and '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %)'
       end associate
    end subroutine pin_open
+
+   !> Each candidate's expected discrimination between the refits ea and eb, into sp (its
+   !> names, d and best; a and b are the caller's)
+   subroutine rank_candidates(ctx, res, hist, names, rel_noise, ea, eb, sp, nevals)
+      type(diagnose_context), intent(in) :: ctx
+      type(diagnose_result), intent(in) :: res
+      type(history_type), intent(in) :: hist(n_candidates)
+      character(len=80), intent(in) :: names(n_candidates)
+      real(dp), intent(in) :: rel_noise
+      type(effect_outcome), intent(in) :: ea, eb
+      type(separation_type), intent(inout) :: sp
+      integer, intent(inout) :: nevals   !< simulations, counted on
+      integer :: c
+      sp%names = names
+      do c = 1, n_candidates
+         call discrimination(ctx, res, hist(c), ea, eb, rel_noise, sp%d(c), nevals)
+      end do
+      sp%best = maxloc(sp%d, 1)
+   end subroutine rank_candidates
 
    !> The standard candidates scaled to a strain amplitude emax: tension at two rates to
    !> twice it, relaxation holds at half and whole of it, cycling with holds over it and
