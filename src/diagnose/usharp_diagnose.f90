@@ -35,7 +35,7 @@ module usharp_diagnose
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     rest_at_noise, fit_structured, diagnose_progress, tell, step_done, &
                                     joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
-                                    baseline_left_behind
+                                    baseline_left_behind, physical_point
    use usharp_diagnose_numerics, only: gn_decrease
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions, baseline_step
    use usharp_diagnose_screen, only: screen
@@ -104,8 +104,9 @@ contains
    !> One stage of a diagnosis, of the fit tests or of every test fitted together: the
    !> baseline, the steps after it, and the baseline fitted again from a refit's constants
    !> while they leave it behind (see rebaseline). clock0: the clock the steps are timed
-   !> from (absent: the stage's own start)
-   subroutine diagnose_stage(cfg, opts, src, ctx, res, error, clock0)
+   !> from (absent: the stage's own start); carried: further starts of the refits (see
+   !> diagnose_context)
+   subroutine diagnose_stage(cfg, opts, src, ctx, res, error, clock0, carried)
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(stage_sources), intent(in) :: src
@@ -113,11 +114,13 @@ contains
       type(diagnose_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       integer(int64), intent(in), optional :: clock0
+      type(physical_point), intent(in), optional :: carried(:)
       integer :: round
       logical :: lower
       call baseline_stage(cfg, opts, src, ctx, res, error)
       if (allocated(error)) return
       if (present(clock0)) ctx%clock0 = clock0
+      if (present(carried)) ctx%carried = carried
       call diagnose_effects(ctx, res, error)
       if (allocated(error)) return
       do round = 1, rebaseline_rounds
@@ -301,6 +304,7 @@ contains
          return
       end if
       rctx%clock0 = ctx%clock0
+      if (allocated(ctx%carried)) rctx%carried = ctx%carried
       allocate (rctx%earlier(size(ctx%cat)))
       if (allocated(ctx%earlier)) rctx%earlier = ctx%earlier
       do j = 1, size(res%effects)
@@ -340,14 +344,23 @@ contains
       type(diagnose_options) :: jopts
       type(diagnose_context) :: jctx
       type(diagnose_result) :: jres
+      type(physical_point), allocatable :: carried(:)
       integer :: j
       call tell(ctx, 'the held-out tests fitted too', res%nevals)
+      ! Each refit of the fit tests, with its values fitted to the held-out tests, is a
+      ! point of its refit with every test fitted
+      allocate (carried(size(ctx%cat)))
+      do j = 1, size(res%effects)
+         if (.not. res%effects(j)%refitted .or. .not. allocated(res%effects(j)%p_all)) cycle
+         carried(res%effects(j)%k)%c = res%effects(j)%c
+         carried(res%effects(j)%k)%p = res%effects(j)%p_all
+      end do
       ! The baseline's multi-start has searched the constants already
       jcfg = config_at(cfg, ctx%prob%idx, res%c)
       jcfg%diagnose%holdout = .false.
       jopts = opts
       jopts%joint = .true.
-      call diagnose_stage(jcfg, jopts, src, jctx, jres, error, ctx%clock0)
+      call diagnose_stage(jcfg, jopts, src, jctx, jres, error, ctx%clock0, carried)
       if (allocated(error)) return
       res%nevals = res%nevals + jres%nevals
       res%steps = [res%steps, jres%steps]

@@ -16,7 +16,7 @@ module usharp_diagnose_types
    private
 
    public :: params_bound_note, hardening_note, side_word
-   public :: diagnose_context, effect_outcome, diagnose_result, fit_structured, held_quiet
+   public :: diagnose_context, physical_point, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text
    public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
    public :: deviance_change, prediction_open, open_spread, separating_d
@@ -86,6 +86,12 @@ module usharp_diagnose_types
       real(dp), allocatable :: x(:)
    end type end_point
 
+   !> A refit's end point in physical units, which a problem of another set of tests can
+   !> start from: the fitted constants and every effect parameter of every test
+   type :: physical_point
+      real(dp), allocatable :: c(:), p(:)
+   end type physical_point
+
    !> The problem every step of a diagnosis works on
    type :: diagnose_context
       type(fit_problem) :: prob              !< all tests; constants: the baseline's once fitted
@@ -111,6 +117,14 @@ module usharp_diagnose_types
       !> them held the effect's rate), so that a better baseline does not leave it above an
       !> end point found before
       type(end_point), allocatable :: earlier(:)
+      !> The end point of each catalogue effect's refit on the fit tests, with its values
+      !> fitted to the held-out tests (see joint_stage in usharp_diagnose; c unallocated:
+      !> none): its refit with every test fitted goes on from there where it is clearly
+      !> lower (see from_carried in usharp_diagnose_refit). That stage's baseline has taken
+      !> up what an effect shared by all tests can hide in the constants (a temperature
+      !> offset of 17 K, refitted from there to 39.7 % of the gap where the fit tests' own
+      !> refit, taken on, removes it all)
+      type(physical_point), allocatable :: carried(:)
    end type diagnose_context
 
    !> One effect: screening, and the refit when it led
