@@ -2300,7 +2300,7 @@ contains
       e%shrink_alike_lo = 0.547_dp
       e%shrink_alike_hi = 0.882_dp
       text = alike_note(e)
-      call check(error, index(text, '54.7 to 88.2 % at 5 end points') > 0 .and. &
+      call check(error, index(text, 'responses of 5 end points') > 0 .and. index(text, '54.7 to 88.2 %') > 0 .and. &
                  index(text, 'leave the held-out prediction open') > 0, 'no range stated: '//text)
       if (allocated(error)) return
       e%shrink_alike_hi = 0.590_dp

@@ -7,7 +7,7 @@ module usharp_diagnose_refit
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use usharp_kinds, only: dp
    use usharp_lapack, only: mat_mul, solve_dense
-   use usharp_math, only: log_dp, log10_dp
+   use usharp_math, only: log_dp, log10_dp, exp_dp
    use usharp_error, only: error_type
    use usharp_model, only: model_type
    use usharp_objective, only: fit_problem
@@ -862,6 +862,8 @@ contains
       e%y = y
       e%held_gap = max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
       if (res%gap_held > 0.0_dp) e%shrink_held = 1.0_dp - e%held_gap/res%gap_held
+      e%held_gap_point = e%held_gap
+      e%shrink_held_point = e%shrink_held
       ! (its share of the reference baseline's gap: see judge)
       e%gap_fit_after = max(sum(r**2, .not. res%held(res%test_of)) - res%noise_fit, 0.0_dp)
       ! The same constants without the effect: what of the held-out share they carry alone
@@ -904,18 +906,25 @@ contains
    !> prediction open: refits of a softening in the creep matrix ended within 0.6 of each
    !> other in deviance and carried 55 % and 75 % of the held-out creep test's gap, a
    !> minimum near the truth 89 %. Only a prediction (an effect not fitted to the held-out
-   !> tests, its rate free) is spread so.
+   !> tests, its rate free) is spread so. The prediction is then their responses averaged
+   !> with the weights the fit tests give them, exp(-deviance/2) against the end point used
+   !> (Akaike weights; the same number of parameters): which of them lies lowest is the
+   !> noise's choice, and in the creep matrix it was the one that carried least (a
+   !> softening's 70.9 % of 70.9-100 % at 8 end points; averaged 87.5 %).
    subroutine held_alike(ctx, res, ep, e)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(in) :: res
       type(effect_problem), intent(inout) :: ep
       type(effect_outcome), intent(inout) :: e
       class(model_type), allocatable :: m2
-      real(dp), allocatable :: p2(:), r(:), y(:), per(:), seen(:, :)
-      real(dp) :: dev, shrink, fmax
+      real(dp), allocatable :: p2(:), r(:), y(:), per(:), seen(:, :), rsum(:)
+      real(dp) :: dev, shrink, fmax, w, wsum
       integer :: j
       logical :: ok
+      ! From the end point's own prediction (held_alike may meet e again, see refit)
       e%n_alike = 0
+      e%held_gap = e%held_gap_point
+      e%shrink_held = e%shrink_held_point
       e%shrink_alike_lo = e%shrink_held
       e%shrink_alike_hi = e%shrink_held
       if (allocated(e%c_open)) deallocate (e%c_open, e%p_open)
@@ -929,6 +938,7 @@ contains
       ! (each test's residuals of a variance of their own): a wide first sieve
       fmax = e%f_after*(1.0_dp + 4.0_dp*bic_margin/real(ep%nres(), dp))
       seen = reshape(e%x_fit, [size(e%x_fit), 1])
+      wsum = 0.0_dp
       do j = 1, size(e%f_ends)
          if (e%f_ends(j) >= failed_objective .or. e%f_ends(j) > fmax) cycle
          if (same_point(e%x_ends(:, j), seen)) cycle
@@ -940,6 +950,14 @@ contains
          dev = deviance_change(res%npts(ctx%ifit), e%per_test_after(ctx%ifit), per(ctx%ifit))
          if (dev > bic_margin) cycle
          shrink = 1.0_dp - max(sum(r**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)/res%gap_held
+         ! The end point used weighs 1 (its residuals join the sum below)
+         w = exp_dp(-0.5_dp*dev)
+         if (wsum == 0.0_dp) then
+            rsum = w*r
+         else
+            rsum = rsum + w*r
+         end if
+         wsum = wsum + w
          e%n_alike = e%n_alike + 1
          if (shrink < e%shrink_alike_lo) then
             e%shrink_alike_lo = shrink
@@ -949,6 +967,15 @@ contains
             call keep_open(2)
          end if
       end do
+      if (e%n_alike == 0) return
+      call ep%unpack(e%x_fit, m2, p2)
+      call every_test(ctx, m2, e%k, p2, r, y, ok)
+      if (.not. ok) return
+      ! Residuals are data - response: the weighted mean of the residuals is that of the
+      ! responses
+      rsum = (rsum + r)/(wsum + 1.0_dp)
+      e%held_gap = max(sum(rsum**2, res%held(res%test_of)) - res%noise_held, 0.0_dp)
+      e%shrink_held = 1.0_dp - e%held_gap/res%gap_held
    contains
       !> The end point just met as column col of c_open and p_open
       subroutine keep_open(col)

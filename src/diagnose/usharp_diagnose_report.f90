@@ -15,7 +15,7 @@ module usharp_diagnose_report
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
                                     fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet, side_word, &
-                                    rate_at_end, separation_type
+                                    rate_at_end, separation_type, prediction_open
    use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
@@ -381,7 +381,9 @@ contains
       if (e%n_alike > 0) call add_line(lines, '- end points of the refit that the fit tests cannot '// &
          'tell from the one used (BIC within '//real_str(bic_margin, 'f0.0')//'): '//str(e%n_alike)// &
          ' more; with them the held-out gap removed is '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &
-         ' to '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %')
+         ' to '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %; their responses weighted by '// &
+         'the fit tests (exp(-deviance/2)) remove '//real_str(100.0_dp*e%shrink_held, 'f0.1')// &
+         ' %, the prediction used (the one alone '//real_str(100.0_dp*e%shrink_held_point, 'f0.1')//' %)')
       ! (before: at the reference baseline, as "objective before")
       call add_line(lines, '- objective per test, before -> after:')
       before = per_test_ref(res)
@@ -480,9 +482,15 @@ contains
       call add_line(lines, '')
       select case (joint_reason(res, .false.))
       case (joint_partial)
-         call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
-            'tests, but its prediction carries only part of the held-out tests'': either what the fit '// &
-            'tests alone make of its parameters fails there, or another effect adds to it.')
+         if (prediction_open(res%effects(res%leading))) then
+            call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
+               'tests, but they leave its prediction of the held-out tests open: the held-out tests fix '// &
+               'the parameters it depends on.')
+         else
+            call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
+               'tests, but its prediction carries only part of the held-out tests'': either what the fit '// &
+               'tests alone make of its parameters fails there, or another effect adds to it.')
+         end if
       case (joint_bic_only)
          call add_line(lines, 'An effect leads on the fit tests by BIC alone (the held-out tests below their '// &
             'floor, and the fit tests'' structured gap below its floor too or mostly left): the held-out '// &

@@ -164,6 +164,10 @@ module usharp_diagnose_types
       !> bic_margin), and the least and most of the held-out gap they carry
       integer :: n_alike = 0
       real(dp) :: shrink_alike_lo = 0.0_dp, shrink_alike_hi = 0.0_dp
+      !> The held-out gap the refit's own end point leaves, and its share removed; with end
+      !> points alike (n_alike > 0) held_gap and shrink_held are those of their prediction
+      !> weighted by their evidence (see held_alike)
+      real(dp) :: held_gap_point = 0.0_dp, shrink_held_point = 0.0_dp
       !> The two of those end points (its own among them) that carry the least and the most
       !> of the held-out gap: their constants (columns 1 and 2, as c) and every parameter (as
       !> p_all), for the test that would tell them apart (see prediction_open)
@@ -686,8 +690,10 @@ contains
    !> and leaves a rest above their floor, while on the fit tests it leaves none above theirs.
    !> Fitted to the fit tests alone its parameters may be what fails (a softening of 0.17, fitted to the LCF and ratcheting tests as a slower one, carried 55 % of the
    !> relaxation test's gap), or another effect adds to it: only every test fitted together
-   !> tells which, and how much of every gap the effect closes. Not where the baseline ran to
-   !> a bound (see loose_prediction), whose joint stage decides alone.
+   !> tells which, and how much of every gap the effect closes. So too where the fit tests
+   !> leave its prediction open (see prediction_open) and it leaves a rest above the floor:
+   !> the held-out tests hold what fixes the parameters it depends on. Not where the baseline
+   !> ran to a bound (see loose_prediction), whose joint stage decides alone.
    pure logical function partial_carry(res)
       type(diagnose_result), intent(in) :: res
       partial_carry = .false.
@@ -696,7 +702,7 @@ contains
       associate (e => res%effects(res%leading))
          if (e%held_fitted) return
          if ((1.0_dp - e%shrink_fit)*gap_fit_ref(res) > res%floor_fit) return
-         partial_carry = e%shrink_held < most .and. held_rest_open(res)
+         partial_carry = (e%shrink_held < most .or. prediction_open(e)) .and. held_rest_open(res)
       end associate
    end function partial_carry
 

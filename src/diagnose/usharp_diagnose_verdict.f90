@@ -534,9 +534,9 @@ contains
       character(len=:), allocatable :: text
       text = ''
       if (.not. prediction_open(e)) return
-      text = ' ('//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')//' to '// &
-             real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' % at '//str(e%n_alike + 1)// &
-             ' end points of its refit that the fit tests cannot tell apart, BIC within '// &
-             str(nint(bic_margin))//': they leave the held-out prediction open)'
+      text = ' (the responses of '//str(e%n_alike + 1)//' end points of its refit that the fit '// &
+             'tests cannot tell apart, BIC within '//str(nint(bic_margin))//', weighted by them; '// &
+             'one by one they carry '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')//' to '// &
+             real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %: they leave the held-out prediction open)'
    end function alike_note
 end module usharp_diagnose_verdict
