@@ -3,7 +3,7 @@ module test_fit
    use testdrive, only: error_type, unittest_type, new_unittest, check, test_failed, skip_test
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type, stat_failure
-   use usharp_experiment, only: interpolate
+   use usharp_experiment, only: interpolate, data_note
    use usharp_weighting, only: threshold_weights, relaxation_weights, rate_signal
    use usharp_rng, only: rng_type
    use usharp_objective, only: test_objective, fit_problem, setup_problem, eval_ok, eval_failed, &
@@ -52,6 +52,8 @@ contains
          new_unittest('hooke-jeeves-quadratic', test_hj_quadratic), &
          new_unittest('hooke-jeeves-honours-itermax-and-eps', test_hj_limits), &
          new_unittest('data-not-covering-span-rejected', test_coverage), &
+         new_unittest('sparse-data-compared-at-its-samples', test_sparse_data), &
+         new_unittest('programme-checked-against-recorded-control', test_programme), &
          new_unittest('data-unit-converted', test_units), &
          new_unittest('wrong-unit-or-column-refused', test_scale), &
          new_unittest('fit-aborts-after-failures-in-a-row', test_abort), &
@@ -243,6 +245,69 @@ contains
       call check(error, index(uerr%message, 'data cover 0.00000 to 240.000 s but the '// &
                  'simulation runs from 0.00000 to 1202.00 s') > 0, uerr%message)
    end subroutine test_coverage
+
+   !> Data sampled more coarsely than dt_out are compared only at the output times within
+   !> dt_out/2 of a sample, not at values interpolated between samples (which carry no noise
+   !> and make a gap the data do not hold); data at least as fine keep every output time;
+   !> output times past the data's end by less than a sampling interval are left out, not
+   !> refused
+   subroutine test_sparse_data(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      character(len=:), allocatable :: f
+      character(len=40), allocatable :: rows(:)
+      integer :: k
+      ! The relaxation history (1202 s, dt_out 1 s: 1203 output times), logged every 10 s
+      rows = [character(len=40) :: 'time,stress', (str(10*k)//',10', k=0, 120), '1202,10']
+      f = write_text('sparse10.csv', rows)
+      call problem_of('sparse10.nml', [character(len=200) :: &
+         "&test name='r', history='relaxation', data_file='sparse10.csv' /"], cfg, prob, error)
+      if (allocated(error)) return
+      associate (tg => prob%targets(1))
+         call check(error, size(tg%t) == 122 .and. tg%exp%nunmeasured == 1081 .and. tg%exp%nbeyond == 0, &
+                    'compared at the 122 samples, 1081 output times left out: '//str(size(tg%t))//' '// &
+                    str(tg%exp%nunmeasured))
+         if (allocated(error)) return
+         call check(error, all([(minval(abs(tg%exp%t - tg%t(k))) <= 0.5_dp, k=1, size(tg%t))]), &
+                    'every compared time within dt_out/2 of a sample')
+         if (allocated(error)) return
+         call check(error, index(data_note(tg%exp, 1.0_dp), 'not compared: 1081') > 0, &
+                    'the summary says so: '//data_note(tg%exp, 1.0_dp))
+         if (allocated(error)) return
+      end associate
+      ! Logged every second but ending at 1201 s: every output time but the last
+      rows = [character(len=40) :: 'time,stress', (str(k)//',10', k=0, 1201)]
+      f = write_text('dense1.csv', rows)
+      call problem_of('dense1.nml', [character(len=200) :: &
+         "&test name='r', history='relaxation', data_file='dense1.csv' /"], cfg, prob, error)
+      if (allocated(error)) return
+      associate (tg => prob%targets(1))
+         call check(error, size(tg%t) == 1202 .and. tg%exp%nunmeasured == 0 .and. tg%exp%nbeyond == 1, &
+                    'every output time to 1201 s compared, 1202 s left out: '//str(size(tg%t)))
+      end associate
+   end subroutine test_sparse_data
+
+   !> A programmed history that is not the test the data file records (its strain column):
+   !> a strain range of half the recorded one, as an amplitude given for the range makes, is
+   !> refused in one line naming the variables; the right range passes
+   subroutine test_programme(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      character(len=*), parameter :: test = "&test name='f', history='cyclic', strain_rate=1e-3, cycles=5, "// &
+         "hold_max=600, hold_min=600, data_file='../../data/tutorial/cyclic-fast.csv', data_unit='MPa', "
+      call read_config(fit_deck('programme-half.nml', '', [character(len=300) :: test//'strain_range=0.015 /']), &
+                       cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      call check(error, allocated(uerr), 'half the range refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, "cyclic-fast.csv: its column 'strain'") > 0 .and. &
+                 index(uerr%message, 'strain_range (max - min)') > 0, uerr%message)
+      if (allocated(error)) return
+      call problem_of('programme-right.nml', [character(len=300) :: test//'strain_range=0.03 /'], cfg, prob, error)
+   end subroutine test_programme
 
    subroutine test_units(error)
       type(error_type), allocatable, intent(out) :: error
@@ -456,10 +521,12 @@ contains
       type(run_config) :: cfg
       type(fit_problem) :: prob
       character(len=:), allocatable :: pf, df
-      integer :: n, np
+      integer :: n, np, i
       real(dp) :: share
       pf = peak_file()
-      df = write_text('loops.csv', [character(len=40) :: 'time,stress', '0,0', '30,10', '60,0'])
+      ! Sampled every second: every output time has a measurement (see measured_times)
+      df = write_text('loops.csv', [character(len=40) :: 'time,stress', &
+                      (str(i)//','//str(10 - abs(30 - i)/3), i=0, 60)])
       call problem_of('both.nml', [character(len=200) :: &
          "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
          "dt_out=2.0, target='both', peak_file='peaks.csv', data_file='loops.csv', peak_share=0.3 /"], cfg, prob, error)

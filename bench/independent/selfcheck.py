@@ -130,8 +130,13 @@ def verdict_of(text):
     m3 = re.search(r'([0-9.]+) %\s*on the held-out', v)
     alike = []
     m4 = re.search(r';\s*([a-z0-9, ]+?) explains? it equally well', v)
-    if m4 and re.search(r'would tell \S+ from ', v):
-        alike = [x.strip() for x in m4.group(1).split(',')]
+    # alike only by both leaving noise: 'lag (BIC +164.0) explains it to the noise level too'
+    m5 = re.search(r';\s*([a-zA-Z0-9, ()+.-]+?) explains? it to the noise level too', v)
+    if re.search(r'would tell \S+ from ', v):
+        if m4:
+            alike = [x.strip() for x in m4.group(1).split(',')]
+        if m5:
+            alike += [re.sub(r'\s*\(BIC [^)]*\)', '', x).strip() for x in m5.group(1).split(',')]
     return lead, (float(m3.group(1)) if m3 else float('nan')), v, alike
 
 

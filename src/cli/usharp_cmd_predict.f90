@@ -12,6 +12,7 @@ module usharp_cmd_predict
    use usharp_filesys, only: make_dir, join_path
    use usharp_cmd_run, only: write_curves
    use usharp_overwrite, only: check_overwrite, simulate_mark
+   use usharp_experiment, only: data_note
    implicit none
    private
 
@@ -63,6 +64,8 @@ contains
       if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.
       call setup_problem(cfg, prob, error)
       if (allocated(error)) return
+      ! Its tests as compared: where the data hold a measurement
+      cfg%tests = prob%cfg%tests
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return
       allocate (res(size(cfg%tests)))
@@ -87,6 +90,7 @@ contains
             name = cfg%tests(i)%name
             if (part == 1) name = cfg%tests(i)%name//' peaks'
             write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+            if (part == 0) row = trim(row)//data_note(prob%targets(i)%exp, cfg%tests(i)%dt_out)
             summary = [character(len=report_line_len) :: summary, '  '//pad(name, w)//trim(row)]
          end do
       end do

@@ -8,7 +8,7 @@ module usharp_cmd_run
    use usharp_config, only: run_config, fit_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
    use usharp_objective, only: fit_problem, setup_problem, simulated
-   use usharp_experiment, only: fits_strain, response_name
+   use usharp_experiment, only: fits_strain, response_name, data_note
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines, result_file
@@ -154,7 +154,7 @@ contains
          end if
          do i = 1, size(cfg%tests)
             summary = [character(len=report_line_len) :: summary, '  test '//cfg%tests(i)%name//': '// &
-               real_str(out%per_test(i), 'es12.5')//merged_note(prob%targets(i)%exp%nmerged)]
+               real_str(out%per_test(i), 'es12.5')//data_note(prob%targets(i)%exp, cfg%tests(i)%dt_out)]
          end do
          summary = [character(len=report_line_len) :: summary, '  constant        start          fitted']
          do j = 1, size(start)
@@ -213,16 +213,6 @@ contains
          if (any(shared > 0)) text = '; a share of the tests of '//join(shared, ', ')//' points'
       end function shares_text
    end subroutine run_command
-
-   !> What a summary says of a test whose data repeat a time (a logger's two rows at one
-   !> time stamp, averaged into one as the data are read)
-   pure function merged_note(nmerged) result(note)
-      integer, intent(in) :: nmerged
-      character(len=:), allocatable :: note
-      note = ''
-      if (nmerged > 0) note = '  (rows repeating a time stamp of the data: '//str(nmerged)// &
-                              ', each averaged into the row of that time)'
-   end function merged_note
 
    !> The identifiability report at rank 0's optimum, its Jacobian's points split over the
    !> ranks (every rank calls this after the fit; nothing when the fit failed on any rank)

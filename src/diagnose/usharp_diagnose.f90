@@ -28,7 +28,7 @@ module usharp_diagnose
    use usharp_config, only: run_config
    use usharp_input_diagnose, only: check_holdout
    use usharp_objective, only: setup_problem
-   use usharp_experiment, only: experiment_type, fits_strain
+   use usharp_experiment, only: experiment_type, fits_strain, data_note
    use usharp_effects, only: effect_catalogue, param_per_test
    use usharp_sort, only: order_of
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of, bic_margin, rival_share
@@ -512,10 +512,11 @@ contains
       res%held = cfg%diagnose%holdout
       ctx%ifit = pack([(i, i=1, nt)], .not. res%held)
       ctx%ihold = pack([(i, i=1, nt)], res%held)
-      allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt), strain_fit(nt))
+      allocate (res%names(nt), res%unit(nt), res%noise(nt), res%peak(nt), strain_fit(nt), res%data_notes(nt))
       res%stress_unit = cfg%units
       do i = 1, nt
          res%names(i) = cfg%tests(i)%name
+         res%data_notes(i) = data_note(ctx%prob%targets(i)%exp, cfg%tests(i)%dt_out, bare=.true.)
          res%unit(i) = merge('strain (-)     ', 'stress ('//cfg%units//')   ', fits_strain(cfg%tests(i)))
          ! (from the baseline's residual, see baseline_regions)
          res%noise(i) = 0.0_dp

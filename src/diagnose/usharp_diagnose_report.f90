@@ -131,6 +131,12 @@ contains
             real_str(max(res%per_test0(i) - region_noise(res, i), 0.0_dp), 'es10.3')//' |')
       end do
       call add_line(lines, '')
+      if (allocated(res%data_notes)) then
+         do i = 1, size(res%data_notes)
+            if (len_trim(res%data_notes(i)) > 0) call add_line(lines, 'Data of '//trim(res%names(i))// &
+               ': '//trim(res%data_notes(i))//'.')
+         end do
+      end if
       call add_line(lines, 'A set of tests has a structured gap only above '//str(nint(gap_z))// &
                ' standard errors of the gap noise alone leaves (the scatter of the noise')
       call add_line(lines, 'estimate and of the objective): fit tests '//real_str(res%gap_fit, 'es10.3')//' against '// &

@@ -238,6 +238,8 @@ module usharp_diagnose_types
    !> The whole diagnosis
    type :: diagnose_result
       character(len=name_len), allocatable :: names(:)   !< of the tests
+      !> How each test's data were compared (data_note; blank: every output time, every row)
+      character(len=256), allocatable :: data_notes(:)
       character(len=32), allocatable :: unit(:)   !< response and unit per test
       character(len=8) :: stress_unit = ''        !< the model's stress unit
       logical, allocatable :: held(:)

@@ -98,8 +98,7 @@ contains
    !> explains it as well, and which fit tests it makes worse
    subroutine effect_verdict(res)
       type(diagnose_result), intent(inout) :: res
-      character(len=:), allocatable :: text, others
-      integer :: j
+      character(len=:), allocatable :: text
       associate (e => res%effects(res%leading))
          if (explains_resolved(e, res)) then
             text = trim(e%name)//' explains the gap'
@@ -130,20 +129,13 @@ contains
                text = text//' and '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % on the held-out tests'
                if (e%shrink_held < most .and. rest_at_noise(res%gap_held, e%shrink_held, res%floor_held)) &
                   text = text//rest_note
+               ! Per-test values of the held-out tests are fitted to them: no prediction
+               if (e%held_fitted) text = text//' (by its values of the held-out tests fitted to them, '// &
+                  'the constants carried over: not a prediction)'
                text = text//alike_note(e)
             end if
          end if
-         if (size(res%alike) > 1) then
-            others = ''
-            do j = 2, size(res%alike)
-               if (j > 2) others = others//', '
-               others = others//trim(res%effects(res%alike(j))%name)
-            end do
-            text = text//'; '//trim(others)//' explain'//trim(merge('s', ' ', size(res%alike) == 2))// &
-                   ' it equally well (BIC within '//str(nint(bic_margin))// &
-                   ' or only noise left): the tests cannot tell them apart; '//trim(e%name)// &
-                   ' is the simplest'
-         end if
+         if (size(res%alike) > 1) text = text//alike_text(res)
          if (allocated(e%p)) text = text//hardening_note(e%name, e%p)
          if (any(e%worse)) text = text//'; it makes '//test_list(res, e%worse)//' worse'
          text = text//bound_note(res, e)
@@ -155,6 +147,53 @@ contains
       end associate
       res%verdict = text
    end subroutine effect_verdict
+
+   !> What the verdict says of the other effects that explain the gap alike (res%alike): those
+   !> within bic_margin of the leader's BIC equally well (the tests cannot tell them apart);
+   !> those alike only because they too leave nothing but noise, with the BIC that does tell
+   !> them apart (a lag 164 worse than a shift, both at the noise level, was once said to be
+   !> indistinguishable); and why the leader leads: the simplest, or of equal complexity the
+   !> lowest BIC
+   function alike_text(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      character(len=:), allocatable :: within, noise
+      integer :: j, nw, nn
+      logical :: simplest
+      within = ''
+      noise = ''
+      nw = 0
+      nn = 0
+      simplest = .true.
+      associate (e => res%effects(res%leading))
+         do j = 2, size(res%alike)
+            associate (o => res%effects(res%alike(j)))
+               simplest = simplest .and. complexity(e) < complexity(o)
+               if (abs(o%dbic - e%dbic) < bic_margin) then
+                  if (nw > 0) within = within//', '
+                  within = within//trim(o%name)
+                  nw = nw + 1
+               else
+                  if (nn > 0) noise = noise//', '
+                  noise = noise//trim(o%name)//' (BIC '//trim(merge('+', '-', o%dbic >= e%dbic))// &
+                          real_str(abs(o%dbic - e%dbic), 'f0.1')//')'
+                  nn = nn + 1
+               end if
+            end associate
+         end do
+         text = ''
+         if (nw > 0) text = text//'; '//within//' explain'//trim(merge('s', ' ', nw == 1))// &
+            ' it equally well (BIC within '//str(nint(bic_margin))//'): the tests cannot tell them apart'
+         if (nn > 0) text = text//'; '//noise//' explain'//trim(merge('s', ' ', nn == 1))// &
+            ' it to the noise level too: BIC tells '//trim(merge('it  ', 'them', nn == 1))//' from '// &
+            trim(e%name)//', the noise level does not rule '//trim(merge('it  ', 'them', nn == 1))//' out'
+         if (simplest) then
+            text = text//'; '//trim(e%name)//' is the simplest'
+         else
+            text = text//'; '//trim(e%name)//' leads by BIC'
+         end if
+      end associate
+   end function alike_text
 
    !> What the verdict adds of a leader's refit that ran to a search bound: its constants at
    !> a bound of &fit (the refit ran away), its own parameters at theirs (not determined);
@@ -509,9 +548,18 @@ contains
       end do
       if (e%confirmed .and. allocated(res%alike) .and. res%leading > 0) then
          if (j == res%leading .and. size(res%alike) > 1) then
-            text = text//', leads as the simplest of those that explain it equally well'
+            if (all([(complexity(e) < complexity(res%effects(res%alike(i))), i=2, size(res%alike))])) then
+               text = text//', leads as the simplest of those that explain it equally well'
+            else
+               text = text//', leads by BIC among those that explain it alike'
+            end if
          else if (any(res%alike == j) .and. j /= res%leading) then
-            text = text//', as well as '//trim(res%effects(res%leading)%name)//': the tests cannot tell them apart'
+            if (abs(e%dbic - res%effects(res%leading)%dbic) < bic_margin) then
+               text = text//', as well as '//trim(res%effects(res%leading)%name)//': the tests cannot tell them apart'
+            else
+               text = text//', to the noise level as '//trim(res%effects(res%leading)%name)//' does, '// &
+                      'which BIC prefers'
+            end if
          else if (j /= res%leading) then
             text = text//', but '//trim(res%effects(res%leading)%name)//' is better by BIC'
          end if

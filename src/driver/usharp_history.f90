@@ -5,7 +5,7 @@ module usharp_history
    use usharp_kinds, only: dp
    use usharp_math, only: pow_dp, cubic_piece
    use usharp_error, only: error_type, fatal_error
-   use usharp_strings, only: str
+   use usharp_strings, only: str, real_str
    implicit none
    private
 
@@ -291,7 +291,8 @@ contains
       real(dp), allocatable :: t(:), v(:)
       integer :: i
       if (size(levels) < 1 .or. size(holds) /= size(levels)) then
-         call fatal_error(error, 'relaxation needs as many holds as levels (at least one)')
+         call fatal_error(error, 'relaxation needs as many holds as levels (at least one): levels has '// &
+                          str(size(levels))//', holds '//str(size(holds))//' (decimal commas? 600,5 reads as two values)')
          return
       end if
       if (ramp_time <= 0.0_dp .or. any(holds <= 0.0_dp)) then
@@ -362,7 +363,8 @@ contains
          return
       end if
       if (.not. (hold_max >= 0.0_dp .and. hold_min >= 0.0_dp)) then
-         call fatal_error(error, 'cyclic holds must be >= 0')
+         call fatal_error(error, 'cyclic: hold_max and hold_min must be >= 0 (s): hold_max = '// &
+                          real_str(hold_max, 'g0.6')//', hold_min = '//real_str(hold_min, 'g0.6'))
          return
       end if
       amp = 0.5_dp*strain_range
@@ -371,7 +373,8 @@ contains
       else if (period > 0.0_dp) then
          quarter = 0.25_dp*period
       else
-         call fatal_error(error, 'cyclic needs a strain rate > 0 or a period > 0')
+         call fatal_error(error, 'cyclic needs strain_rate > 0 (1/s) or period > 0 (s): strain_rate = '// &
+                          real_str(rate, 'g0.6')//', period = '//real_str(period, 'g0.6'))
          return
       end if
       allocate (t(6*cycles + 2), v(6*cycles + 2))

@@ -13,7 +13,8 @@ module usharp_objective
    use usharp_simulate, only: simulate_test
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_config, only: run_config, test_config
-   use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain, check_scale
+   use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain, check_scale, &
+                                compare_where_measured, check_programme
    use usharp_weighting, only: threshold_weights, relaxation_weights, rate_signal
    use usharp_external, only: run_external
    use usharp_filesys, only: join_path
@@ -90,13 +91,17 @@ contains
             call load_experiment(cfg%tests(i), cfg%units, prob%targets(i)%exp, error)
             if (allocated(error)) exit
          end if
-         call set_target(cfg%tests(i), cfg%units, prob%targets(i), error)
+         ! Compared (and simulated) where the data hold a measurement
+         call compare_where_measured(prob%cfg%tests(i), prob%targets(i)%exp)
+         call set_target(prob%cfg%tests(i), cfg%units, prob%targets(i), error)
          if (allocated(error)) exit
          if (.not. present(experiments)) then
             associate (tg => prob%targets(i))
-               call check_scale(cfg%tests(i), tg%exp, cfg%model%youngs, cfg%units, tg%t(1), &
-                                tg%t(size(tg%t)), error)
+               ! (against every output time, not only those compared)
+               call check_scale(cfg%tests(i), tg%exp, cfg%model%youngs, cfg%units, cfg%tests(i)%times(), error)
             end associate
+            if (allocated(error)) exit
+            call check_programme(cfg%tests(i), cfg%units, error)
             if (allocated(error)) exit
          end if
       end do

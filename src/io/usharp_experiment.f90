@@ -14,6 +14,7 @@ module usharp_experiment
    private
 
    public :: experiment_type, load_experiment, interpolate, fits_strain, response_name, check_scale
+   public :: measured_times, compare_where_measured, data_note, check_programme
 
    !> The stress a test's data may peak at, as a share of Young's modulus: below, a column in
    !> GPa (0.35 for 350 MPa) or a strain column; above, one in Pa or kPa
@@ -30,6 +31,12 @@ module usharp_experiment
       real(dp), allocatable :: y(:)
       real(dp), allocatable :: weight(:)  !< only with weighting = 'column'
       integer :: nmerged = 0              !< rows with a repeated time folded into one
+      !> Output times left out of the comparison: no sample within half an output interval
+      !> (see measured_times)
+      integer :: nunmeasured = 0
+      !> Output times past an end of the data by less than a sampling interval, not compared
+      integer :: nbeyond = 0
+      integer :: noutside = 0             !< rows outside the simulated time, not compared
    end type experiment_type
 
 contains
@@ -87,15 +94,15 @@ contains
 
    !> Data in a wrong unit or column, which a fit would take as they are: a measured strain
    !> beyond 1 (in percent), a stress far from what a metal of Young's modulus youngs (model
-   !> unit) shows, or rows that lie mostly beyond the simulated times t0 to t1 (s) and far
+   !> unit) shows, or rows that lie mostly beyond the simulated (output) times t and far
    !> beyond (time in ms)
-   pure subroutine check_scale(test, exp, youngs, model_units, t0, t1, error)
+   pure subroutine check_scale(test, exp, youngs, model_units, t, error)
       type(test_config), intent(in) :: test
       type(experiment_type), intent(in) :: exp
-      real(dp), intent(in) :: youngs, t0, t1
+      real(dp), intent(in) :: youngs, t(:)
       character(len=*), intent(in) :: model_units
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: peak, share, tol
+      real(dp) :: peak, share, tol, t0, t1
       if (test%target == 'peaks' .or. size(exp%y) == 0) return
       peak = maxval(abs(exp%y))
       if (fits_strain(test)) then
@@ -112,6 +119,8 @@ contains
             test%data%unit//''')')
       end if
       if (allocated(error)) return
+      t0 = t(1)
+      t1 = t(size(t))
       tol = 1.0e-9_dp*max(1.0_dp, abs(t1))
       share = real(count(exp%t >= t0 - tol .and. exp%t <= t1 + tol), dp)/real(size(exp%t), dp)
       if (share < min_rows_within .and. maxval(exp%t) - t0 > ms_span*(t1 - t0)) &
@@ -121,6 +130,190 @@ contains
          real_str(maxval(exp%t), 'es10.3')//' s): is the time in ms? (a part of a longer test is '// &
          'chosen with filter_column)')
    end subroutine check_scale
+
+   !> Which output times t (s, ascending) have a measurement to be compared with, for data
+   !> sampled at ts (s, ascending) and an output interval dt (s): those within dt/2 of a
+   !> sample. Where the data are sampled at least every dt, every output time is; where more
+   !> coarsely (a logger at 10 s against dt_out = 1 s), the others would be compared with
+   !> values interpolated between samples, which carry none of the data's noise: the noise
+   !> estimate from the residual's second differences falls to nearly 0 and a gap appears
+   !> that the data do not hold. Output times past either end of the data by less than one
+   !> sampling interval there (or dt) are left out too (a file ending at 6299.7 s, the
+   !> history at 6300 s); further out they stay, and the interpolation names the mismatch.
+   !> dt = 0 (the history's own points) leaves every time in.
+   pure function measured_times(t, ts, dt) result(keep)
+      real(dp), intent(in) :: t(:), ts(:), dt
+      logical :: keep(size(t))
+      real(dp) :: tol, lo_tol, hi_tol
+      integer :: i, k, n
+      n = size(ts)
+      keep = .true.
+      if (.not. dt > 0.0_dp .or. n < 2) return
+      tol = 1.0e-9_dp*max(1.0_dp, abs(ts(1)), abs(ts(n)))
+      lo_tol = max(dt, ts(2) - ts(1))
+      hi_tol = max(dt, ts(n) - ts(n - 1))
+      k = 1
+      do i = 1, size(t)
+         if (t(i) < ts(1) - tol) then
+            keep(i) = t(i) < ts(1) - lo_tol
+         else if (t(i) > ts(n) + tol) then
+            keep(i) = t(i) > ts(n) + hi_tol
+         else
+            do while (k < n - 1)
+               if (ts(k + 1) >= t(i)) exit
+               k = k + 1
+            end do
+            keep(i) = min(abs(t(i) - ts(k)), abs(ts(k + 1) - t(i))) <= 0.5_dp*dt + tol
+         end if
+      end do
+   end function measured_times
+
+   !> Leave out of test's compared times (and its points' kinds) those without a measurement
+   !> of exp (measured_times; a cycle's peak stays); count them, and exp's rows outside the
+   !> simulated time, in exp
+   pure subroutine compare_where_measured(test, exp)
+      type(test_config), intent(inout) :: test
+      type(experiment_type), intent(inout) :: exp
+      real(dp), allocatable :: t(:)
+      logical, allocatable :: keep(:)
+      real(dp) :: tol
+      t = test%times()
+      if (size(t) == 0 .or. size(exp%t) == 0) return
+      tol = 1.0e-9_dp*max(1.0_dp, abs(t(1)), abs(t(size(t))))
+      exp%noutside = count(exp%t < t(1) - tol .or. exp%t > t(size(t)) + tol)
+      keep = measured_times(t, exp%t, test%dt_out)
+      if (test%has_peaks()) keep = keep .or. test%point_kind /= 0
+      tol = 1.0e-9_dp*max(1.0_dp, abs(exp%t(1)), abs(exp%t(size(exp%t))))
+      exp%nbeyond = count(.not. keep .and. (t < exp%t(1) - tol .or. t > exp%t(size(exp%t)) + tol))
+      exp%nunmeasured = count(.not. keep) - exp%nbeyond
+      if (all(keep)) return
+      test%tout = pack(t, keep)
+      if (allocated(test%point_kind)) then
+         if (size(test%point_kind) == size(keep)) then
+            test%point_kind = pack(test%point_kind, keep)
+            test%peak_y = pack(test%peak_y, keep)
+            test%peak_cycle = pack(test%peak_cycle, keep)
+         end if
+      end if
+   end subroutine compare_where_measured
+
+   !> What a summary says of how a test's data were compared: rows repeating a time stamp
+   !> (averaged into one as the data are read), output times without a measurement and rows
+   !> outside the simulated time (neither compared); '' when none. In parentheses after two
+   !> spaces, for a summary's line, unless bare
+   pure function data_note(exp, dt_out, bare) result(note)
+      type(experiment_type), intent(in) :: exp
+      real(dp), intent(in) :: dt_out   !< the test's output interval, s
+      logical, intent(in), optional :: bare
+      character(len=:), allocatable :: note
+      note = ''
+      if (exp%nmerged > 0) note = note//'; rows repeating a time stamp of the data: '// &
+                                  str(exp%nmerged)//', each averaged into the row of that time'
+      if (exp%nunmeasured > 0) note = note//'; output times farther than dt_out/2 from every sample (dt_out = '// &
+         plain(dt_out)//' s), not compared: '//str(exp%nunmeasured)
+      if (exp%nbeyond > 0) note = note//'; output times past an end of the data by less than '// &
+                                  'a sampling interval, not compared: '//str(exp%nbeyond)
+      if (exp%noutside > 0) note = note//'; rows outside the simulated time, not compared: '// &
+                                   str(exp%noutside)
+      if (len(note) == 0) return
+      note = note(3:)
+      if (present(bare)) then
+         if (bare) return
+      end if
+      note = '  ('//note//')'
+   contains
+      !> x with up to six significant digits and no trailing zeros ('0.5', '1', '5000')
+      pure function plain(x) result(text)
+         real(dp), intent(in) :: x
+         character(len=:), allocatable :: text
+         integer :: k
+         text = real_str(x, 'g0.6')
+         if (index(text, 'E') > 0 .or. index(text, '.') == 0) return
+         k = len(text)
+         do while (text(k:k) == '0')
+            k = k - 1
+         end do
+         if (text(k:k) == '.') k = k - 1
+         text = text(:k)
+      end function plain
+   end function data_note
+
+   !> A programmed history against the data file's own record of the control it set (its
+   !> strain column under strain control, its stress column under stress control), where
+   !> the file has that column: a range given where the amplitude was meant, a hold left out
+   !> or a rate that is not the test's simulates another test than the one measured, and a
+   !> fit of it takes the constants anywhere. An error where, at more than a tenth of the
+   !> rows within the history's time, the two differ by more than a fifth of the measured
+   !> control's range; histories 'data' and 'file' are the record itself.
+   subroutine check_programme(test, model_units, error)
+      type(test_config), intent(in) :: test
+      character(len=*), intent(in) :: model_units
+      type(error_type), allocatable, intent(out) :: error
+      real(dp), parameter :: max_share = 0.1_dp, max_diff = 0.2_dp
+      real(dp), allocatable :: vals(:, :), prog(:), meas(:), d(:), tin(:)
+      type(error_type), allocatable :: unread
+      character(len=:), allocatable :: column, cols(:)
+      logical, allocatable :: inside(:)
+      real(dp) :: range, tol
+      integer :: k, nbad
+      if (.not. test%has_data .or. test%target == 'peaks') return
+      if (any(test%history_kind == [character(len=4) :: 'data', 'file'])) return
+      if (test%hist%control == control_stress) then
+         column = test%data%stress_col
+      else
+         column = test%data%strain_col
+      end if
+      allocate (character(len=max(len(column), len(test%data%time_col))) :: cols(2))
+      cols(1) = test%data%time_col
+      cols(2) = column
+      call read_data_columns(test%data, cols, vals, unread)
+      ! A file without that column has nothing to check against
+      if (allocated(unread)) return
+      tol = 1.0e-9_dp*max(1.0_dp, abs(test%hist%end_time()))
+      inside = vals(:, 1) >= test%hist%t(1) - tol .and. vals(:, 1) <= test%hist%end_time() + tol
+      if (count(inside) < 2) return
+      tin = pack(vals(:, 1), inside)
+      meas = pack(vals(:, 2), inside)
+      if (test%hist%control == control_stress) meas = meas*stress_factor(test%data%unit, model_units)
+      prog = [(test%hist%value_at(min(max(tin(k), test%hist%t(1)), test%hist%end_time())), k=1, size(tin))]
+      range = maxval(meas) - minval(meas)
+      if (.not. range > 0.0_dp) return
+      d = abs(prog - meas)
+      nbad = count(d > max_diff*range)
+      if (real(nbad, dp) <= max_share*real(size(d), dp)) return
+      k = maxloc(d, 1)
+      call fatal_error(error, test%data%file//": its column '"//column//"' (from "// &
+         real_str(minval(meas), 'g0.4')//' to '//real_str(maxval(meas), 'g0.4')//') and history '''// &
+         test%history_kind//''' differ by more than a fifth of that range at '// &
+         real_str(100.0_dp*real(nbad, dp)/real(size(d), dp), 'f0.0')//' % of its rows (at t = '// &
+         real_str(tin(k), 'g0.6')//' s: '//real_str(prog(k), 'g0.4')//' against '// &
+         real_str(meas(k), 'g0.4')//'): do '//programme_settings(test%history_kind)// &
+         ' describe the test that was run?')
+   end subroutine check_programme
+
+   !> The &test variables that set a history of this kind
+   pure function programme_settings(kind) result(names)
+      character(len=*), intent(in) :: kind
+      character(len=:), allocatable :: names
+      select case (kind)
+      case ('cyclic')
+         names = 'strain_range (max - min), mean_strain, strain_rate or period, hold_max and hold_min'
+      case ('thesis_lcf')
+         names = 'amp_first, amp_last, npeaks and quarter_time'
+      case ('relaxation')
+         names = 'levels, ramp_time and holds'
+      case ('ratchet')
+         names = 'up, down, repeats and seg_time'
+      case ('tensile')
+         names = 'strain_rate and final_strain'
+      case ('rate_jump')
+         names = 'rates and final_strain'
+      case ('creep')
+         names = 'stress and ramp_time'
+      case default
+         names = 'the history''s settings'
+      end select
+   end function programme_settings
 
    !> A stress-controlled test (creep) is fitted on its strain, the response it measures; an
    !> external command reports stress only
