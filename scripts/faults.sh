@@ -136,6 +136,9 @@ awk -F, -v OFS=, '/^#/ || /^time/ { print; next } { $2 = 100 * $2; print }' \
   "$root/data/tutorial/cyclic-fast.csv" > pct.csv
 mk pct.nml "$fitg" "&test name='fast', history='data', data_file='pct.csv' /"
 row 'data: measured strain in percent' - u run pct.nml -o pct
+cp "$root/data/tutorial/cyclic-fast.csv" fast.csv
+mk amp.nml "$fitg" "&test name='fast', history='cyclic', strain_range=0.015, strain_rate=1e-3, cycles=5, hold_max=600.0, hold_min=600.0, data_file='fast.csv', data_unit='MPa' /"
+row 'data: the history is not the recorded test (an amplitude given as strain_range)' - u run amp.nml -o amp
 mk range.nml "$fitg" "&test name='c', history='cyclic', strain_range=3.0, strain_rate=1e-3, cycles=1 /"
 row 'strain range in percent (3 for 3 %)' - u run range.nml -o range
 mk range-half.nml "$fitg" "&test name='c', history='cyclic', strain_range=0.5, strain_rate=1e-3, cycles=1 /"

@@ -32,7 +32,7 @@ module test_diagnose_data
    use usharp_diagnose_numerics, only: bic_power, power_lambda, lm_ftol, lm_updates
    use usharp_diagnose_baseline, only: converge_baseline
    use usharp_identify, only: chi2_quantile_95
-   use test_util, only: write_text
+   use test_util, only: write_text, read_text
    implicit none
    private
    public :: collect_diagnose_data
@@ -54,6 +54,7 @@ contains
       type(unittest_type), allocatable, intent(out) :: testsuite(:)
       testsuite = [ &
          new_unittest('classes-of-a-quantised-noisy-strain', test_quantised), &
+         new_unittest('relaxation-logged-coarsely-no-effect', test_coarse_log), &
          new_unittest('holds-only-where-the-strain-is-steady', test_measured_hold), &
          new_unittest('ratchet-steps-are-not-all-reversal', test_ratchet_classes), &
          new_unittest('inelastic-from-the-model-rate', test_inelastic), &
@@ -1196,6 +1197,62 @@ contains
       if (allocated(error)) return
       call check(error, opt%f < f_cut, 'the continued search did not descend: '//real_str(opt%f, 'es12.5'))
    end subroutine test_baseline_continued
+
+   !> The thesis tests with 1 % noise and no effect (data/thesis-noise1), the relaxation test
+   !> logged every 10 s instead of every second (dt_out = 1 s, as the deck asks). Compared at
+   !> values interpolated between its samples, its residual had no noise to speak of (1e-5 of
+   !> the peak) and an initial state was named (BIC -844); compared at its samples, its noise
+   !> is the data's and nothing is named, and the report says what was left out
+   subroutine test_coarse_log(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      character(len=:), allocatable :: text, line, last, f
+      character(len=220), allocatable :: rows(:), deck(:)
+      character(len=*), parameter :: d = '../../data/thesis-noise1/'
+      integer :: i, j, n
+      text = read_text('data/thesis-noise1/relax.sim.txt')
+      allocate (rows(0))
+      n = 0
+      i = 1
+      last = ''
+      do
+         j = index(text(i:), new_line('a'))
+         if (j == 0) exit
+         line = text(i:i + j - 2)
+         i = i + j
+         if (line(1:1) == '#') then
+            rows = [character(len=220) :: rows, line]
+            cycle
+         end if
+         n = n + 1
+         last = line
+         if (mod(n - 1, 10) == 0) rows = [character(len=220) :: rows, line]
+         if (mod(n - 1, 10) == 0) last = ''
+      end do
+      if (len(last) > 0) rows = [character(len=220) :: rows, last]
+      f = write_text('relax-every-10s.sim.txt', rows)
+      deck = [character(len=220) :: &
+         "&model temperature = 866.15, tm = 1800.0, youngs = 22.5e3, poisson = 0.3 /", &
+         "&constants a1 = 0.8, a2 = 7.42e-5, b = 1.0e15, c2 = 0.1, h1 = 280.0, h2 = 100.0, n = 5.8, q = 91000.0 /", &
+         "&fit fitted = 'A1', 'A2', 'B', 'C2', 'H1', 'H2', 'n', method = 'lm', objective = 'eq7' /", &
+         "&diagnose holdout = 'ratchet' /", &
+         "&test name = 'lcf', history = 'thesis_lcf', dt_out = 0.5, amp_first = 0.0005, amp_last = 0.005,", &
+         "  npeaks = 12, quarter_time = 10.0, weighting = 'threshold', sig = 14.0, data_file = '"//d//"lcf.sim.txt' /", &
+         "&test name = 'relax', history = 'relaxation', dt_out = 1.0, weighting = 'relaxation',", &
+         "  levels = 0.00075, 0.001, ramp_time = 1.0, holds = 600.0, 600.0, data_file = 'relax-every-10s.sim.txt' /", &
+         "&test name = 'ratchet', history = 'ratchet', dt_out = 1.0, up = 0.0005, down = 0.00025,", &
+         "  repeats = 15, seg_time = 40.0, data_file = '"//d//"ratchet.sim.txt' /"]
+      call diagnose_deck(write_text('diag-coarse-log.nml', deck), res, error)
+      if (allocated(error)) return
+      write (*, '(4x,a)') 'relax noise '//real_str(100.0_dp*res%noise(2)/res%peak(2), 'f0.2')//' % of its peak; '// &
+         trim(res%data_notes(2))
+      call check(error, res%noise(2) > 0.005_dp*res%peak(2), 'the noise of the relaxation test is its data''s (1 %)')
+      if (allocated(error)) return
+      call check(error, index(res%data_notes(2), 'not compared: 1081') > 0, 'what was left out: '//trim(res%data_notes(2)))
+      if (allocated(error)) return
+      call check(error, res%leading == 0 .and. index(res%verdict, 'no significant effect') == 1, &
+                 'nothing named: '//res%verdict)
+   end subroutine test_coarse_log
 
    !> Clean independent data with the relaxation test held out
    !> (data/independent-relax-clean-joint). With the relaxation weights from the raw

@@ -131,6 +131,18 @@ contains
             real_str(max(res%per_test0(i) - region_noise(res, i), 0.0_dp), 'es10.3')//' |')
       end do
       call add_line(lines, '')
+      if (res%global .and. res%f0_global < res%f0 .and. allocated(res%per_test_global)) then
+         starts = ''
+         do i = 1, size(res%names)
+            if (res%held(i)) cycle
+            if (len(starts) > 0) starts = starts//', '
+            starts = starts//trim(res%names(i))//' '//real_str(res%per_test_global(i), 'es10.3')
+         end do
+         call add_line(lines, 'The Latin-hypercube starts of section 2 found a lower baseline of the fit tests '// &
+            '(objective '//real_str(res%f0_global, 'es11.4')//'; per test: '//starts//'): the "before" '// &
+            'of section 2 and its shares are against it; the held-out tests'' figures stay this table''s '// &
+            '(the prediction of the first baseline).')
+      end if
       if (allocated(res%data_notes)) then
          do i = 1, size(res%data_notes)
             if (len_trim(res%data_notes(i)) > 0) call add_line(lines, 'Data of '//trim(res%names(i))// &
@@ -158,7 +170,7 @@ contains
          call add_line(lines, '| '//str(k)//' | '//trim(res%regions(i)%test)//' | '//trim(res%regions(i)%label)// &
             ' | '//str(res%regions(i)%n)//' | '//real_str(100.0_dp*res%regions(i)%ssr/set_total(res, i), 'f0.1')// &
             ' | '//real_str(res%regions(i)%rms, 'es9.2')//' | '//real_str(res%regions(i)%bias, 'es9.2')// &
-            ' | '//real_str(res%regions(i)%z, 'f0.1')//' | '//real_str(res%regions(i)%ratio, 'f0.2')//' | '// &
+            ' | '//real_str(res%regions(i)%z, 'f0.1')//' | '//ratio_text(res%regions(i)%ratio)//' | '// &
             trim(merge('structured', 'noise     ', res%regions(i)%structured))//' |')
       end do
       call add_line(lines, '')
@@ -912,4 +924,16 @@ contains
          text = "(strcol(1) eq '"//trim(res%names(i))//"' ? $3 : 1/0)"
       end function own_x
    end subroutine draw_plots
+
+   !> A ratio of mean squares as text: fixed with two decimals up to 1e4, else in E format
+   !> (3.3E+14, not 331042219086019.38)
+   pure function ratio_text(x) result(text)
+      real(dp), intent(in) :: x
+      character(len=:), allocatable :: text
+      if (abs(x) < 1.0e4_dp) then
+         text = real_str(x, 'f0.2')
+      else
+         text = real_str(x, 'es9.2')
+      end if
+   end function ratio_text
 end module usharp_diagnose_report

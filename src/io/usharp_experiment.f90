@@ -7,7 +7,7 @@ module usharp_experiment
    use usharp_config, only: test_config
    use usharp_history, only: control_stress
    use usharp_input, only: read_data_columns
-   use usharp_input_test, only: max_strain, percent_strain, compared_columns
+   use usharp_input_test, only: max_strain, percent_strain, compared_columns, history_settings
    use usharp_table, only: merge_repeated_times
    use usharp_units, only: stress_factor
    implicit none
@@ -287,33 +287,9 @@ contains
          test%history_kind//''' differ by more than a fifth of that range at '// &
          real_str(100.0_dp*real(nbad, dp)/real(size(d), dp), 'f0.0')//' % of its rows (at t = '// &
          real_str(tin(k), 'g0.6')//' s: '//real_str(prog(k), 'g0.4')//' against '// &
-         real_str(meas(k), 'g0.4')//'): do '//programme_settings(test%history_kind)// &
+         real_str(meas(k), 'g0.4')//'): do '//history_settings(test%history_kind)// &
          ' describe the test that was run?')
    end subroutine check_programme
-
-   !> The &test variables that set a history of this kind
-   pure function programme_settings(kind) result(names)
-      character(len=*), intent(in) :: kind
-      character(len=:), allocatable :: names
-      select case (kind)
-      case ('cyclic')
-         names = 'strain_range (max - min), mean_strain, strain_rate or period, hold_max and hold_min'
-      case ('thesis_lcf')
-         names = 'amp_first, amp_last, npeaks and quarter_time'
-      case ('relaxation')
-         names = 'levels, ramp_time and holds'
-      case ('ratchet')
-         names = 'up, down, repeats and seg_time'
-      case ('tensile')
-         names = 'strain_rate and final_strain'
-      case ('rate_jump')
-         names = 'rates and final_strain'
-      case ('creep')
-         names = 'stress and ramp_time'
-      case default
-         names = 'the history''s settings'
-      end select
-   end function programme_settings
 
    !> A stress-controlled test (creep) is fitted on its strain, the response it measures; an
    !> external command reports stress only

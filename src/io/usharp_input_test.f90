@@ -18,7 +18,7 @@ module usharp_input_test
    private
 
    public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
-   public :: read_data_columns, max_strain, percent_strain, compared_columns
+   public :: read_data_columns, max_strain, percent_strain, compared_columns, history_settings
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
@@ -912,4 +912,28 @@ contains
          names = 'the history file'
       end select
    end function strain_source
+
+   !> The &test variables that set a history of this kind
+   pure function history_settings(kind) result(names)
+      character(len=*), intent(in) :: kind
+      character(len=:), allocatable :: names
+      select case (kind)
+      case ('cyclic')
+         names = 'strain_range (max - min), mean_strain, strain_rate or period, hold_max and hold_min'
+      case ('thesis_lcf')
+         names = 'amp_first, amp_last, npeaks and quarter_time'
+      case ('relaxation')
+         names = 'levels, ramp_time and holds'
+      case ('ratchet')
+         names = 'up, down, repeats and seg_time'
+      case ('tensile')
+         names = 'strain_rate and final_strain'
+      case ('rate_jump')
+         names = 'rates and final_strain'
+      case ('creep')
+         names = 'stress and ramp_time'
+      case default
+         names = 'the history''s settings'
+      end select
+   end function history_settings
 end module usharp_input_test
