@@ -195,9 +195,11 @@ contains
       call add_line(lines, 'Screening (score test at the baseline): predicted fall of the objective from a Gauss-Newton')
       call add_line(lines, 'step in the effect''s parameters with the constants re-optimised; predicted BIC change.')
       call add_line(lines, 'Power: of the significance rule (dBIC < -'//real_str(bic_margin, 'f0.0')//') against the '// &
-         'effect at the low end of its realistic range on the fit tests, from the expected chi-square of '// &
+         'effect at the low end of its realistic range on '//trim(merge('the fit tests', 'every test   ', &
+         any(res%held)))//', from the expected chi-square of '// &
          'its signal there beyond what the constants take up, at the baseline''s residual (linear in the '// &
-         'effect; a per-test effect at that magnitude in every fit test and in each alone, the least; '// &
+         'effect; a per-test effect at that magnitude in every '//trim(merge('fit test', 'test    ', any(res%held)))// &
+         ' and in each alone, the least; '// &
          'of two parameters the weaker).')
       call add_line(lines, '')
       call add_line(lines, '| rank | effect | parameters | predicted fall | % of objective | predicted dBIC | '// &
