@@ -6,7 +6,8 @@
 !> measured deck's own (start) constants; the objective of both. Writes each
 !> test's simulated loops of both treatments to OUT/<test>.forcing.txt for the plots.
 !> Usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT, or bench_measured
-!> THESIS.nml for the thesis deck's time per evaluation alone.
+!> DECK.nml [CONSTANTS.nml] for one deck's time per evaluation alone (at the deck's constants,
+!> or at those of CONSTANTS.nml).
 program bench_measured
    use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
    use usharp_kinds, only: dp
@@ -31,8 +32,8 @@ program bench_measured
    do i = 1, 4
       call get_command_argument(i, arg(i))
    end do
-   if (command_argument_count() == 1) then
-      call read_config_as(trim(arg(1)), '', '', thesis, err)
+   if (command_argument_count() <= 2) then
+      call read_config_as(trim(arg(1)), trim(arg(2)), '', thesis, err)
       call check()
       call setup_problem(thesis, p_thesis, err)
       call check()
@@ -40,7 +41,7 @@ program bench_measured
       do i = 1, 5
          t_thesis = min(t_thesis, time_eval(p_thesis, 50))
       end do
-      write (output_unit, '(a,i0,a,f9.4)') 'thesis (', size(thesis%tests), &
+      write (output_unit, '(a,i0,a,f9.4)') trim(arg(1))//' (', size(thesis%tests), &
          ' tests): ms per evaluation ', t_thesis
       stop
    end if

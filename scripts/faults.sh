@@ -139,6 +139,8 @@ row 'data: measured strain in percent' - u run pct.nml -o pct
 cp "$root/data/tutorial/cyclic-fast.csv" fast.csv
 mk amp.nml "$fitg" "&test name='fast', history='cyclic', strain_range=0.015, strain_rate=1e-3, cycles=5, hold_max=600.0, hold_min=600.0, data_file='fast.csv', data_unit='MPa' /"
 row 'data: the history is not the recorded test (an amplitude given as strain_range)' - u run amp.nml -o amp
+mk amp-pct.nml "$fitg" "&test name='fast', history='cyclic', strain_range=0.03, strain_rate=1e-3, cycles=5, hold_max=600.0, hold_min=600.0, data_file='pct.csv', data_unit='MPa' /"
+row 'data: measured strain in percent beside a programmed history' - u run amp-pct.nml -o amp-pct
 mk range.nml "$fitg" "&test name='c', history='cyclic', strain_range=3.0, strain_rate=1e-3, cycles=1 /"
 row 'strain range in percent (3 for 3 %)' - u run range.nml -o range
 mk range-half.nml "$fitg" "&test name='c', history='cyclic', strain_range=0.5, strain_rate=1e-3, cycles=1 /"

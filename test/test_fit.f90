@@ -20,7 +20,7 @@ module test_fit
    use usharp_input, only: read_config
    use usharp_cmd_run, only: run_command
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, fit_deck
-   use usharp_strings, only: report_line_len, str
+   use usharp_strings, only: report_line_len, str, real_str
    implicit none
    private
    public :: collect_fit, rosenbrock
@@ -296,6 +296,11 @@ contains
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(uerror), allocatable :: uerr
+      real(dp), allocatable :: vals(:, :)
+      character(len=60), allocatable :: rows(:)
+      character(len=300) :: line(1)
+      character(len=:), allocatable :: dfile
+      integer :: k
       character(len=*), parameter :: test = "&test name='f', history='cyclic', strain_rate=1e-3, cycles=5, "// &
          "hold_max=600, hold_min=600, data_file='../../data/tutorial/cyclic-fast.csv', data_unit='MPa', "
       call read_config(fit_deck('programme-half.nml', '', [character(len=300) :: test//'strain_range=0.015 /']), &
@@ -307,6 +312,40 @@ contains
                  index(uerr%message, 'strain_range (max - min)') > 0, uerr%message)
       if (allocated(error)) return
       call problem_of('programme-right.nml', [character(len=300) :: test//'strain_range=0.03 /'], cfg, prob, error)
+      if (allocated(error)) return
+      ! The same record with its strain column in percent: refused, with the hint
+      call read_columns('data/tutorial/cyclic-fast.csv', [character(len=6) :: 'time', 'strain', 'stress'], &
+                        vals, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      allocate (rows(size(vals, 1) + 1))
+      rows(1) = 'time,strain,stress'
+      ! A loop: an array constructor of some 6300 rows makes the compiler's memory explode
+      do k = 1, size(vals, 1)
+         rows(k + 1) = real_str(vals(k, 1), 'f0.3')//','//real_str(100.0_dp*vals(k, 2), 'es13.6')//','// &
+                       real_str(vals(k, 3), 'f0.3')
+      end do
+      dfile = write_text('programme-percent.csv', rows)
+      ! Through a variable: gfortran 12 sizes a typed array constructor's element made by
+      ! a function of deferred length by the expression, and writes past it
+      line(1) = replace_file(test, 'programme-percent.csv')//'strain_range=0.03 /'
+      call read_config(fit_deck('programme-percent.nml', '', line), cfg, uerr)
+      if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+      call check(error, allocated(uerr), 'strain in percent refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, "programme-percent.csv: its column 'strain'") > 0 .and. &
+                 index(uerr%message, "(from -1.500 to 1.500; strain is read as a fraction: is the column in percent?) "// &
+                 "and history 'cyclic'") > 0, uerr%message)
+   contains
+      pure function replace_file(line, file) result(out)
+         character(len=*), intent(in) :: line, file
+         character(len=:), allocatable :: out
+         integer :: i
+         i = index(line, '../../data/tutorial/cyclic-fast.csv')
+         out = line(:i - 1)//file//line(i + len('../../data/tutorial/cyclic-fast.csv'):)
+      end function replace_file
    end subroutine test_programme
 
    subroutine test_units(error)

@@ -5,7 +5,7 @@ module usharp_experiment
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, real_str
    use usharp_config, only: test_config
-   use usharp_history, only: control_stress
+   use usharp_history, only: control_stress, control_strain
    use usharp_input, only: read_data_columns
    use usharp_input_test, only: max_strain, percent_strain, compared_columns, history_settings
    use usharp_table, only: merge_repeated_times
@@ -252,9 +252,9 @@ contains
       real(dp), parameter :: max_share = 0.1_dp, max_diff = 0.2_dp
       real(dp), allocatable :: vals(:, :), prog(:), meas(:), d(:), tin(:)
       type(error_type), allocatable :: unread
-      character(len=:), allocatable :: column, cols(:)
+      character(len=:), allocatable :: column, cols(:), hint
       logical, allocatable :: inside(:)
-      real(dp) :: range, tol
+      real(dp) :: range, prange, tol
       integer :: k, nbad
       if (.not. test%has_data .or. test%target == 'peaks') return
       if (any(test%history_kind == [character(len=4) :: 'data', 'file'])) return
@@ -282,8 +282,13 @@ contains
       nbad = count(d > max_diff*range)
       if (real(nbad, dp) <= max_share*real(size(d), dp)) return
       k = maxloc(d, 1)
+      ! A strain column in percent spans about a hundred times the programmed fraction
+      prange = maxval(prog) - minval(prog)
+      hint = ''
+      if (test%hist%control == control_strain .and. range > 50.0_dp*prange .and. &
+          range < 200.0_dp*prange) hint = '; strain is read as a fraction: is the column in percent?'
       call fatal_error(error, test%data%file//": its column '"//column//"' (from "// &
-         real_str(minval(meas), 'g0.4')//' to '//real_str(maxval(meas), 'g0.4')//') and history '''// &
+         real_str(minval(meas), 'g0.4')//' to '//real_str(maxval(meas), 'g0.4')//hint//') and history '''// &
          test%history_kind//''' differ by more than a fifth of that range at '// &
          real_str(100.0_dp*real(nbad, dp)/real(size(d), dp), 'f0.0')//' % of its rows (at t = '// &
          real_str(tin(k), 'g0.6')//' s: '//real_str(prog(k), 'g0.4')//' against '// &
