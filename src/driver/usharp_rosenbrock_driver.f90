@@ -315,13 +315,14 @@ contains
    !> Jacobian in the state and the rates' time derivative (through the load), both from
    !> the analytic derivative in the stress: the rates' Jacobian with d sigma/d eps_in = 1
    !> gives d f/d sigma as its first column. fy: the rates themselves (of the plain model
-   !> the same bit for bit as those of rates)
-   pure subroutine rates_jacobian(sys, t, y, jac, dfdt, fy)
+   !> the same bit for bit as those of rates); stress: the stress at (t, y)
+   pure subroutine rates_jacobian(sys, t, y, jac, dfdt, fy, stress)
       type(rate_system), intent(in) :: sys
       real(dp), intent(in) :: t
       real(dp), intent(in), contiguous :: y(:)
       real(dp), intent(out), contiguous :: jac(:, :), dfdt(:)
       real(dp), intent(out), optional, contiguous :: fy(:)
+      real(dp), intent(out), optional :: stress
       real(dp) :: sigma, dsig, dsig_dt, rate
       ! Arrays of a size known only at run time are made on the heap, at every step: the
       ! temperature's differences only, where they are needed; dfdt holds the rates first
@@ -330,6 +331,7 @@ contains
       logical :: ok
       integer :: k
       call stress_of(sys, t, y, sigma, dsig, dsig_dt)
+      if (present(stress)) stress = sigma
       call system_rates(sys, t, 0.0_dp, sigma, 1.0_dp, y, dfdt, ok, jac)
       if (present(fy)) fy = dfdt
       dfdt = jac(:, 1)*dsig_dt
