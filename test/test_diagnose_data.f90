@@ -503,6 +503,39 @@ contains
             'lag power at the low end '//real_str(sr%effects(i)%power_low, 'f0.2'))
          if (allocated(error)) return
       end do
+      ! Against its replicates' own misfit at their constants: the drifting specimen stands
+      ! out (its objective per point above both of theirs), and a clean one set against the
+      ! drifting one and a clean one does not: its verdict says so, and what an effect takes
+      ! up is its gap, not how it differs
+      call check(error, size(sr%rep_ms) == 2, 'replicates'' objectives per point not found')
+      if (allocated(error)) return
+      call check(error, sr%f0/sr%m > maxval(sr%rep_ms), 'the drifting specimen does not stand out: '// &
+                 real_str(sr%f0/sr%m, 'es10.3')//' against '//real_str(maxval(sr%rep_ms), 'es10.3'))
+      if (allocated(error)) return
+      call check(error, index(verdict_of(sr), 'stand out') == 0, verdict_of(sr))
+      if (allocated(error)) return
+      call specimen_run(cfg, 1, opts, .true., sr, e, exps)
+      call check(error, .not. allocated(e), 'per-specimen diagnosis of the clean test failed')
+      if (allocated(error)) return
+      call check(error, sr%f0/sr%m <= sr%rep_ms(2) .and. sr%rep_ms(2) > sr%rep_ms(1), &
+                 'the clean specimen against a drifting replicate: '//real_str(sr%f0/sr%m, 'es10.3')// &
+                 ' per point against '//real_str(sr%rep_ms(1), 'es10.3')//' and '//real_str(sr%rep_ms(2), 'es10.3'))
+      if (allocated(error)) return
+      call check(error, index(verdict_of(sr), trim(sr%name)//' does not stand out from its replicates') > 0 .and. &
+                 index(verdict_of(sr), 'differs from its replicates') == 0, verdict_of(sr))
+   contains
+      !> The report's verdict line
+      function verdict_of(sr) result(v)
+         type(specimen_result), intent(in) :: sr
+         character(len=:), allocatable :: v
+         character(len=report_line_len), allocatable :: lines(:)
+         integer :: k
+         lines = specimen_report(sr)
+         v = ''
+         do k = 1, size(lines)
+            if (index(lines(k), '**Verdict:**') == 1) v = trim(lines(k))
+         end do
+      end function verdict_of
    end subroutine test_specimen_drift
 
    !> The thesis tests with 1 % noise and no effect (data/thesis-noise1), seven constants

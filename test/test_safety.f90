@@ -245,7 +245,7 @@ contains
       input = fit_deck('specimen-resume.nml', '', [character(len=200) :: &
          "&test name='lcf', history='thesis_lcf', data_file='"//thesis//"lcf.sim.txt', weighting='threshold', sig=14 /", &
          "&test name='relax', history='relaxation', data_file='"//thesis//"relax.sim.txt', weighting='relaxation' /", &
-         "&diagnose specimen = 'all', effects = 'temperature', 'drift' /"])
+         "&diagnose specimen = 'all', effects = 'temperature', 'drift', global_starts = 2 /"])
       dir = scratch_dir//'/specimen-resume-out'
       call check(error, shell('rm -rf '//dir) == 0, 'clean folder')
       if (allocated(error)) return
@@ -270,6 +270,10 @@ contains
       if (allocated(error)) return
       call check(error, any(index(first, 'wrote '//dir//'/diagnose/specimen-lcf.md, specimen-lcf.csv') == 1), &
                  'no line names the files written')
+      if (allocated(error)) return
+      ! A setting of the held-out diagnosis is said to do nothing here
+      call check(error, index(first(1), '&diagnose: global_starts: not used by the per-specimen mode') > 0, &
+                 'no note of the unused setting: '//trim(first(1)))
       if (allocated(error)) return
       call diagnose_command(input, dir, '', again, e, mode='resume')
       if (allocated(e)) then

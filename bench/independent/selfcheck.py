@@ -120,6 +120,9 @@ def verdict_of(text):
     # the verdict's line and its continuation lines (indented)
     m = re.search(r'\*\*Verdict:\*\*\s*(.*(?:\n  .*)*)', text)
     v = ' '.join(x.strip() for x in m.group(1).split('\n')) if m else ''
+    # a specimen fitted by its replicates' constants no worse than they fit themselves: the
+    # verdict says so first, then names the effect as before
+    v = re.sub(r'^\s*\S+ does not stand out from its replicates \([^)]*\);\s*', '', v)
     if re.match(r'\s*no significant effect', v) or re.match(r'\s*no effect explains', v) or \
             'predicted to its noise level by its replicates' in v or \
             re.match(r'\s*one set of constants fits .* to its noise level', v):

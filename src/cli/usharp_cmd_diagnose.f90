@@ -3,7 +3,7 @@
 module usharp_cmd_diagnose
    use usharp_error, only: error_type
    use usharp_config, only: run_config
-   use usharp_input, only: read_config_as
+   use usharp_input, only: read_config_as, specimen_unused
    use usharp_diagnose, only: diagnose_options, diagnose_result, diagnose_run, write_report, &
                               diagnose_options_of, diagnose_progress, diagnose_journal, &
                               check_diagnosable
@@ -101,7 +101,7 @@ contains
       type(diagnose_journal), pointer :: jr
       type(error_type), allocatable :: e
       character(len=report_line_len), allocatable :: part(:)
-      character(len=:), allocatable :: report, dir, text, unit_lines(:), table(:), name
+      character(len=:), allocatable :: report, dir, text, unit_lines(:), table(:), name, unused
       integer, allocatable :: which(:)
       integer :: i, k, at
       character(len=16) :: digest
@@ -182,6 +182,11 @@ contains
       end do
       call journal%close(e)
       if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
+      ! Settings that do nothing here are said, not passed over
+      unused = specimen_unused(cfg%diagnose)
+      if (len(unused) > 0 .and. allocated(lines)) lines = [character(len=report_line_len) :: &
+         'note: '//cfg%path//': &diagnose: '//unused//': not used by the per-specimen mode (they set '// &
+         'the diagnosis of held-out tests and its self-check)', lines]
    end subroutine specimen_command
 
    !> Self-check of the diagnosis on synthetic data with each effect injected; its

@@ -332,6 +332,17 @@ contains
             interval_end(e%p_lo(k), lo_open, 'es11.4')//', '//interval_end(e%p_hi(k), hi_open, 'es11.4')// &
             ']'//unit//what)
       end do
+      ! The constants it ends at, so that what follows from them (a separating test's
+      ! responses) can be checked by a simulation of the user's
+      if (allocated(e%c) .and. allocated(res%cnames)) then
+         if (size(e%c) == size(res%cnames)) then
+            what = '- constants of the refit:'
+            do k = 1, size(e%c)
+               what = what//trim(merge(' ', ',', k == 1))//' '//trim(res%cnames(k))//' = '//real_str(e%c(k), 'es11.4')
+            end do
+            call add_line(lines, what)
+         end if
+      end if
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
          if (e%rate_why == rate_at_end) then

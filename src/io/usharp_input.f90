@@ -15,14 +15,14 @@ module usharp_input
    use usharp_input_output, only: read_output_group
    use usharp_input_fit, only: read_fit_group
    use usharp_input_design, only: read_design_group
-   use usharp_input_diagnose, only: read_diagnose_group
+   use usharp_input_diagnose, only: read_diagnose_group, specimen_unused
    use usharp_input_test, only: read_test_groups, read_data_columns
    implicit none
    private
 
    public :: read_config, read_config_as, override_constants, resolve_path, known_groups
    public :: check_inputs_kept, check_not_a_fit, output_names
-   public :: read_data_columns
+   public :: read_data_columns, specimen_unused
 
    !> The groups of an input file; all but &test at most once
    character(len=9), parameter :: known_groups(8) = &

@@ -10,7 +10,7 @@ module usharp_input_diagnose
    implicit none
    private
 
-   public :: diagnose_config, read_diagnose_group, write_diagnose_defaults, check_holdout
+   public :: diagnose_config, read_diagnose_group, write_diagnose_defaults, check_holdout, specimen_unused
 
    !> Longest effect name
    integer, parameter :: effect_len = 64
@@ -158,6 +158,28 @@ contains
 
    !> The &diagnose namelist, starting from diagnose (no test held out): read from text or
    !> written to unit. The lists come back as given, to be checked and resolved.
+   !> The settings of d, given other than their defaults, that the per-specimen mode does not
+   !> use (they set the diagnosis of held-out tests and its self-check), comma-separated
+   pure function specimen_unused(d) result(names)
+      type(diagnose_config), intent(in) :: d
+      character(len=:), allocatable :: names
+      type(diagnose_config) :: def
+      names = ''
+      if (allocated(d%holdout)) then
+         if (any(d%holdout)) names = names//', holdout'
+      end if
+      if (d%n_refit /= def%n_refit) names = names//', n_refit'
+      if (d%refit_starts /= def%refit_starts) names = names//', refit_starts'
+      if (d%global_starts /= def%global_starts) names = names//', global_starts'
+      if (d%cross_starts .neqv. def%cross_starts) names = names//', cross_starts'
+      if (d%confirm_shrink /= def%confirm_shrink) names = names//', confirm_shrink'
+      if (any(d%rows /= def%rows)) names = names//', rows'
+      if (d%reps /= def%reps) names = names//', reps'
+      if (d%seed /= def%seed) names = names//', seed'
+      if (d%noise /= def%noise) names = names//', noise'
+      if (len(names) > 0) names = names(3:)
+   end function specimen_unused
+
    subroutine diagnose_namelist(settings, holdout, effects, rows, specimen_given, ios, msg, text, unit)
       type(diagnose_config), intent(inout) :: settings
       character(len=value_len), intent(out) :: holdout(max_list), effects(max_list), rows(max_list)
