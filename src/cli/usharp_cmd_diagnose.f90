@@ -100,7 +100,7 @@ contains
       type(diagnose_journal), target :: journal
       type(diagnose_journal), pointer :: jr
       type(error_type), allocatable :: e
-      character(len=report_line_len), allocatable :: part(:)
+      character(len=report_line_len), allocatable :: part(:), verdicts(:)
       character(len=:), allocatable :: report, dir, text, unit_lines(:), table(:), name, unused
       integer, allocatable :: which(:)
       integer :: i, k, at
@@ -145,7 +145,7 @@ contains
                         ' specimen='//trim(cfg%diagnose%specimen)//' units=2', mode, error)
       if (allocated(error)) return
       jr => journal
-      allocate (lines(0))
+      allocate (lines(0), verdicts(0))
       do i = 1, size(which)
          digest = unit_digest('specimen '//trim(cfg%tests(which(i))%name))
          call next_unit(jr, digest, text, replay, error)
@@ -179,7 +179,12 @@ contains
          if (allocated(error)) exit
          lines = [character(len=report_line_len) :: lines, part, '', 'wrote '//name//'.md, '// &
                   'specimen-'//trim(cfg%tests(which(i))%name)//'.csv', '']
+         ! Each specimen's verdict again at the end, side by side
+         at = findloc(index(part, '**Verdict:** ') == 1, .true., dim=1)
+         if (at > 0) verdicts = [character(len=report_line_len) :: verdicts, '- '//trim(part(at)(14:))]
       end do
+      if (size(which) > 1 .and. size(verdicts) > 0 .and. .not. allocated(error)) &
+         lines = [character(len=report_line_len) :: lines, '## The verdicts, specimen by specimen', '', verdicts]
       call journal%close(e)
       if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
       ! Settings that do nothing here are said, not passed over

@@ -974,10 +974,12 @@ contains
       if (allocated(sr%w)) then
          call add('Power: of that rule against the effect at the low end of its realistic range, from the '// &
             'chi-square of its signal there (simulated) in the residual''s covariance with the constants'' '// &
-            'uncertainty beside the noise.')
+            'uncertainty beside the noise, at the scale the residual is fitted to: the larger the misfit '// &
+            'the constants leave, the less a small effect shows against it.')
       else
          call add('Power: of that rule against the effect at the low end of its realistic range, from the '// &
-            'chi-square of its signal there (simulated) at the prediction''s residual.')
+            'chi-square of its signal there (simulated) at the prediction''s residual: the larger the misfit '// &
+            'the constants leave, the less a small effect shows against it.')
       end if
       call add('')
       call add('| rank | effect | magnitude [95 % interval] | objective | BIC change | gap removed | verdict | '// &
