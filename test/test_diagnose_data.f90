@@ -512,7 +512,7 @@ contains
       call check(error, sr%f0/sr%m > maxval(sr%rep_ms), 'the drifting specimen does not stand out: '// &
                  real_str(sr%f0/sr%m, 'es10.3')//' against '//real_str(maxval(sr%rep_ms), 'es10.3'))
       if (allocated(error)) return
-      call check(error, index(verdict_of(sr), 'stand out') == 0, verdict_of(sr))
+      call check(error, index(specimen_verdict(sr), 'stand out') == 0, specimen_verdict(sr))
       if (allocated(error)) return
       call specimen_run(cfg, 1, opts, .true., sr, e, exps)
       call check(error, .not. allocated(e), 'per-specimen diagnosis of the clean test failed')
@@ -521,11 +521,11 @@ contains
                  'the clean specimen against a drifting replicate: '//real_str(sr%f0/sr%m, 'es10.3')// &
                  ' per point against '//real_str(sr%rep_ms(1), 'es10.3')//' and '//real_str(sr%rep_ms(2), 'es10.3'))
       if (allocated(error)) return
-      call check(error, index(verdict_of(sr), trim(sr%name)//' does not stand out from its replicates') > 0 .and. &
-                 index(verdict_of(sr), 'differs from its replicates') == 0, verdict_of(sr))
+      call check(error, index(specimen_verdict(sr), trim(sr%name)//' does not stand out from its replicates') > 0 .and. &
+                 index(specimen_verdict(sr), 'differs from its replicates') == 0, specimen_verdict(sr))
    contains
       !> The report's verdict line
-      function verdict_of(sr) result(v)
+      function specimen_verdict(sr) result(v)
          type(specimen_result), intent(in) :: sr
          character(len=:), allocatable :: v
          character(len=report_line_len), allocatable :: lines(:)
@@ -535,7 +535,7 @@ contains
          do k = 1, size(lines)
             if (index(lines(k), '**Verdict:**') == 1) v = trim(lines(k))
          end do
-      end function verdict_of
+      end function specimen_verdict
    end subroutine test_specimen_drift
 
    !> The thesis tests with 1 % noise and no effect (data/thesis-noise1), seven constants
@@ -1354,6 +1354,38 @@ contains
       call check(error, named_effect(res) == effect_index('temperature') .or. &
                  (named_effect(res) == effect_index('initial') .and. &
                   index(res%verdict, 'would tell initial from temperature') > 0), res%verdict)
+      if (allocated(error)) return
+      ! Each refit's initial drag stress, which the report gives beside an initial drag
+      ! offset: the deck's model set up at the refit's constants has that D0
+      block
+         type(run_config) :: cfg
+         type(uerror), allocatable :: e
+         type(miller_model) :: m
+         integer, allocatable :: idx(:)
+         integer :: k, nchecked
+         call read_config('data/independent-lcf-temperature-joint/diagnose.nml', cfg, e)
+         call check(error, .not. allocated(e), 'deck not read')
+         if (allocated(error)) return
+         select type (mm => cfg%model)
+         type is (miller_model)
+            m = mm
+         end select
+         idx = pack([(k, k=1, size(cfg%fit%fitted))], cfg%fit%fitted)
+         nchecked = 0
+         do k = 1, size(res%effects)
+            if (.not. (res%effects(k)%refitted .and. allocated(res%effects(k)%c))) cycle
+            do j = 1, size(idx)
+               call m%set_constant(idx(j), res%effects(k)%c(j))
+            end do
+            call model_setup(m, e)
+            if (allocated(e)) cycle
+            call check(error, abs(res%effects(k)%drag0 - m%d0) <= 1.0e-12_dp*m%d0, trim(res%effects(k)%name)// &
+                       ': D0 '//real_str(res%effects(k)%drag0, 'es14.7')//' against '//real_str(m%d0, 'es14.7'))
+            if (allocated(error)) return
+            nchecked = nchecked + 1
+         end do
+         call check(error, nchecked > 0, 'no refit to check D0 on')
+      end block
    end subroutine test_joint_carried
 
    !> A softening of a = 0.093 (independent data, data/independent-creep-softening-open; the

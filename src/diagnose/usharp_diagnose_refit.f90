@@ -606,6 +606,7 @@ contains
       e%c_bound = at_bound(x(1:nc), lo(1:nc), hi(1:nc))
       call ep%unpack(x, mdl, p)
       e%c = [(mdl%get_constant(ctx%prob%idx(j)), j=1, nc)]
+      e%drag0 = initial_drag_of(mdl)
       pscale = pack(ep%pscale, ep%pfree)
       e%p = pack(p, ep%pfree)
       ! At the search box's outer ends (the catalogue's box, in units of the parameter's scale)
@@ -619,6 +620,22 @@ contains
       call name_params(ctx, res, ep, e)
       call judge_magnitude(ctx, res, ep, x, p, e)
    end subroutine magnitudes
+
+   !> The initial drag stress of model (set up on a copy; negative when it cannot be)
+   real(dp) function initial_drag_of(model) result(d0)
+      class(model_type), intent(in) :: model
+      class(model_type), allocatable :: m
+      type(error_type), allocatable :: err
+      real(dp), allocatable :: y0(:)
+      real(dp) :: back
+      d0 = -1.0_dp
+      allocate (m, source=model)
+      call m%setup(err)
+      if (allocated(err)) return
+      allocate (y0(m%n_uniaxial()))
+      call m%uniaxial_initial(y0)
+      call m%uniaxial_outputs(y0, back, d0)
+   end function initial_drag_of
 
    !> The parameters of a per-test effect that its BIC counts: those of the tests that show
    !> it. A specimen's artefact (an extensometer's drift) need not be in every test: where

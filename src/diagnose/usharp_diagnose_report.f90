@@ -343,6 +343,10 @@ contains
             call add_line(lines, what)
          end if
       end if
+      ! What an initial drag offset adds to, or a specimen's factor scales
+      if (e%drag0 > 0.0_dp .and. any(e%name == [character(len=8) :: 'initial', 'scatter'])) &
+         call add_line(lines, '- the initial drag stress at those constants: D0 = '//real_str(e%drag0, 'es11.4')// &
+            ' '//trim(res%stress_unit)//trim(merge(' (dD0 adds to it)  ', ' (dD0/D0 scales it)', e%name == 'initial')))
       if (e%held .and. allocated(e%p_all)) then
          k = held_rate(cat(e%k))
          if (e%rate_why == rate_at_end) then

@@ -157,6 +157,9 @@ module usharp_diagnose_types
       character(len=name_len + 17), allocatable :: pname(:)
       character(len=12), allocatable :: punit(:)
       real(dp), allocatable :: c(:)          !< constants of the refit
+      !> the initial drag stress of the model at those constants (model stress unit; what an
+      !> initial effect's dD0 adds to and a scatter's dD0/D0 scales), negative when none
+      real(dp) :: drag0 = -1.0_dp
       real(dp), allocatable :: x_fit(:)      !< search point at the end of the refit
       !> End points of the refit's starts (columns) and their objectives on the fit tests
       real(dp), allocatable :: x_ends(:, :), f_ends(:)
