@@ -156,8 +156,6 @@ contains
       call diagnose_namelist(diagnose, holdout, effects, rows, specimen, ios, msg, unit=unit)
    end subroutine write_diagnose_defaults
 
-   !> The &diagnose namelist, starting from diagnose (no test held out): read from text or
-   !> written to unit. The lists come back as given, to be checked and resolved.
    !> The settings of d, given other than their defaults, that the per-specimen mode does not
    !> use (they set the diagnosis of held-out tests and its self-check), comma-separated
    pure function specimen_unused(d) result(names)
@@ -180,6 +178,8 @@ contains
       if (len(names) > 0) names = names(3:)
    end function specimen_unused
 
+   !> The &diagnose namelist, starting from diagnose (no test held out): read from text or
+   !> written to unit. The lists come back as given, to be checked and resolved.
    subroutine diagnose_namelist(settings, holdout, effects, rows, specimen_given, ios, msg, text, unit)
       type(diagnose_config), intent(inout) :: settings
       character(len=value_len), intent(out) :: holdout(max_list), effects(max_list), rows(max_list)
