@@ -3,7 +3,9 @@
 !> the measured strain as smooth forcing (the default) and as the piecewise-linear history
 !> through every sample (the integrator stops at each); the stress of both against a
 !> tight-tolerance reference under the same forcing, at the given constants and at the
-!> measured deck's own (start) constants; the objective of both. Writes each
+!> measured deck's own (start) constants; the objective of both; the diagnosis's model with
+!> effects at zero against the plain model, with the extended states p and R2 carried at
+!> rest and without (as the diagnosis leaves them where no effect acts through them). Writes each
 !> test's simulated loops of both treatments to OUT/<test>.forcing.txt for the plots.
 !> Usage: bench_measured THESIS.nml MEASURED.nml CONSTANTS.nml OUT, or bench_measured
 !> DECK.nml [CONSTANTS.nml] for one deck's time per evaluation alone (at the deck's constants,
@@ -20,6 +22,8 @@ program bench_measured
    use usharp_input, only: read_config_as, read_data_columns
    use usharp_table, only: merge_repeated_times
    use usharp_objective, only: fit_problem, setup_problem
+   use usharp_effect_values, only: test_effects
+   use usharp_effect_problem, only: simulate_effect
    implicit none
    type(run_config) :: thesis, smooth, raw, start
    type(fit_problem) :: p_thesis, p_smooth, p_raw
@@ -88,6 +92,7 @@ program bench_measured
    do i = 1, nt
       call compare(i)
    end do
+   call at_rest()
    ! The deck's own constants (a fit's start, far from these data): a harder case for the
    ! error control, the stress there being a small difference of large strains
    call read_config_as(trim(arg(2)), '', '', start, err)
@@ -180,6 +185,66 @@ contains
       end do
       close (u)
    end subroutine compare
+   !> The seven tests simulated by the model with effects at zero, p and R2 carried at rest
+   !> and not, against the plain model (ms per simulation of all, best of 5 interleaved
+   !> batches; the stress without them is the plain model's bit for bit)
+   subroutine at_rest()
+      type(sim_result) :: rp, rn, rc
+      type(test_effects) :: zero
+      real(dp) :: tp, tn, tc, dmax
+      integer(int64) :: c0, c1, c2, c3, rate
+      integer :: b, k, j
+      logical :: same
+      tp = huge(1.0_dp)
+      tn = tp
+      tc = tp
+      same = .true.
+      dmax = 0.0_dp
+      do b = 1, 5
+         call system_clock(c0, rate)
+         do k = 1, 10
+            do j = 1, nt
+               call simulate_test(smooth%model, smooth%solver, smooth%tests(j), rp, err)
+            end do
+         end do
+         call system_clock(c1)
+         do k = 1, 10
+            do j = 1, nt
+               call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
+                                    smooth%solver, rn, err, smooth%tests(j)%temperature)
+            end do
+         end do
+         call system_clock(c2)
+         do k = 1, 10
+            do j = 1, nt
+               call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
+                                    smooth%solver, rc, err, smooth%tests(j)%temperature, states=.true.)
+            end do
+         end do
+         call system_clock(c3)
+         call check()
+         tp = min(tp, real(c1 - c0, dp)/real(rate, dp)*1.0e2_dp)
+         tn = min(tn, real(c2 - c1, dp)/real(rate, dp)*1.0e2_dp)
+         tc = min(tc, real(c3 - c2, dp)/real(rate, dp)*1.0e2_dp)
+      end do
+      do j = 1, nt
+         call simulate_test(smooth%model, smooth%solver, smooth%tests(j), rp, err)
+         call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
+                              smooth%solver, rn, err, smooth%tests(j)%temperature)
+         call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
+                              smooth%solver, rc, err, smooth%tests(j)%temperature, states=.true.)
+         call check()
+         same = same .and. all(rn%stress == rp%stress)
+         dmax = max(dmax, maxval(abs(rc%stress - rp%stress))/maxval(abs(rp%stress)))
+      end do
+      write (output_unit, '(a)') '# effects at zero (the diagnosis''s model), ms per simulation of the tests'
+      write (output_unit, '(a,f9.3)') 'plain model                          ', tp
+      write (output_unit, '(a,f9.3,a,l1)') 'effects, p and R2 not carried       ', tn, &
+         '   stress the plain model''s bit for bit: ', same
+      write (output_unit, '(a,f9.3,a,f6.3,a,es9.2)') 'effects, p and R2 carried at rest   ', tc, &
+         '   ratio to not carried ', tc/tn, '   max|stress - plain|/peak ', dmax
+   end subroutine at_rest
+
    !> Test i at the start constants: smooth forcing against its tight reference
    subroutine start_accuracy(i)
       integer, intent(in) :: i

@@ -21,7 +21,7 @@ module test_diagnose_data
    use usharp_input, only: read_config
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type
-   use usharp_effects, only: test_effects, effect_index
+   use usharp_effects, only: test_effects, effect_index, n_effects
    use usharp_effect_problem, only: effect_problem, new_effect_problem, failed_objective
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report
@@ -669,6 +669,7 @@ contains
       type(experiment_type), allocatable, intent(out) :: exps(:)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
+      type(run_config) :: tight
       type(fit_problem) :: prob
       type(effect_problem) :: ep
       type(test_effects) :: base
@@ -794,10 +795,12 @@ contains
       end do
    end subroutine test_serrated_verdict
 
-   !> B and n fitted to 1 % cycling with 1 % noise (40 draws), 1.2 % cycling at a tenth of the
+   !> B and n fitted to 1 % cycling with 1 % noise (80 draws), 1.2 % cycling at a tenth of the
    !> rate held out without noise: its objective is the prediction's error alone, made by the
    !> scatter of the fitted constants, and averages what the constants' own uncertainty
    !> explains (pred_held, within 3 Monte Carlo standard errors), which is well above zero.
+   !> The prediction's error has a long tail (in B and n's valley the largest of 80 draws is
+   !> 14 times the mean uncertainty): 40 draws left the mean's standard error at 0.4 of it.
    !> Fits ending at nearly the same constants give nearly the same spread: B and n trade off,
    !> and a Jacobian at the integrator's working tolerance had left J'J's small eigenvalue to
    !> its error (the spread of one draw 2.5e-5 against 1.6e-3 from another path to the same
@@ -806,7 +809,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(diagnose_options) :: opts
-      type(diagnose_result) :: res(40)
+      type(diagnose_result) :: res(80)
       type(experiment_type), allocatable :: clean(:)
       real(dp) :: excess(size(res)), pred(size(res)), se, sd(2, size(res))
       integer :: k, ndraw
@@ -895,7 +898,10 @@ contains
 
    !> A deck of two cyclic tests (c1: 1 % range at 1e-3/s, 3 cycles, fitted; c2 held out:
    !> range2 at rate2, cycles2) sampled every dt s, the Table 4 constants, &fit's list of
-   !> constants fit; clean holds each test's response of the plain model at its output times
+   !> constants fit; clean holds each test's response of the plain model at its output times,
+   !> integrated at rtol 1e-10 (made at the fit's own tolerance, the data held its integration
+   !> error, which a fit starting at these constants then met exactly there and nowhere else:
+   !> some fits of noisy data stayed at the start, in a well of that error, not the noise's)
    subroutine model_data(name, fit, dt, range2, rate2, cycles2, cfg, opts, clean, error)
       character(len=*), intent(in) :: name, fit
       real(dp), intent(in) :: dt, range2, rate2
@@ -905,6 +911,7 @@ contains
       type(experiment_type), allocatable, intent(out) :: clean(:)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
+      type(run_config) :: tight
       type(fit_problem) :: prob
       type(effect_problem) :: ep
       type(test_effects) :: base
@@ -925,7 +932,10 @@ contains
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (allocated(e)) call test_failed(error, 'deck failed: '//e%message)
       if (allocated(error)) return
-      call placeholder_problem(cfg, prob, clean, error)
+      tight = cfg
+      tight%solver%rtol = 1.0e-10_dp
+      tight%solver%atol_strain = 1.0e-14_dp
+      call placeholder_problem(tight, prob, clean, error)
       if (allocated(error)) return
       call new_effect_problem(prob, [1, 2], 1, base, 1.0_dp, ep, free_constants=.false., p0=[0.0_dp])
       allocate (r(ep%nres()), y(ep%nres()))
@@ -1107,12 +1117,16 @@ contains
    end subroutine test_loose_constants
 
    !> A drift at the low end of its range, strongest in one fit test (independent data: 2e-5
-   !> strain over each test, -8.3e-8 1/s in the LCF test; ratcheting held out): the constants
-   !> take it up and nothing is significant. The power the verdict states against a per-test
-   !> effect is the least over the fit tests together and each alone: with the drift at its low
-   !> end in both fit tests the power was 1.00 and the verdict said nothing of a drift it had
-   !> missed; it now names the drift as one the fit tests could miss, up to a multiple of the
-   !> low end that holds the injected one (1.0)
+   !> strain over each test, -8.3e-8 1/s in the LCF test; ratcheting held out): on the fit
+   !> tests the constants take it up. The power the verdict states against a per-test effect
+   !> is the least over the fit tests together and each alone: with the drift at its low end
+   !> in both fit tests the power was 1.00 and the verdict said nothing of a drift it had
+   !> missed; it is now below 0.95, with the multiple of the low end at which it would be
+   !> found holding the injected one (1.0). The verdict then names the drift as one the fit
+   !> tests could miss, or, where an effect of the fit tests sends the diagnosis on to every
+   !> test fitted together (a temperature offset at BIC -12.8 on them, their gaps below the
+   !> floors, as the last bits of the baseline's search decide), names the drift found there;
+   !> no other effect
    subroutine test_drift_one_test(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
@@ -1120,7 +1134,8 @@ contains
       call diagnose_deck('data/independent-ratchet-drift-low/diagnose.nml', res, error)
       if (allocated(error)) return
       write (*, '(4x,a)') res%verdict
-      call check(error, res%leading == 0, 'an effect named: '//res%verdict)
+      call check(error, named_effect(res) == 0 .or. named_effect(res) == effect_index('drift'), &
+                 'an effect other than the drift named: '//res%verdict)
       if (allocated(error)) return
       j = findloc(res%effects%k, effect_index('drift'), 1)
       call check(error, j > 0, 'drift not screened')
@@ -1131,8 +1146,9 @@ contains
                  'drift at the low end in one fit test: power '//real_str(res%effects(j)%power_low, 'f0.2')// &
                  ', hidden up to '//real_str(res%effects(j)%hidden%times, 'f0.2')//' times the low end')
       if (allocated(error)) return
-      call check(error, index(res%verdict, 'could miss: ') > 0 .and. index(res%verdict, 'drift (power') > 0, &
-                 'the verdict does not name the drift as one it could miss: '//res%verdict)
+      if (named_effect(res) == 0) call check(error, index(res%verdict, 'could miss: ') > 0 .and. &
+                                             index(res%verdict, 'drift (power') > 0, &
+                                             'the verdict does not name the drift as one it could miss: '//res%verdict)
    end subroutine test_drift_one_test
 
    !> A fast second back stress (independent data: H3/gamma3 1.55 ksi at gamma3 = 1266; the
@@ -1157,13 +1173,28 @@ contains
    !> refit shows that the baseline was not the optimum of the constants
    !> (baseline_left_behind): the baseline is fitted again from its constants and ends lower
    !> (below 0.7), the delay and the compliance are not significant against it, and the
-   !> second back stress is named with an interval of gamma3 that holds the injected one
+   !> second back stress is named with an interval of gamma3 that holds the injected one.
+   !> Every candidate is refitted (n_refit = 9): which of them screening puts among the
+   !> three refitted by default follows the baseline's end point, which the last bits of the
+   !> arithmetic steer (from a baseline at 2.19 the three leaders' refits, each with its
+   !> effect, show no better basin of the constants alone)
    subroutine test_baseline_left_behind(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
+      type(run_config) :: cfg
+      type(diagnose_options) :: opts
+      type(uerror), allocatable :: e
       integer :: j
-      call diagnose_deck('data/independent-lcf-backstress2-basin/diagnose.nml', res, error)
-      if (allocated(error)) return
+      call read_config('data/independent-lcf-backstress2-basin/diagnose.nml', cfg, e)
+      if (.not. allocated(e)) then
+         cfg%diagnose%n_refit = n_effects
+         call diagnose_options_of(cfg, opts, e)
+      end if
+      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
+      if (allocated(e)) then
+         call test_failed(error, 'diagnosis failed: '//e%message)
+         return
+      end if
       write (*, '(4x,a)') res%verdict
       write (*, '(4x,a,2es12.4)') 'first baseline, baseline:', res%f0_left, res%f0
       call check(error, allocated(res%rebased_by), 'the baseline was not fitted again')

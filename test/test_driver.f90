@@ -217,6 +217,7 @@ contains
          if (iext == 2) then
             n = n_extended
             sys%extended = .true.
+            sys%extra = 2
             sys%eff%compliance = 0.05_dp
             sys%eff%lag = 0.5_dp
             sys%eff%soften = 0.2_dp
@@ -485,7 +486,9 @@ contains
    end subroutine test_smooth_fast_drag
 
    !> The model with effects (the diagnosis's) under the same measured-like strain as smooth
-   !> forcing: without effects it is the plain model's response (within 1e-6 of the peak);
+   !> forcing: without effects it is the plain model's response, the same bit for bit in the
+   !> same steps (p and R2, at rest, are not carried), and within 1e-6 of the peak with them
+   !> carried (states);
    !> with a compliance, a saturating softening and a second back stress, RODAS4 at its
    !> defaults is within 1e-4 of the peak stress of its own rtol 1e-10 under that forcing, and
    !> steps across the samples (fewer steps than stopping at each); so too with a lag of the
@@ -498,7 +501,7 @@ contains
       type(history_type) :: hs, hr
       type(uerror), allocatable :: uerr
       type(solver_options) :: def, tight
-      type(sim_result) :: plain, none, r, ref, rr, lag_s, lag_r, lag_d, lag_rd
+      type(sim_result) :: plain, none, r, ref, rr, lag_s, lag_r, lag_d, lag_rd, plain_d, none_d
       type(test_effects) :: eff, off
       real(dp), allocatable :: t(:), v(:), tout(:)
       real(dp) :: peak, du
@@ -517,7 +520,9 @@ contains
       eff%h3 = 2000.0_dp
       eff%gamma3 = 800.0_dp
       call simulate_rosenbrock(m, hs, tout, tight, plain, uerr)
-      if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, tight, none, uerr, off)
+      if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, tight, none, uerr, off, states=.true.)
+      if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, def, plain_d, uerr)
+      if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, def, none_d, uerr, off)
       if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, def, r, uerr, eff)
       if (.not. allocated(uerr)) call simulate_rosenbrock(m, hs, tout, tight, ref, uerr, eff)
       if (.not. allocated(uerr)) call simulate_rosenbrock(m, hr, tout, def, rr, uerr, eff)
@@ -525,7 +530,11 @@ contains
       if (allocated(error)) return
       peak = maxval(abs(plain%stress))
       call check(error, maxval(abs(none%stress - plain%stress)) <= 1.0e-6_dp*peak, &
-                 'without effects the plain model''s response')
+                 'without effects, p and R2 carried, the plain model''s response')
+      if (allocated(error)) return
+      call check(error, all(none_d%stress == plain_d%stress) .and. all(none_d%strain == plain_d%strain) &
+                 .and. none_d%nsteps == plain_d%nsteps, &
+                 'without effects the plain model''s response bit for bit, in its steps')
       if (allocated(error)) return
       call check(error, maxval(abs(ref%stress - plain%stress)) > 1.0e-2_dp*peak, 'the effects act')
       if (allocated(error)) return

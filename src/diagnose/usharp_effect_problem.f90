@@ -31,6 +31,8 @@ module usharp_effect_problem
       type(fit_problem) :: prob                !< tests, targets, model, solver
       integer, allocatable :: tests(:)         !< indices of the tests in the residual
       integer :: k = 0                         !< catalogue effect (0: none)
+      !> effect k acts through the extended model's p and R2: every point carries them
+      logical :: states = .false.
       logical :: free_constants = .true.       !< the fitted constants are in x
       real(dp), allocatable :: p0(:)           !< effect parameters (physical units, all tests)
       logical, allocatable :: pfree(:)         !< which of them are in x
@@ -91,6 +93,7 @@ contains
       if (k > 0) then
          cat = effect_catalogue(peak)
          np = effect_nparams(cat(k), nt)
+         ep%states = cat(k)%states
       end if
       allocate (ep%p0(np), ep%pfree(np), ep%pscale(np), ep%pbox(np), ep%pnonneg(np), ep%pacts(np))
       ep%p0 = 0.0_dp
@@ -235,7 +238,7 @@ contains
          i = self%tests(it)
          associate (tg => self%prob%targets(i), test => self%prob%cfg%tests(i))
             call simulate_effect(model, eff(i), test%hist, tg%t, self%prob%cfg%solver, res, err, &
-                                 test%temperature)
+                                 test%temperature, self%states)
             if (allocated(err)) then
                failed(it) = .true.
                return
@@ -255,8 +258,9 @@ contains
    !> A test's response with the effects eff, at the data's times t (s): the model the test
    !> sees (effect_model, at temperature, K, when > 0), the stress channel lagging by the
    !> shift, and an extensometer drift that a strain-controlled specimen follows less (the
-   !> measured strain is then the specimen's plus the drift)
-   subroutine simulate_effect(model, eff, hist0, t, solver, res, error, temperature)
+   !> measured strain is then the specimen's plus the drift); with states, the extended
+   !> model's p and R2 carried where eff leaves them at rest (see simulate_rosenbrock)
+   subroutine simulate_effect(model, eff, hist0, t, solver, res, error, temperature, states)
       class(model_type), intent(in) :: model
       type(test_effects), intent(in) :: eff
       type(history_type), intent(in) :: hist0
@@ -265,6 +269,7 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: temperature
+      logical, intent(in), optional :: states
       class(model_type), allocatable :: mt
       type(history_type) :: hist
       real(dp), allocatable :: tout(:)
@@ -278,7 +283,7 @@ contains
       if (solver%integrator == 'cvode') then
          call simulate_cvode(mt, hist, tout, solver, res, error, eff)
       else
-         call simulate_rosenbrock(mt, hist, tout, solver, res, error, eff)
+         call simulate_rosenbrock(mt, hist, tout, solver, res, error, eff, states)
       end if
       if (allocated(error)) return
       if (eff%drift /= 0.0_dp) res%strain = res%strain + eff%drift*(tout - hist%t(1))

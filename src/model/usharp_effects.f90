@@ -17,7 +17,7 @@ module usharp_effects
    public :: effects_of, extended_rates, n_extended, lagged_value, lag_corners, effect_nparams
    public :: effect_acts, effect_acts_why
    public :: param_global, param_per_test, effect_model, extended_size, extended_initial
-   public :: wrapped_rates
+   public :: wrapped_rates, states_act
 
    !> States of the extended Miller model: eps_in, R, D, accumulated inelastic strain p, R2;
    !> of any other model its own states, then p and R2
@@ -49,6 +49,9 @@ module usharp_effects
       !> Half-width of each parameter's search box, in units of its scale (a nonneg one
       !> searched in [0, box])
       real(dp) :: box(2) = 1.0e3_dp
+      !> Acts through the extended model's own states, the accumulated inelastic strain p and
+      !> the second back stress R2 (the other effects leave them at rest)
+      logical :: states = .false.
    end type effect_info
 
 contains
@@ -123,6 +126,8 @@ contains
       ! a start near gamma3 = 4000 came close (objective 240.9 there, 360.8 from 1e4)
       ! (H3's unit is the peak: its box is gamma3's largest value, 1e6)
       cat(8)%box(1) = cat(8)%box(2)*cat(8)%scale(2)
+      cat(7)%states = .true.
+      cat(8)%states = .true.
    end function effect_catalogue
 
    !> Catalogue index of an effect by name, 0 when there is none
@@ -246,6 +251,13 @@ contains
       if (allocated(error)) return
       call out%set_temperature(out%temperature + eff%dtemp, error)
    end subroutine effect_model
+
+   !> Whether the extended model's own states act in eff: p through a softening, R2 through a
+   !> second back stress (without them p only accumulates and R2 stays 0)
+   elemental logical function states_act(eff)
+      type(test_effects), intent(in) :: eff
+      states_act = eff%soften /= 0.0_dp .or. eff%h3 /= 0.0_dp
+   end function states_act
 
    !> Number of states of the extended model
    pure integer function extended_size(model) result(n)
