@@ -189,61 +189,55 @@ contains
    !> and not, against the plain model (ms per simulation of all, best of 5 interleaved
    !> batches; the stress without them is the plain model's bit for bit)
    subroutine at_rest()
-      type(sim_result) :: rp, rn, rc
-      type(test_effects) :: zero
-      real(dp) :: tp, tn, tc, dmax
-      integer(int64) :: c0, c1, c2, c3, rate
-      integer :: b, k, j
+      type(sim_result) :: r(3)
+      real(dp) :: t(3), dmax
+      integer(int64) :: c0, c1, rate
+      integer :: b, k, j, v
       logical :: same
-      tp = huge(1.0_dp)
-      tn = tp
-      tc = tp
+      t = huge(1.0_dp)
+      do b = 1, 5
+         do v = 1, 3
+            call system_clock(c0, rate)
+            do k = 1, 10
+               do j = 1, nt
+                  call at_zero(v, j, r(v))
+               end do
+            end do
+            call system_clock(c1)
+            t(v) = min(t(v), real(c1 - c0, dp)/real(rate, dp)*1.0e2_dp)
+         end do
+      end do
       same = .true.
       dmax = 0.0_dp
-      do b = 1, 5
-         call system_clock(c0, rate)
-         do k = 1, 10
-            do j = 1, nt
-               call simulate_test(smooth%model, smooth%solver, smooth%tests(j), rp, err)
-            end do
-         end do
-         call system_clock(c1)
-         do k = 1, 10
-            do j = 1, nt
-               call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
-                                    smooth%solver, rn, err, smooth%tests(j)%temperature)
-            end do
-         end do
-         call system_clock(c2)
-         do k = 1, 10
-            do j = 1, nt
-               call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
-                                    smooth%solver, rc, err, smooth%tests(j)%temperature, states=.true.)
-            end do
-         end do
-         call system_clock(c3)
-         call check()
-         tp = min(tp, real(c1 - c0, dp)/real(rate, dp)*1.0e2_dp)
-         tn = min(tn, real(c2 - c1, dp)/real(rate, dp)*1.0e2_dp)
-         tc = min(tc, real(c3 - c2, dp)/real(rate, dp)*1.0e2_dp)
-      end do
       do j = 1, nt
-         call simulate_test(smooth%model, smooth%solver, smooth%tests(j), rp, err)
-         call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
-                              smooth%solver, rn, err, smooth%tests(j)%temperature)
-         call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
-                              smooth%solver, rc, err, smooth%tests(j)%temperature, states=.true.)
-         call check()
-         same = same .and. all(rn%stress == rp%stress)
-         dmax = max(dmax, maxval(abs(rc%stress - rp%stress))/maxval(abs(rp%stress)))
+         do v = 1, 3
+            call at_zero(v, j, r(v))
+         end do
+         same = same .and. all(r(2)%stress == r(1)%stress)
+         dmax = max(dmax, maxval(abs(r(3)%stress - r(1)%stress))/maxval(abs(r(1)%stress)))
       end do
       write (output_unit, '(a)') '# effects at zero (the diagnosis''s model), ms per simulation of the tests'
-      write (output_unit, '(a,f9.3)') 'plain model                          ', tp
-      write (output_unit, '(a,f9.3,a,l1)') 'effects, p and R2 not carried       ', tn, &
+      write (output_unit, '(a,f9.3)') 'plain model                          ', t(1)
+      write (output_unit, '(a,f9.3,a,l1)') 'effects, p and R2 not carried       ', t(2), &
          '   stress the plain model''s bit for bit: ', same
-      write (output_unit, '(a,f9.3,a,f6.3,a,es9.2)') 'effects, p and R2 carried at rest   ', tc, &
-         '   ratio to not carried ', tc/tn, '   max|stress - plain|/peak ', dmax
+      write (output_unit, '(a,f9.3,a,f6.3,a,es9.2)') 'effects, p and R2 carried at rest   ', t(3), &
+         '   ratio to not carried ', t(3)/t(2), '   max|stress - plain|/peak ', dmax
    end subroutine at_rest
+
+   !> Test j simulated by the plain model (v = 1) or the model with effects at zero, p and R2
+   !> not carried (2) or carried (3)
+   subroutine at_zero(v, j, res)
+      integer, intent(in) :: v, j
+      type(sim_result), intent(out) :: res
+      type(test_effects) :: zero
+      if (v == 1) then
+         call simulate_test(smooth%model, smooth%solver, smooth%tests(j), res, err)
+      else
+         call simulate_effect(smooth%model, zero, smooth%tests(j)%hist, p_smooth%targets(j)%t, &
+                              smooth%solver, res, err, smooth%tests(j)%temperature, states=v == 3)
+      end if
+      call check()
+   end subroutine at_zero
 
    !> Test i at the start constants: smooth forcing against its tight reference
    subroutine start_accuracy(i)

@@ -35,7 +35,10 @@ one() {  # name: then the arguments of usharp diagnose (run in decks/)
   (cd decks && OMP_NUM_THREADS=$threads /usr/bin/time -f '%e %U %S' -o "$tmp/$name.time" \
      "../$exe" diagnose "$@" -o "$tmp/$name") > "$tmp/$name.txt"
   l1=$(load)
-  sims=$(sed -n 's/^\([0-9]*\) simulations of the test set.*/\1/p' "$tmp/$name.txt" | paste -sd+ | bc)
+  # (a per-specimen diagnosis counts its replicates' fit and the specimen's simulations apart)
+  sims=$(sed -n 's/^\([0-9]*\) simulations of the test set.*/\1/p
+    s/^\([0-9]*\) simulations of the replicates (their fit), \([0-9]*\) of the specimen.*/\1+\2/p' \
+    "$tmp/$name.txt" | paste -sd+ | bc)
   verdict=$(sed -n 's/^\*\*Verdict:\*\* //p' "$tmp/$name.txt" | head -n 1 | cut -c1-60)
   [ -n "$verdict" ] || verdict=$(sed -n 's/^\*\*Verdict\*\*: //p; s/^Verdict: //p' "$tmp/$name.txt" | head -n 1 | cut -c1-60)
   read -r wall user sys < "$tmp/$name.time"

@@ -168,7 +168,7 @@ contains
             sys%yk = lag_corners(hist%t, hist%v, effects%lag)
          end if
          ! p and R2 only where they act: carried at rest they make a simulation of the Alloy
-         ! 617 tests some 8 % dearer (bench/measured.sh) and step otherwise
+         ! 617 tests 1.10 times dearer (bench/measured.sh) and step otherwise
          sys%extra = 0
          if (states_act(effects)) sys%extra = 2
          if (present(states)) then
