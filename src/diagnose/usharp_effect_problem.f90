@@ -277,16 +277,25 @@ contains
       if (allocated(error)) return
       ! The stress channel lags by shift: the data at t saw the response at t - shift
       tout = min(max(t - eff%shift, hist0%t(1)), hist0%end_time())
-      ! (linear in time, so the corners stay the corners)
-      hist = hist0
-      if (eff%drift /= 0.0_dp .and. hist%control == control_strain) call hist%add_ramp(-eff%drift)
-      if (solver%integrator == 'cvode') then
-         call simulate_cvode(mt, hist, tout, solver, res, error, eff)
+      ! (linear in time, so the corners stay the corners; the history is copied only then)
+      if (eff%drift /= 0.0_dp .and. hist0%control == control_strain) then
+         hist = hist0
+         call hist%add_ramp(-eff%drift)
+         call simulate_on(hist)
       else
-         call simulate_rosenbrock(mt, hist, tout, solver, res, error, eff, states)
+         call simulate_on(hist0)
       end if
       if (allocated(error)) return
-      if (eff%drift /= 0.0_dp) res%strain = res%strain + eff%drift*(tout - hist%t(1))
+      if (eff%drift /= 0.0_dp) res%strain = res%strain + eff%drift*(tout - hist0%t(1))
+   contains
+      subroutine simulate_on(h)
+         type(history_type), intent(in) :: h
+         if (solver%integrator == 'cvode') then
+            call simulate_cvode(mt, h, tout, solver, res, error, eff)
+         else
+            call simulate_rosenbrock(mt, h, tout, solver, res, error, eff, states)
+         end if
+      end subroutine simulate_on
    end subroutine simulate_effect
 
    !> Residuals at the points xs(:, j), in parallel; a failed point gets a large penalty. A
