@@ -87,6 +87,7 @@ program bench_measured
    write (output_unit, '(a,i0,a,f9.3,a,f6.2)') 'measured, every sample (', nt, ')     ', &
       t_raw, '   ratio to thesis ', t_raw/t_thesis
    write (output_unit, '(a,2f12.4)') 'objective (Eq. 8) smooth, every sample: ', f_smooth, f_raw
+   call per_step()
    write (output_unit, '(a)') '# test: knots of the smooth forcing; steps smooth / every sample; '// &
       'max|stress - tight reference|/peak smooth, every sample; max|smooth - every sample|/peak; objective smooth, every sample'
    do i = 1, nt
@@ -151,6 +152,38 @@ contains
       if (present(total)) total = f
       if (present(per_test)) per_test = per
    end function time_eval
+
+   !> Steps, rate evaluations and output points of one evaluation of the thesis deck and of
+   !> the measured deck (smooth forcing), and the time per step of each: the ratio of the
+   !> evaluations' times is, step for step, that of their rate evaluations
+   subroutine per_step()
+      integer(int64) :: steps(2), outs(2), nrhs(2)
+      type(sim_result) :: r
+      integer :: k
+      steps = 0
+      outs = 0
+      nrhs = 0
+      do k = 1, size(thesis%tests)
+         call simulate_test(thesis%model, thesis%solver, thesis%tests(k), r, err)
+         call check()
+         steps(1) = steps(1) + r%nsteps
+         nrhs(1) = nrhs(1) + r%nrhs
+         outs(1) = outs(1) + size(r%t)
+      end do
+      do k = 1, nt
+         call simulate_test(smooth%model, smooth%solver, smooth%tests(k), r, err)
+         call check()
+         steps(2) = steps(2) + r%nsteps
+         nrhs(2) = nrhs(2) + r%nrhs
+         outs(2) = outs(2) + size(r%t)
+      end do
+      write (output_unit, '(a)') '# steps, rate evaluations, output points and microseconds per '// &
+         'step of one evaluation'
+      write (output_unit, '(a,3i8,f9.3)') 'thesis                  ', steps(1), nrhs(1), outs(1), &
+         1.0e3_dp*t_thesis/real(steps(1), dp)
+      write (output_unit, '(a,3i8,f9.3)') 'measured, smooth forcing', steps(2), nrhs(2), outs(2), &
+         1.0e3_dp*t_smooth/real(steps(2), dp)
+   end subroutine per_step
 
    !> Test i: both treatments against their tight references, and the loops to a file
    subroutine compare(i)
