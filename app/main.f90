@@ -1,9 +1,10 @@
 !> usharp command line: parse the arguments into a command, execute it, print, exit
 program usharp_main
    use, intrinsic :: iso_c_binding, only: c_int
-   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+   use, intrinsic :: iso_fortran_env, only: error_unit
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, stat_usage, stat_input
+   use usharp_filesys, only: raw_file, standard_output
    use usharp_strings, only: str, real_str
    use usharp_cli, only: cli_command, arg_string, parse_arguments, execute_command, &
                          main_help, command_help, version_text
@@ -16,6 +17,9 @@ program usharp_main
    type(error_type), allocatable :: error
    character(len=4200), allocatable :: lines(:)
    integer :: i, length
+   !> a write to standard output failed (a full disk, a closed pipe): the results a script
+   !> reads there are not whole, which the exit status says (exit 4)
+   type(error_type), allocatable :: out_error
 
    interface
       function c_isatty(fd) bind(C, name='isatty') result(r)
@@ -48,12 +52,12 @@ program usharp_main
       end if
    end if
    if (allocated(error)) call finish(stat_usage)
-   if (cmd%version .and. is_root()) write (output_unit, '(a)') version_text()
+   if (cmd%version .and. is_root()) call put(version_text())
    if (cmd%help .and. is_root()) then
       if (len(cmd%name) > 0) then
-         write (output_unit, '(a)') command_help(cmd%name)
+         call put(command_help(cmd%name))
       else
-         write (output_unit, '(a)') main_help()
+         call put(main_help())
       end if
    end if
    if (cmd%version .or. cmd%help) call finish(0)
@@ -68,7 +72,7 @@ program usharp_main
    ! (lines come with an error only where the results stand: a fit whose report failed)
    if (allocated(lines) .and. is_root()) then
       do i = 1, size(lines)
-         write (output_unit, '(a)') trim(lines(i))
+         call put(trim(lines(i)))
       end do
    end if
    if (allocated(error)) then
@@ -84,13 +88,29 @@ program usharp_main
 
 contains
 
-   !> Stop MPI (when running under it) and exit with code
+   !> Stop MPI (when running under it) and exit with code; with code 0, exit 4 when what was
+   !> written to standard output did not reach it
    subroutine finish(code)
       integer, intent(in) :: code
+      integer :: exit_code
+      exit_code = code
+      if (allocated(out_error) .and. exit_code == 0) then
+         write (error_unit, '(a)') 'usharp: error: '//out_error%message
+         exit_code = out_error%stat
+      end if
       call parallel_stop()
       ! quiet: no note of floating-point flags on stderr, which a model's trial points raise
-      stop code, quiet=.true.
+      stop exit_code, quiet=.true.
    end subroutine finish
+
+   !> One line to standard output; the first failure is kept (see finish) and ends the writing
+   subroutine put(text)
+      character(len=*), intent(in) :: text
+      type(raw_file) :: out
+      if (allocated(out_error)) return
+      out = standard_output()
+      call out%put(text//new_line('a'), out_error)
+   end subroutine put
 
    subroutine show_progress(nevals, best, seconds)
       integer, intent(in) :: nevals

@@ -32,6 +32,7 @@ program bench_measured
    real(dp) :: t_thesis, t_smooth, t_raw, f_smooth, f_raw
    real(dp), allocatable :: per_smooth(:), per_raw(:)
    integer :: i, nt
+   integer(int64) :: work(3)
 
    do i = 1, 4
       call get_command_argument(i, arg(i))
@@ -47,6 +48,8 @@ program bench_measured
       end do
       write (output_unit, '(a,i0,a,f9.4)') trim(arg(1))//' (', size(thesis%tests), &
          ' tests): ms per evaluation ', t_thesis
+      call deck_work(thesis, work(1), work(2), work(3))
+      write (output_unit, '(a,i0,a,i0)') 'steps ', work(1), ', rate evaluations ', work(2)
       stop
    end if
    if (len_trim(arg(4)) == 0) then
@@ -158,25 +161,8 @@ contains
    !> evaluations' times is, step for step, that of their rate evaluations
    subroutine per_step()
       integer(int64) :: steps(2), outs(2), nrhs(2)
-      type(sim_result) :: r
-      integer :: k
-      steps = 0
-      outs = 0
-      nrhs = 0
-      do k = 1, size(thesis%tests)
-         call simulate_test(thesis%model, thesis%solver, thesis%tests(k), r, err)
-         call check()
-         steps(1) = steps(1) + r%nsteps
-         nrhs(1) = nrhs(1) + r%nrhs
-         outs(1) = outs(1) + size(r%t)
-      end do
-      do k = 1, nt
-         call simulate_test(smooth%model, smooth%solver, smooth%tests(k), r, err)
-         call check()
-         steps(2) = steps(2) + r%nsteps
-         nrhs(2) = nrhs(2) + r%nrhs
-         outs(2) = outs(2) + size(r%t)
-      end do
+      call deck_work(thesis, steps(1), nrhs(1), outs(1))
+      call deck_work(smooth, steps(2), nrhs(2), outs(2))
       write (output_unit, '(a)') '# steps, rate evaluations, output points and microseconds per '// &
          'step of one evaluation'
       write (output_unit, '(a,3i8,f9.3)') 'thesis                  ', steps(1), nrhs(1), outs(1), &
@@ -184,6 +170,25 @@ contains
       write (output_unit, '(a,3i8,f9.3)') 'measured, smooth forcing', steps(2), nrhs(2), outs(2), &
          1.0e3_dp*t_smooth/real(steps(2), dp)
    end subroutine per_step
+
+   !> Steps, rate evaluations and output points of one evaluation of a deck's tests at its
+   !> constants
+   subroutine deck_work(cfg, steps, nrhs, outs)
+      type(run_config), intent(in) :: cfg
+      integer(int64), intent(out) :: steps, nrhs, outs
+      type(sim_result) :: r
+      integer :: k
+      steps = 0
+      nrhs = 0
+      outs = 0
+      do k = 1, size(cfg%tests)
+         call simulate_test(cfg%model, cfg%solver, cfg%tests(k), r, err)
+         call check()
+         steps = steps + r%nsteps
+         nrhs = nrhs + r%nrhs
+         outs = outs + size(r%t)
+      end do
+   end subroutine deck_work
 
    !> Test i: both treatments against their tight references, and the loops to a file
    subroutine compare(i)

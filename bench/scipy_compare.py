@@ -5,12 +5,13 @@ uniaxial Miller model (Eqs. 2-5 of the technical reference, written here indepen
 scipy's Radau from segment to segment of the strain history, and reports:
 - the error of usharp and of Radau at several tolerances against Radau at rtol 1e-11
   (max |stress difference| / peak stress),
-- Radau's wall time for the two tests at each tolerance (best of 3),
+- Radau's wall time for the two tests at each tolerance (best of 3), and its evaluations of
+  the rates (its finite-difference Jacobians' included) against usharp's,
 - the cheapest tolerance at which Radau is at least as accurate as usharp, and the ratio of
   its time to usharp's per-evaluation time (given in ms, from bench_measured),
 - Radau's time at exactly usharp's accuracy, interpolated (log-log) between the tolerances
   around it (the decade steps overshoot it).
-Usage: python3 scipy_compare.py USHARP_MS LCF.sim.txt RELAX.sim.txt
+Usage: python3 scipy_compare.py USHARP_MS LCF.sim.txt RELAX.sim.txt [USHARP_RATE_EVALUATIONS]
 """
 import math
 import sys
@@ -73,6 +74,7 @@ def simulate(head, tc, vc, tout, rtol, atol):
 
     y = [0.0, 0.0, c['D0']]
     sig = np.empty(len(tout))
+    nfev = 0
     for k in range(len(tc) - 1):
         last = k == len(tc) - 2
         sel = np.where((tout >= tc[k]) & ((tout <= tc[k + 1]) if last else (tout < tc[k + 1])))[0]
@@ -81,25 +83,31 @@ def simulate(head, tc, vc, tout, rtol, atol):
                         rtol=rtol, atol=[atol, atol * E, atol * E])
         if not sol.success:
             raise RuntimeError(sol.message)
+        # scipy's count leaves out the finite-difference Jacobians' columns (one each)
+        nfev += sol.nfev + len(y) * sol.njev
         for j, i in enumerate(sel):
             sig[i] = E * (vc[k] + (vc[k + 1] - vc[k]) * (tout[i] - tc[k]) / (tc[k + 1] - tc[k])
                           - sol.y[0, j])
         y = list(sol.y[:, -1])
-    return sig
+    return sig, nfev
 
 
 def main():
     usharp_ms = float(sys.argv[1])
+    usharp_rhs = int(sys.argv[4]) if len(sys.argv) > 4 else 0
     tests = []
     for path, name in zip(sys.argv[2:4], ['lcf', 'relax']):
         head, cols = read_sim(path)
         tests.append((name, head, cols[:, 0], cols[:, 2]))
-    refs = [simulate(h, *corners(nm), t, 1e-11, 1e-15) for nm, h, t, _ in tests]
+    refs = [simulate(h, *corners(nm), t, 1e-11, 1e-15)[0] for nm, h, t, _ in tests]
     peak = [np.max(np.abs(r)) for r in refs]
     err_u = max(np.max(np.abs(s - r)) / p for (_, _, _, s), r, p in zip(tests, refs, peak))
     print('usharp (RODAS4, default tolerances): max |stress - reference| / peak %.2e, '
           '%.3f ms per evaluation (bench_measured)' % (err_u, usharp_ms))
-    print('%-22s %12s %14s %10s' % ('scipy Radau', 'max err/peak', 'ms (2 tests)', 'ratio'))
+    if usharp_rhs:
+        print('usharp: %d rate evaluations, %.3f us each' % (usharp_rhs, 1e3 * usharp_ms / usharp_rhs))
+    print('%-22s %12s %14s %10s %12s %10s' % ('scipy Radau', 'max err/peak', 'ms (2 tests)', 'ratio',
+                                              'rate evals', 'us each'))
     chosen = None
     curve = []
     for rtol in [1e-4, 1e-5, 1e-6, 1e-7, 1e-8]:
@@ -107,11 +115,14 @@ def main():
         best = float('inf')
         for _ in range(3):
             t0 = time.perf_counter()
-            sims = [simulate(h, *corners(nm), t, rtol, atol) for nm, h, t, _ in tests]
+            runs = [simulate(h, *corners(nm), t, rtol, atol) for nm, h, t, _ in tests]
             best = min(best, time.perf_counter() - t0)
+        sims = [r[0] for r in runs]
+        nfev = sum(r[1] for r in runs)
         err = max(np.max(np.abs(s - r)) / p for s, r, p in zip(sims, refs, peak))
         ms = best * 1e3
-        print('rtol %-8.0e atol %-6.0e %12.2e %14.1f %10.0f' % (rtol, atol, err, ms, ms / usharp_ms))
+        print('rtol %-8.0e atol %-6.0e %12.2e %14.1f %10.0f %12d %10.1f'
+              % (rtol, atol, err, ms, ms / usharp_ms, nfev, 1e3 * ms / nfev))
         if chosen is None and err <= err_u:
             chosen = (rtol, ms)
         curve.append((err, ms))

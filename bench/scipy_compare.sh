@@ -10,7 +10,9 @@ fpm build --profile release --flag "$FLAGS" >/dev/null 2>&1
 exe=$(fpm run --profile release --flag "$FLAGS" --runner 2>/dev/null | tail -n 1)
 tmp=$(mktemp -d)
 "$exe" simulate decks/thesis-run2.nml -q -o "$tmp"
-ms=$(OMP_NUM_THREADS=1 fpm run --profile release --flag "$FLAGS" --example bench_measured -- \
-  decks/thesis-run2.nml 2>/dev/null | sed -n 's/.*ms per evaluation *//p')
-python3 -W ignore bench/scipy_compare.py "$ms" "$tmp/lcf.sim.txt" "$tmp/relax.sim.txt"
+OMP_NUM_THREADS=1 fpm run --profile release --flag "$FLAGS" --example bench_measured -- \
+  decks/thesis-run2.nml > "$tmp/usharp.txt" 2>/dev/null
+ms=$(sed -n 's/.*ms per evaluation *//p' "$tmp/usharp.txt")
+rhs=$(sed -n 's/.*rate evaluations *//p' "$tmp/usharp.txt")
+python3 -W ignore bench/scipy_compare.py "$ms" "$tmp/lcf.sim.txt" "$tmp/relax.sim.txt" "$rhs"
 rm -rf "$tmp"

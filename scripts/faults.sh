@@ -326,3 +326,13 @@ row 'plot-fit.sh: a folder name that is gnuplot code' - bash "$root/scripts/plot
 put '... the command in the name' 0 "$([ -e pwned ] && echo 'RAN: pwned exists' || echo 'did not run: no file pwned')"
 
 row 'plot-fit.sh: folder without fits' - bash "$root/scripts/plot-fit.sh" r-none
+
+# --- standard output, temporary names, load histories
+row 'standard output on a full device' - sh -c "'$exe' simulate --force -o so fit.nml > /dev/full"
+mkdir -p pt && echo 'my notes' > pt/lcf.fit.txt.part
+row "a user's file under a result's temporary name (lcf.fit.txt.part)" - u run -q fit.nml -o pt
+mkdir -p hf && cp lcf.txt hf/lcf.sim.txt
+{ echo "$model"; echo "$consts"; echo "&test name='lcf', history='file', file='lcf.sim.txt' /"; } > hf/h.nml
+row 'simulate --force into the folder of its load history (lcf.sim.txt)' - u simulate --force hf/h.nml -o hf
+{ echo "$model"; echo "$consts"; echo "&test name='lcf', history='file' /"; } > nofile.nml
+row "history 'file' without file" - u simulate nofile.nml -o nofile

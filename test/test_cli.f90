@@ -75,6 +75,14 @@ contains
       call parse_arguments(argv('simulate -t relax x.nml'), cmd, e)
       call check(error, .not. allocated(e) .and. cmd%only_test == 'relax', 'simulate -t')
       if (allocated(error)) return
+      call parse_arguments(argv('run -q -- -x.nml'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%quiet .and. cmd%input == '-x.nml', &
+                 "'--' ends the options")
+      if (allocated(error)) return
+      call parse_arguments(argv('run -- -q'), cmd, e)
+      call check(error, .not. allocated(e) .and. .not. cmd%quiet .and. cmd%input == '-q', &
+                 "after '--' an option's name is a file's")
+      if (allocated(error)) return
       call parse_arguments(argv('identify --help --bogus'), cmd, e)
       call check(error, .not. allocated(e) .and. cmd%help .and. cmd%name == 'identify', &
                  'help ends the parsing')

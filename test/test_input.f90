@@ -59,7 +59,8 @@ contains
          new_unittest('long-values-kept-whole-or-refused', test_long_values), &
          new_unittest('model-units-plausible', test_plausible_units), &
          new_unittest('reading-work-linear-in-groups', test_linear_reading), &
-         new_unittest('namelist-reference-complete', test_reference_complete)]
+         new_unittest('namelist-reference-complete', test_reference_complete), &
+         new_unittest('missing-fit-group-named', test_missing_fit)]
    end subroutine collect_input
 
    !> An input file of the model, the constants and the given extra lines
@@ -344,8 +345,28 @@ contains
       hfile = write_text('back.hist', [character(len=20) :: '0 0', '10 0.001', '5 0', '20 0'])
       call expect_config_error(error, 'backtime.nml', [character(len=80) :: &
          "&test name='f', history='file', file='back.hist' /"], &
-         'back.hist: history time is not increasing at point 3')
+         'back.hist:3:1: time is not increasing (5.00000 s after 10.0000 s)')
+      if (allocated(error)) return
+      call expect_config_error(error, 'nofile.nml', [character(len=80) :: &
+         "&test name='f', history='file' /"], "&test #1 'f': history 'file' needs file")
    end subroutine test_file_time
+
+   !> A fit of an input without &fit names the missing group, not an empty list of it
+   subroutine test_missing_fit(error)
+      use usharp_objective, only: fit_problem, setup_problem
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      call read_config(write_text('nofit.nml', deck_lines([character(len=80) :: &
+         "&test name='r', history='relaxation', levels=0.00075, holds=60.0 /"])), cfg, uerr)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      call setup_problem(cfg, prob, uerr)
+      call check_message(error, uerr, 'nofit.nml: group &fit is missing')
+   end subroutine test_missing_fit
 
    subroutine test_file_garbled(error)
       type(error_type), allocatable, intent(out) :: error

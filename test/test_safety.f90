@@ -29,6 +29,7 @@ contains
          new_unittest('fnv1a-hash-reference-values', test_hash), &
          new_unittest('writer-reports-a-full-device', test_dev_full), &
          new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
+         new_unittest('standard-output-full-exit-4', test_stdout_full), &
          new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
          new_unittest('specimen-reports-kept-without-force', test_specimen_kept), &
          new_unittest('specimen-diagnosis-resumed-same-reports', test_specimen_resume), &
@@ -91,6 +92,51 @@ contains
       if (allocated(error)) return
       call check(error, e%stat, stat_io, 'exit code 4')
    end subroutine test_dev_full
+
+   !> What a command prints to a standard output that cannot take it (a full device, a closed
+   !> descriptor) is not lost silently: exit 4, one line naming standard output
+   subroutine test_stdout_full(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, errfile, input
+      integer :: stat, k
+      character(len=*), parameter :: into(2) = [character(len=10) :: '>/dev/full', '>&-']
+      exe = usharp_exe()
+      if (len(exe) == 0) then
+         call skip_test(error, 'the usharp executable was not found beside the tester')
+         return
+      end if
+      if (.not. file_exists('/dev/full')) then
+         call skip_test(error, '/dev/full does not exist here')
+         return
+      end if
+      errfile = scratch_dir//'/stdout-full.err'
+      input = deck('stdout-full.nml', 'max_evals=6', '')
+      do k = 1, size(into)
+         stat = shell(exe//' --version '//trim(into(k))//' 2>'//errfile)
+         call check(error, stat, 4, '--version '//trim(into(k))//': exit code')
+         if (allocated(error)) return
+         call check(error, index(read_text(errfile), 'usharp: error: standard output: write failed') == 1 &
+                    .and. count_lines(read_text(errfile)) == 1, 'one line: '//read_text(errfile))
+         if (allocated(error)) return
+      end do
+      ! (without --quiet: simulate names the files it wrote on standard output)
+      stat = shell(exe//' simulate --force -o '//scratch_dir//'/stdout-full '//input// &
+                   ' >/dev/full 2>'//errfile)
+      call check(error, stat, 4, 'simulate >/dev/full: exit code')
+      if (allocated(error)) return
+      stat = shell(exe//' simulate --force -o '//scratch_dir//'/stdout-full '//input// &
+                   ' >/dev/null 2>'//errfile)
+      call check(error, stat, 0, 'simulate >/dev/null: exit code')
+   contains
+      pure integer function count_lines(text) result(n)
+         character(len=*), intent(in) :: text
+         integer :: i
+         n = 0
+         do i = 1, len(text)
+            if (text(i:i) == new_line('a')) n = n + 1
+         end do
+      end function count_lines
+   end subroutine test_stdout_full
 
    !> run and simulate into a 64 KiB tmpfs: exit 4 naming the file; no result file is
    !> partial, no temporary file is left
@@ -427,6 +473,24 @@ contains
          call check(error, .not. allocated(e), trim(writer(k))//' again over its own files')
          if (allocated(error)) return
       end do
+      ! A user's file under the temporary name a result is written through is refused as
+      ! well, and kept; --force writes the result over it (and renames it into place)
+      call check(error, shell('rm -rf '//dir//' && mkdir -p '//dir) == 0, 'clean folder')
+      if (allocated(error)) return
+      call write_lines(dir//'/lcf.fit.txt.part', [character(len=20) :: 'my notes'], e)
+      call run('predict', .false.)
+      call check_message(error, e, dir//'/lcf.fit.txt.part: a file of this name is there, '// &
+                         'which usharp predict would write lcf.fit.txt through')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_usage, 'predict over lcf.fit.txt.part: exit code 2')
+      if (allocated(error)) return
+      call check(error, read_text(dir//'/lcf.fit.txt.part') == 'my notes'//new_line('a'), &
+                 'lcf.fit.txt.part is kept')
+      if (allocated(error)) return
+      call run('predict', .true.)
+      call check(error, .not. allocated(e) .and. .not. file_exists(dir//'/lcf.fit.txt.part'), &
+                 'predict --force over lcf.fit.txt.part')
+      if (allocated(error)) return
       ! Files of one command are another's strangers: a deck's files are not a prediction's
       call run('deck', .false.)
       call check(error, shell('mv '//dir//'/lcf.inp '//dir//'/lcf.sim.txt') == 0, 'a deck renamed')
@@ -641,6 +705,17 @@ contains
       if (allocated(error)) return
       call check(error, read_text(scratch_dir//'/kept-data/lcf.sim.txt') == data, &
                  'the data are untouched by simulate')
+      if (allocated(error)) return
+      ! Nor a load history read from a file (history 'file') of a name simulate writes
+      input = write_text('kept-data/kept3.nml', [character(len=400) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=200, h2=100, n=5.0, q=91000 /', &
+         "&test name='lcf', history='file', file='lcf.sim.txt' /"])
+      call simulate_command(input, scratch_dir//'/kept-data', written, e, force=.true.)
+      call check_message(error, e, 'lcf.sim.txt: an input of this run')
+      if (allocated(error)) return
+      call check(error, read_text(scratch_dir//'/kept-data/lcf.sim.txt') == data, &
+                 'the load history is untouched by simulate --force')
       if (allocated(error)) return
       ! Nor does deck --force write over the input deck, named as a deck or as the constants
       ! file it writes

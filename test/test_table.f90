@@ -233,6 +233,12 @@ contains
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
       call merge_repeated_times(v, path, nm, uerr)
       call check_message(error, uerr, 'time is not increasing at data row 3')
+      if (allocated(error)) return
+      ! Read as a data file's time column: the line and column of the row, after a comment
+      path = write_text('back2.csv', [character(len=40) :: '# rig log', 'stress,time', '1,0', &
+                                      '2,2', '3,1', '3,3'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr, time_first=.true.)
+      call check_message(error, uerr, 'back2.csv:5:2: time is not increasing (1.00000 s after 2.00000 s)')
    contains
    end subroutine test_bad
 

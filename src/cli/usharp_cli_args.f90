@@ -93,6 +93,7 @@ contains
       character(len=:), allocatable :: arg, long
       type(arg_string), allocatable :: positional(:)
       integer :: i, npos
+      logical :: ends
 
       cmd%name = ''
       cmd%input = ''
@@ -125,8 +126,19 @@ contains
       npos = 0
       allocate (positional(0))
       i = 2
+      ends = .false.
       do while (i <= size(args))
          arg = args(i)%s
+         ! After '--' every argument is an input file, a name beginning with '-' among them
+         if (ends .or. arg == '--') then
+            if (ends) then
+               npos = npos + 1
+               positional = [positional, arg_string(arg)]
+            end if
+            ends = .true.
+            i = i + 1
+            cycle
+         end if
          long = long_name(arg)
          if (len(arg) > 0) then
             if (arg(1:1) == '-' .and. len(long) == 0) then

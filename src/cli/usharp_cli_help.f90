@@ -16,7 +16,8 @@ module usharp_cli_help
    !> Exit codes, shown by every help text
    character(len=*), parameter :: exit_codes = &
       'exit codes: 0 success, 1 input error, 2 usage error, 3 failed simulation or fit,'//nl// &
-      '            4 output not writable (disk full: no result file is left half written),'//nl// &
+      '            4 output not writable (disk full: no result file is left half written;'//nl// &
+      '              standard output as well),'//nl// &
       '            5 fit done and written but its identifiability report failed,'//nl// &
       '            6 output folder in use by another run, 128+N stopped by signal N'//nl// &
       '            (143: SIGTERM, 130: Ctrl-C; continue with --resume)'
@@ -30,7 +31,8 @@ module usharp_cli_help
    character(len=*), parameter :: common_options = &
       '  -o, --out-dir DIR     write to DIR instead of &output out_dir'//nl// &
       '  -h, --help            show this help'//nl// &
-      '  -V, --version         show the version and the build'
+      '  -V, --version         show the version and the build'//nl// &
+      '  --                    end of the options (for an input file named -x.nml)'
 
    !> --force of the commands that write over their own earlier output only
    character(len=*), parameter :: force_option = &

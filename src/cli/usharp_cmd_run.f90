@@ -13,7 +13,7 @@ module usharp_cmd_run
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines, result_file
    use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists
-   use usharp_overwrite, only: made_by_usharp, simulate_mark
+   use usharp_overwrite, only: made_by_usharp, simulate_mark, check_temporary_names
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
@@ -342,8 +342,9 @@ contains
    end subroutine write_peaks
 
    !> A run starts in a folder only where it overwrites nothing a user made: files of the
-   !> names it writes, with no journal that says a run made them (a journal's own case, an
-   !> earlier run, is run_fit's), are refused unless allowed (--force, or --resume)
+   !> names it writes or of their temporary names (<name>.part), with no journal that says a
+   !> run made them (a journal's own case, an earlier run, is run_fit's), are refused unless
+   !> allowed (--force, or --resume)
    subroutine check_no_strangers(cfg, dir, allowed, error)
       type(run_config), intent(in) :: cfg
       character(len=*), intent(in) :: dir
@@ -354,6 +355,8 @@ contains
       ! (--auto-resume without a journal starts afresh, as a plain run does)
       if (allowed .or. file_exists(join_path(dir, 'fit.journal'))) return
       names = output_names(cfg, run_files, test_files)
+      call check_temporary_names(dir, names, 'run', error)
+      if (allocated(error)) return
       do i = 1, size(names)
          if (simulated_by_usharp(join_path(dir, trim(names(i))))) cycle
          if (file_exists(join_path(dir, trim(names(i))))) then

@@ -74,7 +74,12 @@ contains
       prob%cfg = cfg
       prob%idx = pack([(k, k=1, cfg%model%n_constants())], cfg%fit%fitted)
       if (size(prob%idx) == 0) then
-         call fatal_error(error, cfg%path//': &fit: fitted names no constant to fit')
+         if (cfg%fit%present) then
+            call fatal_error(error, cfg%path//': &fit: fitted names no constant to fit')
+         else
+            call fatal_error(error, cfg%path//': group &fit is missing (its fitted names the '// &
+               'constants to fit)')
+         end if
          return
       end if
       allocate (prob%targets(size(cfg%tests)))

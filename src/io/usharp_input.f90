@@ -128,8 +128,9 @@ contains
    end subroutine read_config_as
 
    !> No input of a command is a file it writes: an output folder that holds the deck, the
-   !> constants given with -c or a test's data under a name the command writes there (a test
-   !> 'lcf' with its data in lcf.sim.txt) would have them overwritten, even with --force
+   !> constants given with -c or a test's data, peaks or load history under a name the command
+   !> writes there (a test 'lcf' with its data in lcf.sim.txt) would have them overwritten,
+   !> even with --force
    subroutine check_inputs_kept(cfg, path, constants_file, fixed, per_test, error, only)
       type(run_config), intent(in) :: cfg
       !> the deck and the constants file given with -c ('' for none)
@@ -148,12 +149,15 @@ contains
       do i = 1, size(cfg%tests)
          if (allocated(cfg%tests(i)%data%file)) n = max(n, len(cfg%tests(i)%data%file))
          if (allocated(cfg%tests(i)%peak_file)) n = max(n, len(cfg%tests(i)%peak_file))
+         if (allocated(cfg%tests(i)%history_file)) n = max(n, len(cfg%tests(i)%history_file))
       end do
       allocate (character(len=n) :: inputs(0))
       inputs = [character(len=n) :: path, constants_file]
       do i = 1, size(cfg%tests)
          if (allocated(cfg%tests(i)%data%file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%data%file]
          if (allocated(cfg%tests(i)%peak_file)) inputs = [character(len=n) :: inputs, cfg%tests(i)%peak_file]
+         if (allocated(cfg%tests(i)%history_file)) &
+            inputs = [character(len=n) :: inputs, cfg%tests(i)%history_file]
       end do
       outputs = output_names(cfg, fixed, per_test, only)
       do i = 1, size(inputs)

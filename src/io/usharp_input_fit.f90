@@ -36,6 +36,7 @@ module usharp_input_fit
       real(dp) :: anneal_t0 = 0.0_dp               !< initial temperature (0: the start objective)
       real(dp) :: anneal_rt = 0.85_dp              !< temperature reduction factor
       logical :: identify = .true.                 !< identifiability report after the fit
+      logical :: present = .false.                 !< the input has a &fit group
    end type fit_config
 
    !> The &fit lists as given: names of the fitted constants and their bounds in that order
@@ -73,6 +74,7 @@ contains
          fit%upper(i) = 100.0_dp*high*f
       end do
       k = find_group(file, 'fit')
+      fit%present = k > 0
       if (k > 0) then
          call group_text(file, k, lines)
          call fit_namelist(fit, given, ios, msg, text=lines)

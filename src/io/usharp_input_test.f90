@@ -79,6 +79,7 @@ module usharp_input_test
       character(len=:), allocatable :: target    !< data, peaks or both
       character(len=:), allocatable :: gap_fill  !< cycles or linear (history 'data')
       character(len=:), allocatable :: peak_file !< every cycle's peak stresses (target peaks)
+      character(len=:), allocatable :: history_file !< the load history read (history 'file')
       real(dp) :: peak_share = 0.5_dp       !< share of the peaks in the test's objective (both)
       !> The compared (and written) times, s, when they are not output_times(hist, dt_out):
       !> the recorded pieces of a gap-filled history, the turning points of a peaks target
@@ -399,7 +400,12 @@ contains
          end if
          call creep_history(v%stress, v%ramp_time, v%duration, t%hist, error)
       case ('file')
-         call file_history(resolve_path(base_dir, trim(v%file)), lower_text(trim(v%control)), &
+         if (len_trim(v%file) == 0) then
+            call fatal_error(error, "history 'file' needs file")
+            return
+         end if
+         t%history_file = resolve_path(base_dir, trim(v%file))
+         call file_history(t%history_file, lower_text(trim(v%control)), &
                            trim(v%time_column), trim(v%strain_column), trim(v%stress_column), &
                            t%hist, error)
       case ('data')
@@ -769,7 +775,7 @@ contains
       else
          cols(2) = stress_col
       end if
-      call read_columns(path, cols, vals, error, unnamed=['1', '2'])
+      call read_columns(path, cols, vals, error, unnamed=['1', '2'], time_first=.true.)
       if (allocated(error)) return
       call history_from_points(vals(:, 1), vals(:, 2), mode, hist, error)
       if (allocated(error)) call prefix_error(error, path//': ')
@@ -880,7 +886,7 @@ contains
       real(dp), allocatable, intent(out) :: vals(:, :)
       type(error_type), allocatable, intent(out) :: error
       call read_columns(spec%file, columns, vals, error, spec%filter_col, spec%filter_values, &
-                        spec%format)
+                        spec%format, time_first=.true.)
    end subroutine read_data_columns
 
 

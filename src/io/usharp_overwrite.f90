@@ -1,6 +1,7 @@
 !> Nothing a user made is overwritten unasked. Before a command writes, each file of its
 !> output names that is already there must be the command's own earlier output, known by its
-!> first line; any other file is refused (a usage error naming it) unless --force is given.
+!> first line; any other file, and any file under the temporary name a result is written
+!> through (<name>.part), is refused (a usage error naming it) unless --force is given.
 !> A file without text lines (a plot) is known instead by its hash, which usharp records on a
 !> line of a text file of its own beside it (see drawn_line).
 module usharp_overwrite
@@ -11,7 +12,7 @@ module usharp_overwrite
    private
 
    public :: check_overwrite, check_overwrite_each, made_by_usharp, begins_like, simulate_mark
-   public :: drawn_line
+   public :: drawn_line, check_temporary_names
 
    !> How the first line of a <test>.sim.txt that `usharp simulate` wrote begins ('*': the
    !> version)
@@ -38,6 +39,8 @@ contains
       character(len=:), allocatable :: file
       integer :: i
       if (force) return
+      call check_temporary_names(dir, names, command, error)
+      if (allocated(error)) return
       do i = 1, size(names)
          file = join_path(dir, trim(names(i)))
          if (.not. file_exists(file)) cycle
@@ -48,6 +51,29 @@ contains
          return
       end do
    end subroutine check_overwrite
+
+   !> Refuse to write any of names (files in dir) where a file of its temporary name is
+   !> there: a result file is written under <name>.part, then renamed (usharp_output), so a
+   !> file of that name is not usharp's (its own is gone once renamed). The error names the
+   !> first and says to add --force (exit 2)
+   subroutine check_temporary_names(dir, names, command, error)
+      !> the output folder
+      character(len=*), intent(in) :: dir
+      !> the files the command is about to write there
+      character(len=*), intent(in) :: names(:)
+      !> the command's name, for the message
+      character(len=*), intent(in) :: command
+      type(error_type), allocatable, intent(out) :: error
+      integer :: i
+      do i = 1, size(names)
+         if (.not. file_exists(join_path(dir, trim(names(i))//'.part'))) cycle
+         call fatal_error(error, join_path(dir, trim(names(i))//'.part')//': a file of this '// &
+            'name is there, which usharp '//command//' would write '//trim(names(i))// &
+            ' through; move it away, overwrite it with --force, or give another output '// &
+            'folder (-o)', stat_usage)
+         return
+      end do
+   end subroutine check_temporary_names
 
    !> check_overwrite of each of names with its own mark: marks(k) is names(k)'s
    subroutine check_overwrite_each(dir, names, marks, command, force, error)

@@ -22,7 +22,7 @@ contains
    !> of filter_values are kept. With fmt (a Fortran format such as '(2E12.5)'), each data line
    !> is read with that format and columns must be positions.
    subroutine read_columns(file, columns, values, error, filter_column, filter_values, fmt, &
-                           skip_missing, unnamed)
+                           skip_missing, unnamed, time_first)
       character(len=*), intent(in) :: file
       character(len=*), intent(in) :: columns(:)
       real(dp), allocatable, intent(out) :: values(:, :)
@@ -35,6 +35,9 @@ contains
       !> the columns' positions in a file that names none (no header row): a file of bare
       !> numbers is read by these, one with a header by the names in columns
       character(len=*), intent(in), optional :: unnamed(:)
+      !> the first column is time: a row whose time is below the row's before is an error at
+      !> its line and column (rows of equal time are merged later: merge_repeated_times)
+      logical, intent(in), optional :: time_first
 
       character(len=:), allocatable :: text
       character(len=field_len) :: fields(max_fields), header(max_fields), last_label
@@ -193,6 +196,13 @@ contains
             end if
          end do
          if (allocated(error)) exit
+         if (present(time_first) .and. npt > 0) then
+            if (time_first .and. row(1) < buf(1, npt)) then
+               call fatal_error(error, file//':'//str(lineno)//':'//str(icol(1))//': time is '// &
+                  'not increasing ('//str(row(1))//' s after '//str(buf(1, npt))//' s)')
+               exit
+            end if
+         end if
          call append(row(:size(columns)))
       end do
       if (allocated(error)) return

@@ -11,7 +11,7 @@ module usharp_filesys
 
    public :: make_dir, join_path, file_exists, absolute_path, remove_file, remove_dir
    public :: rename_file, lock_file, unlock_file, file_hash, hash_text, hash_hex
-   public :: raw_file, read_line, read_whole_file
+   public :: raw_file, read_line, read_whole_file, standard_output
 
    !> A file written through the C library, every write and the close checked. (gfortran's
    !> formatted and stream writes do not report a full disk: the bytes are lost and iostat
@@ -99,6 +99,14 @@ module usharp_filesys
 
 
 contains
+
+   !> The process's standard output as a raw_file: each put one write(2), its failure (a full
+   !> disk, a closed pipe) an error, which the Fortran runtime's buffered unit does not report
+   function standard_output() result(f)
+      type(raw_file) :: f
+      f%fd = 1_c_int
+      f%path = 'standard output'
+   end function standard_output
 
    !> Create (or truncate) a file for writing
    subroutine raw_create(self, path, error)
