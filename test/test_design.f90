@@ -177,6 +177,13 @@ contains
          "&fit fitted = 'B' /", "&test name = 'r', history = 'relaxation' /"]), cfg, e)
       if (.not. allocated(e)) call design_run(cfg, res, e)
       call check_message(error, e, 'design needs at least one test with candidate = .true.')
+      if (allocated(error)) return
+      ! 1 % written as a whole number is 100 % of the peak: refused, the unit said
+      call read_config(write_text('design-noise.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", '&design noise = 1 /', &
+         "&test name = 'r', history = 'relaxation', candidate = .true. /"]), cfg, e)
+      call check_message(error, e, '&design: noise = 1.000: it is a fraction of the peak '// &
+                         'response, in (0, 0.5] (0.01 for 1 %)')
    end subroutine test_no_candidate
 
    !> Synthetic data have no weight column: a clear error, not a read of unset weights

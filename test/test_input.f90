@@ -60,7 +60,8 @@ contains
          new_unittest('model-units-plausible', test_plausible_units), &
          new_unittest('reading-work-linear-in-groups', test_linear_reading), &
          new_unittest('namelist-reference-complete', test_reference_complete), &
-         new_unittest('missing-fit-group-named', test_missing_fit)]
+         new_unittest('missing-fit-group-named', test_missing_fit), &
+         new_unittest('list-longer-than-it-holds-named', test_long_list)]
    end subroutine collect_input
 
    !> An input file of the model, the constants and the given extra lines
@@ -350,6 +351,23 @@ contains
       call expect_config_error(error, 'nofile.nml', [character(len=80) :: &
          "&test name='f', history='file' /"], "&test #1 'f': history 'file' needs file")
    end subroutine test_file_time
+
+   !> A list longer than a list variable holds is named as such, with the count
+   subroutine test_long_list(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=160) :: lines(6)
+      integer :: i
+      ! (over several lines, as a long list is written)
+      lines(1) = "&test name='r', history='relaxation', levels="
+      lines(2:) = ''
+      do i = 1, 65
+         write (lines(2 + (i - 1)/13)(len_trim(lines(2 + (i - 1)/13)) + 1:), '(es10.2,a)') &
+            1.0e-5_dp*i, ','
+      end do
+      lines(6) = lines(6)(:len_trim(lines(6)) - 1)//' /'
+      call expect_config_error(error, 'longlist.nml', lines, &
+         "longlist.nml:3:39: &test #1 'r': levels: 65 values, where a list holds at most 64")
+   end subroutine test_long_list
 
    !> A fit of an input without &fit names the missing group, not an empty list of it
    subroutine test_missing_fit(error)

@@ -327,10 +327,10 @@ contains
       character(len=report_line_len), allocatable :: lines(:)
       integer :: j
       lines = [character(len=report_line_len) :: design_mark//': stress noise sd '// &
-         real_str(100.0_dp*res%noise, 'f0.2')//' % of each test''s peak, determined = predicted '// &
-         '95 % interval within '//real_str(100.0_dp*res%ci_target, 'f0.1')//' %', &
+         percent(res%noise, 'f0.2')//' % of each test''s peak, determined = predicted '// &
+         '95 % interval within '//percent(res%ci_target, 'f0.1')//' %', &
          '  (information in log10 of the constants; prior sd '//real_str(res%prior_decades, 'f0.1')// &
-         ' decades; '//str(res%nevals)//' simulated points; predicted 95 % half-widths in %)', '']
+         ' decades; '//str(res%nevals)//' simulations of single tests; predicted 95 % half-widths in %)', '']
       lines = [character(len=report_line_len) :: lines, '  current tests: '//test_list(res, res%current%tests)]
       lines = [character(len=report_line_len) :: lines, header(res, 'gain'), &
          row(res, res%current, 0.0_dp, 'current')]
@@ -353,6 +353,18 @@ contains
          lines = [character(len=report_line_len) :: lines, '', '  recommended: '// &
             test_list(res, res%best(1)%tests)//': '//determined_words(res, res%best(1))]
       end if
+   contains
+      !> A fraction as a percentage in fmt, or in three significant digits below 0.1 %
+      pure function percent(fraction, fmt) result(text)
+         real(dp), intent(in) :: fraction
+         character(len=*), intent(in) :: fmt
+         character(len=:), allocatable :: text
+         if (100.0_dp*fraction >= 0.1_dp) then
+            text = real_str(100.0_dp*fraction, fmt)
+         else
+            text = real_str(100.0_dp*fraction, 'es9.2')
+         end if
+      end function percent
    end function design_report
 
    function header(res, what) result(line)

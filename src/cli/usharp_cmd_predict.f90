@@ -99,8 +99,8 @@ contains
          '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
       if (any([(cfg%tests(i)%has_peaks(), i=1, size(cfg%tests))])) summary(size(summary)) = &
          trim(summary(size(summary)))//' (and <test>.peaks.txt)'
-      call write_curves(prob, cfg%model, cfg%out_dir, error, 'prediction with the constants of '// &
-                        constants_file)
+      call write_curves(prob, cfg%model, cfg%out_dir, constants_file, error, &
+                        'prediction with the constants of '//constants_file)
       if (allocated(error)) return
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
    end subroutine predict_command
@@ -121,9 +121,11 @@ contains
          ! Assigned one by one: gfortran 12 overran the heap building an array constructor of
          ! a length taken from the deferred-length name
          block
-            character(len=len(name) + 64) :: marks(2)
-            marks(1) = "# prediction with the constants of *, test '"//name//"'"
-            marks(2) = simulate_mark//name//"'"
+            character(len=len(name) + 64) :: marks(3)
+            marks(1) = "# usharp * prediction with the constants of *, test '"//name//"'"
+            ! (an earlier build's first line, without the program)
+            marks(2) = "# prediction with the constants of *, test '"//name//"'"
+            marks(3) = simulate_mark//name//"'"
             call check_overwrite(cfg%out_dir, [name//'.sim.txt'], marks, 'predict', force, error)
          end block
          if (allocated(error)) return

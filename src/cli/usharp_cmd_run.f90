@@ -8,6 +8,7 @@ module usharp_cmd_run
    use usharp_config, only: run_config, fit_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
    use usharp_objective, only: fit_problem, setup_problem, simulated
+   use usharp_simulate, only: model_lines
    use usharp_experiment, only: fits_strain, response_name, data_note
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
@@ -124,7 +125,7 @@ contains
          if (allocated(error)) return
          call write_best(join_path(dir, 'best.nml'), path, best, cfg%units, out, error)
          if (allocated(error)) return
-         call write_curves(prob, best, dir, error)
+         call write_curves(prob, best, dir, join_path(dir, 'best.nml'), error)
          if (allocated(error)) return
          ! The fit's results are whole: from here a stop signal ends the process at once (the
          ! report and the summary are written whole or not at all), and one received while
@@ -265,10 +266,12 @@ contains
 
    !> The best fit's curves: <test>.sim.txt (full response) and <test>.fit.txt (data beside
    !> simulation at the simulation's times, with residual and weight)
-   subroutine write_curves(prob, best, dir, error, what)
+   subroutine write_curves(prob, best, dir, constants, error, what)
       type(fit_problem), intent(in) :: prob
       class(model_type), intent(in) :: best
       character(len=*), intent(in) :: dir
+      !> the file that holds best's constants (the fit's best.nml, predict's -c)
+      character(len=*), intent(in) :: constants
       type(error_type), allocatable, intent(out) :: error
       !> what the constants are, for the files' first lines ('best fit' when absent)
       character(len=*), intent(in), optional :: what
@@ -276,7 +279,7 @@ contains
       integer :: i, k
       type(result_file) :: out
       character(len=160) :: row
-      character(len=400) :: header(1)
+      character(len=512) :: header(4)
       character(len=:), allocatable :: resp, label
       real(dp), allocatable :: y(:)
       allocate (res(size(prob%targets)))
@@ -285,7 +288,12 @@ contains
       label = 'best fit'
       if (present(what)) label = what
       do i = 1, size(prob%targets)
-         header(1) = label//", test '"//prob%cfg%tests(i)%name//"'"
+         header(1) = 'usharp '//usharp_version_string//' '//label//", test '"// &
+                     prob%cfg%tests(i)%name//"'"
+         header(2) = 'the same curve: usharp simulate '//shell_word(prob%cfg%path)// &
+                     ' --constants '//shell_word(constants)//' --test '//shell_word(prob%cfg%tests(i)%name)
+         header(3:4) = model_lines(best, prob%cfg%units, prob%cfg%tests(i), error)
+         if (allocated(error)) return
          call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), res(i), &
                              header, prob%cfg%units, error)
          if (allocated(error)) return

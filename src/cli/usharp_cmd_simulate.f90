@@ -7,7 +7,7 @@ module usharp_cmd_simulate
    use usharp_input, only: read_config, override_constants, check_inputs_kept, check_not_a_fit
    use usharp_simulation, only: sim_result
    use usharp_model, only: model_type, model_at
-   use usharp_simulate, only: simulate_test, add_stress_noise
+   use usharp_simulate, only: simulate_test, add_stress_noise, model_lines
    use usharp_history, only: control_strain
    use usharp_output, only: write_sim_file
    use usharp_filesys, only: make_dir, join_path
@@ -33,12 +33,9 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(sim_result) :: res
-      character(len=:), allocatable :: dir, command, file, line
+      character(len=:), allocatable :: dir, command, file
       character(len=512), allocatable :: header(:)
-      character(len=:), allocatable :: dnames(:)
-      class(model_type), allocatable :: mt
-      real(dp), allocatable :: dvals(:)
-      integer :: i, k
+      integer :: i
       logical :: one_test, overwrite
       one_test = .false.
       overwrite = .false.
@@ -108,33 +105,9 @@ contains
             'usharp '//usharp_version_string//" simulation of test '"//cfg%tests(i)%name// &
             "' (history "//cfg%tests(i)%history_kind//', '// &
             merge('strain', 'stress', cfg%tests(i)%hist%control == control_strain)//' control)', &
-            'regenerate: '//command, &
-            'model '//cfg%model%name()//', T = '//real_str(merge(cfg%tests(i)%temperature, &
-            cfg%model%temperature, cfg%tests(i)%temperature > 0.0_dp), 'g0.8')// &
-            ' K, Tm = '//real_str(cfg%model%tm, 'g0.8')//' K, E = '// &
-            real_str(cfg%model%youngs, 'g0.8')//' '//cfg%units]
-         if (allocated(cfg%tests(i)%hist%temp)) header(3) = trim(header(3))//' (at the start; '// &
-            'the temperature follows the command from '//real_str(minval(cfg%tests(i)%hist%temp), &
-            'g0.8')//' to '//real_str(maxval(cfg%tests(i)%hist%temp), 'g0.8')//' K)'
-         ! (the model as the test starts: a test at its own temperature, a temperature cycle
-         ! at its first, is set up there)
-         if (cfg%tests(i)%temperature > 0.0_dp) then
-            call model_at(cfg%model, cfg%tests(i)%temperature, mt, error)
-            if (allocated(error)) return
-            call mt%derived_values(dnames, dvals)
-         else
-            call cfg%model%derived_values(dnames, dvals)
-         end if
-         do k = 1, size(dvals)
-            header(3) = trim(header(3))//', '//trim(dnames(k))//' = '//real_str(dvals(k), 'g0.8')// &
-                        ' '//cfg%units
-         end do
-         line = 'constants:'
-         do k = 1, cfg%model%n_constants()
-            line = line//' '//cfg%model%constant_name(k)//' = '// &
-                   real_str(cfg%model%get_constant(k), 'es12.5')
-         end do
-         header = [character(len=512) :: header, line]
+            'regenerate: '//command]
+         header = [character(len=512) :: header, model_lines(cfg%model, cfg%units, cfg%tests(i), error)]
+         if (allocated(error)) return
          if (cfg%tests(i)%noise > 0.0_dp) header = [character(len=512) :: header, &
             'stress noise: Gaussian, sd = '//real_str(cfg%tests(i)%noise, 'g0.6')// &
             ' x max|stress|, seed '//str(cfg%tests(i)%seed)]

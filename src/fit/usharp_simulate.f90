@@ -18,7 +18,7 @@ module usharp_simulate
    !> in seconds, which the integrator follows with its error in control
    real(dp), parameter :: runaway_strain = 1.0_dp
 
-   public :: simulate_test, add_stress_noise
+   public :: simulate_test, add_stress_noise, model_lines
 
 contains
 
@@ -83,4 +83,45 @@ contains
          res%stress(i) = res%stress(i) + scale*rng%normal()
       end do
    end subroutine add_stress_noise
+   !> The two header lines of a test's simulation file that say what made it: the model at
+   !> the test's temperature (T, Tm, E and the derived values; a temperature cycle from its
+   !> start) and every constant
+   function model_lines(model, units, test, error) result(lines)
+      class(model_type), intent(in) :: model
+      !> the model's stress unit
+      character(len=*), intent(in) :: units
+      type(test_config), intent(in) :: test
+      type(error_type), allocatable, intent(out) :: error
+      character(len=512) :: lines(2)
+      class(model_type), allocatable :: mt
+      character(len=:), allocatable :: line
+      character(len=:), allocatable :: dnames(:)
+      real(dp), allocatable :: dvals(:)
+      integer :: k
+      line = 'model '//model%name()//', T = '//real_str(merge(test%temperature, &
+             model%temperature, test%temperature > 0.0_dp), 'g0.8')//' K, Tm = '// &
+             real_str(model%tm, 'g0.8')//' K, E = '//real_str(model%youngs, 'g0.8')//' '//units
+      if (allocated(test%hist%temp)) line = line//' (at the start; the temperature follows '// &
+         'the command from '//real_str(minval(test%hist%temp), 'g0.8')//' to '// &
+         real_str(maxval(test%hist%temp), 'g0.8')//' K)'
+      ! (the model as the test starts: a test at its own temperature, a temperature cycle at
+      ! its first, is set up there)
+      if (test%temperature > 0.0_dp) then
+         call model_at(model, test%temperature, mt, error)
+         if (allocated(error)) return
+         call mt%derived_values(dnames, dvals)
+      else
+         call model%derived_values(dnames, dvals)
+      end if
+      do k = 1, size(dvals)
+         line = line//', '//trim(dnames(k))//' = '//real_str(dvals(k), 'g0.8')//' '//units
+      end do
+      lines(1) = line
+      line = 'constants:'
+      do k = 1, model%n_constants()
+         line = line//' '//model%constant_name(k)//' = '//real_str(model%get_constant(k), 'es12.5')
+      end do
+      lines(2) = line
+   end function model_lines
+
 end module usharp_simulate

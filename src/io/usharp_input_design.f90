@@ -1,6 +1,7 @@
 !> The &design group: settings of `usharp design` (test-matrix design)
 module usharp_input_design
    use usharp_kinds, only: dp
+   use usharp_strings, only: real_str
    use usharp_error, only: error_type
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error
    implicit none
@@ -33,13 +34,18 @@ contains
       call design_namelist(design, ios, msg, text=lines)
       if (ios /= 0) then
          call read_error(error, file, k, 'design', ios, msg, reread)
-      else if (.not. (design%noise > 0.0_dp)) then
-         call group_error(error, file%path, 'design', 'noise must be > 0 (a fraction of the '// &
-            'peak response, 0.01 for 1 %)')
+      else if (.not. (design%noise > 0.0_dp .and. design%noise <= 0.5_dp)) then
+         ! (a noise of 1 means 100 % of the peak: 1 % written as a whole number)
+         call group_error(error, file%path, 'design', 'noise = '//real_str(design%noise, 'g0.4')// &
+            ': it is a fraction of the peak response, in (0, 0.5] (0.01 for 1 %)')
       else if (design%max_tests < 1 .or. design%top < 1) then
          call group_error(error, file%path, 'design', 'max_tests and top must be >= 1')
-      else if (.not. (design%ci_target > 0.0_dp) .or. .not. (design%prior_decades > 0.0_dp)) then
-         call group_error(error, file%path, 'design', 'ci_target and prior_decades must be > 0')
+      else if (.not. (design%ci_target > 0.0_dp .and. design%ci_target <= 1.0_dp)) then
+         call group_error(error, file%path, 'design', 'ci_target = '// &
+            real_str(design%ci_target, 'g0.4')//': it is a fraction of each constant, in (0, 1] '// &
+            '(0.01 for 1 %)')
+      else if (.not. (design%prior_decades > 0.0_dp)) then
+         call group_error(error, file%path, 'design', 'prior_decades must be > 0')
       end if
    contains
       subroutine reread(lines, ios, msg)

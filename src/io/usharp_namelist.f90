@@ -768,6 +768,29 @@ contains
       end do
    end function name_list
 
+   !> The number of values an assignment 'name = v1, v2 ...' gives: the words after its
+   !> '=' between commas and blanks outside quotes
+   pure integer function value_count(text) result(n)
+      character(len=*), intent(in) :: text
+      character :: quote
+      logical :: inside
+      integer :: i
+      n = 0
+      quote = ' '
+      inside = .false.
+      do i = index(text, '=') + 1, len(text)
+         if (quote /= ' ') then
+            if (text(i:i) == quote) quote = ' '
+         else if (index(', '//achar(9), text(i:i)) > 0) then
+            inside = .false.
+         else
+            if (.not. inside) n = n + 1
+            inside = .true.
+            if (text(i:i) == '''' .or. text(i:i) == '"') quote = text(i:i)
+         end if
+      end do
+   end function value_count
+
    !> Index of the first group called name, 0 if the file has none
    pure integer function find_group(file, name) result(k)
       type(nml_file), intent(in) :: file
@@ -813,6 +836,14 @@ contains
             call fatal_error(error, place(file, items(m)%at(q))//': &'//label//': '// &
                items(m)%name//': the quotes here do not pair up on their line (a text '// &
                "value is written in quotes on one line: name = 'text')")
+            return
+         end if
+         ! More values than a list holds: the read's words name a value past the end
+         q = value_count(items(m)%text)
+         if (q > max_list) then
+            call fatal_error(error, place(file, items(m)%at(1))//': &'//label//': '// &
+               items(m)%name//': '//str(q)//' values, where a list holds at most '// &
+               str(max_list))
             return
          end if
          ! A name without '=' after the value (it reads as part of the value)
