@@ -1005,7 +1005,7 @@ contains
          'viscoplastic: temperature is in kelvin (K = Celsius + 273.15)')
       if (allocated(error)) return
       call expect_model("&model temperature = 1900.0, tm = 1800.0, youngs = 22.5e3 /", &
-         'temperature = 1900.00 K: must lie between 0 K and the melting temperature tm = 1800.00 K')
+         'temperature = 1900.00 K: must lie between 0.1 tm and the melting temperature tm = 1800.00 K')
       if (allocated(error)) return
       call expect_model("&model units = 'MPa', temperature = 1223.15, tm = 1630.0, youngs = 144 /", &
          "youngs = 144.000 MPa is no metal's Young's modulus (1.0E+04 to 7.0E+05 MPa): youngs is"// &

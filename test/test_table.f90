@@ -4,6 +4,7 @@ module test_table
    use usharp_kinds, only: dp
    use usharp_error, only: uerror => error_type
    use usharp_table, only: read_columns, merge_repeated_times
+   use usharp_filesys, only: check_text
    use usharp_strings, only: csv_field, split_fields, add_line, str, report_line_len
    use test_util, only: write_text, check_message
    implicit none
@@ -273,6 +274,27 @@ contains
          return
       end if
       call check(error, v(4, 2), 6.75_dp, 'stress of the row with three empty last fields')
+      if (allocated(error)) return
+      ! One decimal comma in a file separated by blanks: the row is split at the comma alone
+      path = write_text('blank-comma.txt', [character(len=40) :: 'time strain stress', &
+         '0 0 0', '1 1e-4 2.25', '2 2e-4 4,5', '3 3e-4 6.75'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call check_message(error, uerr, 'blank-comma.txt:4: row has 2 fields, the header names 3 '// &
+                         '(decimal commas?')
+      if (allocated(error)) return
+      ! Files that are not text: UTF-16 (with and without its byte-order mark), lines ended by
+      ! a carriage return alone
+      call check_text('u16.txt', achar(255)//achar(254)//'t'//achar(0)//'i'//achar(0), uerr)
+      call check_message(error, uerr, 'u16.txt: the file is in UTF-16; save it as UTF-8 or ASCII')
+      if (allocated(error)) return
+      call check_text('bin.txt', 't'//achar(0)//'i'//achar(0), uerr)
+      call check_message(error, uerr, 'bin.txt: holds NUL bytes, not text')
+      if (allocated(error)) return
+      call check_text('cr.txt', 'time stress'//achar(13)//'0 1'//achar(13), uerr)
+      call check_message(error, uerr, 'cr.txt: its lines end in a carriage return alone')
+      if (allocated(error)) return
+      call check_text('crlf.txt', 'time stress'//achar(13)//achar(10)//'0 1'//achar(13)//achar(10), uerr)
+      call check(error, .not. allocated(uerr), 'CR LF line ends are text')
    end subroutine test_field_count
 
    subroutine test_merge(error)

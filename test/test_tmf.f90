@@ -249,7 +249,7 @@ contains
       call check_message(error, e, 'between a tenth of tm and tm')
       if (allocated(error)) return
       call read_config(deck('tmf-above-tm', 'tmf_temperatures = 811.15, 1900.0'), cfg, e)
-      call check_message(error, e, "&test 'c': tmf_temperatures reaches 1900.00 K, which must lie between")
+      call check_message(error, e, "&test #1 'c': tmf_temperatures reaches 1900.00 K, which must lie between")
       if (allocated(error)) return
       ! A Chaboche model without an activation energy: its rates do not follow the temperature,
       ! so a test at another temperature (or a cycle) would be simulated at the model's own
@@ -261,13 +261,13 @@ contains
             '  c2 = 5.0e3, g2 = 60.0, a1 = 0.0, m1 = 1.0, a2 = 1.0e-8, m2 = 3.0 /', &
             "&test name = 't', history = 'cyclic', strain_range = 0.006, strain_rate = 1e-3, temperature = 900.0 /"])
          call read_config(path, cfg, e)
-         call check_message(error, e, "&test 't': temperature = 900.000 K changes nothing: the rates "// &
+         call check_message(error, e, "&test #1 't': temperature = 900.000 K changes nothing: the rates "// &
                             'of the chaboche model here do not depend on the temperature (set &model activation)')
          if (allocated(error)) return
       end block
       call read_config(deck('tmf-cvode', 'tmf_temperatures = 811.15, 922.15', &
                             "&solver integrator = 'cvode' /"), cfg, e)
-      call check_message(error, e, "&solver: integrator = 'cvode': &test 'c' has a temperature cycle")
+      call check_message(error, e, "&solver: integrator = 'cvode': &test #1 'c' has a temperature cycle")
       if (allocated(error)) return
       ! The simulation refuses it too, for a configuration made without the reader
       call read_config(deck('tmf-cvode-2', 'tmf_temperatures = 811.15, 922.15'), cfg, e)

@@ -347,7 +347,8 @@ contains
       n = size(res%c)
       lines = [character(len=report_line_len) :: 'identifiability at '// &
          trim(merge('the optimum    ', 'these constants', res%gn_fall < optimum_fall))// &
-         ' ('//str(res%m)//' residuals, '//str(n)//' constants, s^2 = SSR/(m-p) = '// &
+         ' ('//str(res%m)//' residuals, '//str(n)//' constant'//trim(merge('s', ' ', n /= 1))// &
+         ', s^2 = SSR/(m-p) = '// &
          real_str(res%s2, 'es10.3')//')']
       if (.not. res%gn_fall < optimum_fall) lines = [character(len=report_line_len) :: lines, &
          '  - not an optimum of these tests: a Gauss-Newton step would lower the sum of squares by '// &
@@ -361,7 +362,7 @@ contains
       end do
       lines = [character(len=report_line_len) :: lines, line, &
          '  constant      value       95 % interval (sandwich)    simultaneous 95 % ('// &
-         str(res%rank)//' directions)   status']
+         str(res%rank)//' direction'//trim(merge('s', ' ', res%rank /= 1))//')   status']
       do j = 1, n
          line = '  '//res%names(j)//'  '//real_str(res%c(j), 'es13.5')//'  '
          if (res%determined(j) .or. res%at_bound(j)) then

@@ -164,8 +164,8 @@ contains
             common_options
       case ('predict')
          text = 'usage: usharp predict -c best.nml [options] <input.nml>'//nl//nl// &
-            'Reads the input''s &model, &solver and &test groups (with their data files) and the'//nl// &
-            '&constants of FILE (a best.nml of run: the fitted constants); simulates every test'//nl// &
+            'Reads the input''s &model, &solver, &output and &test groups (with their data files)'//nl// &
+            'and the &constants of FILE (a best.nml of run: the fitted constants); simulates every test'//nl// &
             'and compares it with its data: RMS error, RMS error / peak of the data and largest'//nl// &
             'error per test. Writes <out_dir>/<test>.sim.txt, <test>.fit.txt (data beside the'//nl// &
             'prediction) and summary.txt (the table), as run does for the tests it fits.'//nl//nl// &

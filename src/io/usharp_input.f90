@@ -73,7 +73,7 @@ contains
          ! A temperature cycle is checked at its two ends
          if (allocated(cfg%tests(i)%hist%temp) .and. cfg%solver%integrator /= 'rodas4') then
             call fatal_error(error, path//": &solver: integrator = '"//trim(cfg%solver%integrator)// &
-               "': &test '"//cfg%tests(i)%name//"' has a temperature cycle (tmf_temperatures), "// &
+               "': &test #"//str(i)//" '"//cfg%tests(i)%name//"' has a temperature cycle (tmf_temperatures), "// &
                "which needs 'rodas4'")
             return
          end if
@@ -88,7 +88,7 @@ contains
             associate (temp => temps(j))
                if (.not. temp > 0.0_dp) cycle
                if (temp < 0.1_dp*cfg%model%tm .or. temp >= cfg%model%tm) then
-                  call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': "//what// &
+                  call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': "//what// &
                      str(temp)//' K, which must lie between a tenth of tm and tm = '//str(cfg%model%tm)// &
                      ' K (temperatures are in kelvin)')
                   return
@@ -96,14 +96,14 @@ contains
                ! A model whose rates do not follow the temperature would simulate the test at
                ! the model's own, while its output said otherwise
                if (temp /= cfg%model%temperature .and. .not. cfg%model%temperature_matters()) then
-                  call fatal_error(error, path//": &test '"//cfg%tests(i)%name//"': "//what// &
+                  call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': "//what// &
                      str(temp)//' K changes nothing: the rates of the '//cfg%model%name()// &
                      ' model here do not depend on the temperature (set &model activation)')
                   return
                end if
                call model_at(cfg%model, temp, mt, error)
                if (allocated(error)) then
-                  call prefix_error(error, path//": &test '"//cfg%tests(i)%name//"': at "// &
+                  call prefix_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': at "// &
                                     str(temp)//' K: ')
                   return
                end if

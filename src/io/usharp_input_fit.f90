@@ -98,7 +98,8 @@ contains
             ! A bound is given for the i-th fitted constant: one the list does not name
             if (any([given%lower(i), given%upper(i), given%box_lower(i), given%box_upper(i)] /= unset)) then
                call fail('a bound ('//trim(bound_names(i))//') is given for fitted constant '// &
-                  str(i)//', but fitted names '//str(count(len_trim(given%fitted) > 0))//' constants')
+                  str(i)//', but fitted names '//str(count(len_trim(given%fitted) > 0))//' constant'// &
+                  trim(merge('s', ' ', count(len_trim(given%fitted) > 0) /= 1)))
                return
             end if
             cycle

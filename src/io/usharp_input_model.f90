@@ -165,7 +165,7 @@ contains
          call fatal_error(error, where//'tm = '//str(tm)//': the melting temperature is in K, > 0')
       else if (.not. (temperature > 0.0_dp .and. temperature < tm)) then
          call fatal_error(error, where//'temperature = '//str(temperature)// &
-            ' K: must lie between 0 K and the melting temperature tm = '//str(tm)//' K')
+            ' K: must lie between 0.1 tm and the melting temperature tm = '//str(tm)//' K')
       else if (temperature < lowest_homologous*tm) then
          call fatal_error(error, where//'temperature = '//str(temperature)//' K is below a tenth '// &
             'of tm = '//str(tm)//' K, where no metal is viscoplastic: temperature is in kelvin '// &
@@ -208,7 +208,7 @@ contains
       end do
       if (len(missing) > 0) then
          call group_error(error, file%path, 'constants', 'every constant must be set '// &
-            '(missing: '//adjustl(missing)//')')
+            '(missing: '//trim(adjustl(missing))//')')
          return
       end if
    contains

@@ -8,7 +8,7 @@ module usharp_namelist
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower, str
-   use usharp_filesys, only: file_exists, read_whole_file
+   use usharp_filesys, only: file_exists, read_whole_file, check_text
    implicit none
    private
 
@@ -89,6 +89,7 @@ contains
          return
       end if
       call read_whole_file(path, file%text, error)
+      if (.not. allocated(error)) call check_text(path, file%text, error)
       if (allocated(error)) return
       ! A UTF-8 byte-order mark (some editors write one) is no text, nor a column
       if (len(file%text) >= 3) then

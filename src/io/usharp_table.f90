@@ -6,7 +6,7 @@ module usharp_table
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: lower, str, split_fields
-   use usharp_filesys, only: read_whole_file
+   use usharp_filesys, only: read_whole_file, check_text
    implicit none
    private
 
@@ -74,6 +74,7 @@ contains
       ! The file in one read, then its lines as slices of it: a formatted read per line took
       ! most of the time of reading a long file
       call read_whole_file(file, text, error)
+      if (.not. allocated(error)) call check_text(file, text, error)
       if (allocated(error)) return
       have_header = .false.
       nheader = 0
@@ -238,7 +239,9 @@ contains
       function hint() result(advice)
          character(len=:), allocatable :: advice
          advice = ''
-         if (nfull > nlong .and. index(text(a:b), ',') > 0) &
+         ! (a comma splits the row: in a file separated by blanks one decimal comma makes the
+         ! row comma-separated, and its fields fewer)
+         if (index(text(a:b), ',') > 0) &
             advice = ' (decimal commas? a field holding a comma needs double quotes)'
       end function hint
 

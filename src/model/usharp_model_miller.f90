@@ -20,7 +20,7 @@ module usharp_model_miller
    use usharp_kinds, only: dp
    use usharp_math, only: exp_dp, log_dp, pow_dp, asinh_dp, sinh_power_dp
    use usharp_error, only: error_type, fatal_error
-   use usharp_strings, only: str, lower
+   use usharp_strings, only: str, lower, real_str
    use usharp_units, only: stress_factor
    use usharp_model, only: update_status_ok, update_status_cut, block_scalar, block_strain, &
                            block_stress
@@ -224,7 +224,7 @@ contains
       if (allocated(error)) return
       model%btheta = model%c%b*theta_miller(model%c%q, model%tm, model%temperature)
       if (.not. ieee_is_finite(model%btheta) .or. model%btheta <= 0.0_dp) then
-         call fatal_error(error, 'B*theta(T) = '//str(model%btheta)//' 1/s is not representable')
+         call fatal_error(error, 'B*theta(T) = '//real_str(model%btheta, 'es10.3')//' 1/s is not representable')
          return
       end if
       if (model%d0_fixed > 0.0_dp) then
@@ -755,7 +755,7 @@ contains
       self%temperature = temperature
       self%btheta = self%c%b*theta_miller(self%c%q, self%tm, temperature)
       if (.not. ieee_is_finite(self%btheta) .or. self%btheta <= 0.0_dp) &
-         call fatal_error(error, 'B*theta(T) = '//str(self%btheta)//' 1/s is not representable')
+         call fatal_error(error, 'B*theta(T) = '//real_str(self%btheta, 'es10.3')//' 1/s is not representable')
    end subroutine miller_set_temperature
 
    !> YS of the D0 formula: the thesis's 18 ksi in the model's unit

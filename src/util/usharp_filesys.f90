@@ -11,7 +11,7 @@ module usharp_filesys
 
    public :: make_dir, join_path, file_exists, absolute_path, remove_file, remove_dir
    public :: rename_file, lock_file, unlock_file, file_hash, hash_text, hash_hex
-   public :: raw_file, read_line, read_whole_file, standard_output
+   public :: raw_file, read_line, read_whole_file, standard_output, check_text
 
    !> A file written through the C library, every write and the close checked. (gfortran's
    !> formatted and stream writes do not report a full disk: the bytes are lost and iostat
@@ -267,6 +267,30 @@ contains
       close (unit)
       if (ios /= 0 .or. nbytes < 0) call fatal_error(error, path//': cannot read ('//trim(msg)//')')
    end subroutine read_whole_file
+
+   !> A file read as text (an input deck, a data table) that is none: NUL bytes (UTF-16, a
+   !> spreadsheet's binary file) or line ends of CR alone, which the readers would take for
+   !> one long line; the error names the file and what to do
+   pure subroutine check_text(path, text, error)
+      !> the file
+      character(len=*), intent(in) :: path
+      !> its contents
+      character(len=*), intent(in) :: text
+      type(error_type), allocatable, intent(out) :: error
+      if (index(text, achar(0)) > 0) then
+         if (len(text) >= 2) then
+            if (text(1:2) == achar(255)//achar(254) .or. text(1:2) == achar(254)//achar(255)) then
+               call fatal_error(error, path//': the file is in UTF-16; save it as UTF-8 or ASCII')
+               return
+            end if
+         end if
+         call fatal_error(error, path//': holds NUL bytes, not text (UTF-16, or a binary file '// &
+            'such as a spreadsheet workbook); save it as UTF-8 or ASCII text')
+      else if (index(text, achar(13)) > 0 .and. index(text, achar(10)) == 0) then
+         call fatal_error(error, path//': its lines end in a carriage return alone; save it '// &
+            'with LF (or CR LF) line ends')
+      end if
+   end subroutine check_text
 
    !> FNV-1a 64-bit hash of a file's bytes; ok false if it cannot be read
    subroutine file_hash(path, hash, ok)
