@@ -336,3 +336,6 @@ mkdir -p hf && cp lcf.txt hf/lcf.sim.txt
 row 'simulate --force into the folder of its load history (lcf.sim.txt)' - u simulate --force hf/h.nml -o hf
 { echo "$model"; echo "$consts"; echo "&test name='lcf', history='file' /"; } > nofile.nml
 row "history 'file' without file" - u simulate nofile.nml -o nofile
+awk '/^#/ { print; next } { $2 = 100 * $2; print }' lcf.txt > pct-small.txt
+mk pct-small.nml "$fitg" "&test name='lcf', history='data', data_file='pct-small.txt' /"
+row 'data: measured strain in percent below 1 (a 0.5 % test)' - u run pct-small.nml -o pct-small

@@ -61,7 +61,8 @@ contains
          new_unittest('reading-work-linear-in-groups', test_linear_reading), &
          new_unittest('namelist-reference-complete', test_reference_complete), &
          new_unittest('missing-fit-group-named', test_missing_fit), &
-         new_unittest('list-longer-than-it-holds-named', test_long_list)]
+         new_unittest('list-longer-than-it-holds-named', test_long_list), &
+         new_unittest('measured-strain-in-percent-below-one-named', test_percent_strain_below_one)]
    end subroutine collect_input
 
    !> An input file of the model, the constants and the given extra lines
@@ -368,6 +369,54 @@ contains
       call expect_config_error(error, 'longlist.nml', lines, &
          "longlist.nml:3:39: &test #1 'r': levels: 65 values, where a list holds at most 64")
    end subroutine test_long_list
+
+   !> A measured strain in percent below 1 (the thesis's LCF data, strain times 100, at most
+   !> 0.5) passes the check of its size; the stiffness of its stretches tells it
+   subroutine test_percent_strain_below_one(error)
+      use usharp_objective, only: fit_problem, setup_problem
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: deck
+      integer :: k
+      deck = write_text('pct.nml', deck_lines([character(len=80) :: &
+         "&fit fitted = 'H1' /", "&test name='lcf', history='data', data_file='pct.txt' /"]))
+      do k = 1, 2
+         call write_data(merge(1.0_dp, 100.0_dp, k == 1))
+         call read_config(deck, cfg, uerr)
+         if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+         if (k == 1) then
+            call check(error, .not. allocated(uerr), 'the strain in mm/mm passes')
+         else
+            call check_message(error, uerr, "pct.txt: the stress rises with column 'strain' at "// &
+                               'most 2.6')
+            if (allocated(error)) return
+            call check_message(error, uerr, 'is the strain in percent?')
+         end if
+         if (allocated(error)) return
+      end do
+   contains
+      !> The thesis's LCF data with the strain times scale, as pct.txt
+      subroutine write_data(scale)
+         real(dp), intent(in) :: scale
+         real(dp) :: row(6)
+         integer :: src, dst, ios
+         character(len=400) :: line
+         open (newunit=src, file='data/thesis/lcf.sim.txt', status='old', action='read')
+         open (newunit=dst, file=scratch_dir//'/pct.txt', status='replace', action='write')
+         write (dst, '(a)') 'time strain stress'
+         do
+            read (src, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            if (line(1:1) == '#') cycle
+            read (line, *) row
+            write (dst, '(3es24.15)') row(1), scale*row(2), row(3)
+         end do
+         close (src)
+         close (dst)
+      end subroutine write_data
+   end subroutine test_percent_strain_below_one
 
    !> A fit of an input without &fit names the missing group, not an empty list of it
    subroutine test_missing_fit(error)

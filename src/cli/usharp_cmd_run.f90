@@ -143,7 +143,10 @@ contains
             '  objective ('//trim(cfg%fit%objective)//'): start '//real_str(out%f_start, 'es12.5')// &
             ', best '//real_str(out%opt%f, 'es12.5'), &
             '  evaluations '//str(out%opt%nevals)//' ('//str(out%nreplayed)//' replayed, '// &
-            str(out%nsimulated)//' simulated), iterations '// &
+            str(out%nsimulated)//' simulated'//trim(merge(' with the sensitivity Jacobians', &
+                                                         '                               ', &
+                                                         cfg%fit%jacobian == 'sensitivity'))// &
+            '), iterations '// &
             str(out%opt%iterations)//', penalised '//str(out%nfail)//', time '// &
             real_str(out%seconds, 'f10.2')//' s']
          if (size(out%helped) > 1) then

@@ -5,7 +5,7 @@ module usharp_experiment
    use usharp_error, only: error_type, fatal_error
    use usharp_strings, only: str, real_str
    use usharp_config, only: test_config
-   use usharp_history, only: control_stress, control_strain
+   use usharp_history, only: history_type, control_stress, control_strain
    use usharp_input, only: read_data_columns
    use usharp_input_test, only: max_strain, percent_strain, compared_columns, history_settings
    use usharp_table, only: merge_repeated_times
@@ -19,6 +19,9 @@ module usharp_experiment
    !> The stress a test's data may peak at, as a share of Young's modulus: below, a column in
    !> GPa (0.35 for 350 MPa) or a strain column; above, one in Pa or kPa
    real(dp), parameter :: min_stress_share = 1.0e-5_dp, max_stress_share = 0.05_dp
+   !> A measured strain's stiffest stretch (the elastic unloading after a reversal, the first
+   !> loading) below this share of Young's modulus is a strain column in percent (1/100)
+   real(dp), parameter :: min_stiffness_share = 0.1_dp
    !> Time in ms: under this share of a data file's rows within the simulated time, and its
    !> times running past this many times the simulated span (a part of a test simulated on
    !> its own, the first 22 s of a 1202 s relaxation, is no slip of unit)
@@ -102,7 +105,7 @@ contains
       real(dp), intent(in) :: youngs, t(:)
       character(len=*), intent(in) :: model_units
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: peak, share, tol, t0, t1
+      real(dp) :: peak, share, tol, t0, t1, stiff
       if (test%target == 'peaks' .or. size(exp%y) == 0) return
       peak = maxval(abs(exp%y))
       if (fits_strain(test)) then
@@ -119,6 +122,20 @@ contains
             test%data%unit//''')')
       end if
       if (allocated(error)) return
+      ! A strain in percent below 1 (a test of less than 100 % "strain") passes the check
+      ! above; its stiffness tells it: the stress rises a hundred times too slowly with it
+      if (test%history_kind == 'data' .and. .not. fits_strain(test) .and. youngs > 0.0_dp .and. &
+          peak > 0.0_dp) then
+         stiff = largest_secant(test%hist, exp%t, exp%y, 0.2_dp*peak, 0.05_dp*peak/youngs)
+         if (stiff > 0.0_dp .and. stiff < min_stiffness_share*youngs) then
+            call fatal_error(error, test%data%file//": the stress rises with column '"// &
+               test%data%strain_col//"' at most "//real_str(stiff, 'es10.3')//' '//model_units// &
+               ' per unit strain, '//real_str(stiff/youngs, 'es8.1')//" of Young's modulus ("// &
+               real_str(youngs, 'f0.0')//' '//model_units//'): is the strain in percent? '// &
+               '(strain is in mm/mm)')
+            return
+         end if
+      end if
       t0 = t(1)
       t1 = t(size(t))
       tol = 1.0e-9_dp*max(1.0_dp, abs(t1))
@@ -130,6 +147,38 @@ contains
          real_str(maxval(exp%t), 'es10.3')//' s): is the time in ms? (a part of a longer test is '// &
          'chosen with filter_column)')
    end subroutine check_scale
+
+   !> The largest secant |d stress / d strain| of a measured test over stretches of one
+   !> direction of the strain in which the stress changes by at least dsig (model unit), each
+   !> from a sample to the first within the next 200 that far from it: Young's modulus or near
+   !> it where the test loads or unloads elastically, whatever the noise of the strain (dsig
+   !> over E is some 1e-4). A stretch ends where the strain turns back by more than back (a
+   !> secant across a reversal measures the loop's width, not a stiffness). 0 where none is
+   !> found
+   pure real(dp) function largest_secant(hist, ts, sig, dsig, back) result(stiff)
+      !> the measured strain as the test's history
+      type(history_type), intent(in) :: hist
+      !> the measured stress (model unit) at times ts (s)
+      real(dp), intent(in) :: ts(:), sig(:)
+      real(dp), intent(in) :: dsig, back
+      real(dp) :: eps(size(ts)), d, dmax
+      integer :: i, j
+      stiff = 0.0_dp
+      do i = 1, size(ts)
+         eps(i) = hist%value_at(min(max(ts(i), hist%t(1)), hist%t(size(hist%t))))
+      end do
+      do i = 1, size(ts) - 1
+         dmax = 0.0_dp
+         do j = i + 1, min(i + 200, size(ts))
+            d = abs(eps(j) - eps(i))
+            if (d < dmax - back) exit
+            dmax = max(dmax, d)
+            if (abs(sig(j) - sig(i)) < dsig) cycle
+            if (d > 0.0_dp) stiff = max(stiff, abs(sig(j) - sig(i))/d)
+            exit
+         end do
+      end do
+   end function largest_secant
 
    !> Which output times t (s, ascending) have a measurement to be compared with, for data
    !> sampled at ts (s, ascending) and an output interval dt (s): those within dt/2 of a
