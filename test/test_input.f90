@@ -104,6 +104,10 @@ contains
          "&test name='lcf', history='thesis_lcf',", "  dt_out = abc, sig = 14.0 /"], &
          "bad-value.nml:4:3: &test #1 'lcf': dt_out = abc is not a value dt_out can take")
       if (allocated(error)) return
+      call expect_config_error(error, 'logical-value.nml', [character(len=80) :: &
+         "&test name='lcf', history='thesis_lcf',", "  dt_out = .true. /"], &
+         "logical-value.nml:4:3: &test #1 'lcf': dt_out = .true. is not a value dt_out can take")
+      if (allocated(error)) return
       call expect_config_error(error, 'twice.nml', [character(len=80) :: &
          "&test name='lcf', history='thesis_lcf', dt_out = 1.0,", "  sig = 14.0, DT_OUT=2.0 /"], &
          "twice.nml:4:15: &test: DT_OUT is given twice (also at line:column 3:41)")

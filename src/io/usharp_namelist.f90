@@ -870,6 +870,10 @@ contains
          word = after(why, 'cannot match namelist object name ')
          if (len(word) > 0 .and. lower(trim(why)) /= unknown) then
             q = word_at(items(m)%text, word)
+            ! (not the rest of a logical value, .true. where a number belongs)
+            if (q > 1) then
+               if (items(m)%text(q - 1:q - 1) == '.') q = 0
+            end if
             if (q > 0) then
                if (len_trim(items(m)%text(index(items(m)%text, '=') + 1:q - 1)) > 0) then
                   if (colon_assigns(items(m)%text, q, word)) then
