@@ -28,6 +28,7 @@ contains
          new_unittest('prvar-bad-listings-rejected', test_prvar_bad), &
          new_unittest('deck-load-steps-are-history-corners', test_deck_corners), &
          new_unittest('committed-decks-regenerate', test_committed_decks), &
+         new_unittest('deck-tests-sharing-constants-read-them-alike', test_deck_shared_constants), &
          new_unittest('command-placeholders-quoted', test_placeholders), &
          new_unittest('external-run-failures-named', test_failures), &
          new_unittest('external-command-time-limit', test_time_limit), &
@@ -173,6 +174,60 @@ contains
          deallocate (t, v)
       end do
    end subroutine test_deck_corners
+
+   !> Tests that share one constants file read it alike: another format or another
+   !> temperature's D0 for one of them is refused; with a file each, each holds its own
+   !> (the D0 of a test at 900 K, that of simulate's header)
+   subroutine test_deck_shared_constants(error)
+      use usharp_cmd_deck, only: deck_command
+      use usharp_cmd_simulate, only: simulate_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=4096), allocatable :: written(:)
+      character(len=:), allocatable :: deck, text
+      character(len=*), parameter :: head(2) = [character(len=100) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /']
+      real(dp) :: d0, v, last
+      integer :: k, u, ios
+      do k = 1, 2
+         deck = write_text('shared.nml', [character(len=120) :: head, &
+            "&test name='lcf', history='thesis_lcf' /", &
+            "&test name='relax', history='relaxation', levels=0.00075, holds=60.0, "// &
+            trim(merge("constants_format='(ES24.16)'", "temperature=900.0           ", k == 1))//' /'])
+         call deck_command(deck, '', scratch_dir//'/shared-decks', '', written, e, .true.)
+         call check_message(error, e, "&test #1 'lcf' and &test #2 'relax' read one constants "// &
+                            'file, Constants.txt, that would hold other numbers for each')
+         if (allocated(error)) return
+      end do
+      deck = write_text('own.nml', [character(len=120) :: head, &
+         "&test name='lcf', history='thesis_lcf' /", &
+         "&test name='relax', history='relaxation', levels=0.00075, holds=60.0, temperature=900.0,", &
+         "  constants_file='relax-constants.txt' /"])
+      call deck_command(deck, '', scratch_dir//'/own-decks', '', written, e, .true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      call simulate_command(deck, scratch_dir//'/own-sim', written, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      text = read_text(scratch_dir//'/own-sim/relax.sim.txt')
+      text = text(index(text, 'D0 = ') + 5:)
+      read (text(:index(text, ' ') - 1), *) d0
+      ! the constants file's last number is D0
+      open (newunit=u, file=scratch_dir//'/own-decks/relax-constants.txt', status='old', action='read')
+      do
+         read (u, *, iostat=ios) v
+         if (ios /= 0) exit
+         last = v
+      end do
+      close (u)
+      call check(error, abs(last - d0) <= 1.0e-4_dp*d0, 'the D0 of relax at 900 K: '// &
+                 str(last)//' against '//str(d0))
+   end subroutine test_deck_shared_constants
 
    !> decks/ansys holds what `usharp deck decks/thesis-data.nml -o decks/ansys` writes now
    subroutine test_committed_decks(error)

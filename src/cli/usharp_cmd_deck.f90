@@ -5,10 +5,12 @@ module usharp_cmd_deck
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants, check_inputs_kept
    use usharp_apdl, only: apdl_deck, line_len
-   use usharp_external, only: write_constants_file
+   use usharp_external, only: constants_lines
+   use usharp_simulate, only: test_model
+   use usharp_model, only: model_type
    use usharp_filesys, only: make_dir, join_path, file_exists
    use usharp_output, only: write_lines
-   use usharp_strings, only: shell_word
+   use usharp_strings, only: shell_word, str
    use usharp_overwrite, only: check_overwrite, made_by_usharp
    implicit none
    private
@@ -30,7 +32,13 @@ contains
       character(len=line_len), allocatable :: lines(:)
       character(len=:), allocatable :: dir, command, file, mark
       character(len=512), allocatable :: consts(:)
-      integer :: i, nmatch
+      class(model_type), allocatable :: mt
+      !> each test's constants file as its lines
+      type :: table_lines
+         character(len=64), allocatable :: lines(:)
+      end type table_lines
+      type(table_lines), allocatable :: tables(:)
+      integer :: i, j, nmatch
       logical :: overwrite
       overwrite = .false.
       if (present(force)) overwrite = force
@@ -74,6 +82,27 @@ contains
       cfg%out_dir = dir
       call check_inputs_kept(cfg, path, constants_file, consts, ['.inp'], error, test_name)
       if (allocated(error)) return
+      ! The tests that share one constants file read it alike: in one format, with one model
+      ! (the drag stress's start D0 follows a test's own temperature)
+      allocate (tables(size(cfg%tests)))
+      do i = 1, size(cfg%tests)
+         if (len(test_name) > 0 .and. cfg%tests(i)%name /= test_name) cycle
+         call test_model(cfg%model, cfg%tests(i), mt, error)
+         if (.not. allocated(error)) call constants_lines(cfg%tests(i)%ext%constants_file, mt, &
+                                                          cfg%tests(i)%ext%constants_format, &
+                                                          tables(i)%lines, error)
+         if (allocated(error)) return
+         do j = 1, i - 1
+            if (.not. allocated(tables(j)%lines)) cycle
+            if (cfg%tests(j)%ext%constants_file /= cfg%tests(i)%ext%constants_file) cycle
+            if (all(tables(j)%lines == tables(i)%lines)) cycle
+            call fatal_error(error, path//": &test #"//str(j)//" '"//cfg%tests(j)%name// &
+               "' and &test #"//str(i)//" '"//cfg%tests(i)%name//"' read one constants file, "//cfg%tests(i)%ext%constants_file// &
+               ', that would hold other numbers for each (another constants_format, or another '// &
+               "temperature's D0): give each its own constants_file", stat_input)
+            return
+         end do
+      end do
       ! Every file is checked before the first is written
       do i = 1, size(cfg%tests)
          if (len(test_name) > 0 .and. cfg%tests(i)%name /= test_name) cycle
@@ -98,7 +127,7 @@ contains
          written = [character(len=4096) :: written, file]
          ! The constants file the deck reads, from the input's constants
          file = join_path(dir, cfg%tests(i)%ext%constants_file)
-         call write_constants_file(file, cfg%model, cfg%tests(i)%ext%constants_format, error)
+         call write_lines(file, tables(i)%lines, error)
          if (allocated(error)) return
          if (.not. any(written == file)) written = [character(len=4096) :: written, file]
       end do

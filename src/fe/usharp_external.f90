@@ -31,7 +31,7 @@ module usharp_external
    implicit none
    private
 
-   public :: run_external, write_constants_file, expand_command, n_constants_file
+   public :: run_external, write_constants_file, constants_lines, expand_command, n_constants_file
    character(len=*), parameter :: script_name = 'usharp-command.sh'
    character(len=*), parameter :: stdout_name = 'stdout.txt', stderr_name = 'stderr.txt'
 
@@ -56,13 +56,25 @@ contains
       class(model_type), intent(in) :: model
       type(error_type), allocatable, intent(out) :: error
       logical, intent(in), optional :: sync  !< see result_commit (default true)
+      character(len=64), allocatable :: lines(:)
+      call constants_lines(path, model, fmt, lines, error)
+      if (.not. allocated(error)) call write_lines(path, lines, error, sync)
+   end subroutine write_constants_file
+
+   !> The lines of the constants file path (see write_constants_file): one number each in
+   !> fmt; an error where fmt does not fit a number
+   subroutine constants_lines(path, model, fmt, lines, error)
+      character(len=*), intent(in) :: path, fmt
+      class(model_type), intent(in) :: model
+      character(len=64), allocatable, intent(out) :: lines(:)
+      type(error_type), allocatable, intent(out) :: error
       real(dp) :: vals(n_constants_file(model))
-      character(len=64) :: lines(n_constants_file(model))
       integer :: ios, k
       character(len=256) :: msg
       integer, allocatable :: pos(:)
       real(dp), allocatable :: start(:)
       character(len=:), allocatable :: names(:), notes(:)
+      allocate (lines(size(vals)))
       call model%to_props(vals(:model%n_props()))
       call model%fe_start_values(pos, start, names, notes)
       vals(model%n_props() + 1:) = start
@@ -74,8 +86,7 @@ contains
             return
          end if
       end do
-      call write_lines(path, lines, error, sync)
-   end subroutine write_constants_file
+   end subroutine constants_lines
 
    !> The command with its placeholders replaced: {work} {constants} {output} {input_dir} by
    !> quoted paths, {test} by the name

@@ -10,7 +10,7 @@ module usharp_objective
    use usharp_history, only: control_stress
    use usharp_units, only: stress_factor
    use usharp_simulation, only: sim_result
-   use usharp_simulate, only: simulate_test
+   use usharp_simulate, only: simulate_test, test_model
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_config, only: run_config, test_config
    use usharp_experiment, only: experiment_type, load_experiment, interpolate, fits_strain, check_scale, &
@@ -263,6 +263,7 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       integer :: k
+      class(model_type), allocatable :: mt
       associate (test => self%cfg%tests(i))
          if (.not. test%ext%enabled) then
             call simulate_test(model, self%cfg%solver, test, res, error)
@@ -270,9 +271,12 @@ contains
          end if
          call res%allocate(size(self%targets(i)%t))
          res%t = self%targets(i)%t
-         call run_external(test%ext, model, self%cfg%units, test%hist, test%name, &
-                           self%cfg%base_dir, self%cfg%out_dir, tag, res%t, &
-                           res%stress, error)
+         ! (the constants file at the test's own temperature: its D0)
+         call test_model(model, test, mt, error)
+         if (.not. allocated(error)) &
+            call run_external(test%ext, mt, self%cfg%units, test%hist, test%name, &
+                              self%cfg%base_dir, self%cfg%out_dir, tag, res%t, &
+                              res%stress, error)
          if (allocated(error)) then
             call prefix_error(error, "test '"//test%name//"': ")
             return

@@ -18,7 +18,7 @@ module usharp_simulate
    !> in seconds, which the integrator follows with its error in control
    real(dp), parameter :: runaway_strain = 1.0_dp
 
-   public :: simulate_test, add_stress_noise, model_lines
+   public :: simulate_test, add_stress_noise, model_lines, test_model
 
 contains
 
@@ -31,12 +31,8 @@ contains
       type(sim_result), intent(out) :: res
       type(error_type), allocatable, intent(out) :: error
       class(model_type), allocatable :: mt
-      if (test%temperature > 0.0_dp) then
-         call model_at(model, test%temperature, mt, error)
-         if (.not. allocated(error)) call simulate_with(mt)
-      else
-         call simulate_with(model)
-      end if
+      call test_model(model, test, mt, error)
+      if (.not. allocated(error)) call simulate_with(mt)
       if (.not. allocated(error)) call check_runaway()
       if (allocated(error)) call prefix_error(error, "test '"//test%name//"': ")
    contains
@@ -83,6 +79,20 @@ contains
          res%stress(i) = res%stress(i) + scale*rng%normal()
       end do
    end subroutine add_stress_noise
+   !> The model as test sees it: at the test's own temperature where it has one (its drag
+   !> stress's start D0 and the rates' temperature factor follow), else model itself
+   subroutine test_model(model, test, mt, error)
+      class(model_type), intent(in) :: model
+      type(test_config), intent(in) :: test
+      class(model_type), allocatable, intent(out) :: mt
+      type(error_type), allocatable, intent(out) :: error
+      if (test%temperature > 0.0_dp) then
+         call model_at(model, test%temperature, mt, error)
+      else
+         allocate (mt, source=model)
+      end if
+   end subroutine test_model
+
    !> The two header lines of a test's simulation file that say what made it: the model at
    !> the test's temperature (T, Tm, E and the derived values; a temperature cycle from its
    !> start) and every constant
@@ -106,13 +116,9 @@ contains
          real_str(maxval(test%hist%temp), 'g0.8')//' K)'
       ! (the model as the test starts: a test at its own temperature, a temperature cycle at
       ! its first, is set up there)
-      if (test%temperature > 0.0_dp) then
-         call model_at(model, test%temperature, mt, error)
-         if (allocated(error)) return
-         call mt%derived_values(dnames, dvals)
-      else
-         call model%derived_values(dnames, dvals)
-      end if
+      call test_model(model, test, mt, error)
+      if (allocated(error)) return
+      call mt%derived_values(dnames, dvals)
       do k = 1, size(dvals)
          line = line//', '//trim(dnames(k))//' = '//real_str(dvals(k), 'g0.8')//' '//units
       end do
