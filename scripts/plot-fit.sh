@@ -43,7 +43,17 @@ if [ -f "$dir/summary.txt" ]; then
   fi
 fi
 mkdir -p -- "$dir/plots"
-# The measured column's title says whether the test is fitted on stress or on strain
+# The columns' line says whether the test is fitted on stress (stress against strain) or on
+# strain (a creep test: strain against time)
+axes() { # axes FILE UNIT: the gnuplot labels and the using of the measured and fitted columns
+  if grep -q '^# time strain strain_exp strain_sim' -- "$1"; then
+    echo "set xlabel 'time (h)'; set ylabel 'strain (%)'"
+    echo 'm = "($1/3600):(100*$3)"; s = "($1/3600):(100*$4)"'
+  else
+    echo "set xlabel 'strain (%)'; set ylabel 'stress ($2)'"
+    echo 'm = "(100*$2):3"; s = "(100*$2):4"'
+  fi
+}
 for f in "${files[@]}"; do
   name=$(basename -- "$f" .fit.txt)
   unit=$(sed -n 's/.*stress (\([A-Za-z]*\)) of the simulation.*/\1/p' "$f" | head -1)
@@ -51,13 +61,12 @@ for f in "${files[@]}"; do
     echo 'set terminal pngcairo size 800,600 font ",11" noenhanced'
     echo "set output $(gq "$dir/plots/$name.png")"
     echo "set title $(gq "$title: $name")"
-    echo 'set xlabel "strain (%)"'
-    echo "set ylabel 'stress (${unit:-model unit})'"
+    axes "$f" "${unit:-model unit}"
     echo 'set key top left'
     echo 'set grid'
     echo "f = $(gq "$f")"
-    echo 'plot f using (100*$2):3 with points pt 7 ps 0.3 lc rgb "#888888" title "measured", \'
-    echo '     f using (100*$2):4 with lines lw 2 lc rgb "#c0392b" title "fit"'
+    echo 'plot f using @m with points pt 7 ps 0.3 lc rgb "#888888" title "measured", \'
+    echo '     f using @s with lines lw 2 lc rgb "#c0392b" title "fit"'
   } | gnuplot
 done
 n=${#files[@]}
@@ -67,12 +76,14 @@ rows=$(( (n + cols - 1) / cols ))
   echo "set terminal pngcairo size $((420*cols)),$((330*rows)) font \",9\" noenhanced"
   echo "set output $(gq "$dir/plots/all.png")"
   echo "set multiplot layout $rows,$cols title $(gq "$title")"
-  echo "set grid; set key top left; set xlabel 'strain (%)'; set ylabel 'stress'"
+  echo "set grid; set key top left"
   for f in "${files[@]}"; do
     name=$(basename -- "$f" .fit.txt)
+    unit=$(sed -n 's/.*stress (\([A-Za-z]*\)) of the simulation.*/\1/p' "$f" | head -1)
     echo "set title $(gq "$name")"
+    axes "$f" "${unit:-model unit}"
     echo "f = $(gq "$f")"
-    echo "plot f using (100*\$2):3 with points pt 7 ps 0.2 lc rgb '#888888' title 'measured', f using (100*\$2):4 with lines lw 2 lc rgb '#c0392b' title 'fit'"
+    echo "plot f using @m with points pt 7 ps 0.2 lc rgb '#888888' title 'measured', f using @s with lines lw 2 lc rgb '#c0392b' title 'fit'"
   done
   echo "unset multiplot"
 } | gnuplot

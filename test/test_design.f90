@@ -9,7 +9,7 @@ module test_design
    use usharp_input, only: read_config
    use usharp_history, only: history_type, rate_jump_history
    use usharp_simulation, only: sim_result
-   use usharp_simulate, only: simulate_test, add_stress_noise
+   use usharp_simulate, only: simulate_test, add_response_noise
    use usharp_experiment, only: experiment_type
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_identify, only: identify_result, identify_at
@@ -53,7 +53,7 @@ contains
       do i = 1, size(cfg%tests)
          call simulate_test(cfg%model, cfg%solver, cfg%tests(i), sim, e)
          if (allocated(e)) return
-         call add_stress_noise(sim, cfg%tests(i)%noise, cfg%tests(i)%seed)
+         call add_response_noise(sim, cfg%tests(i)%hist%control, cfg%tests(i)%noise, cfg%tests(i)%seed)
          exps(i)%t = sim%t
          exps(i)%y = simulated(cfg%tests(i), sim)
       end do

@@ -180,8 +180,15 @@ contains
          lines = [character(len=report_line_len) :: lines, part, '', 'wrote '//name//'.md, '// &
                   'specimen-'//trim(cfg%tests(which(i))%name)//'.csv', '']
          ! Each specimen's verdict again at the end, side by side
+         ! (the whole paragraph: the report wraps it over lines)
          at = findloc(index(part, '**Verdict:** ') == 1, .true., dim=1)
-         if (at > 0) verdicts = [character(len=report_line_len) :: verdicts, '- '//trim(part(at)(14:))]
+         if (at > 0) then
+            verdicts = [character(len=report_line_len) :: verdicts, '- '//trim(part(at)(14:))]
+            do k = at + 1, size(part)
+               if (len_trim(part(k)) == 0) exit
+               verdicts = [character(len=report_line_len) :: verdicts, '  '//trim(part(k))]
+            end do
+         end if
       end do
       if (size(which) > 1 .and. size(verdicts) > 0 .and. .not. allocated(error)) &
          lines = [character(len=report_line_len) :: lines, '## The verdicts, specimen by specimen', '', verdicts]

@@ -7,8 +7,8 @@ module usharp_cmd_simulate
    use usharp_input, only: read_config, override_constants, check_inputs_kept, check_not_a_fit
    use usharp_simulation, only: sim_result
    use usharp_model, only: model_type, model_at
-   use usharp_simulate, only: simulate_test, add_stress_noise, model_lines
-   use usharp_history, only: control_strain
+   use usharp_simulate, only: simulate_test, add_response_noise, model_lines
+   use usharp_history, only: control_strain, control_stress
    use usharp_output, only: write_sim_file
    use usharp_filesys, only: make_dir, join_path
    use usharp_version, only: usharp_version_string
@@ -99,7 +99,7 @@ contains
          end if
          call simulate_test(cfg%model, cfg%solver, cfg%tests(i), res, error)
          if (allocated(error)) return
-         call add_stress_noise(res, cfg%tests(i)%noise, cfg%tests(i)%seed)
+         call add_response_noise(res, cfg%tests(i)%hist%control, cfg%tests(i)%noise, cfg%tests(i)%seed)
          allocate (header(0))
          header = [character(len=512) :: &
             'usharp '//usharp_version_string//" simulation of test '"//cfg%tests(i)%name// &
@@ -109,8 +109,10 @@ contains
          header = [character(len=512) :: header, model_lines(cfg%model, cfg%units, cfg%tests(i), error)]
          if (allocated(error)) return
          if (cfg%tests(i)%noise > 0.0_dp) header = [character(len=512) :: header, &
-            'stress noise: Gaussian, sd = '//real_str(cfg%tests(i)%noise, 'g0.6')// &
-            ' x max|stress|, seed '//str(cfg%tests(i)%seed)]
+            trim(merge('strain', 'stress', cfg%tests(i)%hist%control == control_stress))// &
+            ' noise: Gaussian, sd = '//real_str(cfg%tests(i)%noise, 'g0.6')//' x max|'// &
+            trim(merge('strain', 'stress', cfg%tests(i)%hist%control == control_stress))// &
+            '|, seed '//str(cfg%tests(i)%seed)]
          file = join_path(dir, cfg%tests(i)%name//'.sim.txt')
          call write_sim_file(file, res, header, cfg%units, error)
          deallocate (header)

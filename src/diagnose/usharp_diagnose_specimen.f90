@@ -1036,7 +1036,15 @@ contains
             rest_low = max(e%f_after - sum(sr%nv), 0.0_dp) <= sr%floor
             verdict = trim(e%name)//trim(merge(' explains       ', ' partly explains', &
                       e%removed >= most .or. sr%gap <= 0.0_dp .or. rest_low))//subject//': '
-            if (sr%gap > 0.0_dp) then
+            if (sr%gap > 0.0_dp .and. .not. e%removed > 0.0_dp) then
+               ! Significant by BIC while it removes none of the structured gap (which its
+               ! rest below the floor does not make an explanation of)
+               verdict = trim(e%name)//' lowers BIC by '//real_str(-e%dbic, 'f0.1')//' for'// &
+                         subject//' but removes none of its structured gap ('// &
+                         real_str(100.0_dp*e%removed, 'f0.0')//' %)'// &
+                         trim(merge(', which lies below its floor', '                            ', &
+                                    sr%gap <= sr%floor))
+            else if (sr%gap > 0.0_dp) then
                verdict = verdict//real_str(100.0_dp*e%removed, 'f0.0')//' % of its structured gap'// &
                          trim(merge(', the rest below its floor', '                          ', &
                                     rest_low .and. e%removed < most))//', BIC '//real_str(e%dbic, 'f0.1')

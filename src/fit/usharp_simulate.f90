@@ -10,6 +10,7 @@ module usharp_simulate
    use usharp_config, only: test_config
    use usharp_rng, only: rng_type
    use usharp_strings, only: real_str
+   use usharp_history, only: control_stress
    implicit none
    private
 
@@ -18,7 +19,7 @@ module usharp_simulate
    !> in seconds, which the integrator follows with its error in control
    real(dp), parameter :: runaway_strain = 1.0_dp
 
-   public :: simulate_test, add_stress_noise, model_lines, test_model
+   public :: simulate_test, add_response_noise, model_lines, test_model
 
 contains
 
@@ -63,10 +64,13 @@ contains
       end subroutine simulate_with
    end subroutine simulate_test
 
-   !> Add Gaussian noise of standard deviation level*max|stress| to the stress (synthetic
-   !> measurement noise), reproducibly from the seed
-   subroutine add_stress_noise(res, level, seed)
+   !> Add Gaussian noise to the measured response of a simulated test, sd = level times its
+   !> largest magnitude: the stress of a strain-controlled test, the strain of a
+   !> stress-controlled one (creep), whose stress is the command
+   subroutine add_response_noise(res, control, level, seed)
       type(sim_result), intent(inout) :: res
+      !> the test's control (control_strain or control_stress)
+      integer, intent(in) :: control
       real(dp), intent(in) :: level
       integer, intent(in) :: seed
       type(rng_type) :: rng
@@ -74,11 +78,18 @@ contains
       integer :: i
       if (level <= 0.0_dp) return
       call rng%seed(seed)
-      scale = level*maxval(abs(res%stress))
-      do i = 1, size(res%stress)
-         res%stress(i) = res%stress(i) + scale*rng%normal()
-      end do
-   end subroutine add_stress_noise
+      if (control == control_stress) then
+         scale = level*maxval(abs(res%strain))
+         do i = 1, size(res%strain)
+            res%strain(i) = res%strain(i) + scale*rng%normal()
+         end do
+      else
+         scale = level*maxval(abs(res%stress))
+         do i = 1, size(res%stress)
+            res%stress(i) = res%stress(i) + scale*rng%normal()
+         end do
+      end if
+   end subroutine add_response_noise
    !> The model as test sees it: at the test's own temperature where it has one (its drag
    !> stress's start D0 and the rates' temperature factor follow), else model itself
    subroutine test_model(model, test, mt, error)
