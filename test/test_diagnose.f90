@@ -29,7 +29,7 @@ module test_diagnose
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
                                     joint_not_carried, rate_open, rate_at_end, &
                                     joint_bic_only, joint_partial, joint_loose, joint_held_fit, joint_form_beats, gap_fit_ref
-   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note
+   use usharp_diagnose_verdict, only: conclude, joint_verdict, verdict_of, alike_note, bound_note, missed_note
    use usharp_diagnose_refit, only: judge, rate_undetermined, rate_doubt, with_params, other_sign, global_baseline_starts, &
                                     rate_rungs, shown_groups
    use usharp_diagnose_screen, only: basin_points
@@ -134,7 +134,8 @@ contains
          new_unittest('softening-saturates-jacobian-against-differences', test_softening), &
          new_unittest('separating-test-softening-against-initial', test_separate_softening), &
          new_unittest('selfcheck-finds-injected-effects', test_selfcheck), &
-         new_unittest('selfcheck-at-a-start-names-the-matrix-and-effect', test_selfcheck_start)]
+         new_unittest('selfcheck-at-a-start-names-the-matrix-and-effect', test_selfcheck_start), &
+         new_unittest('could-miss-said-within-the-limits', test_missed_note)]
    end subroutine collect_diagnose
 
    !> A thesis model, set up
@@ -2588,4 +2589,42 @@ contains
                  'simulated at its &constants with the injected effect ') == 1 .and. &
                  index(e%message, ' = ') > 0 .and. index(e%message, 'best.nml') > 0, e%message)
    end subroutine test_selfcheck_start
+   !> What the tests could miss, said within the effects' limits: a second back stress by
+   !> its saturation, a size beyond the physical limit as not found within it, a power of
+   !> 0.949 as short of 0.95, and a test named only where it would find the effect more often
+   subroutine test_missed_note(error)
+      use usharp_diagnose_types, only: hidden_effect, hidden_size
+      use usharp_effects, only: effect_catalogue, effect_info
+      type(error_type), allocatable, intent(out) :: error
+      type(effect_info), allocatable :: cat(:)
+      type(hidden_effect) :: h(2)
+      character(len=:), allocatable :: text
+      character(len=64) :: size_text
+      logical :: beyond
+      integer :: ks, kb
+      cat = effect_catalogue(20.0_dp)
+      do ks = 1, size(cat)
+         if (cat(ks)%name == 'softening') exit
+      end do
+      do kb = 1, size(cat)
+         if (cat(kb)%name == 'backstress2') exit
+      end do
+      call hidden_size(cat(kb), [1290.0_dp, 200.0_dp], 1, 20.0_dp, 'ksi', size_text, beyond)
+      call check(error, trim(size_text) == 'H3/gamma3 = 6.45E+00 ksi' .and. .not. beyond, &
+                 'a second back stress by its saturation: '//trim(size_text))
+      if (allocated(error)) return
+      call hidden_size(cat(ks), [59.9_dp, 100.0_dp], 1, 20.0_dp, 'ksi', size_text, beyond)
+      call check(error, beyond, 'a softening of a = 59.9 beyond its limit')
+      if (allocated(error)) return
+      h(1)%times = 1198.0_dp
+      h(1)%beyond = .true.
+      h(2)%times = 2.0_dp
+      h(2)%test = 'tension at 1e-5 /s'
+      h(2)%power = 0.39_dp
+      text = missed_note([character(len=16) :: 'softening', 'drift'], [0.2_dp, 0.949_dp], h, 'these tests')
+      call check(error, index(text, 'softening (power 0.20 there; not found with power 0.95 within '// &
+                 'its physical limit)') > 0 .and. index(text, 'drift (power 0.94 there; found with '// &
+                 'power 0.95 from 2.0 times it)') > 0, text)
+   end subroutine test_missed_note
+
 end module test_diagnose

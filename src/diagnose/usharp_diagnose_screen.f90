@@ -11,7 +11,7 @@ module usharp_diagnose_screen
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_optimiser, only: optimum_type
    use usharp_sort, only: order_of
-   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, magnitude_text
+   use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, tell, hidden_size
    use usharp_diagnose_units, only: lm_unit
    use usharp_diagnose_journal, only: unit_stopped
    use usharp_diagnose_numerics, only: jacobian, gn_decrease, free_params, effect_fit, &
@@ -239,6 +239,7 @@ contains
       !> mean)
       subroutine hidden_bound()
          real(dp), allocatable :: dg(:), p(:), p1(:)
+         character(len=64) :: unused
          integer :: q, nt, j, gp, i
          integer, allocatable :: idx(:)
          logical, allocatable :: nz(:)
@@ -258,10 +259,13 @@ contains
                   if (.not. any(nz)) nz = .true.
                   p1(gp) = sum(p(idx), mask=nz)/count(nz)
                end do
+               ! (the mean's size: its magnitude per test is not one number)
+               call hidden_size(info, p1, 1, ctx%peak, ctx%prob%cfg%units, unused, e%hidden%beyond)
             else
                p1 = p(:effect_nparams(info, 1))
                j = maxloc(abs(dg), 1)
-               e%hidden%magnitude = magnitude_text(info%pname(j), p(j), info%punit(j), ctx%prob%cfg%units)
+               call hidden_size(info, p1, j, ctx%peak, ctx%prob%cfg%units, e%hidden%magnitude, &
+                                e%hidden%beyond)
             end if
          end associate
          call finding_test(ep%prob%cfg%model, ep%k, p1, ctx%eff_base, ctx%prob%cfg%solver, fit_amplitude(ctx), &

@@ -33,7 +33,7 @@ module usharp_diagnose_specimen
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end, below_resolved, resolved_share
    use usharp_diagnose_verdict, only: power_cells, missed_note
-   use usharp_diagnose_types, only: most, hidden_effect, magnitude_text, bound_list, unit_text, &
+   use usharp_diagnose_types, only: most, hidden_effect, hidden_size, bound_list, unit_text, &
                                     params_bound_note, side_word, hardening_note
    use usharp_diagnose_separate, only: finding_test
    use usharp_diagnose_profile, only: profile_interval, profile_result, open_beyond_estimate
@@ -702,7 +702,9 @@ contains
          end if
          j = maxloc(abs(d), 1)
          g = merge((j - 1)/nt + 1, j, cat(ek%k)%sharing == param_per_test)
-         se_out%hidden%magnitude = magnitude_text(cat(ek%k)%pname(g), p(j), cat(ek%k)%punit(g), prob%cfg%units)
+         ! (against the specimen's own limits, as its fitted effects are judged)
+         call hidden_size(own(ek%k), p1, g, speak, prob%cfg%units, se_out%hidden%magnitude, &
+                          se_out%hidden%beyond)
          emax = 0.005_dp
          associate (h => prob%cfg%tests(ispec)%hist)
             if (h%control == control_strain) emax = maxval(abs(h%v))

@@ -17,7 +17,8 @@ module usharp_diagnose_types
 
    public :: params_bound_note, hardening_note, side_word
    public :: diagnose_context, physical_point, effect_outcome, diagnose_result, fit_structured, held_quiet
-   public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text
+   public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text, &
+             hidden_size
    public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
    public :: deviance_change, prediction_open, open_spread, separating_d
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
@@ -79,6 +80,8 @@ module usharp_diagnose_types
       character(len=64) :: magnitude = ''
       character(len=80) :: test = ''         !< the candidate ('' when none simulates)
       real(dp) :: power = -1.0_dp            !< its power there
+      !> that multiple lies beyond the effect's physical limit (see hidden_size)
+      logical :: beyond = .false.
    end type hidden_effect
 
    !> A search point of a refit (its problem's coordinates: constants and the effect's parameters)
@@ -334,12 +337,43 @@ contains
    end function prediction_open
 
    !> A parameter's value with its unit ('stress': the model's stress unit; '-' or '': none)
-   function magnitude_text(name, value, unit, stress_unit) result(text)
+   pure function magnitude_text(name, value, unit, stress_unit) result(text)
       character(len=*), intent(in) :: name, unit, stress_unit
       real(dp), intent(in) :: value
       character(len=:), allocatable :: text
       text = trim(name)//' = '//real_str(value, 'es9.2')//unit_text(unit, stress_unit)
    end function magnitude_text
+
+   !> The magnitude an effect the tests could hide would have at the parameters p (one group
+   !> of info's, in the catalogue's order) as a verdict says it, and whether it lies beyond
+   !> the effect's physical limit: a second back stress by its saturation H3/gamma3 against
+   !> the peak stress (its H3 alone, 1.3e3 ksi beside peaks of 20, says nothing), any other
+   !> by its parameter j, every parameter against its plausible value (a softening's a of 60
+   !> takes the drag stress below zero)
+   pure subroutine hidden_size(info, p, j, peak, stress_unit, text, beyond)
+      type(effect_info), intent(in) :: info
+      real(dp), intent(in) :: p(:)
+      !> the parameter to state (the one that grows most)
+      integer, intent(in) :: j
+      !> the peak stress the saturation is set against (model unit)
+      real(dp), intent(in) :: peak
+      character(len=*), intent(in) :: stress_unit
+      character(len=64), intent(out) :: text
+      logical, intent(out) :: beyond
+      integer :: g
+      beyond = .false.
+      do g = 1, min(size(p), info%nparam)
+         if (info%plausible(g) < huge(1.0_dp)) beyond = beyond .or. abs(p(g)) > info%plausible(g)
+      end do
+      if (info%name == 'backstress2' .and. size(p) >= 2) then
+         if (p(2) > 0.0_dp) then
+            text = 'H3/gamma3 = '//real_str(abs(p(1)/p(2)), 'es9.2')//unit_text('stress', stress_unit)
+            beyond = beyond .or. abs(p(1)/p(2)) > peak
+            return
+         end if
+      end if
+      text = magnitude_text(info%pname(j), p(j), info%punit(j), stress_unit)
+   end subroutine hidden_size
 
    !> 'n = 170 (upper), H2 = 1.0e+04 (lower)' for the constants at a bound (side -1: the
    !> lower, 1: the upper, 0: none, as at_bound gives them), or without their values c

@@ -378,13 +378,18 @@ contains
       do j = 1, size(names)
          if (power(j) < 0.0_dp .or. power(j) >= 0.95_dp) cycle
          if (len(text) > 0) text = text//', '
-         text = text//trim(names(j))//' (power '//real_str(power(j), 'f0.2')//' there'
+         ! (two decimals cut, not rounded: 0.949 is short of 0.95)
+         text = text//trim(names(j))//' (power '//real_str(real(floor(100.0_dp*power(j)), dp)/100.0_dp, &
+                                                          'f0.2')//' there'
          associate (h => hidden(j))
-            if (h%times > 0.0_dp) then
+            if (h%times > 0.0_dp .and. h%beyond) then
+               text = text//'; not found with power 0.95 within its physical limit'
+            else if (h%times > 0.0_dp) then
                text = text//'; found with power 0.95 from '//real_str(h%times, 'f0.1')//' times it'
                if (len_trim(h%magnitude) > 0) text = text//', '//trim(h%magnitude)
-               if (len_trim(h%test) > 0 .and. h%power >= 0.0_dp) text = text//', which a '//trim(h%test)// &
-                  ' would find with power '//real_str(h%power, 'f0.2')
+               ! (a test named only where it finds it more often than these tests do)
+               if (len_trim(h%test) > 0 .and. h%power > power(j)) text = text//', which a '// &
+                  trim(h%test)//' would find with power '//real_str(h%power, 'f0.2')
             end if
          end associate
          text = text//')'
