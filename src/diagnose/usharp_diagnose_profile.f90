@@ -226,10 +226,24 @@ contains
             u = un
             rise_prev = rise
             endpoint = from_u(u)
-            if (at_bound) return
+            if (at_bound) then
+               ! Down to 0, the end of a parameter that cannot be negative (a delay, a rate):
+               ! the interval reaches it, closed there ([0, 9.7e-3] s, not [open, 9.7e-3])
+               if (d < 0.0_dp .and. lo(j) == 0.0_dp) then
+                  endpoint = 0.0_dp
+                  is_open = .false.
+               end if
+               return
+            end if
             ! Longer steps while the objective rises slowly
             if (rise < 0.25_dp*pr%threshold) step = 2.0_dp*step
          end do
+         ! A walk in the logarithm never meets 0: one that has gone six decades below the
+         ! centre with the objective still within the threshold reaches it as well
+         if (d < 0.0_dp .and. lo(j) == 0.0_dp .and. abs(endpoint) < 1.0e-6_dp*abs(x_hat(j))) then
+            endpoint = 0.0_dp
+            is_open = .false.
+         end if
       end subroutine walk
 
       !> The other coordinates refitted from x_start at the held value hp%value
