@@ -29,7 +29,8 @@ contains
          new_unittest('predict-with-the-constants-that-made-the-data', test_predict), &
          new_unittest('predict-needs-constants', test_predict_needs_constants), &
          new_unittest('predict-readme-a617-twice', test_predict_a617), &
-         new_unittest('deck-test-and-input-swapped', test_deck_swapped)]
+         new_unittest('deck-test-and-input-swapped', test_deck_swapped), &
+         new_unittest('identify-words-at-the-truth-and-a-guess', test_identify_words)]
    end subroutine collect_cli
 
    !> The argument list of a command line given as one string split at blanks
@@ -276,4 +277,37 @@ contains
                  'deck takes the test''s name first: usharp deck lcf decks/thesis-data.nml') == 1 .and. &
                  size(written) == 0, 'usage error giving the order: '//e%message)
    end subroutine test_deck_swapped
+   !> identify at the constants that made noise-free data is at an optimum (what a step
+   !> would take off lies within the integrator's accuracy), and at the thesis's standard
+   !> guess, where A1 and A2 share two weak directions, says neither is determined (not that
+   !> A1*A2 and A2/A1 each are)
+   subroutine test_identify_words(error)
+      use usharp_cmd_identify, only: identify_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: text
+      integer :: k
+      call identify_command('decks/thesis-run2.nml', scratch_dir//'/identify-truth', &
+                            'decks/thesis-data.nml', summary, e, .true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      call check(error, index(summary(1), 'identifiability at the optimum') == 1, trim(summary(1)))
+      if (allocated(error)) return
+      call identify_command('decks/thesis-run2.nml', scratch_dir//'/identify-guess', '', summary, e, .true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      text = ''
+      do k = 1, size(summary)
+         text = text//trim(summary(k))//new_line('a')
+      end do
+      call check(error, index(text, 'neither A1 nor A2 is determined, nor a combination of them') > 0 &
+                 .and. index(text, 'only A2/A1 is determined') == 0 .and. &
+                 index(text, 'only A1*A2 is determined') == 0, text)
+   end subroutine test_identify_words
+
 end module test_cli
