@@ -293,7 +293,7 @@ contains
             j = big(1)
             k = big(2)
             e = -res%v(j, i)/res%v(k, i)
-            ! Unless another weak direction holds the same two: then neither, nor any
+            ! Unless another weak direction holds the same two alone: then neither, nor any
             ! combination of them, is (A1*A2 and A2/A1 each "determined" would make both so)
             i2 = other_weak(i, j, k)
             if (i2 > 0) then
@@ -355,13 +355,14 @@ contains
          end do
       end function partner
 
-      !> Another weak direction than i (the first) in which constants j and k both have a
-      !> share as large as in a direction's description (0 if none)
+      !> Another weak direction than i (the first) of the same two constants j and k alone
+      !> (the two with a share as large as in a direction's description; 0 if none)
       pure integer function other_weak(i, j, k) result(i2)
          integer, intent(in) :: i, j, k
          do i2 = 1, size(res%sv)
             if (i2 == i .or. res%sv(i2) > weak_ratio*res%sv(1)) cycle
-            if (abs(res%v(j, i2)) > 0.3_dp .and. abs(res%v(k, i2)) > 0.3_dp) return
+            if (abs(res%v(j, i2)) > 0.3_dp .and. abs(res%v(k, i2)) > 0.3_dp .and. &
+                count(abs(res%v(:, i2)) > 0.3_dp) == 2) return
          end do
          i2 = 0
       end function other_weak
