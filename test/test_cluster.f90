@@ -38,7 +38,8 @@ contains
          new_unittest('mpi-one-start-lm-helped-same-on-1-and-2-ranks', test_mpi_helped), &
          new_unittest('mpi-external-command-not-told-the-job', test_mpi_external_env), &
          new_unittest('usr1-outside-a-fit-ends-as-term', test_usr1_as_term), &
-         new_unittest('usr1-after-a-fit-ends-the-run-resume-completes', test_usr1_after_fit)]
+         new_unittest('usr1-after-a-fit-ends-the-run-resume-completes', test_usr1_after_fit), &
+         new_unittest('mpi-run-into-a-locked-or-unwritable-folder-exits', test_mpi_folder_refused)]
    end subroutine collect_cluster
 
    subroutine test_syntax(error)
@@ -145,6 +146,30 @@ contains
       call check(error, stat == 0 .and. index(read_text(d//'/out5'), 'run --auto-resume -q fit.nml') > 0, &
                  'PBS copy, USHARP_JOB: '//read_text(d//'/out5'))
    end subroutine test_job_copy
+
+   !> A 2-rank run into a folder another run holds exits 6, into one it cannot make exits 4,
+   !> as one process does, every rank told (rank 1 had waited in the fit for ever)
+   subroutine test_mpi_folder_refused(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: exe, mpirun, d
+      integer :: stat, cstat
+      call require_mpirun(mpirun, error)
+      if (allocated(error)) return
+      call require_exe(exe, error)
+      if (allocated(error)) return
+      d = scratch_dir//'/mpi-locked'
+      call execute_command_line('rm -rf '//d//' && mkdir -p '//d//' && : > '//d//'.file', exitstat=stat)
+      ! (the lock held by flock for 20 s; timeout ends a run that would wait for ever)
+      call execute_command_line('( flock 9; sleep 20 ) 9> '//d//'/.usharp.lock & sleep 1; '// &
+                                'OMP_NUM_THREADS=1 timeout 15 '//mpirun(19:)//exe//' run -q -o '//d//' '// &
+                                multistart_deck(2, 6)//' > /dev/null 2> '//d//'.log', exitstat=stat, cmdstat=cstat)
+      call check(error, stat, 6, 'a locked folder: exit code ('//read_text(d//'.log')//')')
+      if (allocated(error)) return
+      call execute_command_line('OMP_NUM_THREADS=1 timeout 15 '//mpirun(19:)//exe//' run -q -o '//d// &
+                                '.file '//multistart_deck(2, 6)//' > /dev/null 2> '//d//'.log', exitstat=stat, &
+                                cmdstat=cstat)
+      call check(error, stat, 4, 'an unwritable folder: exit code ('//read_text(d//'.log')//')')
+   end subroutine test_mpi_folder_refused
 
    !> mpirun for np ranks (2 when absent) of one thread each, or a skip when there is none
    subroutine require_mpirun(mpirun, error, np)

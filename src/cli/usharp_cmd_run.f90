@@ -75,6 +75,7 @@ contains
          real(dp), allocatable :: start(:), dvals(:)
          character(len=:), allocatable :: dnames(:)
          integer :: i, j, w
+         integer, allocatable :: code(:)
          logical :: spread
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
@@ -96,19 +97,28 @@ contains
          ! Under MPI the other ranks search starts for rank 0, which writes everything, and
          ! compute their share of the identifiability report
          spread = cfg%fit%identify .and. n_ranks() > 1
+         ! Rank 0 takes the folder; every rank learns whether it could before any waits for it
+         ! in the fit (the others had waited there for ever while rank 0 ended on a locked
+         ! or unwritable folder)
+         code = [0]
+         if (is_root()) then
+            call make_dir(dir, error)
+            if (.not. allocated(error)) call lock_file(join_path(dir, '.usharp.lock'), lock, error)
+            if (.not. allocated(error) .and. lock < 0) &
+               call fatal_error(error, dir//': another usharp run is writing into this folder '// &
+                  '(it holds '//join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
+            if (allocated(error)) code = [error%stat]
+         end if
+         call share(code, 0)
+         if (code(1) /= 0) then
+            if (.not. is_root()) call fatal_error(error, 'rank 0 could not take the output folder '// &
+                                                  dir//'; stopped with it', code(1))
+            return
+         end if
          if (.not. is_root()) then
             call run_fit(prob, dir, resume, out, error, force=overwrite, constants_file=constants_file, &
                          auto_resume=auto_resume)
             if (spread) call identify_over_ranks(prob, out, allocated(error), ident, report_error)
-            return
-         end if
-         call make_dir(dir, error)
-         if (allocated(error)) return
-         call lock_file(join_path(dir, '.usharp.lock'), lock, error)
-         if (allocated(error)) return
-         if (lock < 0) then
-            call fatal_error(error, dir//': another usharp run is writing into this folder '// &
-               '(it holds '//join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
             return
          end if
          call run_fit(prob, dir, resume, out, error, progress, overwrite, constants_file, auto_resume, &
