@@ -31,6 +31,7 @@ contains
          new_unittest('disk-full-exit-4-no-half-file', test_disk_full), &
          new_unittest('standard-output-full-exit-4', test_stdout_full), &
          new_unittest('journal-kept-without-resume-or-force', test_journal_kept), &
+         new_unittest('resume-of-a-finished-fit-keeps-its-cache', test_cache_kept), &
          new_unittest('specimen-reports-kept-without-force', test_specimen_kept), &
          new_unittest('specimen-diagnosis-resumed-same-reports', test_specimen_resume), &
          new_unittest('inputs-never-overwritten', test_inputs_kept), &
@@ -183,6 +184,39 @@ contains
       end if
       stat = shell('umount '//mnt)
    end subroutine test_disk_full
+
+   !> --resume of a fit that has finished replays it and leaves fit.cache as the fit wrote
+   !> it, byte for byte (the last start's residual vectors; it had been cut to its header)
+   subroutine test_cache_kept(error)
+      use usharp_filesys, only: file_hash
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=:), allocatable :: input, dir
+      integer(int64) :: h1, h2
+      logical :: ok1, ok2
+      input = deck('cache-kept.nml', "method='lm', max_evals=40", '')
+      dir = scratch_dir//'/cache-kept'
+      call run_command(input, dir, '', .false., summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, 'first run: '//e%message)
+         return
+      end if
+      call file_hash(dir//'/fit.cache', h1, ok1)
+      call run_command(input, dir, '', .true., summary, e)
+      if (allocated(e)) then
+         call test_failed(error, 'resume: '//e%message)
+         return
+      end if
+      call file_hash(dir//'/fit.cache', h2, ok2)
+      call check(error, ok1 .and. ok2 .and. h1 == h2 .and. file_size(dir//'/fit.cache') > 16, &
+                 'fit.cache changed by the resume of a finished fit')
+   contains
+      integer function file_size(path) result(n)
+         character(len=*), intent(in) :: path
+         inquire (file=path, size=n)
+      end function file_size
+   end subroutine test_cache_kept
 
    !> A second run into a folder with a journal is refused, naming --resume and --force
    subroutine test_journal_kept(error)

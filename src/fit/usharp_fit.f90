@@ -1084,8 +1084,9 @@ contains
    end function closed_start
 
    !> A start the journal closes, taken from it as it was made: its evaluations logged again
-   !> (without residuals: no search will ask for them) and the optimum it reached, no search
-   !> run and nothing simulated (a finished start needs nothing of fit.cache)
+   !> (with the residuals and Jacobians fit.cache held, the last start's of a finished fit, so
+   !> that a resume keeps them) and the optimum it reached, no search run and nothing
+   !> simulated (a finished start needs nothing of fit.cache)
    subroutine replay_start(obj, done, opt, error)
       type(fit_objective), intent(inout) :: obj
       type(start_done), intent(in) :: done
@@ -1095,16 +1096,29 @@ contains
       integer :: k
       do k = done%first, done%last
          associate (rec => obj%replay(k))
-            call obj%record(rec%x, rec%f, rec%per_test, rec%status, replay_message(obj, k), error)
+            ! With the residuals fit.cache held (a finished fit's last start): they stay in
+            ! it, which a resume of a finished fit had cut to its header
+            if (allocated(rec%r)) then
+               call obj%record(rec%x, rec%f, rec%per_test, rec%status, replay_message(obj, k), error, &
+                               rec%r)
+            else
+               call obj%record(rec%x, rec%f, rec%per_test, rec%status, replay_message(obj, k), error)
+            end if
          end associate
          if (allocated(error)) return
          obj%nreplayed = obj%nreplayed + 1
       end do
       ! Its Jacobians keep their numbers, not kept (a capturing objective's are counted by
-      ! their place in kept_jac)
+      ! their place in kept_jac); those fit.cache held stay in it, as the residuals above
       if (obj%capture) then
          allocate (none(done%njac))
          obj%kept_jac = [obj%kept_jac, none]
+      else
+         do k = obj%nsens + 1, min(obj%nsens + done%njac, size(obj%replay_jac))
+            if (.not. allocated(obj%replay_jac(k)%x)) cycle
+            call obj%log%record_jacobian(k, obj%replay_jac(k)%x, obj%replay_jac(k)%jac, error)
+            if (allocated(error)) return
+         end do
       end if
       obj%nsens = obj%nsens + done%njac
       opt = done%opt
