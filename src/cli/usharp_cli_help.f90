@@ -192,7 +192,7 @@ contains
    function version_text() result(text)
       character(len=:), allocatable :: text
       character(kind=c_char) :: buffer(64)
-      character(len=64) :: sundials, policy
+      character(len=64) :: sundials, policy, threads_from
       integer :: i, status
       sundials = 'unknown'
       if (sundials_get_version(buffer, int(size(buffer), c_int)) == 0) then
@@ -204,11 +204,15 @@ contains
       end if
       call get_environment_variable('OMP_WAIT_POLICY', policy, status=status)
       if (status /= 0) policy = 'runtime default'
+      ! (where the count comes from: the variable, or the runtime's default, the processors)
+      call get_environment_variable('OMP_NUM_THREADS', threads_from, status=status)
+      threads_from = merge('OMP_NUM_THREADS ', 'runtime default ', status == 0)
       text = 'usharp '//usharp_version_string//nl// &
          'compiler: '//compiler_version()//nl// &
          'SUNDIALS: '//trim(sundials)//nl// &
          'OpenMP: '//str(openmp_version)//', '//str(omp_get_max_threads())// &
-         ' threads (OMP_NUM_THREADS), wait policy '//trim(policy)//' (OMP_WAIT_POLICY)'//nl// &
+         ' thread'//trim(merge('s', ' ', omp_get_max_threads() /= 1))//' ('//trim(threads_from)// &
+         '), wait policy '//trim(policy)//' (OMP_WAIT_POLICY)'//nl// &
          'MPI: '//parallel_description()
    end function version_text
 end module usharp_cli_help
