@@ -6,7 +6,6 @@ module usharp_cmd_simulate
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants, check_inputs_kept, check_not_a_fit
    use usharp_simulation, only: sim_result
-   use usharp_model, only: model_type, model_at
    use usharp_simulate, only: simulate_test, add_response_noise, model_lines
    use usharp_history, only: control_strain, control_stress
    use usharp_output, only: write_sim_file

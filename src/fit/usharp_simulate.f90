@@ -73,23 +73,26 @@ contains
       integer, intent(in) :: control
       real(dp), intent(in) :: level
       integer, intent(in) :: seed
-      type(rng_type) :: rng
-      real(dp) :: scale
-      integer :: i
       if (level <= 0.0_dp) return
-      call rng%seed(seed)
       if (control == control_stress) then
-         scale = level*maxval(abs(res%strain))
-         do i = 1, size(res%strain)
-            res%strain(i) = res%strain(i) + scale*rng%normal()
-         end do
+         call add_to(res%strain)
       else
-         scale = level*maxval(abs(res%stress))
-         do i = 1, size(res%stress)
-            res%stress(i) = res%stress(i) + scale*rng%normal()
-         end do
+         call add_to(res%stress)
       end if
+   contains
+      subroutine add_to(y)
+         real(dp), intent(inout) :: y(:)
+         type(rng_type) :: rng
+         real(dp) :: scale
+         integer :: i
+         call rng%seed(seed)
+         scale = level*maxval(abs(y))
+         do i = 1, size(y)
+            y(i) = y(i) + scale*rng%normal()
+         end do
+      end subroutine add_to
    end subroutine add_response_noise
+
    !> The model as test sees it: at the test's own temperature where it has one (its drag
    !> stress's start D0 and the rates' temperature factor follow), else model itself
    subroutine test_model(model, test, mt, error)
