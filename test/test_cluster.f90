@@ -26,6 +26,7 @@ contains
          new_unittest('job-scripts-parse', test_syntax), &
          new_unittest('job-stopped-by-term-resumes-to-same-result', test_restart), &
          new_unittest('job-script-run-as-a-copy-finds-its-helper', test_job_copy), &
+         new_unittest('job-requeued-only-with-work-left', test_requeue_only_resumable), &
          new_unittest('mpi-multistart-same-on-1-2-and-3-ranks', test_mpi_multistart), &
          new_unittest('mpi-2-ranks-stopped-resume-on-1-rank', test_mpi_resume), &
          new_unittest('mpi-selfcheck-same-on-1-and-2-ranks', test_mpi_selfcheck), &
@@ -60,17 +61,19 @@ contains
       type(uerror), allocatable :: e
       character(len=:), allocatable :: exe, a, b, stop_script, fom_a, fom_b, log
       integer :: stat
+      logical :: requeued
       call require_exe(exe, error)
       if (allocated(error)) return
       call make_dir(scratch_dir, e)
       a = scratch_dir//'/cluster-whole'
       b = scratch_dir//'/cluster-stopped'
-      call execute_command_line('rm -rf '//a//' '//b)
+      call execute_command_line('rm -rf '//a//' '//b//' '//b//'.requeued')
       call execute_command_line(exe//' run -q -o '//a//' decks/thesis-run2.nml > /dev/null', exitstat=stat)
       call check(error, stat == 0, 'uninterrupted run')
       if (allocated(error)) return
       ! Start the job, wait for 300 evaluations in FOM.TXT (at most 120 s), send TERM
-      stop_script = 'USHARP='//exe//' bash scripts/cluster/usharp-job.sh decks/thesis-run2.nml '// &
+      stop_script = 'USHARP='//exe//' USHARP_REQUEUE="touch '//b//'.requeued" '// &
+         'bash scripts/cluster/usharp-job.sh decks/thesis-run2.nml '// &
          b//' 2> '//b//'.log & p=$!; n=0; '// &
          'while [ "$(cat '//b//'/FOM.TXT 2>/dev/null | wc -l)" -lt 300 ] && [ $n -lt 2400 ]; '// &
          'do sleep 0.05; n=$((n+1)); done; kill -TERM $p; wait $p; echo $? > '//b//'.rc1'
@@ -80,6 +83,9 @@ contains
       if (allocated(error)) return
       call check(error, index(read_text(b//'/fit.log'), 'finished') == 0, &
                  'the stopped run must not have finished')
+      if (allocated(error)) return
+      inquire (file=b//'.requeued', exist=requeued)
+      call check(error, requeued, 'a run stopped with work left must be requeued: '//log)
       if (allocated(error)) return
       call execute_command_line('USHARP='//exe//' bash scripts/cluster/usharp-job.sh '// &
                                 'decks/thesis-run2.nml '//b//' > /dev/null 2>> '//b//'.log', exitstat=stat)
@@ -93,6 +99,37 @@ contains
       if (allocated(error)) return
       call check(error, read_text(a//'/GUESS.TXT') == read_text(b//'/GUESS.TXT'), 'guesses differ')
    end subroutine test_restart
+
+   !> A TERM to the job script requeues the job only when usharp ends with 128 + N (stopped with
+   !> its journal written): not when it had just finished (0) or failed (1, 4), which a requeue
+   !> would only repeat. A stand-in for usharp exits with a chosen code on TERM.
+   subroutine test_requeue_only_resumable(error)
+      type(error_type), allocatable, intent(out) :: error
+      character(len=:), allocatable :: fake, dir, log
+      integer, parameter :: codes(4) = [0, 1, 4, 143]
+      integer :: k, stat
+      logical :: requeued
+      dir = scratch_dir//'/requeue'
+      call execute_command_line('rm -rf '//dir//'; mkdir -p '//dir)
+      fake = write_text('requeue/usharp', [character(len=60) :: '#!/bin/bash', &
+         'trap ''exit $FAKE_RC'' TERM USR1', 'touch "$(dirname "$0")"/ready', &
+         'while :; do sleep 0.02; done'])
+      call execute_command_line('chmod +x '//fake)
+      do k = 1, size(codes)
+         call execute_command_line('rm -f '//dir//'/ready '//dir//'/requeued')
+         call execute_command_line('bash -c ''FAKE_RC='//str(codes(k))//' USHARP='//fake// &
+            ' USHARP_REQUEUE="touch '//dir//'/requeued" bash scripts/cluster/usharp-job.sh x.nml '// &
+            dir//'/out 2> '//dir//'/log & p=$!; n=0; while [ ! -e '//dir//'/ready ] && [ $n -lt 400 ]; '// &
+            'do sleep 0.02; n=$((n+1)); done; kill -TERM $p; wait $p''', exitstat=stat)
+         log = read_text(dir//'/log')
+         call check(error, stat == codes(k), 'exit '//str(codes(k))//' passed on as '//str(stat)//': '//log)
+         if (allocated(error)) return
+         inquire (file=dir//'/requeued', exist=requeued)
+         call check(error, requeued .eqv. codes(k) > 128, 'usharp exit '//str(codes(k))//', requeued: '// &
+                    merge('yes', 'no ', requeued)//'; '//log)
+         if (allocated(error)) return
+      end do
+   end subroutine test_requeue_only_resumable
 
    !> A scheduler runs a copy of the job script from its spool folder, and a job may be
    !> submitted from anywhere: the SLURM script finds usharp-job.sh where scontrol says it was

@@ -16,7 +16,8 @@
 #   USHARP_THREADS  OpenMP threads per rank (default: the allocation's CPUs per task, else all cores)
 #   USHARP_LAUNCHER the MPI launcher and its options for a run over ranks (e.g. 'srun' or
 #                   'mpirun -np 16'; default: none, one process)
-#   USHARP_REQUEUE  a command that puts this job back in the queue after a stop by TERM
+#   USHARP_REQUEUE  a command that puts this job back in the queue after a stop by TERM that
+#                   left work to continue (usharp exit 128 + N; not after exit 0 or a failure)
 #                   (the SLURM and PBS scripts set it; empty: none)
 set -uo pipefail
 input=${1:-}
@@ -57,9 +58,19 @@ while true; do
   kill -0 "$pid" 2>/dev/null || break
 done
 if [ "$stopped" -eq 1 ]; then
-  echo "usharp-job: $(date -u +%FT%TZ) stopped by TERM (usharp exit $rc); the next start resumes" >&2
-  if [ -n "${USHARP_REQUEUE:-}" ]; then
-    sh -c "$USHARP_REQUEUE" || echo "usharp-job: requeue failed: $USHARP_REQUEUE" >&2
+  # Only a stop that left work to continue goes back in the queue: usharp exits 128 + N when a
+  # signal ended it with its journal written. A run that finished before the stop took effect
+  # (exit 0) has nothing left, and one that failed (an input, a full disk, a held folder) would
+  # fail again at every start.
+  if [ "$rc" -gt 128 ] && [ "$rc" -lt 160 ]; then
+    echo "usharp-job: $(date -u +%FT%TZ) stopped by TERM (usharp exit $rc); the next start resumes" >&2
+    if [ -n "${USHARP_REQUEUE:-}" ]; then
+      sh -c "$USHARP_REQUEUE" || echo "usharp-job: requeue failed: $USHARP_REQUEUE" >&2
+    fi
+  elif [ "$rc" -eq 0 ]; then
+    echo "usharp-job: $(date -u +%FT%TZ) TERM came as usharp finished (exit 0); not requeued" >&2
+  else
+    echo "usharp-job: $(date -u +%FT%TZ) TERM sent, usharp failed (exit $rc); not requeued" >&2
   fi
   exit "$rc"
 fi
