@@ -33,7 +33,8 @@ contains
          new_unittest('measured-forcing-noise-zero-is-linear', test_measured_raw), &
          new_unittest('measured-forcing-step-test', test_measured_steps), &
          new_unittest('gap-filled-cycle-10-as-continuous', test_gap_fill), &
-         new_unittest('gap-fill-smooth-pieces-and-peaks', test_gap_fill_smooth)]
+         new_unittest('gap-fill-smooth-pieces-and-peaks', test_gap_fill_smooth), &
+         new_unittest('gap-fill-linear-straight-across', test_gap_linear)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -396,4 +397,42 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_gap_fill_smooth
+
+   !> gap_fill = 'linear': the same noisy recording, each gap a straight line from the end of
+   !> one smoothed piece to the start of the next, with no cycles in it (one spline over all
+   !> samples had bulged across the gap)
+   subroutine test_gap_linear(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      type(history_type) :: cont, joined
+      real(dp), allocatable :: t(:), v(:), spans(:, :)
+      real(dp) :: ta, tb, va, vb, tm
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
+      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 3999)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = 1.0e-5_dp*nint(1.0e5_dp*cont%value_at(t(k)))
+      end do
+      call gap_filled_history(t, v, 1, 0.0_dp, 0.0_dp, 0.0_dp, joined, spans, uerr, straight=.true.)
+      if (allocated(uerr)) then
+         call test_failed(error, uerr%message)
+         return
+      end if
+      ta = 39.95_dp
+      tb = 180.0_dp
+      va = joined%value_at(ta)
+      vb = joined%value_at(tb)
+      call check(error, abs(va - v(800)) < 2.0e-5_dp .and. abs(vb - v(801)) < 2.0e-5_dp, &
+                 'the gap starts and ends at the recorded samples')
+      if (allocated(error)) return
+      do k = 1, 9
+         tm = ta + 0.1_dp*k*(tb - ta)
+         call check(error, joined%value_at(tm), va + 0.1_dp*k*(vb - va), 'straight across the gap', &
+                    thr=1.0e-9_dp)
+         if (allocated(error)) return
+      end do
+      ! The recorded cycles as before: the peaks of cycle 10
+      call check(error, joined%value_at(185.0_dp), 0.005_dp, 'cycle 10 maximum', thr=2.0e-5_dp)
+   end subroutine test_gap_linear
 end module test_history

@@ -51,8 +51,10 @@ contains
    !> (strain) states the cycles' range instead, about mean (strain); rate > 0 (per s) their
    !> rate. A piece that does not reverse (monotonic loading) is joined to the next by a
    !> straight line. spans(:, j): first and last time of recorded piece j (s). noise: as for
-   !> measured_history (0: no smoothing).
-   pure subroutine gap_filled_history(t, v, control, range, mean, rate, hist, spans, error, noise)
+   !> measured_history (0: no smoothing). straight: every gap a straight line from the end of
+   !> one piece to the start of the next (gap_fill = 'linear'), each piece smoothed on its own
+   pure subroutine gap_filled_history(t, v, control, range, mean, rate, hist, spans, error, noise, &
+                                      straight)
       real(dp), intent(in) :: t(:), v(:)
       integer, intent(in) :: control
       real(dp), intent(in) :: range, mean, rate
@@ -60,6 +62,7 @@ contains
       real(dp), allocatable, intent(out) :: spans(:, :)
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: noise
+      logical, intent(in), optional :: straight
       integer, allocatable :: starts(:), stops(:), kstops(:)
       type(history_type) :: piece
       type(cycle_shape) :: a, b
@@ -84,6 +87,12 @@ contains
             ! The filled cycles' corners are knots and stops both (d2 = 0: straight between)
             b = piece_end(piece, .false.)
             call fill_gap(tt(size(tt)), a, piece%t(1), b, range, mean, rate, tc, vc)
+            if (present(straight)) then
+               if (straight) then
+                  tc = tc(:0)
+                  vc = vc(:0)
+               end if
+            end if
             stops = [stops, size(tt) + [(i, i=1, size(tc))]]
             kstops = [kstops, size(tk) + [(i, i=1, size(tc))]]
             tt = [tt, tc]

@@ -8,7 +8,6 @@ module usharp_input_test
                              thesis_lcf_history, relaxation_history, ratchet_history, &
                              cyclic_history, tensile_history, creep_history, rate_jump_history, &
                              add_tmf_temperature, output_times
-   use usharp_forcing, only: measured_history
    use usharp_cycles, only: gap_filled_history, match_peaks
    use usharp_sort, only: order_of
    use usharp_table, only: read_columns, merge_repeated_times, numbers_format
@@ -806,8 +805,9 @@ contains
    !> Strain-controlled history from a measured file's time and strain columns. With
    !> gap_fill = 'cycles' its gaps (unrecorded cycles between recorded ones) are cycled
    !> through (gap_filled_history; range, mean, rate: the cycles' strain range, mean strain
-   !> and rate per s if stated, else 0) and, when there are gaps, tout holds the output times
-   !> (step dt_out, s) inside the recorded pieces only: the filled cycles are not compared.
+   !> and rate per s if stated, else 0); with 'linear' each gap is a straight line. When there
+   !> are gaps, tout holds the output times (step dt_out, s) inside the recorded pieces only:
+   !> what fills a gap is not compared.
    !> With compared (column names), table returns the file's time and those columns as
    !> read with the history, merged at repeated times (nmerged rows), for the comparison;
    !> where they cannot be read with it (a column the file lacks) table is left unallocated
@@ -858,17 +858,14 @@ contains
          end if
          vals = vals(:count(vals(:, 1) <= duration), :)
       end if
-      if (gap_fill == 'linear') then
-         call measured_history(vals(:, 1), vals(:, 2), control_strain, hist, error)
-      else
-         call gap_filled_history(vals(:, 1), vals(:, 2), control_strain, range, mean, rate, &
-                                 hist, spans, error)
-      end if
+      ! Each recorded piece is smoothed on its own: one spline over a gap bulges across it
+      call gap_filled_history(vals(:, 1), vals(:, 2), control_strain, range, mean, rate, &
+                              hist, spans, error, straight=gap_fill == 'linear')
       if (allocated(error)) then
          call prefix_error(error, spec%file//': ')
          return
       end if
-      if (gap_fill == 'linear' .or. size(spans, 2) == 1) return
+      if (size(spans, 2) == 1) return
       times = output_times(hist, dt_out)
       tol = 1.0e-9_dp*max(1.0_dp, abs(times(size(times))))
       allocate (inside(size(times)))
