@@ -185,11 +185,7 @@ contains
          hi = prob%cfg%fit%upper(prob%idx(j))
          res%at_bound(j) = abs(log10_dp(c(j)/lo)) < 1.0e-6_dp .or. abs(log10_dp(hi/c(j))) < 1.0e-6_dp
          ! Determined: no weight in the weak directions, not at a bound
-         res%determined(j) = .not. res%at_bound(j)
-         do i = 1, n
-            if (res%sv(i) <= weak_ratio*res%sv(1) .and. abs(res%v(j, i)) > 0.3_dp) &
-               res%determined(j) = .false.
-         end do
+         res%determined(j) = .not. (res%at_bound(j) .or. in_weak_direction(res, j))
          ! Nor one whose 95 % interval is wider than its search bounds (in decades): the
          ! tests do not bound it within them (A2 of a creep test alone: 326 decades)
          wide(j) = res%determined(j) .and. res%se(j) > 0.0_dp .and. &
@@ -230,6 +226,14 @@ contains
             '): not determined on its own']
       end do
    end subroutine identify_at
+
+   !> Whether constant j weighs in a direction the tests barely see (singular value at most
+   !> weak_ratio of the largest, the constant's share of it above 0.3)
+   pure logical function in_weak_direction(res, j) result(weak)
+      type(identify_result), intent(in) :: res
+      integer, intent(in) :: j
+      weak = any(res%sv <= weak_ratio*res%sv(1) .and. abs(res%v(j, :)) > 0.3_dp)
+   end function in_weak_direction
 
    !> The share of the sum of squares r'r that a Gauss-Newton step over the free columns of
    !> jac would remove, in the directions that carry information (as the intervals take
@@ -395,7 +399,9 @@ contains
          str(res%rank)//' direction'//trim(merge('s', ' ', res%rank /= 1))//')   status']
       do j = 1, n
          line = '  '//res%names(j)//'  '//real_str(res%c(j), 'es13.5')//'  '
-         if (res%determined(j) .or. res%at_bound(j)) then
+         ! At a bound the interval says how far the tests would move it off the bound, unless
+         ! it lies in a weak direction too: then it is the same artefact as below
+         if (res%determined(j) .or. (res%at_bound(j) .and. .not. in_weak_direction(res, j))) then
             line = line//'['//real_str(res%lo95(j), 'es11.4')//', '// &
                    real_str(res%hi95(j), 'es11.4')//']  ['//real_str(res%lo_joint(j), 'es11.4')// &
                    ', '//real_str(res%hi_joint(j), 'es11.4')//']  '
