@@ -148,6 +148,9 @@ row 'strain range in percent (0.5 for 0.5 %)' - u run range-half.nml -o range-ha
 awk '/^#/ { print; next } { $3 = $3 * 0.006894757; print }' lcf.txt > gpa.txt
 mk gpa.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='gpa.txt' /"
 row 'data: stress in GPa on a deck in ksi' - u run gpa.nml -o gpa
+awk '/^#/ { print; next } { $3 = $3 * 6.894757; print }' lcf.txt > mpa.txt
+mk mpa.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='mpa.txt' /"
+row 'data: stress in MPa on a deck in ksi' - u run mpa.nml -o mpa
 awk '/^#/ { print; next } { $1 = 1000 * $1; print }' lcf.txt > ms.txt
 mk ms.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='ms.txt' /"
 row 'data: time in ms' - u run ms.nml -o ms

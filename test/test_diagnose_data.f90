@@ -24,7 +24,7 @@ module test_diagnose_data
    use usharp_effects, only: test_effects, effect_index, n_effects
    use usharp_effect_problem, only: effect_problem, new_effect_problem, failed_objective
    use usharp_diagnose_options, only: diagnose_options, diagnose_options_of
-   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report
+   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, own_measure
    use usharp_diagnose, only: diagnose_result, diagnose_run, diagnose_baseline, diagnose_context, &
                               named_effect, joint_decides
    use usharp_diagnose_verdict, only: conclude, verdict_of
@@ -504,22 +504,22 @@ contains
          if (allocated(error)) return
       end do
       ! Against its replicates' own misfit at their constants: the drifting specimen stands
-      ! out (its objective per point above both of theirs), and a clean one set against the
-      ! drifting one and a clean one does not: its verdict says so, and what an effect takes
-      ! up is its gap, not how it differs
-      call check(error, size(sr%rep_ms) == 2, 'replicates'' objectives per point not found')
+      ! out (its objective above both of theirs), and a clean one set against the drifting
+      ! one and a clean one does not: its verdict says so, and what an effect takes up is its
+      ! gap, not how it differs
+      call check(error, size(sr%rep_ms) == 2, 'replicates'' objectives not found')
       if (allocated(error)) return
-      call check(error, sr%f0/sr%m > maxval(sr%rep_ms), 'the drifting specimen does not stand out: '// &
-                 real_str(sr%f0/sr%m, 'es10.3')//' against '//real_str(maxval(sr%rep_ms), 'es10.3'))
+      call check(error, own_measure(sr) > maxval(sr%rep_ms), 'the drifting specimen does not stand out: '// &
+                 real_str(own_measure(sr), 'es10.3')//' against '//real_str(maxval(sr%rep_ms), 'es10.3'))
       if (allocated(error)) return
       call check(error, index(specimen_verdict(sr), 'stand out') == 0, specimen_verdict(sr))
       if (allocated(error)) return
       call specimen_run(cfg, 1, opts, .true., sr, e, exps)
       call check(error, .not. allocated(e), 'per-specimen diagnosis of the clean test failed')
       if (allocated(error)) return
-      call check(error, sr%f0/sr%m <= sr%rep_ms(2) .and. sr%rep_ms(2) > sr%rep_ms(1), &
-                 'the clean specimen against a drifting replicate: '//real_str(sr%f0/sr%m, 'es10.3')// &
-                 ' per point against '//real_str(sr%rep_ms(1), 'es10.3')//' and '//real_str(sr%rep_ms(2), 'es10.3'))
+      call check(error, own_measure(sr) <= sr%rep_ms(2) .and. sr%rep_ms(2) > sr%rep_ms(1), &
+                 'the clean specimen against a drifting replicate: '//real_str(own_measure(sr), 'es10.3')// &
+                 ' against '//real_str(sr%rep_ms(1), 'es10.3')//' and '//real_str(sr%rep_ms(2), 'es10.3'))
       if (allocated(error)) return
       call check(error, index(specimen_verdict(sr), trim(sr%name)//' does not stand out from its replicates') > 0 .and. &
                  index(specimen_verdict(sr), 'differs from its replicates') == 0, specimen_verdict(sr))

@@ -563,9 +563,12 @@ contains
       integer :: n, np, i
       real(dp) :: share
       pf = peak_file()
-      ! Sampled every second: every output time has a measurement (see measured_times)
+      ! Sampled every second: every output time has a measurement (see measured_times); a
+      ! stress of the cycling's strain, elastic at first and flowing at 50 ksi
       df = write_text('loops.csv', [character(len=40) :: 'time,stress', &
-                      (str(i)//','//str(10 - abs(30 - i)/3), i=0, 60)])
+                      (str(i)//','//real_str(50.0_dp*tanh(22500.0_dp*0.005_dp* &
+                      (1.0_dp - 4.0_dp*abs(modulo(i + 5.0_dp, 20.0_dp)/20.0_dp - 0.5_dp))/50.0_dp), 'es14.6'), &
+                      i=0, 60)])
       call problem_of('both.nml', [character(len=200) :: &
          "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
          "dt_out=2.0, target='both', peak_file='peaks.csv', data_file='loops.csv', peak_share=0.3 /"], cfg, prob, error)

@@ -62,7 +62,7 @@ contains
          new_unittest('namelist-reference-complete', test_reference_complete), &
          new_unittest('missing-fit-group-named', test_missing_fit), &
          new_unittest('list-longer-than-it-holds-named', test_long_list), &
-         new_unittest('measured-strain-in-percent-below-one-named', test_percent_strain_below_one)]
+         new_unittest('strain-in-percent-or-stress-in-a-smaller-unit-named', test_percent_strain_below_one)]
    end subroutine collect_input
 
    !> An input file of the model, the constants and the given extra lines
@@ -375,35 +375,54 @@ contains
    end subroutine test_long_list
 
    !> A measured strain in percent below 1 (the thesis's LCF data, strain times 100, at most
-   !> 0.5) passes the check of its size; the stiffness of its stretches tells it
+   !> 0.5) passes the check of its size; the stiffness of its stretches tells it. So does a
+   !> stress in MPa read as ksi (times 6.895, within the size check's bounds), under the
+   !> measured strain and under the programmed one alike
    subroutine test_percent_strain_below_one(error)
       use usharp_objective, only: fit_problem, setup_problem
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(fit_problem) :: prob
       type(uerror), allocatable :: uerr
-      character(len=:), allocatable :: deck
+      character(len=:), allocatable :: deck, programmed
       integer :: k
       deck = write_text('pct.nml', deck_lines([character(len=80) :: &
          "&fit fitted = 'H1' /", "&test name='lcf', history='data', data_file='pct.txt' /"]))
-      do k = 1, 2
-         call write_data(merge(1.0_dp, 100.0_dp, k == 1))
-         call read_config(deck, cfg, uerr)
-         if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
-         if (k == 1) then
-            call check(error, .not. allocated(uerr), 'the strain in mm/mm passes')
+      programmed = write_text('pct-lcf.nml', deck_lines([character(len=80) :: &
+         "&fit fitted = 'H1' /", "&test name='lcf', history='thesis_lcf', data_file='pct.txt' /"]))
+      do k = 1, 5
+         call write_data(merge(100.0_dp, 1.0_dp, k == 2), merge(6.895_dp, 1.0_dp, k >= 3))
+         if (k >= 4) then
+            call read_config(programmed, cfg, uerr)
          else
+            call read_config(deck, cfg, uerr)
+         end if
+         if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+         select case (k)
+         case (1)
+            call check(error, .not. allocated(uerr), 'the strain in mm/mm passes')
+         case (2)
             call check_message(error, uerr, "pct.txt: the stress rises with column 'strain' at "// &
                                'most 2.6')
             if (allocated(error)) return
             call check_message(error, uerr, 'is the strain in percent?')
-         end if
+         case (3, 4)
+            call check_message(error, uerr, "pct.txt: column 'stress' rises with the strain by ")
+            if (allocated(error)) return
+            call check_message(error, uerr, "is the stress in another unit than data_unit = 'ksi'")
+         case (5)
+            ! The programmed history with the right stress: it passes
+            call write_data(1.0_dp, 1.0_dp)
+            call read_config(programmed, cfg, uerr)
+            if (.not. allocated(uerr)) call setup_problem(cfg, prob, uerr)
+            call check(error, .not. allocated(uerr), 'the programmed history with the data in ksi passes')
+         end select
          if (allocated(error)) return
       end do
    contains
-      !> The thesis's LCF data with the strain times scale, as pct.txt
-      subroutine write_data(scale)
-         real(dp), intent(in) :: scale
+      !> The thesis's LCF data with the strain and the stress scaled, as pct.txt
+      subroutine write_data(scale, stress_scale)
+         real(dp), intent(in) :: scale, stress_scale
          real(dp) :: row(6)
          integer :: src, dst, ios
          character(len=400) :: line
@@ -415,7 +434,7 @@ contains
             if (ios /= 0) exit
             if (line(1:1) == '#') cycle
             read (line, *) row
-            write (dst, '(3es24.15)') row(1), scale*row(2), row(3)
+            write (dst, '(3es24.15)') row(1), scale*row(2), stress_scale*row(3)
          end do
          close (src)
          close (dst)

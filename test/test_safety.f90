@@ -12,6 +12,7 @@ module test_safety
    use usharp_output, only: write_lines
    use usharp_cmd_run, only: run_command
    use usharp_cmd_design, only: design_command
+   use usharp_cmd_diagnose, only: diagnose_command
    use usharp_strings, only: str, report_line_len
    use usharp_cli_args, only: cli_command, arg_string, parse_arguments
    use test_util, only: write_text, usharp_exe, read_text, scratch_dir, check_message, fit_deck
@@ -38,7 +39,7 @@ contains
          new_unittest('user-files-and-fits-kept', test_strangers_kept), &
          new_unittest('user-files-kept-by-predict-identify-deck-simulate', test_own_files_kept), &
          new_unittest('user-files-kept-by-design-and-diagnose', test_reports_kept), &
-         new_unittest('output-folder-locked', test_lock), &
+         new_unittest('output-folder-locked-by-run-design-diagnose', test_lock), &
          new_unittest('resume-refused-after-a-change', test_fingerprint), &
          new_unittest('start-outside-its-bounds-told', test_start_outside), &
          new_unittest('torn-fingerprint-line-a-damaged-journal', test_torn_fingerprint), &
@@ -764,7 +765,7 @@ contains
    subroutine test_lock(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      character(len=report_line_len), allocatable :: summary(:)
+      character(len=report_line_len), allocatable :: summary(:), lines(:)
       character(len=:), allocatable :: input, dir
       integer :: fd
       input = deck('lock.nml', 'max_evals=6', '')
@@ -776,9 +777,25 @@ contains
       if (allocated(error)) return
       call run_command(input, dir, '', .false., summary, e, force=.true.)
       call unlock_file(fd)
-      call check_message(error, e, 'another usharp run is writing into this folder')
+      call check_message(error, e, 'another usharp is writing into this folder')
       if (allocated(error)) return
       call check(error, e%stat, stat_busy, 'exit code 6')
+      if (allocated(error)) return
+      ! A design and a diagnosis hold their folders alike (two into one had shared a journal)
+      call make_dir(dir//'/diagnose', e)
+      call lock_file(dir//'/diagnose/.usharp.lock', fd, e)
+      call diagnose_command('decks/thesis-diagnose.nml', dir, '', lines, e, mode='force')
+      call unlock_file(fd)
+      call check_message(error, e, 'another usharp is writing into this folder')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_busy, 'diagnose: exit code 6')
+      if (allocated(error)) return
+      call lock_file(dir//'/.usharp.lock', fd, e)
+      call design_command('decks/thesis-design.nml', dir, '', lines, e, 'force')
+      call unlock_file(fd)
+      call check_message(error, e, 'another usharp is writing into this folder')
+      if (allocated(error)) return
+      call check(error, e%stat, stat_busy, 'design: exit code 6')
       if (allocated(error)) return
       call check(error, file_exists(dir//'/.usharp.lock'), 'lock file present')
       if (allocated(error)) return

@@ -27,7 +27,7 @@ contains
          new_unittest('repeated-times-merged', test_merge), &
          new_unittest('long-line-and-no-final-newline', test_long_line), &
          new_unittest('real-a617-files-load', test_realdata), &
-         new_unittest('csv-field-written-and-read-back', test_csv_field), &
+         new_unittest('csv-field-and-tab-separated-cells-read-back', test_csv_field), &
          new_unittest('report-lines-wrapped-and-long-words-cut', test_add_line)]
    end subroutine collect_table
 
@@ -44,6 +44,15 @@ contains
       if (allocated(error)) return
       call check(error, csv_field('baseline') == 'baseline' .and. csv_field('a "b"') == '"a ""b"""', &
                  'plain or quoted field written wrongly')
+      if (allocated(error)) return
+      ! Tab-separated, as a spreadsheet exports an empty cell: four fields, the third empty;
+      ! blanks alone: any run of them separates
+      call split_fields('1.5'//achar(9)//'2'//achar(9)//achar(9)//' 4', fields, n)
+      call check(error, n == 4 .and. fields(1) == '1.5' .and. fields(2) == '2' .and. &
+                 len_trim(fields(3)) == 0 .and. fields(4) == '4', 'tab-separated row with an empty cell')
+      if (allocated(error)) return
+      call split_fields('  1.5   2  4', fields, n)
+      call check(error, n == 3 .and. fields(3) == '4', 'blank-separated row')
    end subroutine test_csv_field
 
    !> Report lines: text longer than a line wrapped at a space, continuations indented by two

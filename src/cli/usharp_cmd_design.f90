@@ -5,11 +5,11 @@ module usharp_cmd_design
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept
    use usharp_design, only: design_result, design_run, design_report, design_mark
-   use usharp_filesys, only: make_dir, join_path
+   use usharp_filesys, only: join_path, unlock_file
    use usharp_output, only: write_lines
    use usharp_mpi, only: is_root
    use usharp_strings, only: report_line_len
-   use usharp_overwrite, only: check_overwrite
+   use usharp_overwrite, only: check_overwrite, take_folder
    implicit none
    private
 
@@ -25,6 +25,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: cfg
       type(design_result) :: res
+      integer :: lock
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
       call check_inputs_kept(cfg, path, constants_file, [character(len=14) :: 'design.txt', &
@@ -34,13 +35,15 @@ contains
       ! too) is replaced
       call check_overwrite(cfg%out_dir, ['design.txt'], [design_mark], 'design', mode == 'force', error)
       if (allocated(error)) return
-      call make_dir(cfg%out_dir, error)
+      ! Held for the design: a second design (or run) into the folder is refused
+      call take_folder(cfg%out_dir, lock, error)
       if (allocated(error)) return
       call design_run(cfg, res, error, join_path(cfg%out_dir, 'design.journal'), mode, constants_file)
-      if (allocated(error)) return
-      if (.not. is_root()) return
-      lines = design_report(res)
-      call write_lines(join_path(cfg%out_dir, 'design.txt'), lines, error)
+      if (.not. allocated(error) .and. is_root()) then
+         lines = design_report(res)
+         call write_lines(join_path(cfg%out_dir, 'design.txt'), lines, error)
+      end if
+      call unlock_file(lock)
    end subroutine design_command
 
 end module usharp_cmd_design

@@ -8,14 +8,14 @@ module usharp_cmd_diagnose
                               diagnose_options_of, diagnose_progress, diagnose_journal, &
                               check_diagnosable
    use usharp_diagnose_report, only: report_names, report_marks
-   use usharp_overwrite, only: check_overwrite, check_overwrite_each
+   use usharp_overwrite, only: check_overwrite, check_overwrite_each, take_folder
    use usharp_fit, only: fit_fingerprint
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index, &
                                        specimen_csv, specimen_csv_header
    use usharp_diagnose_journal, only: next_unit, record_unit, text_lines, unit_digest
    use usharp_error, only: fatal_error, stat_input, stat_usage
-   use usharp_filesys, only: make_dir, join_path, file_exists
+   use usharp_filesys, only: make_dir, join_path, file_exists, unlock_file
    use usharp_output, only: write_lines
    use usharp_mpi, only: is_root, parallel_sync, n_ranks
    use usharp_strings, only: report_line_len
@@ -44,6 +44,7 @@ contains
       type(diagnose_journal) :: journal
       type(error_type), allocatable :: e
       character(len=:), allocatable :: dir, journal_mode
+      integer :: lock
       call read_config_as(path, constants_file, out_dir, cfg, error)
       if (allocated(error)) return
       call diagnose_options_of(cfg, opts, error)
@@ -68,19 +69,21 @@ contains
       ! report of an earlier diagnosis (--resume too) is replaced
       call check_overwrite_each(dir, report_names, report_marks, 'diagnose', journal_mode == 'force', error)
       if (allocated(error)) return
-      call make_dir(dir, error)
+      ! Held for the diagnosis: a second one into the folder would share its journal
+      call take_folder(dir, lock, error)
       if (allocated(error)) return
       ! The journal's own format joins the fingerprint (6: each unit headed by its request's
       ! digest). Units made for other requests (another build of usharp that orders or starts
       ! its runs otherwise) are refused unit by unit as they are replayed (usharp_diagnose_journal)
       call journal%open(join_path(dir, 'diagnose.journal'), fit_fingerprint(cfg, constants_file)// &
                         ' units=6', journal_mode, error)
-      if (allocated(error)) return
-      call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
-      call journal%close(e)
-      if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
-      if (allocated(error) .or. .not. is_root()) return
-      call write_report(dir, res, opts, lines, error)
+      if (.not. allocated(error)) then
+         call diagnose_run(cfg, opts, res, error, progress=progress, journal=journal)
+         call journal%close(e)
+         if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
+         if (.not. allocated(error) .and. is_root()) call write_report(dir, res, opts, lines, error)
+      end if
+      call unlock_file(lock)
    end subroutine diagnose_command
 
    !> Per-specimen mode: each named specimen (or every test) against its replicates;
@@ -103,7 +106,7 @@ contains
       character(len=report_line_len), allocatable :: part(:), verdicts(:)
       character(len=:), allocatable :: report, dir, text, unit_lines(:), table(:), name, unused
       integer, allocatable :: which(:)
-      integer :: i, k, at
+      integer :: i, k, at, lock
       character(len=16) :: digest
       logical :: replay
       !> a report's and a table's name and how their first lines begin
@@ -138,12 +141,16 @@ contains
             end if
          end do
       end do
-      call make_dir(dir, error)
+      ! Held for the diagnosis (on rank 0 alone: the others do not come here)
+      call take_folder(dir, lock, error, alone=.true.)
       if (allocated(error)) return
       ! (units=2: a unit holds the report and then its table)
       call journal%open(join_path(dir, 'specimen.journal'), fit_fingerprint(cfg, constants_file)// &
                         ' specimen='//trim(cfg%diagnose%specimen)//' units=2', mode, error)
-      if (allocated(error)) return
+      if (allocated(error)) then
+         call unlock_file(lock)
+         return
+      end if
       jr => journal
       allocate (lines(0), verdicts(0))
       do i = 1, size(which)
@@ -194,6 +201,7 @@ contains
          lines = [character(len=report_line_len) :: lines, '## The verdicts, specimen by specimen', '', verdicts]
       call journal%close(e)
       if (allocated(e) .and. .not. allocated(error)) call move_alloc(e, error)
+      call unlock_file(lock)
       ! Settings that do nothing here are said, not passed over
       unused = specimen_unused(cfg%diagnose)
       if (len(unused) > 0 .and. allocated(lines)) lines = [character(len=report_line_len) :: &
@@ -211,6 +219,7 @@ contains
       type(diagnose_options) :: opts
       type(selfcheck_result) :: sc
       character(len=:), allocatable :: deck, dir
+      integer :: lock
       dir = out_dir
       if (len(dir) == 0) dir = 'selfcheck'
       deck = path
@@ -221,28 +230,36 @@ contains
       if (len(deck) == 0) call check_overwrite(dir, ['selfcheck.nml'], &
          ['! usharp diagnose --selfcheck'], 'diagnose', mode == 'force', error)
       if (allocated(error)) return
-      call make_dir(dir, error)
+      ! Held for the self-check: a second one into the folder would share its journal
+      call take_folder(dir, lock, error)
       if (allocated(error)) return
-      if (len(deck) == 0) then
-         ! The built-in matrix, written out so that it can be edited and run again (by rank 0;
-         ! the other ranks read it)
-         deck = join_path(dir, 'selfcheck.nml')
-         if (is_root()) call write_lines(deck, selfcheck_deck(), error)
-         call parallel_sync()
+      call selfcheck_in(deck)
+      call unlock_file(lock)
+   contains
+      !> The self-check in the folder held: the matrix (deck, or the built-in one written)
+      subroutine selfcheck_in(deck)
+         character(len=:), allocatable, intent(inout) :: deck
+         if (len(deck) == 0) then
+            ! The built-in matrix, written out so that it can be edited and run again (by rank 0;
+            ! the other ranks read it)
+            deck = join_path(dir, 'selfcheck.nml')
+            if (is_root()) call write_lines(deck, selfcheck_deck(), error)
+            call parallel_sync()
+            if (allocated(error)) return
+         end if
+         call read_config_as(deck, '', dir, cfg, error)
          if (allocated(error)) return
-      end if
-      call read_config_as(deck, '', dir, cfg, error)
-      if (allocated(error)) return
-      call diagnose_options_of(cfg, opts, error)
-      if (allocated(error)) return
-      call make_dir(cfg%out_dir, error)
-      if (allocated(error)) return
-      call selfcheck_run(cfg, opts, sc, error, join_path(cfg%out_dir, 'selfcheck.journal'), mode)
-      if (allocated(error)) return
-      if (.not. is_root()) return
-      lines = selfcheck_report(sc)
-      call make_dir(cfg%out_dir, error)
-      if (allocated(error)) return
-      call write_lines(join_path(cfg%out_dir, 'selfcheck.md'), lines, error)
+         call diagnose_options_of(cfg, opts, error)
+         if (allocated(error)) return
+         call make_dir(cfg%out_dir, error)
+         if (allocated(error)) return
+         call selfcheck_run(cfg, opts, sc, error, join_path(cfg%out_dir, 'selfcheck.journal'), mode)
+         if (allocated(error)) return
+         if (.not. is_root()) return
+         lines = selfcheck_report(sc)
+         call make_dir(cfg%out_dir, error)
+         if (allocated(error)) return
+         call write_lines(join_path(cfg%out_dir, 'selfcheck.md'), lines, error)
+      end subroutine selfcheck_in
    end subroutine selfcheck_command
 end module usharp_cmd_diagnose

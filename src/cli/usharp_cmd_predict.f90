@@ -90,7 +90,9 @@ contains
             name = cfg%tests(i)%name
             if (part == 1) name = cfg%tests(i)%name//' peaks'
             write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
-            if (part == 0) row = trim(row)//data_note(prob%targets(i)%exp, cfg%tests(i)%dt_out)
+            ! (the note on the test's first row: its peaks' where it compares only those)
+            if (part == 0 .or. count(kind == 0) == 0) row = trim(row)//data_note(prob%targets(i)%exp, &
+                                                                                 cfg%tests(i)%dt_out)
             summary = [character(len=report_line_len) :: summary, '  '//pad(name, w)//trim(row)]
          end do
       end do

@@ -2,7 +2,7 @@
 !> best.nml, the best fit's curves beside the data, and a summary
 module usharp_cmd_run
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_busy, stat_input, stat_usage
+   use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_input, stat_usage
    use usharp_strings, only: str, real_str, pad, shell_word, join, report_line_len
    use usharp_model, only: model_type
    use usharp_config, only: run_config, fit_config
@@ -13,8 +13,8 @@ module usharp_cmd_run
    use usharp_fit, only: run_fit, fit_outcome, progress_interface
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_sim_file, write_lines, result_file
-   use usharp_filesys, only: make_dir, join_path, lock_file, unlock_file, file_exists
-   use usharp_overwrite, only: made_by_usharp, simulate_mark, check_temporary_names
+   use usharp_filesys, only: join_path, unlock_file, file_exists
+   use usharp_overwrite, only: made_by_usharp, simulate_mark, check_temporary_names, take_folder
    use usharp_version, only: usharp_version_string
    use usharp_identify, only: identify_result, identify_at, identify_report
    use usharp_mpi, only: is_root, n_ranks, any_rank, share
@@ -75,7 +75,6 @@ contains
          real(dp), allocatable :: start(:), dvals(:)
          character(len=:), allocatable :: dnames(:)
          integer :: i, j, w
-         integer, allocatable :: code(:)
          logical :: spread
          allocate (summary(0))
          call read_config_as(path, constants_file, out_dir, cfg, error)
@@ -100,21 +99,8 @@ contains
          ! Rank 0 takes the folder; every rank learns whether it could before any waits for it
          ! in the fit (the others had waited there for ever while rank 0 ended on a locked
          ! or unwritable folder)
-         code = [0]
-         if (is_root()) then
-            call make_dir(dir, error)
-            if (.not. allocated(error)) call lock_file(join_path(dir, '.usharp.lock'), lock, error)
-            if (.not. allocated(error) .and. lock < 0) &
-               call fatal_error(error, dir//': another usharp run is writing into this folder '// &
-                  '(it holds '//join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
-            if (allocated(error)) code = [error%stat]
-         end if
-         call share(code, 0)
-         if (code(1) /= 0) then
-            if (.not. is_root()) call fatal_error(error, 'rank 0 could not take the output folder '// &
-                                                  dir//'; stopped with it', code(1))
-            return
-         end if
+         call take_folder(dir, lock, error)
+         if (allocated(error)) return
          if (.not. is_root()) then
             call run_fit(prob, dir, resume, out, error, force=overwrite, constants_file=constants_file, &
                          auto_resume=auto_resume)

@@ -41,7 +41,7 @@ module usharp_diagnose_specimen
    private
 
    public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
-   public :: specimen_csv, specimen_csv_header
+   public :: specimen_csv, specimen_csv_header, own_measure
    public :: specimen_deviance, profiled_deviance, constants_directions, specimen_noncentrality
 
    !> The first line of specimen-<name>.csv (see specimen_csv)
@@ -90,9 +90,12 @@ module usharp_diagnose_specimen
       real(dp), allocatable :: c(:)          !< constants fitted to the replicates
       integer, allocatable :: c_bound(:)     !< of them, those at a search bound (see bound_list)
       real(dp) :: f_rep = 0.0_dp             !< their objective on the replicates
-      !> each replicate's objective per point at their constants: how well they fit
-      !> themselves, against which the specimen's per point shows whether it stands out
+      !> each replicate's objective at their constants, in the fit's own measure of a test
+      !> (Eq. 7: the test's objective, a mean square error; Eq. 13: its sum of squares per
+      !> point): how well they fit themselves, against which the specimen's shows whether it
+      !> stands out, whatever the number of points of each
       real(dp), allocatable :: rep_ms(:)
+      logical :: per_point = .false.         !< the measure divides by the points (Eq. 13)
       integer :: m = 0                       !< the specimen's points
       real(dp) :: f0 = 0.0_dp                !< the specimen's objective, predicted
       real(dp) :: noise = 0.0_dp             !< the part of it the noise explains
@@ -224,7 +227,11 @@ contains
       allocate (rrep(er%nres()))
       call er%residual_at(er%start(), rrep, ok)
       sr%nevals = sr%nevals + 1
-      if (ok) sr%rep_ms = block_sums(test_sizes(prob, reps), rrep)/real(test_sizes(prob, reps), dp)
+      sr%per_point = prob%cfg%fit%objective /= 'eq7'
+      if (ok) then
+         sr%rep_ms = block_sums(test_sizes(prob, reps), rrep)
+         if (sr%per_point) sr%rep_ms = sr%rep_ms/real(test_sizes(prob, reps), dp)
+      end if
       ! The specimen predicted, and its noise part
       call new_effect_problem(prob, [ispec], 0, base, peak, ep, free_constants=.false.)
       sr%m = ep%nres()
@@ -873,8 +880,15 @@ contains
       typical = .false.
       if (.not. allocated(sr%rep_ms) .or. sr%m < 1) return
       if (size(sr%rep_ms) == 0) return
-      typical = sr%f0/real(sr%m, dp) <= maxval(sr%rep_ms)
+      typical = own_measure(sr) <= maxval(sr%rep_ms)
    end function typical
+
+   !> The specimen's objective at its replicates' constants in the measure of rep_ms
+   pure real(dp) function own_measure(sr) result(f)
+      type(specimen_result), intent(in) :: sr
+      f = sr%f0
+      if (sr%per_point) f = sr%f0/real(max(sr%m, 1), dp)
+   end function own_measure
 
    !> A significant effect of plausible magnitude that the diagnosis resolves
    pure logical function finding(e)
@@ -946,8 +960,8 @@ contains
       end if
       if (allocated(sr%rep_ms)) then
          if (size(sr%rep_ms) > 0) then
-            ln = 'Its objective per point at these constants, '//real_str(sr%f0/max(sr%m, 1), 'es9.2')// &
-                 ', against each replicate''s own there (fitted to them):'
+            ln = 'Its objective at these constants'//trim(merge(' per point', '          ', sr%per_point))// &
+                 ', '//real_str(own_measure(sr), 'es9.2')//', against each replicate''s own there (fitted to them):'
             do j = 1, size(sr%rep_ms)
                ln = ln//trim(merge(' ', ',', j == 1))//' '//trim(sr%replicates(j))//' '//real_str(sr%rep_ms(j), 'es9.2')
             end do
@@ -1096,8 +1110,9 @@ contains
          hidden = sr%effects%hidden
          verdict = verdict//missed_note(names, power, hidden, 'this test alone')
       end if
-      if (typical(sr)) verdict = trim(sr%name)//' does not stand out from its replicates (objective per '// &
-         'point at their constants '//real_str(sr%f0/max(sr%m, 1), 'es9.2')//', theirs '// &
+      if (typical(sr)) verdict = trim(sr%name)//' does not stand out from its replicates (objective'// &
+         trim(merge(' per point', '          ', sr%per_point))//' at their constants '// &
+         real_str(own_measure(sr), 'es9.2')//', theirs '// &
          real_str(minval(sr%rep_ms), 'es9.2')//' to '//real_str(maxval(sr%rep_ms), 'es9.2')//'); '//verdict
       call add('**Verdict:** '//verdict)
       call add('')

@@ -45,6 +45,7 @@ contains
       conf = pack([(j, j=1, size(res%effects))], confirmed)
       if (size(conf) == 0) then
          call no_effect(res)
+         res%verdict = res%verdict//baseline_note(res)
          return
       end if
       best = conf(1)
@@ -65,8 +66,22 @@ contains
       res%alike = res%alike(order_of(real(keys, dp) + 1.0e-6_dp*squash(res%effects(res%alike)%dbic)))
       res%leading = res%alike(1)
       call effect_verdict(res)
-      res%verdict = res%verdict//serration_note(res)
+      res%verdict = res%verdict//serration_note(res)//baseline_note(res)
    end subroutine conclude
+
+   !> Every share and BIC is measured from the baseline: one that ran away (constants at a
+   !> search bound) or did not converge is said in the verdict too, not only in its section
+   pure function baseline_note(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      text = ''
+      if (allocated(res%c_bound)) then
+         if (any(res%c_bound /= 0)) text = '; measured from a baseline that ran away ('// &
+            bound_list(res%cnames, res%c, res%c_bound)//' at a search bound of &fit)'
+      end if
+      if (len(text) == 0 .and. .not. res%baseline_converged) &
+         text = '; measured from a baseline that had not converged'
+   end function baseline_note
 
    !> The tests whose inelastic residual oscillates, named as serrated flow: no catalogue
    !> effect carries an oscillation, and its share of the gap can rank below a cycle's
@@ -359,9 +374,17 @@ contains
       if (power < 0.0_dp) then
          text = '- | -'
       else
-         text = real_str(lambda, 'es9.2')//' | '//real_str(power, 'f0.2')
+         text = real_str(lambda, 'es9.2')//' | '//power_text(power)
       end if
    end function power_cells
+
+   !> A power with two decimals cut, not rounded (0.949 is short of 0.95), so that the table
+   !> and the verdict print the same figure
+   pure function power_text(power) result(text)
+      real(dp), intent(in) :: power
+      character(len=:), allocatable :: text
+      text = real_str(real(floor(100.0_dp*power), dp)/100.0_dp, 'f0.2')
+   end function power_text
 
    !> The effects the tests could miss at the low end of their ranges (the rule's power there
    !> below 0.95), as a clause of a verdict ('' when there are none): for each, that power,
@@ -378,9 +401,7 @@ contains
       do j = 1, size(names)
          if (power(j) < 0.0_dp .or. power(j) >= 0.95_dp) cycle
          if (len(text) > 0) text = text//', '
-         ! (two decimals cut, not rounded: 0.949 is short of 0.95)
-         text = text//trim(names(j))//' (power '//real_str(real(floor(100.0_dp*power(j)), dp)/100.0_dp, &
-                                                          'f0.2')//' there'
+         text = text//trim(names(j))//' (power '//power_text(power(j))//' there'
          associate (h => hidden(j))
             if (h%times > 0.0_dp .and. h%beyond) then
                text = text//'; not found with power 0.95 within its physical limit'
@@ -389,7 +410,7 @@ contains
                if (len_trim(h%magnitude) > 0) text = text//', '//trim(h%magnitude)
                ! (a test named only where it finds it more often than these tests do)
                if (len_trim(h%test) > 0 .and. h%power > power(j)) text = text//', which a '// &
-                  trim(h%test)//' would find with power '//real_str(h%power, 'f0.2')
+                  trim(h%test)//' would find with power '//power_text(h%power)
             end if
          end associate
          text = text//')'

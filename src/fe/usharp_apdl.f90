@@ -18,6 +18,8 @@ module usharp_apdl
    public :: apdl_deck, apdl_real, line_len
 
    integer, parameter :: line_len = 160
+   !> A history's start value away from 0 is put on over this share of its first segment
+   real(dp), parameter :: jump_share = 1.0e-6_dp
 
 contains
 
@@ -48,16 +50,19 @@ contains
       integer, allocatable :: spos(:)
       real(dp), allocatable :: sval(:)
       character(len=:), allocatable :: snames(:), snotes(:)
-      real(dp) :: v
+      real(dp) :: v, t0, v0, jump
       logical :: strain
 
       associate (h => test%hist, ext => test%ext)
-         if (h%t(1) < 0.0_dp .or. (h%t(1) == 0.0_dp .and. h%v(1) /= 0.0_dp)) then
-            call fatal_error(error, "test '"//test%name//"': an APDL deck starts unloaded at "// &
-               't = 0; this history starts at t = '//real_str(h%t(1), 'g0.6')//' s with value '// &
-               real_str(h%v(1), 'g0.6'))
-            return
-         end if
+         ! ANSYS starts at t = 0 unloaded: the history's times are taken from its start (a
+         ! recording from t = 10 s, or cut from a longer test), and a start value that is not
+         ! round-off of 0 (a measured strain starting at 3e-5) is a first load step within
+         ! jump_share of the first segment, elastic as the internal driver's start is
+         t0 = h%t(1)
+         v0 = h%v(1)
+         if (abs(v0) <= 1.0e-9_dp*maxval(abs(h%v))) v0 = 0.0_dp
+         jump = 0.0_dp
+         if (v0 /= 0.0_dp) jump = jump_share*(h%t(2) - t0)
          strain = h%control == control_strain
          call split_name(ext%constants_file, cname, cext)
          call split_name(ext%output_file, oname, oext)
@@ -72,14 +77,17 @@ contains
          do j = 1, size(spos)
             names_text = names_text//', '//trim(snames(j))
          end do
-         allocate (lines(80 + 7*size(h%t)))
+         allocate (lines(90 + 7*size(h%t)))
          n = 0
          call add('! usharp '//usharp_version_string//" APDL deck for test '"//test%name//"' of "// &
                   cfg%path)
          call add('! regenerate: '//command)
-         call add('! history '//test%history_kind//', '//merge('strain', 'stress', strain)// &
-                  ' control, '//str(size(h%t) - 1)//' load steps, '//real_str(h%end_time(), 'g0.8')// &
-                  ' s')
+         row = '! history '//test%history_kind//', '//merge('strain', 'stress', strain)// &
+               ' control, '//str(size(h%t) - 1)//' load steps, '//real_str(h%end_time() - t0, 'g0.8')//' s'
+         if (t0 /= 0.0_dp) row = row//' (its times from its start, '//real_str(t0, 'g0.8')//' s)'
+         call add(row)
+         if (v0 /= 0.0_dp) call add('! load step 0 puts its start value '//apdl_real(v0)//' on within '// &
+                                    apdl_real(jump)//' s, elastically, as usharp starts from it')
          call add('! units: stress '//cfg%units//' (E and the constants), time s, temperature K;')
          call add('! the cube has unit edges, so the top displacement is the axial strain.')
          call add('! needs an ANSYS linked with the usharp USERMAT (docs/guide/fe-users.md).')
@@ -135,18 +143,21 @@ contains
          call add('AUTOTS,ON')
          call add('KBC,0')
          call add('OUTRES,ALL,ALL')
+         if (v0 /= 0.0_dp) then
+            call add('! load step 0')
+            call add('TIME,'//apdl_real(jump))
+            call add('DELTIM,'//apdl_real(jump)//','//apdl_real(min(cfg%solver%dt_min, jump))//','// &
+                     apdl_real(jump))
+            call load(v0)
+            call add('SOLVE')
+         end if
          do k = 2, size(h%t)
             v = h%v(k)
             call add('! load step '//str(k - 1))
-            call add('TIME,'//apdl_real(h%t(k)))
+            call add('TIME,'//apdl_real(h%t(k) - t0))
             call add('DELTIM,'//apdl_real(cfg%solver%dt_init)//','//apdl_real(cfg%solver%dt_min)// &
                      ','//apdl_real(cfg%solver%dt_max))
-            if (strain) then
-               call add('D,5,UZ,'//apdl_real(v)//',,8,1')
-            else
-               ! uniform traction on the unit top face: a quarter of the force at each node
-               call add('F,5,FZ,'//apdl_real(0.25_dp*v)//',,8,1')
-            end if
+            call load(v)
             call add('SOLVE')
          end do
          call add('FINISH')
@@ -168,6 +179,17 @@ contains
          n = n + 1
          lines(n) = text
       end subroutine add
+
+      !> The load at the end of a load step: the top's displacement (the strain) or force
+      subroutine load(value)
+         real(dp), intent(in) :: value
+         if (strain) then
+            call add('D,5,UZ,'//apdl_real(value)//',,8,1')
+         else
+            ! uniform traction on the unit top face: a quarter of the force at each node
+            call add('F,5,FZ,'//apdl_real(0.25_dp*value)//',,8,1')
+         end if
+      end subroutine load
    end subroutine apdl_deck
 
    !> 'Constants.txt' -> 'Constants', 'txt' (APDL takes name and extension apart)

@@ -89,6 +89,9 @@ module usharp_input_test
       !> number of the simulated cycle (0 at data points)
       real(dp), allocatable :: peak_y(:)
       integer, allocatable :: peak_cycle(:)
+      !> Peaks of peak_file not compared: within the history's time at no turning point of
+      !> it, and beyond its time (a whole test's peaks, some of its cycles simulated)
+      integer :: peaks_left = 0, peaks_beyond = 0
       !> History 'data': the data file's time, stress (and weight) columns, read with the
       !> history and merged at repeated times (rows), so that the compared data are not read
       !> a second time; data_merged: the rows merged. Unallocated: the data are read when
@@ -511,10 +514,32 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), allocatable :: vals(:, :), tp(:), yp(:), td(:)
       integer, allocatable :: kp(:), corner(:), cyc(:), order(:)
-      integer :: n, m
+      integer :: n, m, i, k
+      logical, allocatable :: inside(:)
       call read_columns(t%peak_file, columns, vals, error, skip_missing=.true.)
       if (allocated(error)) return
       n = size(vals, 1)
+      ! A column read in the place of another (a stress for a time, the maximum's time for the
+      ! minimum's) would be matched to turning points as it comes: each time column runs
+      ! forward, and each row's maximum lies above its minimum
+      do k = 1, 3, 2
+         i = findloc(vals(2:, k) < vals(:n - 1, k), .true., 1)
+         if (i > 0) then
+            call fatal_error(error, t%peak_file//": column '"//trim(columns(k))//"' (the time of the "// &
+               trim(merge('maximum', 'minimum', k == 1))//', s) goes back from '//real_str(vals(i, k), 'g0.6')// &
+               ' to '//real_str(vals(i + 1, k), 'g0.6')//' at row '//str(i + 1)//' of those read: is it a time? '// &
+               '(peak_columns: time of the maximum, maximum, time of the minimum, minimum)')
+            return
+         end if
+      end do
+      i = findloc(vals(:, 2) < vals(:, 4), .true., 1)
+      if (i > 0) then
+         call fatal_error(error, t%peak_file//": at row "//str(i)//" of those read the maximum ('"// &
+            trim(columns(2))//"', "//real_str(vals(i, 2), 'g0.6')//") lies below the minimum ('"// &
+            trim(columns(4))//"', "//real_str(vals(i, 4), 'g0.6')//'): are the columns in the order '// &
+            'of peak_columns (time of the maximum, maximum, time of the minimum, minimum)?')
+         return
+      end if
       tp = [vals(:, 1), vals(:, 3)]
       yp = [vals(:, 2), vals(:, 4)]
       kp = [spread(1, 1, n), spread(-1, 1, n)]
@@ -524,6 +549,20 @@ contains
                           "history (target = '"//t%target//"')")
          return
       end if
+      inside = tp >= t%hist%t(1) .and. tp <= t%hist%end_time()
+      t%peaks_beyond = count(corner == 0 .and. .not. inside)
+      t%peaks_left = count(corner == 0 .and. inside)
+      ! Peaks of one kind within the history's time of which none is at a turning point of
+      ! that kind are not the test's (the minimum's time in the place of the maximum's)
+      do k = -1, 1, 2
+         if (any(inside .and. kp == k) .and. .not. any(corner > 0 .and. kp == k)) then
+            call fatal_error(error, t%peak_file//': none of its '//str(count(inside .and. kp == k))//' '// &
+               trim(merge('maxima', 'minima', k == 1))//' within the simulated time lies at a '// &
+               trim(merge('maximum', 'minimum', k == 1))//" of the history: is column '"// &
+               trim(columns(2 - k))//"' the time of the "//trim(merge('maximum', 'minimum', k == 1))//'?')
+            return
+         end if
+      end do
       tp = t%hist%t(pack(corner, corner > 0))
       yp = pack(yp, corner > 0)
       kp = pack(kp, corner > 0)

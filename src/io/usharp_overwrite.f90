@@ -6,19 +6,50 @@
 !> line of a text file of its own beside it (see drawn_line).
 module usharp_overwrite
    use, intrinsic :: iso_fortran_env, only: int64
-   use usharp_error, only: error_type, fatal_error, stat_usage
-   use usharp_filesys, only: file_exists, read_line, join_path, file_hash, hash_hex
+   use usharp_error, only: error_type, fatal_error, stat_usage, stat_busy
+   use usharp_filesys, only: file_exists, read_line, join_path, file_hash, hash_hex, make_dir, lock_file
+   use usharp_mpi, only: is_root, share
    implicit none
    private
 
    public :: check_overwrite, check_overwrite_each, made_by_usharp, begins_like, simulate_mark
-   public :: drawn_line, check_temporary_names
+   public :: drawn_line, check_temporary_names, take_folder
 
    !> How the first line of a <test>.sim.txt that `usharp simulate` wrote begins ('*': the
    !> version)
    character(len=*), parameter :: simulate_mark = "# usharp * simulation of test '"
 
 contains
+
+   !> Make the output folder dir and hold its lock file (.usharp.lock) for the command, so that
+   !> a second usharp writing into it (a job started twice, a requeued job beside its first
+   !> start) is refused, stat_busy (exit 6), instead of both writing the same files. lock: the
+   !> descriptor to release with unlock_file (-1 on the ranks but 0). Under MPI rank 0 takes
+   !> the folder and every rank learns whether it could, so that none goes on to wait for a
+   !> rank that stopped here; alone: rank 0 comes here alone (nothing shared).
+   subroutine take_folder(dir, lock, error, alone)
+      character(len=*), intent(in) :: dir
+      integer, intent(out) :: lock
+      type(error_type), allocatable, intent(out) :: error
+      logical, intent(in), optional :: alone
+      integer, allocatable :: code(:)
+      lock = -1
+      code = [0]
+      if (is_root()) then
+         call make_dir(dir, error)
+         if (.not. allocated(error)) call lock_file(join_path(dir, '.usharp.lock'), lock, error)
+         if (.not. allocated(error) .and. lock < 0) &
+            call fatal_error(error, dir//': another usharp is writing into this folder (it holds '// &
+               join_path(dir, '.usharp.lock')//'); wait for it or give another -o', stat_busy)
+         if (allocated(error)) code = [error%stat]
+      end if
+      if (present(alone)) then
+         if (alone) return
+      end if
+      call share(code, 0)
+      if (code(1) /= 0 .and. .not. is_root()) call fatal_error(error, 'rank 0 could not take the '// &
+         'output folder '//dir//'; stopped with it', code(1))
+   end subroutine take_folder
 
    !> Refuse to write over any of names (files in dir) that is there and was not made by
    !> usharp for command: one whose first line begins like none of marks (see begins_like).

@@ -248,7 +248,8 @@ contains
       end do
    end function interval_format
 
-   !> Split a line into fields: by commas when the line holds one, else by white space.
+   !> Split a line into fields: by commas when the line holds one, else by tabs when it holds
+   !> one (each separating one field from the next), else by runs of blanks.
    !> Double quotes group a field (a comma inside quotes does not split); quotes are removed.
    !> fields(:nfield) hold the fields (those beyond size(fields) dropped); the rest are undefined.
    pure subroutine split_fields(line, fields, nfield)
@@ -257,8 +258,15 @@ contains
       integer, intent(out) :: nfield
       logical :: comma, inquote, infield
       integer :: i, k
-      character :: c
+      character :: c, sep
+      ! Commas, else tabs, separate one field each (an empty cell is an empty field, as a
+      ! spreadsheet exports it); without either, any run of blanks separates
       comma = has_unquoted_comma(line)
+      sep = ','
+      if (.not. comma .and. index(line, achar(9)) > 0) then
+         comma = .true.
+         sep = achar(9)
+      end if
       ! Each field blanked as it starts, not all of them: a data file's rows use a few of the
       ! fields, and blanking every one took most of the time of reading a long file
       nfield = 0
@@ -273,7 +281,7 @@ contains
             cycle
          end if
          if (.not. inquote) then
-            if (comma .and. c == ',') then
+            if (comma .and. c == sep) then
                if (.not. infield) call start_field(fields, nfield, k, infield)
                infield = .false.
                cycle
@@ -288,9 +296,9 @@ contains
             if (k <= len(fields)) fields(nfield)(k:k) = c
          end if
       end do
-      ! A trailing comma ends with an empty last field
+      ! A trailing separator ends with an empty last field
       if (comma .and. len_trim(line) > 0) then
-         if (line(len_trim(line):len_trim(line)) == ',') call start_field(fields, nfield, k, infield)
+         if (line(len_trim(line):len_trim(line)) == sep) call start_field(fields, nfield, k, infield)
       end if
       if (comma) then
          do i = 1, min(nfield, size(fields))
