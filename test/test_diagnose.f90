@@ -344,7 +344,7 @@ contains
    !> A smooth signal sampled densely plus white noise of sd 0.1: the estimate within 5 %
    subroutine test_noise(error)
       type(error_type), allocatable, intent(out) :: error
-      real(dp) :: y(20000), sd
+      real(dp) :: y(20000), sd, e
       type(rng_type) :: rng
       integer :: i
       call rng%seed(7)
@@ -353,6 +353,24 @@ contains
       end do
       sd = noise_sd(y)
       call check(error, abs(sd/0.1_dp - 1.0_dp) < 0.05_dp, 'noise estimate off')
+      if (allocated(error)) return
+      ! Independent noise gives the same sd from second differences 5 samples apart (the
+      ! correlation test of the diagnosis); AR(1) noise of correlation 0.9 (sd 0.1) gives
+      ! sqrt((6 - 8 rho**5 + 2 rho**10)/(6 - 8 rho + 2 rho**2)) = 2.17 times that from neighbours,
+      ! above the 2 at which the diagnosis calls it correlated
+      call check(error, abs(noise_sd(y, 5)/sd - 1.0_dp) < 0.05_dp, 'independent noise: lag 5 against 1 '// &
+                 real_str(noise_sd(y, 5)/sd, 'f0.3'))
+      if (allocated(error)) return
+      e = 0.0_dp
+      do i = 1, size(y)
+         e = 0.9_dp*e + sqrt(1.0_dp - 0.81_dp)*0.1_dp*rng%normal()
+         y(i) = 40.0_dp*sin(real(i, dp)*1.0e-3_dp) + e
+      end do
+      call check(error, abs(noise_sd(y, 5)/noise_sd(y) - 2.17_dp) < 0.1_dp, 'AR(1) noise of 0.9: lag 5 '// &
+                 'against 1 '//real_str(noise_sd(y, 5)/noise_sd(y), 'f0.3')//', not 2.17')
+      if (allocated(error)) return
+      call check(error, abs(noise_sd(y)/0.1_dp - sqrt(0.42_dp/6.0_dp)) < 0.03_dp, 'AR(1) noise of 0.9 reads '// &
+                 'as sqrt(0.42/6) of its sd from neighbours: '//real_str(noise_sd(y)/0.1_dp, 'f0.3'))
    end subroutine test_noise
 
    !> The scatter of the noise estimate and of the structured gap a pure-noise residual

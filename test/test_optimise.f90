@@ -317,24 +317,10 @@ contains
    subroutine test_identify(error)
       type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(fit_problem) :: prob
       type(identify_result) :: res
-      real(dp), allocatable :: c(:)
       integer :: j
-      call read_config('decks/thesis-run2.nml', cfg, e)
-      if (.not. allocated(e)) call override_constants(cfg, 'decks/thesis-data.nml', e)
-      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
-      if (allocated(e)) then
-         call test_failed(error, e%message)
-         return
-      end if
-      c = [(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
-      call identify_at(prob, c, 1.0e-3_dp, res, e)
-      if (allocated(e)) then
-         call test_failed(error, e%message)
-         return
-      end if
+      call identify_deck('decks/thesis-run2.nml', 'decks/thesis-data.nml', res, error)
+      if (allocated(error)) return
       call check(error, any(index(res%words, 'only A2/A1 is determined') > 0), 'A2/A1 named')
       if (allocated(error)) return
       call check(error, all(res%determined .eqv. [.false., .false., .true., .false., .true., .true., .true.]), &
@@ -670,13 +656,9 @@ contains
    !> cycles (singular value 8e-4 of the largest) had printed [4.9998E+03, 5.0002E+03]
    subroutine test_identify_bound_weak(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(fit_problem) :: prob
       type(identify_result) :: res
       character(len=report_line_len), allocatable :: lines(:)
       character(len=*), parameter :: data = '../shared/realdata/a617-950C/lcf/HTM_A19_Cycles_E12.csv'
-      real(dp), allocatable :: c(:)
       logical :: exists, weak
       integer :: i, j, k, nbound
       inquire (file=data, exist=exists)
@@ -684,19 +666,8 @@ contains
          call skip_test(error, 'measured data not found at '//data//' (shared/ not beside the checkout)')
          return
       end if
-      call read_config('decks/a617-950C-chaboche.nml', cfg, e)
-      if (.not. allocated(e)) call override_constants(cfg, 'decks/a617-950C-chaboche-best.nml', e)
-      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
-      if (allocated(e)) then
-         call test_failed(error, e%message)
-         return
-      end if
-      c = [(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
-      call identify_at(prob, c, 1.0e-3_dp, res, e)
-      if (allocated(e)) then
-         call test_failed(error, e%message)
-         return
-      end if
+      call identify_deck('decks/a617-950C-chaboche.nml', 'decks/a617-950C-chaboche-best.nml', res, error)
+      if (allocated(error)) return
       lines = identify_report(res)
       nbound = 0
       do j = 1, size(res%c)
@@ -717,4 +688,24 @@ contains
                  'b and g1 at their bounds, b alone in a weak direction')
    end subroutine test_identify_bound_weak
 
+
+   !> The identifiability report of deck's tests at the constants of the file constants
+   subroutine identify_deck(deck, constants, res, error)
+      character(len=*), intent(in) :: deck, constants
+      type(identify_result), intent(out) :: res
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      real(dp), allocatable :: c(:)
+      integer :: j
+      call read_config(deck, cfg, e)
+      if (.not. allocated(e)) call override_constants(cfg, constants, e)
+      if (.not. allocated(e)) call setup_problem(cfg, prob, e)
+      if (.not. allocated(e)) then
+         c = [(cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
+         call identify_at(prob, c, 1.0e-3_dp, res, e)
+      end if
+      if (allocated(e)) call test_failed(error, e%message)
+   end subroutine identify_deck
 end module test_optimise

@@ -18,7 +18,7 @@ module usharp_diagnose_baseline
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_numerics, only: set_constants_at, global_points, at_bound, lm_ftol, lm_itermax, &
                                        jacobian, test_sizes, block_sums, tight_jacobian, sandwich_covariance, &
-                                      noise_variance, residual_noise
+                                      noise_variance, residual_noise, noise_correlation
    implicit none
    private
 
@@ -143,6 +143,7 @@ contains
       res%y_base = yb
       ctx%noise = residual_noise(ctx%prob, [(i, i=1, nt)], yb)
       res%noise = ctx%noise
+      res%noise_corr = noise_correlation(ctx%prob, [(i, i=1, nt)], yb)
       ctx%nv = noise_variance(ctx%prob, [(i, i=1, nt)], res%noise)
       associate (nv => ctx%nv)
          res%per_test0 = per_test(ctx%prob, r0)

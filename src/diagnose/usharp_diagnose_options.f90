@@ -9,10 +9,15 @@ module usharp_diagnose_options
    implicit none
    private
 
-   public :: diagnose_options, diagnose_options_of, bic_margin, gap_z, rival_share
+   public :: diagnose_options, diagnose_options_of, bic_margin, gap_z, rival_share, corr_lag, correlated_ratio
 
    !> BIC must fall by more than this for an effect to be significant (strong evidence)
    real(dp), parameter :: bic_margin = 10.0_dp
+   !> The lag (samples) of the second differences that test a residual's noise for
+   !> correlation (noise_correlation), and the ratio of its sd to that of neighbours above
+   !> which the noise reads as correlated: the floors and BIC assume independent noise
+   integer, parameter :: corr_lag = 5
+   real(dp), parameter :: correlated_ratio = 2.0_dp
    !> A set of tests has a structured gap only above this many standard errors of the gap
    !> that noise alone leaves (on a 600-point test that standard error is 10 % of the noise
    !> part: a fixed fraction of the noise part is no measure of it)

@@ -10,7 +10,7 @@ module usharp_diagnose_report
    use usharp_filesys, only: join_path, make_dir, remove_file, rename_file
    use usharp_overwrite, only: drawn_line
    use usharp_output, only: write_lines
-   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, rival_share
+   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, corr_lag, correlated_ratio, rival_share
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, delay_precision, form_beats_leader, &
                                     joint_reason, joint_partial, joint_bic_only, joint_held_fit, joint_not_carried, &
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
@@ -119,14 +119,19 @@ contains
       end if
       call add_line(lines, 'Noise: estimated from each test''s residual at the baseline (second differences, robust: the')
       call add_line(lines, 'model takes out the response''s own curvature); the objective it explains is set against the')
-      call add_line(lines, 'residual. Structured gap = objective - noise part.')
+      call add_line(lines, 'residual. Structured gap = objective - noise part. Correlation: the noise sd from second')
+      call add_line(lines, 'differences '//str(corr_lag)//' samples apart over that from neighbours, 1 for '// &
+                    'independent noise; above '//real_str(correlated_ratio, 'f0.1')//' the')
+      call add_line(lines, 'noise is correlated from sample to sample, its sd larger than the estimate, and the floors and')
+      call add_line(lines, 'BIC below, which assume independent noise, overstate the evidence.')
       call add_line(lines, '')
-      call add_line(lines, '| test | role | response | noise sd | % of peak | objective | noise part | structured gap |')
-      call add_line(lines, '|---|---|---|---|---|---|---|---|')
+      call add_line(lines, '| test | role | response | noise sd | % of peak | correlation | objective | noise part | '// &
+                    'structured gap |')
+      call add_line(lines, '|---|---|---|---|---|---|---|---|---|')
       do i = 1, size(res%names)
          call add_line(lines, '| '//trim(res%names(i))//' | '//trim(merge('held out', 'fit     ', res%held(i)))// &
             ' | '//trim(res%unit(i))//' | '//real_str(res%noise(i), 'es10.3')//' | '// &
-            real_str(100.0_dp*res%noise(i)/res%peak(i), 'f0.2')//' | '// &
+            real_str(100.0_dp*res%noise(i)/res%peak(i), 'f0.2')//' | '//corr_cell(res, i)//' | '// &
             real_str(res%per_test0(i), 'es10.3')//' | '//real_str(region_noise(res, i), 'es10.3')//' | '// &
             real_str(max(res%per_test0(i) - region_noise(res, i), 0.0_dp), 'es10.3')//' |')
       end do
@@ -953,4 +958,13 @@ contains
          text = real_str(x, 'es9.2')
       end if
    end function ratio_text
+   !> Test i's noise correlation (noise_correlation) as a table cell; '-' where not known
+   pure function corr_cell(res, i) result(text)
+      type(diagnose_result), intent(in) :: res
+      integer, intent(in) :: i
+      character(len=:), allocatable :: text
+      text = '-'
+      if (.not. allocated(res%noise_corr)) return
+      if (res%noise_corr(i) > 0.0_dp) text = real_str(res%noise_corr(i), 'f0.2')
+   end function corr_cell
 end module usharp_diagnose_report

@@ -25,14 +25,15 @@ module usharp_diagnose_specimen
    use usharp_identify, only: robust_covariance
    use usharp_regions, only: gap_se
    use usharp_sort, only: order_of
-   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z
+   use usharp_diagnose_options, only: diagnose_options, bic_margin, gap_z, corr_lag, correlated_ratio
    use usharp_diagnose_numerics, only: jacobian, pseudo_inverse, set_constants_at, softening_starts, lm_updates, &
                                        backstress2_starts, rate_effect_start, low_end_deltas, low_end_starts, &
                                        distinct_starts, bic_power, power_lambda, &
                                        tight_jacobian, sandwich_covariance, noise_variance, residual_noise, at_bound, &
+                                       noise_correlation, &
                                        beyond_limit, limit_measures, lm_ftol, lm_itermax, test_sizes, &
                                        block_sums, at_box_end, below_resolved, resolved_share
-   use usharp_diagnose_verdict, only: power_cells, missed_note
+   use usharp_diagnose_verdict, only: power_cells, missed_note, correlated_note
    use usharp_diagnose_types, only: most, hidden_effect, hidden_size, bound_list, unit_text, &
                                     params_bound_note, side_word, hardening_note
    use usharp_diagnose_separate, only: finding_test
@@ -107,6 +108,9 @@ module usharp_diagnose_specimen
       !> noise alone leaves (gap_se, as the held-out diagnosis's floors)
       real(dp) :: floor = 0.0_dp
       real(dp) :: noise_sd = 0.0_dp          !< response unit
+      !> its noise sd from second differences corr_lag samples apart over that from
+      !> neighbours (noise_correlation: 1 for independent noise)
+      real(dp) :: noise_corr = 0.0_dp
       character(len=32) :: unit = ''
       character(len=8) :: stress_unit = ''   !< the model's stress unit
       type(specimen_effect), allocatable :: effects(:)   !< ranked by BIC
@@ -244,6 +248,7 @@ contains
       end if
       sr%f0 = sum(r0**2)
       sr%noise_sd = sum(residual_noise(prob, [ispec], ysim))
+      sr%noise_corr = sum(noise_correlation(prob, [ispec], ysim))
       sr%nv = noise_variance(prob, [ispec], [sr%noise_sd])
       ! (data without noise leave no covariance to weigh by)
       if (allocated(cov) .and. any(sr%nv > 0.0_dp)) then
@@ -958,6 +963,10 @@ contains
             'constants'' own uncertainty explains (their covariance from the given constants'' noise, carried '// &
             'linearly to the specimen).')
       end if
+      if (sr%noise_corr > 0.0_dp) call add('Its noise sd from second differences '//str(corr_lag)// &
+         ' samples apart is '//real_str(sr%noise_corr, 'f0.2')//' times that from neighbours (1 for independent '// &
+         'noise; above '//real_str(correlated_ratio, 'f0.1')//' the noise is correlated from sample to sample, '// &
+         'and the floor and BIC, which assume independent noise, overstate the evidence).')
       if (allocated(sr%rep_ms)) then
          if (size(sr%rep_ms) > 0) then
             ln = 'Its objective at these constants'//trim(merge(' per point', '          ', sr%per_point))// &
@@ -1114,6 +1123,7 @@ contains
          trim(merge(' per point', '          ', sr%per_point))//' at their constants '// &
          real_str(own_measure(sr), 'es9.2')//', theirs '// &
          real_str(minval(sr%rep_ms), 'es9.2')//' to '//real_str(maxval(sr%rep_ms), 'es9.2')//'); '//verdict
+      verdict = verdict//correlated_note([sr%name], [sr%noise_corr])
       call add('**Verdict:** '//verdict)
       call add('')
       call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &

@@ -250,6 +250,9 @@ module usharp_diagnose_types
       character(len=8) :: stress_unit = ''        !< the model's stress unit
       logical, allocatable :: held(:)
       real(dp), allocatable :: noise(:)           !< noise sd per test, response unit
+      !> per test, its noise sd from second differences 5 samples apart over that from
+      !> neighbours (noise_correlation: 1 for independent noise)
+      real(dp), allocatable :: noise_corr(:)
       real(dp), allocatable :: peak(:)
       real(dp), allocatable :: c0(:), c(:)        !< constants given and of the baseline fit
       integer, allocatable :: c_bound(:)          !< baseline constants at a search bound

@@ -7,7 +7,7 @@ module usharp_diagnose_verdict
    use usharp_sort, only: order_of
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
-   use usharp_diagnose_options, only: bic_margin
+   use usharp_diagnose_options, only: bic_margin, corr_lag, correlated_ratio
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, prediction_open, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
@@ -23,7 +23,8 @@ module usharp_diagnose_verdict
    !> 6-10, a Bayes factor of 20-150): named in a verdict of no effect as a hint
    real(dp), parameter :: hint_margin = 6.0_dp
 
-   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note, bound_note
+   public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note, bound_note, &
+             correlated_note
 
 contains
 
@@ -46,6 +47,7 @@ contains
       if (size(conf) == 0) then
          call no_effect(res)
          res%verdict = res%verdict//baseline_note(res)
+         if (allocated(res%noise_corr)) res%verdict = res%verdict//correlated_note(res%names, res%noise_corr)
          return
       end if
       best = conf(1)
@@ -67,7 +69,32 @@ contains
       res%leading = res%alike(1)
       call effect_verdict(res)
       res%verdict = res%verdict//serration_note(res)//baseline_note(res)
+      if (allocated(res%noise_corr)) res%verdict = res%verdict//correlated_note(res%names, res%noise_corr)
    end subroutine conclude
+
+   !> The tests (names) whose noise is correlated from sample to sample (ratio: see
+   !> noise_correlation; above correlated_ratio), as a clause of a verdict ('' when none):
+   !> the floors and BIC assume independent noise, so the evidence is overstated
+   pure function correlated_note(names, ratio) result(text)
+      character(len=*), intent(in) :: names(:)
+      real(dp), intent(in) :: ratio(:)
+      character(len=:), allocatable :: text, list
+      integer :: j, n
+      text = ''
+      list = ''
+      n = count(ratio > correlated_ratio)
+      if (n == 0) return
+      do j = 1, size(names)
+         if (.not. ratio(j) > correlated_ratio) cycle
+         if (len(list) > 0) list = list//', '
+         list = list//trim(names(j))
+      end do
+      list = list//' is correlated from sample to sample (its sd from second differences '// &
+             str(corr_lag)//' samples apart '//real_str(minval(ratio, ratio > correlated_ratio), 'f0.1')
+      if (n > 1) list = list//' to '//real_str(maxval(ratio), 'f0.1')
+      text = '; the noise of '//list//' times that from neighbours, 1 for independent noise): the '// &
+             'floors and BIC assume independent noise and overstate the evidence'
+   end function correlated_note
 
    !> Every share and BIC is measured from the baseline: one that ran away (constants at a
    !> search bound) or did not converge is said in the verdict too, not only in its section

@@ -296,12 +296,18 @@ contains
       kind = kind(:j)
    end subroutine peak_corners
 
-   !> The turning point of hist at which each measured peak (time tp, s; kind kp: +1 a
-   !> maximum, -1 a minimum) is compared: the nearest turning point of its kind, if it lies
-   !> within a quarter of the local spacing of those turning points (a measured peak may come
-   !> before the strain's, as a first-cycle overshoot does) and no earlier peak took it;
-   !> corner(i) its index in hist (0: none, e.g. a peak after the history's end) and cyc(i)
-   !> the number of the simulated cycle (1 for the first turning point of its kind)
+   !> The turning point of hist at which each measured peak (time tp, s, ascending for each
+   !> kind; kind kp: +1 a maximum, -1 a minimum) is compared: the turning point of its kind
+   !> nearest the peak's time, shifted by the drift of the match before (the simulated time
+   !> of the last matched turning point less its peak's), if it lies within a quarter of the
+   !> local spacing of those turning points and no earlier peak took it; else the one nearest
+   !> the peak's own time, so bounded (a measured peak may come before the strain's, as a
+   !> first-cycle overshoot does). The drift follows the cycles through which a gap between
+   !> recorded cycles is filled: their period, interpolated, differs from the test's by a
+   !> little, which over hundreds of cycles grew to more than a quarter cycle and had left
+   !> most of their peaks unmatched. corner(i) its index in hist (0: none, e.g. a peak after
+   !> the history's end) and cyc(i) the number of the simulated cycle (1 for the first
+   !> turning point of its kind)
    pure subroutine match_peaks(hist, tp, kp, corner, cyc)
       type(history_type), intent(in) :: hist
       real(dp), intent(in) :: tp(:)
@@ -310,8 +316,9 @@ contains
       integer, allocatable :: idx(:), kind(:), sel(:)
       logical, allocatable :: taken(:)
       real(dp), allocatable :: tk(:)
-      real(dp) :: spacing
-      integer :: i, s, lo, hi, mid, j
+      real(dp) :: drift
+      integer :: i, s, j
+      logical :: tracking
       call peak_corners(hist, idx, kind)
       allocate (corner(size(tp)), cyc(size(tp)))
       corner = 0
@@ -322,32 +329,53 @@ contains
          tk = hist%t(sel)
          allocate (taken(size(sel)))
          taken = .false.
+         drift = 0.0_dp
+         tracking = .false.
          do i = 1, size(tp)
             if (kp(i) /= s) cycle
-            ! Nearest by bisection
-            lo = 1
-            hi = size(tk)
-            do while (hi - lo > 1)
-               mid = (lo + hi)/2
-               if (tk(mid) <= tp(i)) then
-                  lo = mid
-               else
-                  hi = mid
-               end if
-            end do
-            j = merge(lo, hi, abs(tk(lo) - tp(i)) <= abs(tk(hi) - tp(i)))
-            if (size(tk) > 1) then
-               spacing = tk(min(j + 1, size(tk))) - tk(max(j - 1, 1))
-               if (j > 1 .and. j < size(tk)) spacing = 0.5_dp*spacing
-            else
-               spacing = hist%end_time() - hist%t(1)
+            j = 0
+            if (tracking) j = nearest_within(tp(i) + drift)
+            if (j == 0) j = nearest_within(tp(i))
+            if (j == 0) then
+               tracking = .false.
+               cycle
             end if
-            if (abs(tk(j) - tp(i)) > 0.25_dp*spacing .or. taken(j)) cycle
             taken(j) = .true.
             corner(i) = sel(j)
             cyc(i) = j
+            drift = tk(j) - tp(i)
+            tracking = .true.
          end do
          deallocate (taken)
       end do
+
+   contains
+
+      !> The untaken turning point of tk nearest t within a quarter of its local spacing
+      !> (0: none)
+      pure integer function nearest_within(t) result(jn)
+         real(dp), intent(in) :: t
+         real(dp) :: spacing
+         integer :: lo, hi, mid
+         ! Nearest by bisection
+         lo = 1
+         hi = size(tk)
+         do while (hi - lo > 1)
+            mid = (lo + hi)/2
+            if (tk(mid) <= t) then
+               lo = mid
+            else
+               hi = mid
+            end if
+         end do
+         jn = merge(lo, hi, abs(tk(lo) - t) <= abs(tk(hi) - t))
+         if (size(tk) > 1) then
+            spacing = tk(min(jn + 1, size(tk))) - tk(max(jn - 1, 1))
+            if (jn > 1 .and. jn < size(tk)) spacing = 0.5_dp*spacing
+         else
+            spacing = hist%end_time() - hist%t(1)
+         end if
+         if (abs(tk(jn) - t) > 0.25_dp*spacing .or. taken(jn)) jn = 0
+      end function nearest_within
    end subroutine match_peaks
 end module usharp_cycles

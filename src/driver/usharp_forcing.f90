@@ -269,15 +269,20 @@ contains
 
    !> Noise standard deviation of a sampled signal from its second differences, robustly
    !> (median absolute deviation): a smooth signal's second difference is far below the noise
-   !> at the sampling rate, white noise gives var(d2) = 6 sd**2
-   pure real(dp) function noise_sd(y) result(sd)
+   !> at the sampling rate, white noise gives var(d2) = 6 sd**2. lag: the differences taken
+   !> that many samples apart (1 unless given); independent noise gives the same sd at every
+   !> lag, noise correlated from sample to sample a larger one at a larger lag
+   pure real(dp) function noise_sd(y, lag) result(sd)
       real(dp), intent(in) :: y(:)
+      integer, intent(in), optional :: lag
       real(dp), allocatable :: d(:)
-      integer :: n
+      integer :: n, k
       n = size(y)
+      k = 1
+      if (present(lag)) k = max(lag, 1)
       sd = 0.0_dp
-      if (n < 5) return
-      d = abs(y(3:n) - 2.0_dp*y(2:n - 1) + y(1:n - 2))
+      if (n < 2*k + 3) return
+      d = abs(y(2*k + 1:n) - 2.0_dp*y(k + 1:n - k) + y(1:n - 2*k))
       sd = 1.4826_dp*median(d)/sqrt(6.0_dp)
    end function noise_sd
 
