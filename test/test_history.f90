@@ -34,7 +34,8 @@ contains
          new_unittest('measured-forcing-step-test', test_measured_steps), &
          new_unittest('gap-filled-cycle-10-as-continuous', test_gap_fill), &
          new_unittest('gap-fill-smooth-pieces-and-peaks', test_gap_fill_smooth), &
-         new_unittest('gap-fill-linear-straight-across', test_gap_linear)]
+         new_unittest('gap-fill-linear-straight-across', test_gap_linear), &
+         new_unittest('peaks-matched-through-a-drift', test_peaks_drift)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -425,6 +426,25 @@ contains
       ! The recorded cycles as before: the peaks of cycle 10
       call check(error, joined%value_at(185.0_dp), 0.005_dp, 'cycle 10 maximum', thr=2.0e-5_dp)
    end subroutine test_gap_linear
+
+   !> Measured peaks whose period differs from the simulated cycles' by 0.1 % (0.02 s a cycle
+   !> of 20 s, as gap-filled cycles at an interpolated period do): after 400 cycles they lie
+   !> 8 s off, more than the quarter cycle within which a peak is matched to its nearest
+   !> turning point, and are still matched, each to its own cycle, by following the drift
+   subroutine test_peaks_drift(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      type(history_type) :: cont
+      real(dp), allocatable :: tp(:)
+      integer, allocatable :: kp(:), corner(:), cyc(:)
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 400, 0.0_dp, 0.0_dp, cont, uerr)
+      tp = [(20.0_dp*k - 15.0_dp + 0.02_dp*(k - 1), k=1, 400)]
+      kp = spread(1, 1, 400)
+      call match_peaks(cont, tp, kp, corner, cyc)
+      call check(error, all(cyc == [(k, k=1, 400)]), 'maxima matched to their cycles: '// &
+                 str(count(cyc == [(k, k=1, 400)]))//' of 400')
+   end subroutine test_peaks_drift
 
    !> Cycles 1, 2 and 10 of a triangular strain cycling (range 1 %, 1e-3/s, sampled every
    !> 0.05 s) recorded to 1e-5, as a test machine's file holds them
