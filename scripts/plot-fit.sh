@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Plots of a fit against its data with gnuplot: for every <test>.fit.txt in the output folder
 # of `usharp run`, the response against strain (measured and fitted), and one overview of all
-# tests. Writes <out_dir>/plots/<test>.png and <out_dir>/plots/all.png.
+# tests, and each test's peak stresses against cycle where it has them (<test>.peaks.txt).
+# Writes <out_dir>/plots/<test>.png, <test>.peaks.png and all.png.
 # Usage: scripts/plot-fit.sh <out_dir> [title]
 #
 # No name reaches gnuplot as code: every path and the title enter the gnuplot script as
@@ -43,6 +44,22 @@ if [ -f "$dir/summary.txt" ]; then
   fi
 fi
 mkdir -p -- "$dir/plots"
+tmp=$(mktemp -d)
+trap 'rm -rf -- "$tmp"' EXIT
+# The loops of a test as gnuplot draws them: its data points only (a test with a peak file
+# also has a row at each compared turning point, which a line through the loops would join
+# across them), with a blank line where the time jumps by more than 50 median steps (the
+# unrecorded cycles between recorded ones: no line across them)
+loops() { # loops FIT_FILE OUT_FILE
+  local peaks=${1%.fit.txt}.peaks.txt med
+  awk -v pf="$peaks" '
+    BEGIN { while ((getline line < pf) > 0) if (line !~ /^#/) { split(line, c, " "); skip[c[3] + 0] = 1 } }
+    /^#/ { next }
+    !(($1 + 0) in skip) { print }' "$1" > "$2.rows"
+  med=$(awk 'NR > 1 { print $1 - t } { t = $1 }' "$2.rows" | sort -g | awk '{ d[NR] = $1 } END { if (NR) print d[int((NR + 1) / 2)]; else print 0 }')
+  { grep '^#' "$1" || true
+    awk -v med="$med" 'NR > 1 && med > 0 && $1 - t > 50 * med { print "" } { print; t = $1 }' "$2.rows"; } > "$2"
+}
 # The columns' line says whether the test is fitted on stress (stress against strain) or on
 # strain (a creep test: strain against time)
 axes() { # axes FILE UNIT: the gnuplot labels and the using of the measured and fitted columns
@@ -57,6 +74,7 @@ axes() { # axes FILE UNIT: the gnuplot labels and the using of the measured and 
 for f in "${files[@]}"; do
   name=$(basename -- "$f" .fit.txt)
   unit=$(sed -n 's/.*stress (\([A-Za-z]*\)) of the simulation.*/\1/p' "$f" | head -1)
+  loops "$f" "$tmp/$name.txt"
   {
     echo 'set terminal pngcairo size 800,600 font ",11" noenhanced'
     echo "set output $(gq "$dir/plots/$name.png")"
@@ -64,10 +82,29 @@ for f in "${files[@]}"; do
     axes "$f" "${unit:-model unit}"
     echo 'set key top left'
     echo 'set grid'
-    echo "f = $(gq "$f")"
+    echo "f = $(gq "$tmp/$name.txt")"
     echo 'plot f using @m with points pt 7 ps 0.3 lc rgb "#888888" title "measured", \'
     echo '     f using @s with lines lw 2 lc rgb "#c0392b" title "fit"'
   } | gnuplot
+  # Every cycle's peak stresses (target peaks or both): measured and simulated against cycle
+  p=${f%.fit.txt}.peaks.txt
+  if [ -f "$p" ]; then
+    # maxima and minima apart, each a line through its cycles
+    awk '!/^#/ && $2 > 0' "$p" > "$tmp/$name.max.txt"
+    awk '!/^#/ && $2 < 0' "$p" > "$tmp/$name.min.txt"
+    {
+      echo 'set terminal pngcairo size 800,600 font ",11" noenhanced'
+      echo "set output $(gq "$dir/plots/$name.peaks.png")"
+      echo "set title $(gq "$title: $name, peak stresses")"
+      echo "set xlabel 'cycle'; set ylabel 'stress (${unit:-model unit})'"
+      echo 'set logscale x; set key bottom left; set grid'
+      echo "a = $(gq "$tmp/$name.max.txt"); b = $(gq "$tmp/$name.min.txt")"
+      echo 'plot a using 1:5 with points pt 7 ps 0.3 lc rgb "#888888" title "measured", \'
+      echo '     b using 1:5 with points pt 7 ps 0.3 lc rgb "#888888" notitle, \'
+      echo '     a using 1:6 with lines lw 2 lc rgb "#c0392b" title "fit", \'
+      echo '     b using 1:6 with lines lw 2 lc rgb "#c0392b" notitle'
+    } | gnuplot
+  fi
 done
 n=${#files[@]}
 cols=$(( n < 3 ? n : 3 ))
@@ -82,7 +119,7 @@ rows=$(( (n + cols - 1) / cols ))
     unit=$(sed -n 's/.*stress (\([A-Za-z]*\)) of the simulation.*/\1/p' "$f" | head -1)
     echo "set title $(gq "$name")"
     axes "$f" "${unit:-model unit}"
-    echo "f = $(gq "$f")"
+    echo "f = $(gq "$tmp/$name.txt")"
     echo "plot f using @m with points pt 7 ps 0.2 lc rgb '#888888' title 'measured', f using @s with lines lw 2 lc rgb '#c0392b' title 'fit'"
   done
   echo "unset multiplot"
