@@ -231,6 +231,13 @@ contains
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
       call check_message(error, uerr, "garbled.csv:3:2: 'abc' in column stress is not a number")
       if (allocated(error)) return
+      ! A file without a header whose first row has a value that is not a number: that row
+      ! reads as a header, and the message says why, not only which names it holds
+      path = write_text('noheader-bad.csv', [character(len=40) :: '0,1,abc', '1,2,3', '2,3,4', '3,4,5'])
+      call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
+      call check_message(error, uerr, "noheader-bad.csv:1: no column 'time': this first row of values is "// &
+                         "read as a header, as 'abc' in its column 3 is not a number")
+      if (allocated(error)) return
       path = write_text('nan.csv', [character(len=40) :: 'time,stress', '0,1', '1,NaN', '2,3'])
       call read_columns(path, [character(len=8) :: 'time', 'stress'], v, uerr)
       call check_message(error, uerr, 'nan.csv:3:2: NaN in column stress is not finite')

@@ -56,6 +56,7 @@ contains
       logical, allocatable :: matched(:), hit(:)
       character(len=:), allocatable :: seen
       integer :: nseen
+      logical :: more_seen   !< labels beyond the nseen listed
       real(dp), allocatable :: buf(:, :)
       real(dp) :: row(max_fields)
 
@@ -67,6 +68,7 @@ contains
          matched = .false.
          seen = ''
          nseen = 0
+         more_seen = .false.
          last_label = achar(0)
       end if
       fixed = .false.
@@ -164,10 +166,14 @@ contains
          if (filtering) then
             if (ifilter > nfield) cycle
             ! (rows come in runs of one label: a label is looked up only where it changes)
-            if (nseen < 12 .and. fields(ifilter) /= last_label) then
+            if (.not. more_seen .and. fields(ifilter) /= last_label) then
                if (index(seen//', ', ', '//trim(fields(ifilter))//', ') == 0) then
-                  seen = seen//', '//trim(fields(ifilter))
-                  nseen = nseen + 1
+                  if (nseen < 12) then
+                     seen = seen//', '//trim(fields(ifilter))
+                     nseen = nseen + 1
+                  else
+                     more_seen = .true.
+                  end if
                end if
             end if
             last_label = fields(ifilter)
@@ -213,7 +219,7 @@ contains
             if (matched(j)) cycle
             call fatal_error(error, file//": filter: no row has '"//trim(filter_values(j))// &
                "' in column "//trim(filter_column)//' (it holds: '// &
-               seen(3:)//trim(merge(', ...', '     ', nseen >= 12))//')')
+               seen(3:)//trim(merge(', ...', '     ', more_seen))//')')
             return
          end do
       end if
@@ -301,6 +307,14 @@ contains
                      "' (the header is one column, '"//trim(adjustl(header(1)))//"': the columns "// &
                      'are separated by semicolons; usharp reads commas, spaces or tabs, and a '// &
                      'point as the decimal mark)')
+               else if (count_numeric(header(:nheader)) > nheader/2) then
+                  ! Mostly numbers: a file without a header whose first row has a field that
+                  ! is not one, read as the header for it
+                  m = first_text(header(:nheader))
+                  call fatal_error(error, file//':'//str(lineno)//": no column '"//trim(columns(k))// &
+                     "': this first row of values is read as a header, as '"//trim(adjustl(header(m)))// &
+                     "' in its column "//str(m)//' is not a number (a file without a header: fix that '// &
+                     'value; else give the header row)')
                else
                   call fatal_error(error, file//": no column '"//trim(columns(k))// &
                      "' (columns: "//joined(header(:nheader))//')')
@@ -417,6 +431,25 @@ contains
       end if
       read (text, *, iostat=ios) val
    end subroutine to_real
+
+   !> How many of fields are numbers (blank ones not counted)
+   integer function count_numeric(fields) result(n)
+      character(len=*), intent(in) :: fields(:)
+      integer :: k
+      n = 0
+      do k = 1, size(fields)
+         if (len_trim(fields(k)) > 0 .and. all_numeric(fields(k:k))) n = n + 1
+      end do
+   end function count_numeric
+
+   !> The first of fields that is not blank and not a number (0: none)
+   integer function first_text(fields) result(k)
+      character(len=*), intent(in) :: fields(:)
+      do k = 1, size(fields)
+         if (len_trim(fields(k)) > 0 .and. .not. all_numeric(fields(k:k))) return
+      end do
+      k = 0
+   end function first_text
 
    logical function all_numeric(fields) result(ok)
       character(len=*), intent(in) :: fields(:)
