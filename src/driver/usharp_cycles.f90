@@ -5,7 +5,7 @@
 module usharp_cycles
    use usharp_kinds, only: dp
    use usharp_error, only: error_type
-   use usharp_history, only: history_type, history_from_points
+   use usharp_history, only: history_type, history_from_points, segment_of
    use usharp_forcing, only: measured_history, turning_points
    use usharp_sort, only: median
    implicit none
@@ -356,18 +356,9 @@ contains
       pure integer function nearest_within(t) result(jn)
          real(dp), intent(in) :: t
          real(dp) :: spacing
-         integer :: lo, hi, mid
-         ! Nearest by bisection
-         lo = 1
-         hi = size(tk)
-         do while (hi - lo > 1)
-            mid = (lo + hi)/2
-            if (tk(mid) <= t) then
-               lo = mid
-            else
-               hi = mid
-            end if
-         end do
+         integer :: lo, hi
+         lo = segment_of(tk, t)
+         hi = min(lo + 1, size(tk))
          jn = merge(lo, hi, abs(tk(lo) - t) <= abs(tk(hi) - t))
          if (size(tk) > 1) then
             spacing = tk(min(jn + 1, size(tk))) - tk(max(jn - 1, 1))

@@ -11,7 +11,7 @@ module usharp_history
 
    public :: history_type, control_strain, control_stress, segment_type
    public :: history_from_points, thesis_lcf_history, relaxation_history, ratchet_history
-   public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history
+   public :: cyclic_history, tensile_history, creep_history, output_times, thesis_history, segment_of
    public :: rate_jump_history, spline_eval, knot_piece, add_tmf_temperature
 
    !> Control modes
