@@ -1123,7 +1123,13 @@ contains
          trim(merge(' per point', '          ', sr%per_point))//' at their constants '// &
          real_str(own_measure(sr), 'es9.2')//', theirs '// &
          real_str(minval(sr%rep_ms), 'es9.2')//' to '//real_str(maxval(sr%rep_ms), 'es9.2')//'); '//verdict
-      verdict = verdict//correlated_note([sr%name], [sr%noise_corr])
+      ! (the residual at the replicates' constants; one that an effect takes up for the most
+      ! part is the effect's, with sharp features that raise the ratio as correlated noise would)
+      if (lead == 0) then
+         verdict = verdict//correlated_note([sr%name], [sr%noise_corr], 'their constants leave')
+      else if (sr%effects(lead)%removed < most) then
+         verdict = verdict//correlated_note([sr%name], [sr%noise_corr], 'their constants leave')
+      end if
       call add('**Verdict:** '//verdict)
       call add('')
       call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &

@@ -8,6 +8,7 @@ module usharp_diagnose_verdict
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin, corr_lag, correlated_ratio
+   use usharp_forcing, only: noise_sd
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, prediction_open, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
@@ -47,7 +48,8 @@ contains
       if (size(conf) == 0) then
          call no_effect(res)
          res%verdict = res%verdict//baseline_note(res)
-         if (allocated(res%noise_corr)) res%verdict = res%verdict//correlated_note(res%names, res%noise_corr)
+         if (allocated(res%noise_corr)) res%verdict = res%verdict//correlated_note(res%names, res%noise_corr, &
+                                                                                  'the baseline leaves')
          return
       end if
       best = conf(1)
@@ -69,15 +71,41 @@ contains
       res%leading = res%alike(1)
       call effect_verdict(res)
       res%verdict = res%verdict//serration_note(res)//baseline_note(res)
-      if (allocated(res%noise_corr)) res%verdict = res%verdict//correlated_note(res%names, res%noise_corr)
+      ! The residual the leader leaves: a structured gap with sharp features (a lag's at each
+      ! reversal) raises the ratio of the baseline's residual as correlated noise would
+      if (allocated(res%effects(res%leading)%y) .and. allocated(res%y_ex)) then
+         res%verdict = res%verdict//correlated_note(res%names, residual_correlation(res, &
+                       res%effects(res%leading)%y), trim(res%effects(res%leading)%name)//' leaves')
+      else if (allocated(res%noise_corr)) then
+         res%verdict = res%verdict//correlated_note(res%names, res%noise_corr, 'the baseline leaves')
+      end if
    end subroutine conclude
 
-   !> The tests (names) whose noise is correlated from sample to sample (ratio: see
-   !> noise_correlation; above correlated_ratio), as a clause of a verdict ('' when none):
-   !> the floors and BIC assume independent noise, so the evidence is overstated
-   pure function correlated_note(names, ratio) result(text)
+   !> Per test, noise_sd of the residual y_ex - y from second differences corr_lag samples
+   !> apart over that from neighbours (1 for independent noise; 0: too few points)
+   pure function residual_correlation(res, y) result(ratio)
+      type(diagnose_result), intent(in) :: res
+      real(dp), intent(in) :: y(:)          !< a simulated response at every point (res%t)
+      real(dp) :: ratio(size(res%names))
+      real(dp), allocatable :: r(:)
+      real(dp) :: sd1
+      integer :: i
+      ratio = 0.0_dp
+      do i = 1, size(res%names)
+         r = pack(res%y_ex - y, res%test_of == i)
+         sd1 = noise_sd(r)
+         if (sd1 > 0.0_dp) ratio(i) = noise_sd(r, corr_lag)/sd1
+      end do
+   end function residual_correlation
+
+   !> The tests (names) whose residual that what leaves (the leading effect, the baseline) is
+   !> correlated from sample to sample (ratio: see noise_correlation; above correlated_ratio),
+   !> as a clause of a verdict ('' when none): noise so correlated reads smaller than it is,
+   !> and the floors and BIC assume independent noise, so the evidence is overstated
+   pure function correlated_note(names, ratio, what) result(text)
       character(len=*), intent(in) :: names(:)
       real(dp), intent(in) :: ratio(:)
+      character(len=*), intent(in) :: what
       character(len=:), allocatable :: text, list
       integer :: j, n
       text = ''
@@ -89,11 +117,12 @@ contains
          if (len(list) > 0) list = list//', '
          list = list//trim(names(j))
       end do
-      list = list//' is correlated from sample to sample (its sd from second differences '// &
-             str(corr_lag)//' samples apart '//real_str(minval(ratio, ratio > correlated_ratio), 'f0.1')
+      list = list//' that '//what//' is correlated from sample to sample (its sd from second '// &
+             'differences '//str(corr_lag)//' samples apart '//real_str(minval(ratio, ratio > correlated_ratio), 'f0.1')
       if (n > 1) list = list//' to '//real_str(maxval(ratio), 'f0.1')
-      text = '; the noise of '//list//' times that from neighbours, 1 for independent noise): the '// &
-             'floors and BIC assume independent noise and overstate the evidence'
+      text = '; the residual of '//list//' times that from neighbours, 1 for independent noise): noise '// &
+             'so correlated reads smaller than it is, and the floors and BIC, which assume independent '// &
+             'noise, overstate the evidence'
    end function correlated_note
 
    !> Every share and BIC is measured from the baseline: one that ran away (constants at a
