@@ -114,12 +114,6 @@ contains
             call check_overwrite(dir, [cfg%tests(i)%ext%constants_file], [character(len=1) ::], &
                                  'deck', overwrite, error)
          if (allocated(error)) return
-         ! A history the deck cannot take is refused before the folder is made
-         call apdl_deck(cfg, cfg%tests(i), command, lines, error)
-         if (allocated(error)) then
-            error%message = path//': '//error%message
-            return
-         end if
       end do
       call make_dir(dir, error)
       if (allocated(error)) return

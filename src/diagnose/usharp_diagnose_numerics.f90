@@ -20,7 +20,7 @@ module usharp_diagnose_numerics
    use usharp_diagnose_types, only: diagnose_context, deviance_change
    use usharp_diagnose_options, only: bic_margin, corr_lag
    use usharp_distributions, only: ncx2_sf
-   use usharp_forcing, only: noise_sd
+   use usharp_forcing, only: noise_sd, noise_lag_ratio
    use usharp_mpi, only: n_ranks, this_rank, share, sum_over_ranks, task_deal, ranks_that_ran
    use omp_lib, only: omp_get_max_threads
    implicit none
@@ -834,26 +834,37 @@ contains
    !> which second differences of the data alone read as noise where the sampling is coarse
    !> (thesis LCF at 0.5 s with 0.5 % noise: 12 % more than the noise, the residual's 0.0 %)
    !> lag: the second differences taken that many samples apart (see noise_sd)
-   pure function residual_noise(prob, tests, ysim, lag) result(sd)
+   pure function residual_noise(prob, tests, ysim) result(sd)
       type(fit_problem), intent(in) :: prob
       integer, intent(in) :: tests(:)
       real(dp), intent(in) :: ysim(:)    !< response unit
-      integer, intent(in), optional :: lag
       real(dp) :: sd(size(tests))
-      integer :: k, n, k0
+      real(dp), allocatable :: r(:)
+      integer :: k, k0
       k0 = 0
       do k = 1, size(tests)
-         associate (tg => prob%targets(tests(k)), test => prob%cfg%tests(tests(k)))
-            n = size(tg%t)
-            if (test%has_peaks()) then
-               sd(k) = noise_sd(pack(tg%y_ex - ysim(k0 + 1:k0 + n), test%point_kind == 0), lag)
-            else
-               sd(k) = noise_sd(tg%y_ex - ysim(k0 + 1:k0 + n), lag)
-            end if
-            k0 = k0 + n
-         end associate
+         call data_residual(prob, tests(k), ysim, k0, r)
+         sd(k) = noise_sd(r)
       end do
    end function residual_noise
+
+   !> Test it of prob's residual at its data points (the peaks of a peaks target left out)
+   !> against ysim, the simulated response of the tests' points from k0 + 1 on; k0 moves past
+   !> the test's points
+   pure subroutine data_residual(prob, it, ysim, k0, r)
+      type(fit_problem), intent(in) :: prob
+      integer, intent(in) :: it
+      real(dp), intent(in) :: ysim(:)
+      integer, intent(inout) :: k0
+      real(dp), allocatable, intent(out) :: r(:)
+      integer :: n
+      associate (tg => prob%targets(it), test => prob%cfg%tests(it))
+         n = size(tg%t)
+         r = tg%y_ex - ysim(k0 + 1:k0 + n)
+         if (test%has_peaks()) r = pack(r, test%point_kind == 0)
+         k0 = k0 + n
+      end associate
+   end subroutine data_residual
 
    !> For each test tests(k), how far its residual's noise is from independent: the noise sd
    !> from second differences corr_lag samples apart over that from neighbours (1 for
@@ -864,14 +875,13 @@ contains
       integer, intent(in) :: tests(:)
       real(dp), intent(in) :: ysim(:)    !< response unit
       real(dp) :: ratio(size(tests))
-      real(dp) :: sd1(size(tests)), sdk(size(tests))
-      sd1 = residual_noise(prob, tests, ysim)
-      sdk = residual_noise(prob, tests, ysim, corr_lag)
-      where (sd1 > 0.0_dp)
-         ratio = sdk/sd1
-      elsewhere
-         ratio = 0.0_dp
-      end where
+      real(dp), allocatable :: r(:)
+      integer :: k, k0
+      k0 = 0
+      do k = 1, size(tests)
+         call data_residual(prob, tests(k), ysim, k0, r)
+         ratio(k) = noise_lag_ratio(r, corr_lag)
+      end do
    end function noise_correlation
 
    !> The noise variance of each residual of the tests tests of prob (objective units, test

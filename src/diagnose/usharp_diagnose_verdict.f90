@@ -8,7 +8,7 @@ module usharp_diagnose_verdict
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin, corr_lag, correlated_ratio
-   use usharp_forcing, only: noise_sd
+   use usharp_forcing, only: noise_lag_ratio
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, prediction_open, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
@@ -87,14 +87,9 @@ contains
       type(diagnose_result), intent(in) :: res
       real(dp), intent(in) :: y(:)          !< a simulated response at every point (res%t)
       real(dp) :: ratio(size(res%names))
-      real(dp), allocatable :: r(:)
-      real(dp) :: sd1
       integer :: i
-      ratio = 0.0_dp
       do i = 1, size(res%names)
-         r = pack(res%y_ex - y, res%test_of == i)
-         sd1 = noise_sd(r)
-         if (sd1 > 0.0_dp) ratio(i) = noise_sd(r, corr_lag)/sd1
+         ratio(i) = noise_lag_ratio(pack(res%y_ex - y, res%test_of == i), corr_lag)
       end do
    end function residual_correlation
 

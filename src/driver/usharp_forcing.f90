@@ -15,7 +15,7 @@ module usharp_forcing
    private
 
    public :: measured_history, turning_points, turn_hysteresis, signal_resolution, smooth_branch, monotone
-   public :: noise_sd
+   public :: noise_sd, noise_lag_ratio
 
    !> A turning point is confirmed once the signal has come back from its extreme by more
    !> than turn_noise times its noise scale (see turn_hysteresis), and at least turn_fraction
@@ -285,6 +285,18 @@ contains
       d = abs(y(2*k + 1:n) - 2.0_dp*y(k + 1:n - k) + y(1:n - 2*k))
       sd = 1.4826_dp*median(d)/sqrt(6.0_dp)
    end function noise_sd
+
+   !> How far the noise of y is from independent: noise_sd from second differences lag
+   !> samples apart over that from neighbours (1 for independent noise, above for noise
+   !> correlated from sample to sample); 0 where y has too few points
+   pure real(dp) function noise_lag_ratio(y, lag) result(ratio)
+      real(dp), intent(in) :: y(:)
+      integer, intent(in) :: lag
+      real(dp) :: sd1
+      ratio = 0.0_dp
+      sd1 = noise_sd(y)
+      if (sd1 > 0.0_dp) ratio = noise_sd(y, lag)/sd1
+   end function noise_lag_ratio
 
    !> The rounding of recorded values: the largest q = s/k (s the smallest non-zero step
    !> between neighbours, k = 1 to 4) of which nearly every value (95 %) is a whole multiple,

@@ -6,7 +6,7 @@
 !> increments, and a POST26 PRVAR listing of time, axial stress and axial strain.
 module usharp_apdl
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error
+   use usharp_error, only: error_type
    use usharp_strings, only: str, real_str
    use usharp_config, only: run_config, test_config
    use usharp_history, only: control_strain

@@ -109,8 +109,9 @@ contains
 
    !> Data in a wrong unit or column, which a fit would take as they are: a measured strain
    !> beyond 1 (in percent), a stress far from what a metal of Young's modulus youngs (model
-   !> unit) shows or rising with the strain far more or less steeply than youngs, or rows that lie mostly beyond the simulated (output) times t and far
-   !> beyond (time in ms)
+   !> unit) shows or rising with the strain far more or less steeply than youngs, a measured
+   !> strain history that starts loaded, or rows that lie mostly beyond the simulated (output)
+   !> times t and far beyond (time in ms)
    pure subroutine check_scale(test, exp, youngs, model_units, t, error)
       type(test_config), intent(in) :: test
       type(experiment_type), intent(in) :: exp
