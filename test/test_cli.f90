@@ -28,6 +28,7 @@ contains
          new_unittest('folders-import-only-downward', test_layers), &
          new_unittest('predict-with-the-constants-that-made-the-data', test_predict), &
          new_unittest('predict-needs-constants', test_predict_needs_constants), &
+         new_unittest('predict-simulates-a-test-without-data', test_predict_without_data), &
          new_unittest('predict-readme-a617-twice', test_predict_a617), &
          new_unittest('deck-test-and-input-swapped', test_deck_swapped), &
          new_unittest('identify-words-at-the-truth-and-a-guess', test_identify_words)]
@@ -213,6 +214,44 @@ contains
       inquire (file=dir//'/lcf.sim.txt', exist=exists)
       call check(error, exists, 'lcf.sim.txt written')
    end subroutine test_predict
+
+   !> predict of a deck with a test without data (a programmed history whose response is
+   !> wanted): simulated with the -c constants (its stress the same as that of the same
+   !> history with data, to the last digit written), a row that says so, no .fit.txt for it
+   subroutine test_predict_without_data(error)
+      use usharp_cmd_predict, only: predict_command
+      use test_util, only: write_text
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=report_line_len), allocatable :: summary(:)
+      character(len=*), parameter :: dir = scratch_dir//'/predict-no-data'
+      character(len=:), allocatable :: deck, a, b
+      character(len=*), parameter :: relax = "history='relaxation', dt_out=1.0, levels=0.00075, 0.001, "// &
+                                             "ramp_time=1.0, holds=600.0, 600.0"
+      logical :: exists
+      deck = write_text('predict-no-data.nml', [character(len=200) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=1.0, a2=1.0e-5, b=1.0e13, c2=0.1, h1=100.0, h2=100.0, n=1.0, q=91000.0 /', &
+         "&test name='relax', "//relax//", data_file='../../data/thesis/relax.sim.txt' /", &
+         "&test name='wanted', "//relax//" /"])
+      call predict_command(deck, dir, 'decks/thesis-data.nml', summary, e, force=.true.)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      call check(error, index(summary(4), 'wanted') > 0 .and. index(summary(4), 'simulated only') > 0, &
+                 'the row of the test without data: '//trim(summary(4)))
+      if (allocated(error)) return
+      inquire (file=dir//'/wanted.fit.txt', exist=exists)
+      call check(error, .not. exists, 'no wanted.fit.txt')
+      if (allocated(error)) return
+      ! The curves after their first lines (which name the test)
+      a = read_text(dir//'/relax.sim.txt')
+      b = read_text(dir//'/wanted.sim.txt')
+      a = a(index(a, '# columns'):)
+      b = b(index(b, '# columns'):)
+      call check(error, len(a) > 1000 .and. a == b, 'the response without data is the one with the -c constants')
+   end subroutine test_predict_without_data
 
    !> predict without -c is an input error that says what is missing
    subroutine test_predict_needs_constants(error)

@@ -2,8 +2,8 @@
 !> it: each test's error figures, the same curves as a fit writes and a summary
 module usharp_cmd_predict
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: real_str, pad, report_line_len
+   use usharp_error, only: error_type, fatal_error, stat_input, prefix_error
+   use usharp_strings, only: real_str, pad, report_line_len, shell_word
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, check_not_a_fit
    use usharp_objective, only: fit_problem, setup_problem, simulated
@@ -13,6 +13,10 @@ module usharp_cmd_predict
    use usharp_cmd_run, only: write_curves
    use usharp_overwrite, only: check_overwrite, simulate_mark
    use usharp_experiment, only: data_note
+   use usharp_simulate, only: simulate_test, model_lines
+   use usharp_output, only: write_sim_file
+   use usharp_version, only: usharp_version_string
+   use usharp_config, only: test_config
    implicit none
    private
 
@@ -23,8 +27,10 @@ contains
    !> Simulate every &test of path with the &constants of constants_file (required) and
    !> compare with the tests' data: RMS error, RMS error / peak of the data, largest error per
    !> test (the fitted response's unit). Writes <test>.sim.txt, <test>.fit.txt and summary.txt
-   !> into out_dir (&output out_dir when empty); summary returns the table. Files of those
-   !> names that an earlier prediction did not write are refused unless force (--force).
+   !> into out_dir (&output out_dir when empty); summary returns the table. A test without a
+   !> data_file (a programmed history whose response is wanted) is simulated alone: its
+   !> <test>.sim.txt and a row that says so. Files of those names that an earlier prediction
+   !> did not write are refused unless force (--force).
    subroutine predict_command(path, out_dir, constants_file, summary, error, force)
       character(len=*), intent(in) :: path, out_dir, constants_file
       character(len=report_line_len), allocatable, intent(out) :: summary(:)
@@ -33,7 +39,10 @@ contains
       logical, intent(in), optional :: force
       type(run_config) :: cfg
       type(fit_problem) :: prob
-      type(sim_result), allocatable :: res(:)
+      !> the tests without data, simulated alone
+      type(test_config), allocatable :: alone(:)
+      logical, allocatable :: measured(:)
+      type(sim_result), allocatable :: res(:), res_alone(:)
       real(dp) :: rms, rel, worst
       character(len=report_line_len) :: row
       character(len=:), allocatable :: name
@@ -62,20 +71,36 @@ contains
       if (allocated(error)) return
       ! Nothing is fitted; the problem's set-up asks for one fitted constant, unused here
       if (.not. any(cfg%fit%fitted)) cfg%fit%fitted(1) = .true.
-      call setup_problem(cfg, prob, error)
-      if (allocated(error)) return
-      ! Its tests as compared: where the data hold a measurement
-      cfg%tests = prob%cfg%tests
-      call make_dir(cfg%out_dir, error)
-      if (allocated(error)) return
-      allocate (res(size(cfg%tests)))
-      call prob%simulate_all(cfg%model, res, error)
-      if (allocated(error)) return
+      measured = [(cfg%tests(i)%has_data, i=1, size(cfg%tests))]
+      alone = pack(cfg%tests, .not. measured)
+      cfg%tests = pack(cfg%tests, measured)
       ! The name column as wide as the longest name (with ' peaks'), at least 32
       w = 32
       do i = 1, size(cfg%tests)
          w = max(w, len(cfg%tests(i)%name) + 6)
       end do
+      do i = 1, size(alone)
+         w = max(w, len(alone(i)%name) + 6)
+      end do
+      if (size(cfg%tests) > 0) then
+         call setup_problem(cfg, prob, error)
+         if (allocated(error)) return
+         ! Its tests as compared: where the data hold a measurement
+         cfg%tests = prob%cfg%tests
+      end if
+      ! Every simulation before the folder is made: a failing one leaves nothing behind
+      allocate (res(size(cfg%tests)), res_alone(size(alone)))
+      if (size(cfg%tests) > 0) call prob%simulate_all(cfg%model, res, error)
+      if (allocated(error)) return
+      do i = 1, size(alone)
+         call simulate_test(cfg%model, cfg%solver, alone(i), res_alone(i), error)
+         if (allocated(error)) then
+            call prefix_error(error, path//': ')
+            return
+         end if
+      end do
+      call make_dir(cfg%out_dir, error)
+      if (allocated(error)) return
       summary = [character(len=report_line_len) :: 'usharp predict '//path//' with the constants of '// &
          constants_file, '  '//pad('test', w)//'   RMS error    RMS/peak   max error']
       do i = 1, size(cfg%tests)
@@ -96,14 +121,36 @@ contains
             summary = [character(len=report_line_len) :: summary, '  '//pad(name, w)//trim(row)]
          end do
       end do
+      do i = 1, size(alone)
+         summary = [character(len=report_line_len) :: summary, '  '//pad(alone(i)%name, w)// &
+                    '   (no data_file: simulated only)']
+      end do
       summary = [character(len=report_line_len) :: summary, '  (errors in '//cfg%units// &
          ', strain for stress-controlled tests; peak: the largest |value| of the data)', &
          '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
       if (any([(cfg%tests(i)%has_peaks(), i=1, size(cfg%tests))])) summary(size(summary)) = &
          trim(summary(size(summary)))//' (and <test>.peaks.txt)'
-      call write_curves(prob, cfg%model, cfg%out_dir, constants_file, error, &
-                        'prediction with the constants of '//constants_file)
-      if (allocated(error)) return
+      if (size(alone) > 0) summary(size(summary)) = trim(summary(size(summary)))// &
+         '; only <test>.sim.txt for a test without data'
+      if (size(cfg%tests) > 0) then
+         call write_curves(prob, cfg%model, cfg%out_dir, constants_file, error, &
+                           'prediction with the constants of '//constants_file)
+         if (allocated(error)) return
+      end if
+      do i = 1, size(alone)
+         block
+            character(len=512), allocatable :: header(:)
+            header = [character(len=512) :: 'usharp '//usharp_version_string// &
+               ' prediction with the constants of '//constants_file//", test '"//alone(i)%name//"'", &
+               'the same curve: usharp simulate '//shell_word(path)//' --constants '// &
+               shell_word(constants_file)//' --test '//shell_word(alone(i)%name)]
+            header = [character(len=512) :: header, model_lines(cfg%model, cfg%units, alone(i), error)]
+            if (allocated(error)) return
+            call write_sim_file(join_path(cfg%out_dir, alone(i)%name//'.sim.txt'), res_alone(i), &
+                                header, cfg%units, error)
+            if (allocated(error)) return
+         end block
+      end do
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
    end subroutine predict_command
 
@@ -131,6 +178,8 @@ contains
             call check_overwrite(cfg%out_dir, [name//'.sim.txt'], marks, 'predict', force, error)
          end block
          if (allocated(error)) return
+         ! (a test without data gets its .sim.txt only)
+         if (.not. cfg%tests(i)%has_data) cycle
          call check_overwrite(cfg%out_dir, [name//'.fit.txt'], &
             ["# prediction with the constants of * of test '"//name//"' against "], 'predict', force, error)
          if (allocated(error)) return
