@@ -74,6 +74,16 @@ contains
       call check(error, .not. allocated(e) .and. cmd%selfcheck .and. cmd%input == '', &
                  'selfcheck needs no input')
       if (allocated(error)) return
+      call parse_arguments(argv('help'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%help .and. cmd%name == '', 'help alone')
+      if (allocated(error)) return
+      call parse_arguments(argv('help diagnose'), cmd, e)
+      call check(error, .not. allocated(e) .and. cmd%help .and. cmd%name == 'diagnose', 'help of a command')
+      if (allocated(error)) return
+      call parse_arguments(argv('help fitt'), cmd, e)
+      call check(error, allocated(e), 'help of no command')
+      if (allocated(error)) return
+      deallocate (e)
       call parse_arguments(argv('simulate -t relax x.nml'), cmd, e)
       call check(error, .not. allocated(e) .and. cmd%only_test == 'relax', 'simulate -t')
       if (allocated(error)) return

@@ -508,11 +508,27 @@ contains
       call write_relaxation_data('a.txt', 1.0_dp, e)
       call check(error, .not. allocated(e), 'relaxation data not written')
       if (allocated(error)) return
-      call read_config(write_text('diag-empty.nml', [character(len=100) :: model_groups, &
+      ! No &diagnose at all: the group is named, not its variable
+      call read_config(write_text('diag-none.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", tests]), cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
+      call check_message(error, e, 'group &diagnose is missing')
+      if (allocated(error)) return
+      call read_config(write_text('diag-empty.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose n_refit = 3 /", tests]), cfg, e)
+      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
+      if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
       call check_message(error, e, '&diagnose: holdout: the held-out set is empty')
+      if (allocated(error)) return
+      ! A test held out twice, and gamma3 named alone
+      call read_config(write_text('diag-twice-held.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose holdout = 'b', 'b' /", tests]), cfg, e)
+      call check_message(error, e, "&diagnose: holdout names 'b' twice")
+      if (allocated(error)) return
+      call read_config(write_text('diag-gamma3.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose holdout = 'b', gamma3 = -1 /", tests]), cfg, e)
+      call check_message(error, e, '&diagnose: gamma3 = -1.000 must be > 0')
       if (allocated(error)) return
       ! The command checks it before it makes its folder and journal: nothing is left behind
       call execute_command_line('rm -rf '//scratch_dir//'/diag-empty-out')
@@ -969,6 +985,13 @@ contains
       call conclude(res)
       call check(error, res%leading == 2 .and. index(res%verdict, 'compliance partly explains') == 1 .and. &
                  index(res%verdict, 'below its floor') == 0, 'rest above the floor: '//res%verdict)
+      if (allocated(error)) return
+      ! 7 % of the fit tests' gap and 4 % of the held-out one: a lower BIC, little explained
+      res%effects(1) = outcome(4, 'scatter', 4, -50.0_dp, 0.07_dp, 2.2_dp)
+      res%effects(2) = outcome(1, 'compliance', 1, -100.0_dp, 0.07_dp, 2.2_dp)
+      call conclude(res)
+      call check(error, res%leading == 2 .and. index(res%verdict, 'compliance explains little of the gap') == 1, &
+                 'shares below 30 %: '//res%verdict)
    contains
       function outcome(k, name, q, dbic, shrink, held_gap) result(e)
          integer, intent(in) :: k, q

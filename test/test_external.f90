@@ -29,6 +29,7 @@ contains
          new_unittest('deck-load-steps-are-history-corners', test_deck_corners), &
          new_unittest('committed-decks-regenerate', test_committed_decks), &
          new_unittest('deck-tests-sharing-constants-read-them-alike', test_deck_shared_constants), &
+         new_unittest('deck-long-creep-and-tmf-refused-dt-max-per-test', test_deck_increments), &
          new_unittest('command-placeholders-quoted', test_placeholders), &
          new_unittest('external-run-failures-named', test_failures), &
          new_unittest('external-command-time-limit', test_time_limit), &
@@ -192,6 +193,51 @@ contains
          deallocate (t, v)
       end do
    end subroutine test_deck_corners
+
+   !> A creep step of 1e6 s at &solver dt_max = 0.15 s would be 6.7e6 ANSYS increments: refused
+   !> naming the load step and dt_max, before the folder is made; with the test's own dt_max
+   !> of 100 s its load step has DELTIM max 100 and the cyclic test keeps 0.15. A temperature
+   !> cycle, which the isothermal deck would lose, is refused
+   subroutine test_deck_increments(error)
+      use usharp_cmd_deck, only: deck_command
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      character(len=4096), allocatable :: written(:)
+      character(len=:), allocatable :: deck, text
+      character(len=*), parameter :: head(2) = [character(len=100) :: &
+         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /']
+      character(len=*), parameter :: dir = scratch_dir//'/increments-decks'
+      character(len=*), parameter :: creep = "&test name='creep', history='creep', stress=10.0, "// &
+                                             "ramp_time=10.0, duration=1.0e6"
+      call execute_command_line('rm -rf '//dir)
+      deck = write_text('increments.nml', [character(len=120) :: head, creep//' /', &
+                        "&test name='cyc', history='cyclic', strain_range=0.01, strain_rate=1e-3 /"])
+      call deck_command(deck, '', dir, '', written, e)
+      call check_message(error, e, "test 'creep': load step 2 lasts 1.00E+06 s: at dt_max = 0.150 s "// &
+                         'at least 6.7E+06 increments')
+      if (allocated(error)) return
+      call check(error, index(e%message, 'its own dt_max') > 0 .and. .not. file_exists(dir), e%message)
+      if (allocated(error)) return
+      deck = write_text('increments.nml', [character(len=120) :: head, creep//', dt_max=100.0 /', &
+                        "&test name='cyc', history='cyclic', strain_range=0.01, strain_rate=1e-3 /"])
+      call deck_command(deck, '', dir, '', written, e)
+      if (allocated(e)) then
+         call test_failed(error, e%message)
+         return
+      end if
+      text = read_text(dir//'/creep.inp')
+      call check(error, index(text, 'DELTIM,1.0E-001,1.0E-008,1.0E+002') > 0, 'creep DELTIM: '//text(index(text, 'DELTIM'):))
+      if (allocated(error)) return
+      text = read_text(dir//'/cyc.inp')
+      call check(error, index(text, 'DELTIM,1.0E-001,1.0E-008,1.5E-001') > 0, 'cyclic DELTIM: '//text(index(text, 'DELTIM'):))
+      if (allocated(error)) return
+      deck = write_text('increments-tmf.nml', [character(len=160) :: head, &
+         "&test name='tmf', history='cyclic', strain_range=0.005, strain_rate=1e-4, "// &
+         "tmf_temperatures=873.15, 1223.15 /"])
+      call deck_command(deck, '', dir//'-tmf', '', written, e)
+      call check_message(error, e, "test 'tmf': its temperature cycle (tmf_temperatures) would be lost")
+   end subroutine test_deck_increments
 
    !> Tests that share one constants file read it alike: another format or another
    !> temperature's D0 for one of them is refused; with a file each, each holds its own

@@ -63,7 +63,9 @@ contains
          new_unittest('peaks-and-data-share-the-objective', test_peak_share), &
          new_unittest('creep-and-lcf-in-one-deck', test_mixed), &
          new_unittest('real-a617-cycles-counted-through-gaps', test_real_life), &
-         new_unittest('test-shares-joined-as-one-rank-has-them', test_shares_merged)]
+         new_unittest('test-shares-joined-as-one-rank-has-them', test_shares_merged), &
+         new_unittest('residual-scale-is-the-peak-within-the-simulated-time', test_peak_within), &
+         new_unittest('gap-cycles-strain-in-percent-refused', test_gap_cycles_percent)]
    end subroutine collect_fit
 
    subroutine rosen_eval(self, x, f, error)
@@ -741,6 +743,61 @@ contains
 
    !> The configuration and fit problem of a deck (fit_deck) with the given &test lines; a
    !> failed test when they cannot be set up
+   !> A creep curve recorded to rupture (strain to 0.2, ten times what it reaches at half its
+   !> life) and simulated to half its life (duration): its residuals are relative to the
+   !> largest strain within the simulated time, as a prediction's RMS/peak is, not to the
+   !> rupture strain the simulation never reaches
+   subroutine test_peak_within(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(fit_problem) :: prob
+      character(len=60) :: rows(42)
+      character(len=200) :: lines(1)
+      character(len=:), allocatable :: path
+      real(dp) :: t, e
+      integer :: k
+      rows(1) = 'time,strain'
+      do k = 0, 40
+         t = 100.0_dp*real(k, dp)
+         ! 0.02 at 2000 s, then ten times as fast to 0.22 at 4000 s
+         e = 1.0e-5_dp*t
+         if (t > 2000.0_dp) e = 0.02_dp + 1.0e-4_dp*(t - 2000.0_dp)
+         rows(k + 2) = real_str(t, 'f0.1')//','//real_str(e, 'es13.6')
+      end do
+      path = write_text('peak-within.csv', rows)
+      lines(1) = "&test name='creep', history='creep', stress=12.0, ramp_time=1.0, duration=2000.0, "// &
+                 "dt_out=100.0, data_file='peak-within.csv' /"
+      call problem_of('peak-within.nml', lines, cfg, prob, error)
+      if (allocated(error)) return
+      call check(error, abs(prob%targets(1)%y_ex_max - 0.02_dp) < 1.0e-9_dp, &
+                 'scale '//real_str(prob%targets(1)%y_ex_max, 'es12.5')//', not the 0.02 reached at 2000 s')
+   end subroutine test_peak_within
+
+   !> The cycles that fill the gaps of history 'data' are checked as a programmed cycling is:
+   !> strain_range = 1.0 meant as 1 % is refused naming it, and mean_strain without
+   !> strain_range (which it would have been ignored without) is refused
+   subroutine test_gap_cycles_percent(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      character(len=200) :: lines(1)
+      character(len=*), parameter :: test = "&test name='d', history='data', "// &
+                                           "data_file='../../data/tutorial/cyclic-fast.csv', data_unit='MPa', "
+      lines(1) = test//'strain_range=1.0 /'
+      call read_config(fit_deck('gap-percent.nml', '', lines), cfg, uerr)
+      call check(error, allocated(uerr), 'strain_range = 1.0 refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'strain_range or mean_strain in percent') > 0 .and. &
+                 index(uerr%message, 'gap-percent.nml') > 0, uerr%message)
+      if (allocated(error)) return
+      deallocate (uerr)
+      lines(1) = test//'mean_strain=0.001 /'
+      call read_config(fit_deck('gap-mean.nml', '', lines), cfg, uerr)
+      call check(error, allocated(uerr), 'mean_strain alone refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'mean_strain needs strain_range') > 0, uerr%message)
+   end subroutine test_gap_cycles_percent
+
    subroutine problem_of(name, tests, cfg, prob, error)
       character(len=*), intent(in) :: name, tests(:)
       type(run_config), intent(out) :: cfg

@@ -6,7 +6,7 @@ module test_history
    use usharp_history
    use usharp_strings, only: str
    use usharp_forcing, only: measured_history, turning_points, monotone, signal_resolution
-   use usharp_cycles, only: gap_filled_history, record_starts, match_peaks
+   use usharp_cycles, only: gap_filled_history, record_starts, match_peaks, peak_corners
    use usharp_model_miller, only: miller_model, model_setup
    use usharp_simulation, only: solver_options, sim_result
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
@@ -35,7 +35,9 @@ contains
          new_unittest('gap-filled-cycle-10-as-continuous', test_gap_fill), &
          new_unittest('gap-fill-smooth-pieces-and-peaks', test_gap_fill_smooth), &
          new_unittest('gap-fill-linear-straight-across', test_gap_linear), &
-         new_unittest('peaks-matched-through-a-drift', test_peaks_drift)]
+         new_unittest('peaks-matched-through-a-drift', test_peaks_drift), &
+         new_unittest('measured-forcing-hold-logged-slowly', test_measured_hold), &
+         new_unittest('gap-time-for-a-hold-logged-slowly', test_gap_time)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -231,6 +233,100 @@ contains
       end do
    end subroutine test_measured_steps
 
+   !> Cycles of +-0.5 % at 1e-3/s with 60 s holds at both peaks, sampled every 0.5 s on the
+   !> ramps and every 20 s in the holds, rounded to 1e-5 (as loggers record them): the
+   !> forcing stays within a resolution step of the command everywhere (a spline through the
+   !> holds had swung to 0.75 % within them) and each peak's turning point is where its hold
+   !> starts
+   subroutine test_measured_hold(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      integer, allocatable :: idx(:), kind(:)
+      real(dp) :: tt, worst
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 60.0_dp, 60.0_dp, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [0.0_dp]
+      do while (t(size(t)) < cmd%end_time() - 1.0e-9_dp)
+         tt = t(size(t))
+         ! in a hold (the command's value at the next 0.5 s the same): the next sample at 20 s
+         if (abs(cmd%value_at(tt + 0.5_dp) - cmd%value_at(tt)) < 1.0e-12_dp .and. &
+             abs(cmd%value_at(min(tt + 20.0_dp, cmd%end_time())) - cmd%value_at(tt)) < 1.0e-12_dp) then
+            t = [t, min(tt + 20.0_dp, cmd%end_time())]
+         else
+            t = [t, min(tt + 0.5_dp, cmd%end_time())]
+         end if
+      end do
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
+      end do
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing failed')
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do k = 0, nint(10.0_dp*cmd%end_time())
+         worst = max(worst, abs(h%value_at(0.1_dp*k) - cmd%value_at(0.1_dp*k)))
+      end do
+      call check(error, worst <= 1.0e-5_dp, 'largest |forcing - command| '//str(worst)//' > 1e-5')
+      if (allocated(error)) return
+      call peak_corners(h, idx, kind)
+      call check(error, size(idx) >= 5, 'turning points of the forcing: '//str(size(idx)))
+      if (allocated(error)) return
+      do k = 1, size(idx)
+         ! the command arrives at each peak (a multiple of 5 s less the holds before it) and
+         ! holds 60 s: the hold starts at the command's first time at the peak's value
+         tt = h%t(idx(k))
+         call check(error, abs(cmd%value_at(tt) - cmd%value_at(tt - 0.5_dp)) > 1.0e-4_dp, &
+                    'turning point at t = '//str(tt)//' s is not where its hold starts')
+         if (allocated(error)) return
+      end do
+   end subroutine test_measured_hold
+
+   !> The same cycles with one sample a minute in the holds: steps longer than 50 times the
+   !> median (0.5 s) are gaps, so the hold's samples stand alone between gaps, which is
+   !> refused naming them and gap_time; with gap_time = 100 s there is no gap
+   subroutine test_gap_time(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:), spans(:, :)
+      real(dp) :: tt
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 180.0_dp, 180.0_dp, cmd, uerr)
+      t = [0.0_dp]
+      do while (t(size(t)) < cmd%end_time() - 1.0e-9_dp)
+         tt = t(size(t))
+         if (abs(cmd%value_at(tt + 0.5_dp) - cmd%value_at(tt)) < 1.0e-12_dp .and. &
+             abs(cmd%value_at(min(tt + 60.0_dp, cmd%end_time())) - cmd%value_at(tt)) < 1.0e-12_dp) then
+            t = [t, min(tt + 60.0_dp, cmd%end_time())]
+         else
+            t = [t, min(tt + 0.5_dp, cmd%end_time())]
+         end if
+      end do
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = cmd%value_at(t(k))
+      end do
+      call gap_filled_history(t, v, control_strain, 0.0_dp, 0.0_dp, 0.0_dp, h, spans, uerr)
+      call check(error, allocated(uerr), 'a lone sample between gaps is refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'gap_time') > 0 .and. index(uerr%message, 'alone') > 0, &
+                 uerr%message)
+      if (allocated(error)) return
+      deallocate (uerr)
+      call gap_filled_history(t, v, control_strain, 0.0_dp, 0.0_dp, 0.0_dp, h, spans, uerr, gap_time=100.0_dp)
+      call check(error, .not. allocated(uerr), 'with gap_time')
+      if (allocated(error)) return
+      call check(error, size(spans, 2), 1, 'one recorded piece')
+      if (allocated(error)) return
+      call check(error, abs(h%value_at(t(size(t)) - 1.0_dp) - cmd%value_at(t(size(t)) - 1.0_dp)) < 1.0e-7_dp, &
+                 'the last hold followed')
+   end subroutine test_gap_time
+
    !> A triangle of strain (amplitude 0.005, 0.1 s samples) rounded to 1e-5 with a dip of
    !> 5e-5 in a ramp: the forcing stops at the two turning points only, stays within two
    !> resolution steps of the true triangle, its ramps are monotone (the dip gone) and its
@@ -313,7 +409,7 @@ contains
       do k = 1, size(t)
          v(k) = cont%value_at(t(k))
       end do
-      call check(error, size(record_starts(t)), 2, 'one gap found')
+      call check(error, size(record_starts(t, 0.0_dp)), 2, 'one gap found')
       if (allocated(error)) return
       call gap_filled_history(t, v, 1, 0.0_dp, 0.0_dp, 0.0_dp, filled, spans, uerr, noise=0.0_dp)
       if (allocated(uerr)) then

@@ -109,6 +109,17 @@ contains
       case ('-h', '--help')
          cmd%help = .true.
          return
+      case ('help')
+         ! usharp help [command]: as usharp --help, usharp <command> --help
+         cmd%help = .true.
+         if (size(args) >= 2) then
+            if (.not. any(command_list == args(2)%s)) then
+               call fatal_error(error, "help: unknown command '"//args(2)%s//"'", stat_usage)
+               return
+            end if
+            cmd%name = args(2)%s
+         end if
+         return
       case ('-V', '--version')
          cmd%version = .true.
          return

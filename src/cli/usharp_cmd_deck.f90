@@ -4,7 +4,7 @@ module usharp_cmd_deck
    use usharp_error, only: error_type, fatal_error, stat_input, stat_usage
    use usharp_config, only: run_config
    use usharp_input, only: read_config, override_constants, check_inputs_kept
-   use usharp_apdl, only: apdl_deck, line_len
+   use usharp_apdl, only: apdl_deck, line_len, check_deckable
    use usharp_external, only: constants_lines
    use usharp_simulate, only: test_model
    use usharp_model, only: model_type
@@ -106,6 +106,8 @@ contains
       ! Every file is checked before the first is written
       do i = 1, size(cfg%tests)
          if (len(test_name) > 0 .and. cfg%tests(i)%name /= test_name) cycle
+         call check_deckable(cfg, cfg%tests(i), error)
+         if (allocated(error)) return
          mark = deck_mark(cfg%tests(i)%name)
          call check_overwrite(dir, [cfg%tests(i)%name//'.inp'], [mark], 'deck', overwrite, error)
          if (allocated(error)) return

@@ -114,7 +114,12 @@ contains
                                    pack(y, (kind /= 0) .eqv. (part == 1)), rms, rel, worst)
             name = cfg%tests(i)%name
             if (part == 1) name = cfg%tests(i)%name//' peaks'
-            write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+            ! (a share too large for f10.2, a prediction far off, in exponent form)
+            if (100.0_dp*rel < 1.0e6_dp) then
+               write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+            else
+               write (row, '(es12.4,1x,es9.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+            end if
             ! (the note on the test's first row: its peaks' where it compares only those)
             if (part == 0 .or. count(kind == 0) == 0) row = trim(row)//data_note(prob%targets(i)%exp, &
                                                                                  cfg%tests(i)%dt_out)

@@ -144,7 +144,8 @@ contains
             starts = starts//trim(res%names(i))//' '//real_str(res%per_test_global(i), 'es10.3')
          end do
          call add_line(lines, 'The Latin-hypercube starts of section 2 found a lower baseline of the fit tests '// &
-            '(objective '//real_str(res%f0_global, 'es11.4')//'; per test: '//starts//'): the "before" '// &
+            '(objective '//real_str(res%f0_global, 'es11.4')//', '//real_str(res%f0 - res%f0_global, 'es9.2')// &
+            ' below the first'//'; per test: '//starts//'): the "before" '// &
             'of section 2 and its shares are against it; the held-out tests'' figures stay this table''s '// &
             '(the prediction of the first baseline).')
       end if

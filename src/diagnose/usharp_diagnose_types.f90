@@ -29,6 +29,8 @@ module usharp_diagnose_types
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
    !> self-check asks the same of the held-out gap
    real(dp), parameter, public :: most = 0.8_dp
+   !> Below this share of each structured gap a leader "explains little of the gap"
+   real(dp), parameter, public :: little = 0.3_dp
 
    !> A delay below the sampling interval is measured by the data when its 95 % interval
    !> lies within this share of it on either side (about 8 standard errors from zero: a

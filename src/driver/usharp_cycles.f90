@@ -4,7 +4,8 @@
 !> is compared.
 module usharp_cycles
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type
+   use usharp_error, only: error_type, fatal_error
+   use usharp_strings, only: real_str
    use usharp_history, only: history_type, history_from_points, segment_of
    use usharp_forcing, only: measured_history, turning_points
    use usharp_sort, only: median
@@ -30,19 +31,29 @@ module usharp_cycles
 contains
 
    !> First index of each recorded piece of times t: 1, and every k with t(k) - t(k-1)
-   !> longer than gap_factor times the median step
-   pure function record_starts(t) result(starts)
+   !> longer than record_limit(t, gap_time)
+   pure function record_starts(t, gap_time) result(starts)
       real(dp), intent(in) :: t(:)
+      !> s; 0: gap_factor times the median step
+      real(dp), intent(in) :: gap_time
       integer, allocatable :: starts(:)
       real(dp) :: limit
       integer :: k
       starts = [1]
       if (size(t) < 3) return
-      limit = gap_factor*median(t(2:) - t(:size(t) - 1))
+      limit = record_limit(t, gap_time)
       do k = 2, size(t)
          if (t(k) - t(k - 1) > limit) starts = [starts, k]
       end do
    end function record_starts
+
+   !> The longest time step of samples at times t that is no gap: gap_time (s) when it is
+   !> positive, else gap_factor times their median step
+   pure real(dp) function record_limit(t, gap_time) result(limit)
+      real(dp), intent(in) :: t(:), gap_time
+      limit = gap_time
+      if (limit <= 0.0_dp .and. size(t) >= 2) limit = gap_factor*median(t(2:) - t(:size(t) - 1))
+   end function record_limit
 
    !> A history from measured samples (t in s, v strain) whose recorded pieces (see
    !> record_starts) are each the smooth forcing of measured_history and whose gaps are filled
@@ -54,7 +65,7 @@ contains
    !> measured_history (0: no smoothing). straight: every gap a straight line from the end of
    !> one piece to the start of the next (gap_fill = 'linear'), each piece smoothed on its own
    pure subroutine gap_filled_history(t, v, control, range, mean, rate, hist, spans, error, noise, &
-                                      straight)
+                                      straight, gap_time)
       real(dp), intent(in) :: t(:), v(:)
       integer, intent(in) :: control
       real(dp), intent(in) :: range, mean, rate
@@ -63,13 +74,31 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: noise
       logical, intent(in), optional :: straight
+      !> a time step longer than this is a gap (s; absent or 0: see record_starts)
+      real(dp), intent(in), optional :: gap_time
       integer, allocatable :: starts(:), stops(:), kstops(:)
+      character(len=:), allocatable :: where_text
+      real(dp) :: limit
       type(history_type) :: piece
       type(cycle_shape) :: a, b
       real(dp), allocatable :: tt(:), vv(:), tk(:), vk(:), d2(:), tc(:), vc(:)
       integer :: i, j, p0, p1, np
-      starts = [record_starts(t), size(t) + 1]
+      limit = 0.0_dp
+      if (present(gap_time)) limit = gap_time
+      starts = [record_starts(t, limit), size(t) + 1]
       np = size(starts) - 1
+      ! A recorded piece holds a cycle or a stretch of one: a sample or two between two gaps
+      ! are no piece, but most likely a stretch logged more slowly than the rest (a hold)
+      do j = 1, np
+         if (starts(j + 1) - starts(j) >= 3 .or. np == 1) cycle
+         where_text = 'the sample at t = '//real_str(t(starts(j)), 'f0.2')//' s lies'
+         if (starts(j + 1) - starts(j) > 1) where_text = 'the samples at t = '// &
+            real_str(t(starts(j)), 'f0.2')//' and '//real_str(t(starts(j) + 1), 'f0.2')//' s lie'
+         call fatal_error(error, where_text//' alone between two gaps (time steps longer than '// &
+            real_str(record_limit(t, limit), 'g0.4')//' s, taken as unrecorded cycles): a hold '// &
+            'logged more slowly than the ramps? Give gap_time (s) longer than its steps')
+         return
+      end do
       allocate (spans(2, np))
       if (np == 1) then
          call measured_history(t, v, control, hist, error, noise)

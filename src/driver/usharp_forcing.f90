@@ -38,6 +38,15 @@ module usharp_forcing
    !> for their 234-1634 samples and take 1690 steps in all at rtol 1e-5, at 0.2 twice the
    !> knots and 1940 steps
    real(dp), parameter :: knot_tol = 1.0_dp
+   !> A hold at a turning point: the samples about it within hold_noise times the noise scale
+   !> (see turn_hysteresis) of its value, for at least hold_travel times the time the slower
+   !> of the ramps beside it takes to cross that band. It becomes a branch of its own, flat,
+   !> with a corner at each end: a spline through a hold logged more slowly than the ramps
+   !> (a sample every 20 s against every 0.5 s) had swung across it to half as much again as
+   !> the peak strain, and a peak is compared where its hold starts. A rounded reversal is no
+   !> hold: the Alloy 617 strains (cycles 1-2) stay within the band for at most 7.8 crossing times
+   real(dp), parameter :: hold_noise = 3.0_dp
+   real(dp), parameter :: hold_travel = 20.0_dp
 
 contains
 
@@ -60,6 +69,7 @@ contains
       real(dp), allocatable :: z(:), ends(:, :), mid(:), tk(:), vk(:), d2(:), mk(:)
       real(dp) :: rate
       integer :: j, a, b, i, first
+      logical, allocatable :: flat(:)
       call history_from_points(t, v, control, hist, error)
       if (allocated(error)) return
       sigma = -1.0_dp
@@ -74,20 +84,31 @@ contains
          end if
       end if
       if (sigma <= 0.0_dp .or. size(t) < 3) return
-      stops = turning_points(v, turn_hysteresis(v))
+      call turns_and_holds(t, v, stops, flat)
       allocate (z(size(v)), ends(2, size(stops) - 1), mid(size(stops)))
       do j = 1, size(stops) - 1
          a = stops(j)
          b = stops(j + 1)
-         z(a:b) = smooth_branch(t(a:b), monotone(v(a:b), v(b) >= v(a)), sigma)
+         if (flat(j)) then
+            z(a:b) = sum(v(a:b))/real(b - a + 1, dp)
+         else
+            z(a:b) = smooth_branch(t(a:b), monotone(v(a:b), v(b) >= v(a)), sigma)
+         end if
          ends(:, j) = [z(a), z(b)]
       end do
-      ! One value at each inner turning point, the mean of its two branches' ends, reached by
-      ! a linear correction of each branch (which leaves its curvature as it is)
+      ! One value at each inner turning point, the mean of its two branches' ends (a hold's
+      ! own value at its ends), reached by a linear correction of each branch (which leaves
+      ! its curvature as it is)
       mid(1) = ends(1, 1)
       mid(size(stops)) = ends(2, size(stops) - 1)
       do j = 2, size(stops) - 1
-         mid(j) = 0.5_dp*(ends(2, j - 1) + ends(1, j))
+         if (flat(j - 1)) then
+            mid(j) = ends(2, j - 1)
+         else if (flat(j)) then
+            mid(j) = ends(1, j)
+         else
+            mid(j) = 0.5_dp*(ends(2, j - 1) + ends(1, j))
+         end if
       end do
       allocate (tk(0), vk(0), d2(0), hist%kstops(size(stops)))
       hist%kstops(1) = 1
@@ -118,6 +139,54 @@ contains
       hist%d2 = d2
       hist%stops = stops
    end subroutine measured_history
+
+   !> The corners of a measured signal v at times t: its turning points (see turning_points)
+   !> and, where a turning point lies in a hold (see hold_noise), the hold's first and last
+   !> samples in its place; flat(j) whether the branch from stops(j) to stops(j + 1) is a hold
+   pure subroutine turns_and_holds(t, v, stops, flat)
+      real(dp), intent(in) :: t(:), v(:)
+      integer, allocatable, intent(out) :: stops(:)
+      logical, allocatable, intent(out) :: flat(:)
+      integer, allocatable :: turns(:)
+      integer :: buf(2*size(v)), j, n, s, e, k
+      logical :: held(2*size(v))
+      real(dp) :: tol, rate
+      turns = turning_points(v, turn_hysteresis(v))
+      tol = hold_noise*max(quantum(v), noise_sd(v))
+      n = 1
+      buf(1) = turns(1)
+      held = .false.
+      do j = 2, size(turns) - 1
+         k = turns(j)
+         s = k
+         do while (s - 1 > turns(j - 1))
+            if (abs(v(s - 1) - v(k)) > tol) exit
+            s = s - 1
+         end do
+         e = k
+         do while (e + 1 < turns(j + 1))
+            if (abs(v(e + 1) - v(k)) > tol) exit
+            e = e + 1
+         end do
+         ! (the rates of the ramps before and after, per s)
+         rate = min(abs(v(s) - v(turns(j - 1)))/(t(s) - t(turns(j - 1))), &
+                    abs(v(turns(j + 1)) - v(e))/(t(turns(j + 1)) - t(e)))
+         if (e > s .and. (t(e) - t(s))*rate >= hold_travel*tol) then
+            buf(n + 1:n + 2) = [s, e]
+            held(n + 1) = .true.
+            n = n + 2
+         else
+            n = n + 1
+            buf(n) = k
+         end if
+      end do
+      if (size(turns) > 1) then
+         n = n + 1
+         buf(n) = turns(size(turns))
+      end if
+      stops = buf(:n)
+      flat = held(:n - 1)
+   end subroutine turns_and_holds
 
    !> The knots (indices idx into t, the first and the last included) of a natural cubic
    !> spline through (t(idx), z(idx)) that passes within tol of every z, and its second

@@ -6,16 +6,20 @@
 !> increments, and a POST26 PRVAR listing of time, axial stress and axial strain.
 module usharp_apdl
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type
+   use usharp_error, only: error_type, fatal_error, stat_input
+   use usharp_simulation, only: solver_options
    use usharp_strings, only: str, real_str
-   use usharp_config, only: run_config, test_config
+   use usharp_config, only: run_config, test_config, test_increments
    use usharp_history, only: control_strain
    use usharp_external, only: n_constants_file
    use usharp_version, only: usharp_version_string
    implicit none
    private
 
-   public :: apdl_deck, apdl_real, line_len
+   public :: apdl_deck, apdl_real, line_len, check_deckable
+
+   !> Most time increments of one load step at the largest increment
+   real(dp), parameter :: max_increments = 1.0e6_dp
 
    integer, parameter :: line_len = 160
    !> A history's start value away from 0 is put on over this share of its first segment
@@ -38,6 +42,35 @@ contains
       text = trim(adjustl(buf))
    end function apdl_real
 
+   !> Whether a deck of test says what usharp simulates: refused, a temperature cycle (the
+   !> deck is isothermal) and a load step that needs more than max_increments increments of
+   !> the largest (a creep step of 1.4e7 s at 0.15 s: 9.4e7 increments, each written out)
+   pure subroutine check_deckable(cfg, test, error)
+      type(run_config), intent(in) :: cfg
+      type(test_config), intent(in) :: test
+      type(error_type), allocatable, intent(out) :: error
+      type(solver_options) :: inc
+      real(dp) :: most
+      integer :: k
+      if (allocated(test%hist%temp)) then
+         call fatal_error(error, cfg%path//": test '"//test%name//"': its temperature cycle "// &
+            '(tmf_temperatures) would be lost: usharp deck writes isothermal decks (one TBTEMP '// &
+            'and TUNIF)', stat_input)
+         return
+      end if
+      inc = test_increments(test, cfg%solver)
+      do k = 2, size(test%hist%t)
+         most = (test%hist%t(k) - test%hist%t(k - 1))/inc%dt_max
+         if (most <= max_increments) cycle
+         call fatal_error(error, cfg%path//": test '"//test%name//"': load step "//str(k - 1)// &
+            ' lasts '//real_str(test%hist%t(k) - test%hist%t(k - 1), 'es9.2')//' s: at dt_max = '// &
+            real_str(inc%dt_max, 'g0.3')//' s at least '//real_str(most, 'es8.1')//' increments, '// &
+            'more than the '//str(nint(max_increments))//' a deck allows; give the &test '// &
+            'its own dt_max (s)', stat_input)
+         return
+      end do
+   end subroutine check_deckable
+
    !> The deck's lines for test of cfg; command is the usharp command that regenerates it
    subroutine apdl_deck(cfg, test, command, lines, error)
       type(run_config), intent(in) :: cfg
@@ -52,7 +85,9 @@ contains
       character(len=:), allocatable :: snames(:), snotes(:)
       real(dp) :: v, t0, v0, jump
       logical :: strain
+      type(solver_options) :: inc
 
+      inc = test_increments(test, cfg%solver)
       associate (h => test%hist, ext => test%ext)
          ! ANSYS starts at t = 0 unloaded: the history's times are taken from its start (a
          ! recording from t = 10 s, or cut from a longer test), and a start value that is not
@@ -146,7 +181,7 @@ contains
          if (v0 /= 0.0_dp) then
             call add('! load step 0')
             call add('TIME,'//apdl_real(jump))
-            call add('DELTIM,'//apdl_real(jump)//','//apdl_real(min(cfg%solver%dt_min, jump))//','// &
+            call add('DELTIM,'//apdl_real(jump)//','//apdl_real(min(inc%dt_min, jump))//','// &
                      apdl_real(jump))
             call load(v0)
             call add('SOLVE')
@@ -155,8 +190,8 @@ contains
             v = h%v(k)
             call add('! load step '//str(k - 1))
             call add('TIME,'//apdl_real(h%t(k) - t0))
-            call add('DELTIM,'//apdl_real(cfg%solver%dt_init)//','//apdl_real(cfg%solver%dt_min)// &
-                     ','//apdl_real(cfg%solver%dt_max))
+            call add('DELTIM,'//apdl_real(inc%dt_init)//','//apdl_real(inc%dt_min)// &
+                     ','//apdl_real(inc%dt_max))
             call load(v)
             call add('SOLVE')
          end do

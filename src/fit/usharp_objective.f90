@@ -39,7 +39,8 @@ module usharp_objective
       real(dp), allocatable :: t(:)     !< s
       real(dp), allocatable :: y_ex(:)  !< model unit
       real(dp), allocatable :: w(:)
-      real(dp) :: y_ex_max = 0.0_dp     !< largest |stress| of the dataset
+      !> largest |value| of the data within the compared times (and of the peaks compared)
+      real(dp) :: y_ex_max = 0.0_dp
       type(experiment_type) :: exp
    end type test_target
 
@@ -127,6 +128,7 @@ contains
       real(dp), allocatable :: td(:), yd(:), wd(:)
       character(len=:), allocatable :: column
       integer :: n, nd
+      real(dp) :: tol, within
       tg%t = test%times()
       n = size(tg%t)
       if (test%has_peaks()) then
@@ -146,7 +148,15 @@ contains
          end if
       end if
       tg%y_ex = unpack(yd, on_data, tg%y_ex)
+      ! The peak of the test as simulated: rows outside its time (a creep curve to rupture
+      ! cut at half its life) would set the scale of its residuals
       tg%y_ex_max = maxval(abs(tg%exp%y))
+      if (n > 0) then
+         tol = 1.0e-9_dp*max(1.0_dp, abs(tg%t(1)), abs(tg%t(n)))
+         ! (where the rows within are all 0, the data's times are checked later: in ms?)
+         within = maxval(abs(tg%exp%y), mask=tg%exp%t >= tg%t(1) - tol .and. tg%exp%t <= tg%t(n) + tol)
+         if (within > 0.0_dp) tg%y_ex_max = within
+      end if
       if (test%has_peaks()) then
          where (.not. on_data) tg%y_ex = test%peak_y*stress_factor(test%data%unit, units)
          tg%y_ex_max = max(tg%y_ex_max, maxval(abs(tg%y_ex), mask=.not. on_data))

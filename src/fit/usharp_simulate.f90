@@ -7,7 +7,7 @@ module usharp_simulate
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use usharp_umat_driver, only: simulate_umat
-   use usharp_config, only: test_config
+   use usharp_config, only: test_config, test_increments
    use usharp_rng, only: rng_type
    use usharp_strings, only: real_str
    use usharp_history, only: control_stress
@@ -54,7 +54,7 @@ contains
             call fatal_error(error, "a temperature cycle (tmf_temperatures) needs integrator "// &
                              "= 'rodas4', not '"//trim(solver%integrator)//"'")
          else if (solver%integrator == 'umat') then
-            call simulate_umat(m, test%hist, test%times(), solver, res, error)
+            call simulate_umat(m, test%hist, test%times(), test_increments(test, solver), res, error)
          else if (solver%integrator == 'rodas4') then
             call simulate_rosenbrock(m, test%hist, test%times(), solver, &
                                      res, error)

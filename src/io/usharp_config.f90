@@ -7,11 +7,11 @@ module usharp_config
    use usharp_input_fit, only: fit_config
    use usharp_input_design, only: design_config
    use usharp_input_diagnose, only: diagnose_config
-   use usharp_input_test, only: test_config, data_spec, external_spec
+   use usharp_input_test, only: test_config, data_spec, external_spec, test_increments
    implicit none
    private
 
-   public :: run_config, test_config, data_spec, fit_config, external_spec, design_config, diagnose_config
+   public :: run_config, test_config, test_increments, data_spec, fit_config, external_spec, design_config, diagnose_config
 
    !> Everything one input file holds
    type :: run_config

@@ -2,7 +2,7 @@
 !> against the &test names, once: every other part of usharp sees a mask over the tests.
 module usharp_input_diagnose
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type
+   use usharp_error, only: error_type, fatal_error, stat_input
    use usharp_namelist, only: nml_file, group_text, find_group, group_error, read_error, check_length, &
                               value_len, max_list
    use usharp_input_test, only: test_config
@@ -35,6 +35,7 @@ module usharp_input_diagnose
       !> Per-specimen mode: the test diagnosed against the others (its replicates), 'all' for
       !> each test in turn; blank: the diagnosis of the fit
       character(len=64) :: specimen = ''
+      logical :: present = .false.                 !< the input file has the group
    end type diagnose_config
 
 contains
@@ -55,6 +56,7 @@ contains
       diagnose%holdout = .false.
       k = find_group(file, 'diagnose')
       if (k == 0) return
+      diagnose%present = .true.
       call group_text(file, k, lines)
       call diagnose_namelist(diagnose, holdout, effects, rows, specimen, ios, msg, text=lines)
       if (ios /= 0) then
@@ -82,6 +84,10 @@ contains
                call fail("rows names '"//trim(rows(i))//"' twice")
                return
             end if
+            if (len_trim(holdout(i)) > 0 .and. holdout(j) == holdout(i)) then
+               call fail("holdout names '"//trim(holdout(i))//"' twice")
+               return
+            end if
          end do
       end do
       do i = 1, max_list
@@ -101,8 +107,10 @@ contains
          call fail('global_starts must be >= 0')
       else if (diagnose%reps < 1) then
          call fail('reps must be >= 1')
-      else if (.not. (diagnose%gamma3 > 0.0_dp) .or. .not. (diagnose%noise > 0.0_dp)) then
-         call fail('gamma3 and noise must be > 0')
+      else if (.not. (diagnose%gamma3 > 0.0_dp)) then
+         call fail('gamma3 = '//real_str(diagnose%gamma3, 'g0.4')//' must be > 0')
+      else if (.not. (diagnose%noise > 0.0_dp)) then
+         call fail('noise = '//real_str(diagnose%noise, 'g0.4')//' must be > 0')
       else if (diagnose%noise >= 0.5_dp) then
          ! A share of the peak stress: 5.0 is 500 % (is it in percent?)
          call fail('noise = '//real_str(diagnose%noise, 'g0.4')//' is a share of the peak stress '// &
@@ -136,7 +144,11 @@ contains
       type(diagnose_config), intent(in) :: diagnose
       character(len=*), intent(in) :: path  !< the input file
       type(error_type), allocatable, intent(out) :: error
-      if (.not. any(diagnose%holdout)) then
+      if (.not. any(diagnose%holdout) .and. .not. diagnose%present) then
+         call fatal_error(error, path//': group &diagnose is missing (its holdout names the tests '// &
+            "to predict, held out of the fit, or specimen = '<test>' one test to set against the others)", &
+            stat_input)
+      else if (.not. any(diagnose%holdout)) then
          call group_error(error, path, 'diagnose', 'holdout: the held-out set is empty; '// &
             'name the tests to predict (held out of the fit) with holdout, or one test to set '// &
             "against the others with specimen = '<test>' (or 'all')")

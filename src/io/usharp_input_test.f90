@@ -11,6 +11,7 @@ module usharp_input_test
    use usharp_cycles, only: gap_filled_history, match_peaks
    use usharp_sort, only: order_of
    use usharp_table, only: read_columns, merge_repeated_times, numbers_format
+   use usharp_simulation, only: solver_options
    use usharp_namelist, only: nml_file, group_text, check_length, read_error, value_len, max_list, unset, &
                               resolve_path
    implicit none
@@ -18,6 +19,7 @@ module usharp_input_test
 
    public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
    public :: read_data_columns, max_strain, percent_strain, compared_columns, history_settings
+   public :: test_increments
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
@@ -80,6 +82,10 @@ module usharp_input_test
       character(len=:), allocatable :: peak_file !< every cycle's peak stresses (target peaks)
       character(len=:), allocatable :: history_file !< the load history read (history 'file')
       real(dp) :: peak_share = 0.5_dp       !< share of the peaks in the test's objective (both)
+      !> Largest time increment of the implicit stress update (integrator 'umat', and the
+      !> ANSYS deck's DELTIM), s; 0: &solver dt_max. A creep test's months want larger
+      !> increments than a cycle's seconds
+      real(dp) :: dt_max = 0.0_dp
       !> The compared (and written) times, s, when they are not output_times(hist, dt_out):
       !> the recorded pieces of a gap-filled history, the turning points of a peaks target
       real(dp), allocatable :: tout(:)
@@ -115,7 +121,7 @@ module usharp_input_test
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list), peak_share, temperature, tmf_temperatures(2)
+                  time_limit, rates(max_list), peak_share, temperature, tmf_temperatures(2), gap_time, dt_max
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
    end type test_values
@@ -315,6 +321,11 @@ contains
          return
       end if
       t%peak_share = v%peak_share
+      if (.not. (v%dt_max >= 0.0_dp)) then
+         call fatal_error(error, 'dt_max must be > 0 (s), or 0 for &solver dt_max')
+         return
+      end if
+      t%dt_max = v%dt_max
       t%has_data = len_trim(v%data_file) > 0 .or. t%target /= 'data'
       t%data%file = resolve_path(base_dir, trim(v%data_file))
       t%data%time_col = trim(v%time_column)
@@ -415,9 +426,28 @@ contains
             call fatal_error(error, "history 'data' needs data_file")
             return
          end if
+         if (v%gap_time < 0.0_dp) then
+            call fatal_error(error, 'gap_time must be > 0 (s), or 0 for 50 times the median step')
+            return
+         end if
+         ! The cycles that fill the gaps stay within a push-pull cycle's strains, as a
+         ! programmed cycling does (0.5 meant as 0.5 % is caught)
+         if (v%strain_range /= unset) then
+            if (abs(v%mean_strain) + 0.5_dp*abs(v%strain_range) > max_cycle_strain) then
+               call fatal_error(error, 'the cycles that fill the gaps (mean_strain +- strain_range/2) '// &
+                  'reach a strain of '//real_str(abs(v%mean_strain) + 0.5_dp*abs(v%strain_range), 'g0.4')// &
+                  ', beyond the '//real_str(100.0_dp*max_cycle_strain, 'f0.0')//' % no push-pull cycle '// &
+                  'reaches: strain is in mm/mm (is strain_range or mean_strain in percent?)')
+               return
+            end if
+         else if (v%mean_strain /= 0.0_dp) then
+            call fatal_error(error, 'mean_strain needs strain_range: together they state the '// &
+                             'cycles that fill the gaps')
+            return
+         end if
          call data_history(t%data, t%gap_fill, merge(v%strain_range, 0.0_dp, v%strain_range /= unset), &
                            v%mean_strain, v%strain_rate, v%duration, t%hist, t%dt_out, t%tout, error, &
-                           compared_columns(t, .false.), t%data_read, t%data_merged)
+                           compared_columns(t, .false.), t%data_read, t%data_merged, v%gap_time)
       case ('')
          call fatal_error(error, 'history is not set (thesis_lcf, relaxation, ratchet, '// &
             'cyclic, tensile, rate_jump, creep, file, data)')
@@ -723,7 +753,7 @@ contains
       real(dp) :: dt_out, amp_first, amp_last, quarter_time, levels(max_list), ramp_time, &
                   holds(max_list), up, down, seg_time, strain_range, mean_strain, strain_rate, &
                   period, hold_max, hold_min, final_strain, stress, duration, noise, sig, &
-                  time_limit, rates(max_list), peak_share, temperature, tmf_temperatures(2)
+                  time_limit, rates(max_list), peak_share, temperature, tmf_temperatures(2), gap_time, dt_max
       logical :: candidate
       integer :: npeaks, repeats, cycles, seed
       namelist /test/ name, history, dt_out, amp_first, amp_last, npeaks, quarter_time, levels, &
@@ -733,7 +763,7 @@ contains
          filter_column, filter, data_format, weighting, sig, noise, seed, backend, command, &
          output_file, output_format, output_time, output_stress, output_unit, constants_file, &
          constants_format, time_limit, candidate, rates, target, gap_fill, peak_file, &
-         peak_columns, peak_share, temperature, tmf_temperatures, tmf_phase
+         peak_columns, peak_share, temperature, tmf_temperatures, tmf_phase, gap_time, dt_max
       name = ''
       history = ''
       file = ''
@@ -761,7 +791,7 @@ contains
       constants_file = 'Constants.txt'; constants_format = '(E12.5)'; time_limit = d%ext%time_limit
       candidate = d%candidate; rates = unset; temperature = d%temperature
       tmf_temperatures = 0.0_dp; tmf_phase = 'in'
-      target = 'data'; gap_fill = 'cycles'; peak_file = ''; peak_share = d%peak_share
+      target = 'data'; gap_fill = 'cycles'; peak_file = ''; peak_share = d%peak_share; gap_time = 0.0_dp; dt_max = d%dt_max
       peak_columns = [character(len=filter_len + 1) :: 'time_max', 'max', 'time_min', 'min']
       ios = 0
       msg = ''
@@ -785,7 +815,7 @@ contains
       v%candidate = candidate; v%npeaks = npeaks; v%repeats = repeats; v%cycles = cycles
       v%seed = seed; v%target = target; v%gap_fill = gap_fill; v%peak_file = peak_file
       v%peak_columns = peak_columns; v%peak_share = peak_share; v%temperature = temperature
-      v%tmf_temperatures = tmf_temperatures; v%tmf_phase = tmf_phase
+      v%tmf_temperatures = tmf_temperatures; v%tmf_phase = tmf_phase; v%gap_time = gap_time; v%dt_max = dt_max
    end subroutine test_namelist
 
    !> History from a file of (time, value) points; control is 'strain' or 'stress'
@@ -852,7 +882,7 @@ contains
    !> where they cannot be read with it (a column the file lacks) table is left unallocated
    !> and the comparison reads them and reports why
    subroutine data_history(spec, gap_fill, range, mean, rate, duration, hist, dt_out, tout, error, &
-                           compared, table, nmerged)
+                           compared, table, nmerged, gap_time)
       type(data_spec), intent(in) :: spec
       character(len=*), intent(in) :: gap_fill
       !> the history ends at the last sample at or before duration (s; unset: at the last)
@@ -864,6 +894,8 @@ contains
       character(len=*), intent(in) :: compared(:)
       real(dp), allocatable, intent(out) :: table(:, :)
       integer, intent(out) :: nmerged
+      !> a time step longer than this is a gap (s; 0: gap_factor times the median step)
+      real(dp), intent(in) :: gap_time
       real(dp), allocatable :: vals(:, :), spans(:, :), times(:)
       real(dp) :: tol
       logical, allocatable :: inside(:)
@@ -899,7 +931,7 @@ contains
       end if
       ! Each recorded piece is smoothed on its own: one spline over a gap bulges across it
       call gap_filled_history(vals(:, 1), vals(:, 2), control_strain, range, mean, rate, &
-                              hist, spans, error, straight=gap_fill == 'linear')
+                              hist, spans, error, straight=gap_fill == 'linear', gap_time=gap_time)
       if (allocated(error)) then
          call prefix_error(error, spec%file//': ')
          return
@@ -978,4 +1010,18 @@ contains
          names = 'the history''s settings'
       end select
    end function history_settings
+   !> The time increments of the implicit stress update for test (integrator 'umat', the
+   !> ANSYS deck): solver's, with the test's own dt_max where it gives one (dt_init then at
+   !> most that)
+   pure function test_increments(test, solver) result(opts)
+      type(test_config), intent(in) :: test
+      type(solver_options), intent(in) :: solver
+      type(solver_options) :: opts
+      opts = solver
+      if (test%dt_max > 0.0_dp) then
+         opts%dt_max = test%dt_max
+         opts%dt_init = min(opts%dt_init, test%dt_max)
+         opts%dt_min = min(opts%dt_min, opts%dt_init)
+      end if
+   end function test_increments
 end module usharp_input_test
