@@ -538,12 +538,49 @@ contains
       call check(error, .not. file_exists(scratch_dir//'/diag-empty-out'), &
                  'the refused diagnosis left no output folder (nor diagnose.journal)')
       if (allocated(error)) return
+      ! A held-out test's missing data file, a specimen without replicates and --resume
+      ! without a journal are found before the folder is made too
+      call write_text_file('diag-nofile.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose holdout = 'b' /", tests(1), &
+         "&test name = 'b', history = 'relaxation', data_file = 'not-there.txt' /"])
+      call execute_command_line('rm -rf '//scratch_dir//'/diag-nofile-out')
+      call diagnose_command(scratch_dir//'/diag-nofile.nml', scratch_dir//'/diag-nofile-out', '', lines, e)
+      call check_message(error, e, 'not-there.txt')
+      if (allocated(error)) return
+      call check(error, .not. file_exists(scratch_dir//'/diag-nofile-out'), &
+                 'a missing held-out file left no output folder')
+      if (allocated(error)) return
+      call write_text_file('diag-single.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose specimen = 'a' /", tests(1)])
+      call execute_command_line('rm -rf '//scratch_dir//'/diag-single-out')
+      call diagnose_command(scratch_dir//'/diag-single.nml', scratch_dir//'/diag-single-out', '', lines, e)
+      call check_message(error, e, 'at least one replicate')
+      if (allocated(error)) return
+      call check(error, .not. file_exists(scratch_dir//'/diag-single-out'), &
+                 'a specimen without replicates left no output folder')
+      if (allocated(error)) return
+      call write_text_file('diag-resume.nml', [character(len=100) :: model_groups, &
+         "&fit fitted = 'B' /", "&diagnose holdout = 'b' /", tests])
+      call execute_command_line('rm -rf '//scratch_dir//'/diag-resume-out')
+      call diagnose_command(scratch_dir//'/diag-resume.nml', scratch_dir//'/diag-resume-out', '', lines, e, &
+                            mode='resume')
+      call check_message(error, e, 'no journal to resume')
+      if (allocated(error)) return
+      call check(error, .not. file_exists(scratch_dir//'/diag-resume-out'), &
+                 '--resume without a journal left no output folder')
+      if (allocated(error)) return
       call read_config(write_text('diag-all.nml', [character(len=100) :: model_groups, &
          "&fit fitted = 'B' /", "&diagnose holdout = 'a', 'b' /", tests]), cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (.not. allocated(e)) call diagnose_run(cfg, opts, res, e)
       call check_message(error, e, 'every test is held out')
       if (allocated(error)) return
+   contains
+      subroutine write_text_file(name, text)
+         character(len=*), intent(in) :: name, text(:)
+         character(len=:), allocatable :: path
+         path = write_text(name, text)
+      end subroutine write_text_file
    end subroutine test_bad_inputs
 
    !> Relaxation data made with the model_groups constants (B = 1e15), every stress times

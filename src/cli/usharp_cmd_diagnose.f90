@@ -10,6 +10,7 @@ module usharp_cmd_diagnose
    use usharp_diagnose_report, only: report_names, report_marks
    use usharp_overwrite, only: check_overwrite, check_overwrite_each, take_folder
    use usharp_fit, only: fit_fingerprint
+   use usharp_objective, only: fit_problem, setup_problem
    use usharp_selfcheck, only: selfcheck_run, selfcheck_report, selfcheck_result, selfcheck_deck
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_index, &
                                        specimen_csv, specimen_csv_header
@@ -68,6 +69,8 @@ contains
       ! A file of the user's among the report's names is refused before any work; the
       ! report of an earlier diagnosis (--resume too) is replaced
       call check_overwrite_each(dir, report_names, report_marks, 'diagnose', journal_mode == 'force', error)
+      if (allocated(error)) return
+      call check_before_folder(cfg, join_path(dir, 'diagnose.journal'), journal_mode, error)
       if (allocated(error)) return
       ! Held for the diagnosis: a second one into the folder would share its journal
       call take_folder(dir, lock, error)
@@ -141,6 +144,13 @@ contains
             end if
          end do
       end do
+      if (size(cfg%tests) < 2) then
+         call fatal_error(error, cfg%path//': &diagnose: specimen: a per-specimen diagnosis needs '// &
+            'the specimen and at least one replicate', stat_input)
+         return
+      end if
+      call check_before_folder(cfg, join_path(dir, 'specimen.journal'), mode, error)
+      if (allocated(error)) return
       ! Held for the diagnosis (on rank 0 alone: the others do not come here)
       call take_folder(dir, lock, error, alone=.true.)
       if (allocated(error)) return
@@ -262,4 +272,20 @@ contains
          call write_lines(join_path(cfg%out_dir, 'selfcheck.md'), lines, error)
       end subroutine selfcheck_in
    end subroutine selfcheck_command
+   !> What would stop a diagnosis at its start, found before its folder and journal are made:
+   !> every test's data read (a held-out test's missing file had left a journal behind; the
+   !> data are read again, and the held-out ones used only for the prediction), and --resume
+   !> with no journal to resume
+   subroutine check_before_folder(cfg, journal_path, mode, error)
+      type(run_config), intent(in) :: cfg
+      character(len=*), intent(in) :: journal_path, mode
+      type(error_type), allocatable, intent(out) :: error
+      type(fit_problem) :: prob
+      if (mode == 'resume' .and. .not. file_exists(journal_path)) then
+         call fatal_error(error, journal_path//': no journal to resume (start without --resume)', &
+                          stat_usage)
+         return
+      end if
+      call setup_problem(cfg, prob, error)
+   end subroutine check_before_folder
 end module usharp_cmd_diagnose

@@ -147,7 +147,7 @@ contains
             character(len=512), allocatable :: header(:)
             header = [character(len=512) :: 'usharp '//usharp_version_string// &
                ' prediction with the constants of '//constants_file//", test '"//alone(i)%name//"'", &
-               'the same curve: usharp simulate '//shell_word(path)//' --constants '// &
+               'the same curve, at every output time: usharp simulate '//shell_word(path)//' --constants '// &
                shell_word(constants_file)//' --test '//shell_word(alone(i)%name)]
             header = [character(len=512) :: header, model_lines(cfg%model, cfg%units, alone(i), error)]
             if (allocated(error)) return

@@ -289,7 +289,8 @@ contains
       do i = 1, size(prob%targets)
          header(1) = 'usharp '//usharp_version_string//' '//label//", test '"// &
                      prob%cfg%tests(i)%name//"'"
-         header(2) = 'the same curve: usharp simulate '//shell_word(prob%cfg%path)// &
+         ! (simulate writes every output time; a fit's curve those compared with the data)
+         header(2) = 'the same curve, at every output time: usharp simulate '//shell_word(prob%cfg%path)// &
                      ' --constants '//shell_word(constants)//' --test '//shell_word(prob%cfg%tests(i)%name)
          header(3:4) = model_lines(best, prob%cfg%units, prob%cfg%tests(i), error)
          if (allocated(error)) return
