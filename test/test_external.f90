@@ -19,6 +19,11 @@ module test_external
    private
    public :: collect_external
 
+   !> The model and constants of the deck tests (thesis units, Table 4 but H1 and n)
+   character(len=*), parameter :: head(2) = [character(len=100) :: &
+      "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
+      '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /']
+
 contains
 
    subroutine collect_external(testsuite)
@@ -204,9 +209,6 @@ contains
       type(uerror), allocatable :: e
       character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: deck, text
-      character(len=*), parameter :: head(2) = [character(len=100) :: &
-         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
-         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /']
       character(len=*), parameter :: dir = scratch_dir//'/increments-decks'
       character(len=*), parameter :: creep = "&test name='creep', history='creep', stress=10.0, "// &
                                              "ramp_time=10.0, duration=1.0e6"
@@ -249,9 +251,6 @@ contains
       type(uerror), allocatable :: e
       character(len=4096), allocatable :: written(:)
       character(len=:), allocatable :: deck, text
-      character(len=*), parameter :: head(2) = [character(len=100) :: &
-         "&model name='miller', units='ksi', temperature=866.15, tm=1800.0, youngs=22.5e3 /", &
-         '&constants a1=0.8, a2=7.42e-5, b=1e15, c2=0.1, h1=280, h2=100, n=5.8, q=91000 /']
       real(dp) :: d0, v, last
       integer :: k, u, ios
       do k = 1, 2

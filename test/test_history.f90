@@ -249,17 +249,7 @@ contains
       call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 60.0_dp, 60.0_dp, cmd, uerr)
       call check(error, .not. allocated(uerr), 'programmed history')
       if (allocated(error)) return
-      t = [0.0_dp]
-      do while (t(size(t)) < cmd%end_time() - 1.0e-9_dp)
-         tt = t(size(t))
-         ! in a hold (the command's value at the next 0.5 s the same): the next sample at 20 s
-         if (abs(cmd%value_at(tt + 0.5_dp) - cmd%value_at(tt)) < 1.0e-12_dp .and. &
-             abs(cmd%value_at(min(tt + 20.0_dp, cmd%end_time())) - cmd%value_at(tt)) < 1.0e-12_dp) then
-            t = [t, min(tt + 20.0_dp, cmd%end_time())]
-         else
-            t = [t, min(tt + 0.5_dp, cmd%end_time())]
-         end if
-      end do
+      t = logged_times(cmd, 20.0_dp)
       allocate (v(size(t)))
       do k = 1, size(t)
          v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
@@ -294,19 +284,9 @@ contains
       type(history_type) :: cmd, h
       type(uerror), allocatable :: uerr
       real(dp), allocatable :: t(:), v(:), spans(:, :)
-      real(dp) :: tt
       integer :: k
       call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 180.0_dp, 180.0_dp, cmd, uerr)
-      t = [0.0_dp]
-      do while (t(size(t)) < cmd%end_time() - 1.0e-9_dp)
-         tt = t(size(t))
-         if (abs(cmd%value_at(tt + 0.5_dp) - cmd%value_at(tt)) < 1.0e-12_dp .and. &
-             abs(cmd%value_at(min(tt + 60.0_dp, cmd%end_time())) - cmd%value_at(tt)) < 1.0e-12_dp) then
-            t = [t, min(tt + 60.0_dp, cmd%end_time())]
-         else
-            t = [t, min(tt + 0.5_dp, cmd%end_time())]
-         end if
-      end do
+      t = logged_times(cmd, 60.0_dp)
       allocate (v(size(t)))
       do k = 1, size(t)
          v(k) = cmd%value_at(t(k))
@@ -326,6 +306,25 @@ contains
       call check(error, abs(h%value_at(t(size(t)) - 1.0_dp) - cmd%value_at(t(size(t)) - 1.0_dp)) < 1.0e-7_dp, &
                  'the last hold followed')
    end subroutine test_gap_time
+
+   !> The times a logger records cmd at: every 0.5 s, every hold_step (s) in a hold (where
+   !> the command stays put over the next 0.5 s and the next hold_step)
+   function logged_times(cmd, hold_step) result(t)
+      type(history_type), intent(in) :: cmd
+      real(dp), intent(in) :: hold_step
+      real(dp), allocatable :: t(:)
+      real(dp) :: tt
+      t = [0.0_dp]
+      do while (t(size(t)) < cmd%end_time() - 1.0e-9_dp)
+         tt = t(size(t))
+         if (abs(cmd%value_at(tt + 0.5_dp) - cmd%value_at(tt)) < 1.0e-12_dp .and. &
+             abs(cmd%value_at(min(tt + hold_step, cmd%end_time())) - cmd%value_at(tt)) < 1.0e-12_dp) then
+            t = [t, min(tt + hold_step, cmd%end_time())]
+         else
+            t = [t, min(tt + 0.5_dp, cmd%end_time())]
+         end if
+      end do
+   end function logged_times
 
    !> A triangle of strain (amplitude 0.005, 0.1 s samples) rounded to 1e-5 with a dip of
    !> 5e-5 in a ramp: the forcing stops at the two turning points only, stays within two
