@@ -403,6 +403,11 @@ contains
          "cycles=1, data_file='scale-ms.csv' /", "scale-ms.csv: 4.8 % of its rows lie within the "// &
          "simulated 0.000E+00 to 1.200E+02 s (its times run to 2.400E+05 s): is the time in ms?")
       if (allocated(error)) return
+      ! A creep stress in GPa (0.01 for 10 MPa, in a ksi deck 1.45 ksi): 6.4e-8 of E
+      call refused('scale-creep-gpa.nml', "&test name='cr', history='creep', stress=0.00145, duration=100.0 /", &
+         "&test #1 'cr': its stress reaches 1.45E-03 ksi, 6.4E-08 of Young's modulus (22500 ksi): no test of "// &
+         "a metal loads it so (is the stress in GPa or a strain, not ksi?)")
+      if (allocated(error)) return
       call refused('scale-creep.nml', "&test name='cr', history='creep', stress=10.0, duration=100.0, "// &
          "data_file='scale-creep.csv', strain_column='strain' /", &
          "scale-creep.csv: column 'strain' reaches 1.200: strain is in mm/mm (is it in percent?)")

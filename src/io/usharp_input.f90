@@ -4,10 +4,11 @@
 !> usharp_input_<group>). Every error names the file and the group and variable, or the line.
 module usharp_input
    use usharp_kinds, only: dp
-   use usharp_error, only: error_type, prefix_error, fatal_error, stat_usage
-   use usharp_strings, only: str, lower
+   use usharp_error, only: error_type, prefix_error, fatal_error, stat_usage, stat_input
+   use usharp_strings, only: str, lower, real_str
    use usharp_filesys, only: absolute_path, join_path, file_exists
    use usharp_model, only: model_type, model_at
+   use usharp_history, only: control_stress
    use usharp_config, only: run_config
    use usharp_namelist, only: nml_file, scan_namelist_file, resolve_path, string_value
    use usharp_input_model, only: read_model_group, read_constants_group
@@ -56,7 +57,32 @@ contains
          return
       end if
       call check_test_temperatures(path, cfg, error)
+      if (.not. allocated(error)) call check_commanded_stress(path, cfg, error)
    end subroutine read_config
+
+   !> A stress-controlled history's largest stress against Young's modulus, as a data file's
+   !> stress is checked: below 1e-5 E a stress in GPa (0.019 for 19 MPa) or a strain, above
+   !> 0.05 E one in Pa or kPa
+   subroutine check_commanded_stress(path, cfg, error)
+      character(len=*), intent(in) :: path
+      type(run_config), intent(in) :: cfg
+      type(error_type), allocatable, intent(out) :: error
+      real(dp) :: peak, e
+      integer :: i
+      e = cfg%model%youngs
+      do i = 1, size(cfg%tests)
+         if (cfg%tests(i)%hist%control /= control_stress .or. cfg%tests(i)%history_kind == 'data') cycle
+         if (size(cfg%tests(i)%hist%v) == 0) cycle
+         peak = maxval(abs(cfg%tests(i)%hist%v))
+         if (peak >= 1.0e-5_dp*e .and. peak <= 0.05_dp*e) cycle
+         call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': its stress reaches "// &
+            real_str(peak, 'es9.2')//' '//cfg%units//', '//real_str(peak/e, 'es8.1')//" of Young's modulus ("// &
+            str(nint(e))//' '//cfg%units//'): no test of a metal loads it so (is the stress in '// &
+            trim(merge('GPa or a strain', 'Pa or kPa      ', peak < 1.0e-5_dp*e))//', not '//cfg%units//'?)', &
+            stat_input)
+         return
+      end do
+   end subroutine check_commanded_stress
 
    !> A test at a temperature of its own (or under a temperature cycle, which needs RODAS4):
    !> within the model's range (as &model's), and the
