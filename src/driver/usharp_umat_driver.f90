@@ -39,10 +39,19 @@ contains
       t = hist%t(1)
       tend = hist%end_time()
       tol = 1.0e-12_dp*max(1.0_dp, abs(tend))
+      ! A history that starts away from 0 (a measured strain at 3e-5) starts there
+      ! elastically, in uniaxial stress, as the other integrators do
       eps = 0.0_dp
       call model%state_initial(y)
       sig = 0.0_dp
-      if (hist%control == control_strain) eps(1) = hist%v(1)
+      if (hist%control == control_strain) then
+         eps(1) = hist%v(1)
+         sig(1) = model%youngs*eps(1)
+      else
+         sig(1) = hist%v(1)
+         eps(1) = sig(1)/model%youngs
+      end if
+      eps(2:3) = -model%poisson*eps(1)
       dt = opts%dt_init
       iout = 1
       kc = 2
