@@ -201,18 +201,22 @@ contains
       type(uerror), allocatable :: e
       character(len=report_line_len), allocatable :: summary(:)
       character(len=*), parameter :: dir = scratch_dir//'/predict-out'
-      real(dp) :: rms, rel
+      real(dp) :: rms, rel, worst
       character(len=32) :: name
+      character(len=1) :: pct
       logical :: exists
-      integer :: k, ios
+      integer :: k, ios, npts
       call predict_command('decks/thesis-run2.nml', dir, 'decks/thesis-data.nml', summary, e)
       if (allocated(e)) then
          call test_failed(error, e%message)
          return
       end if
       do k = 3, 4
-         read (summary(k), *, iostat=ios) name, rms, rel
+         read (summary(k), *, iostat=ios) name, rms, rel, pct, worst, npts
          call check(error, ios == 0 .and. rel < 1.0e-3_dp, 'RMS/peak (%) of '//trim(summary(k)))
+         if (allocated(error)) return
+         ! the points compared: the rows of its .fit.txt
+         call check(error, npts == data_rows(dir//'/'//trim(name)//'.fit.txt'), 'points of '//trim(summary(k)))
          if (allocated(error)) return
       end do
       inquire (file=dir//'/summary.txt', exist=exists)
@@ -223,6 +227,22 @@ contains
       if (allocated(error)) return
       inquire (file=dir//'/lcf.sim.txt', exist=exists)
       call check(error, exists, 'lcf.sim.txt written')
+   contains
+      !> The lines of a file that are not comments
+      integer function data_rows(path) result(n)
+         character(len=*), intent(in) :: path
+         character(len=512) :: line
+         integer :: u, ios
+         n = 0
+         open (newunit=u, file=path, status='old', action='read', iostat=ios)
+         if (ios /= 0) return
+         do
+            read (u, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            if (line(1:1) /= '#') n = n + 1
+         end do
+         close (u)
+      end function data_rows
    end subroutine test_predict
 
    !> predict of a deck with a test without data (a programmed history whose response is

@@ -102,7 +102,7 @@ contains
       call make_dir(cfg%out_dir, error)
       if (allocated(error)) return
       summary = [character(len=report_line_len) :: 'usharp predict '//path//' with the constants of '// &
-         constants_file, '  '//pad('test', w)//'   RMS error    RMS/peak   max error']
+         constants_file, '  '//pad('test', w)//'   RMS error    RMS/peak   max error   points']
       do i = 1, size(cfg%tests)
          y = simulated(cfg%tests(i), res(i))
          kind = spread(0, 1, size(y))
@@ -116,9 +116,11 @@ contains
             if (part == 1) name = cfg%tests(i)%name//' peaks'
             ! (a share too large for f10.2, a prediction far off, in exponent form)
             if (100.0_dp*rel < 1.0e6_dp) then
-               write (row, '(es12.4,f10.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+               write (row, '(es12.4,f10.2,a,es12.4,i9)') rms, 100.0_dp*rel, ' %', worst, &
+                  count((kind /= 0) .eqv. (part == 1))
             else
-               write (row, '(es12.4,1x,es9.2,a,es12.4)') rms, 100.0_dp*rel, ' %', worst
+               write (row, '(es12.4,1x,es9.2,a,es12.4,i9)') rms, 100.0_dp*rel, ' %', worst, &
+                  count((kind /= 0) .eqv. (part == 1))
             end if
             ! (the note on the test's first row: its peaks' where it compares only those)
             if (part == 0 .or. count(kind == 0) == 0) row = trim(row)//data_note(prob%targets(i)%exp, &
@@ -131,7 +133,8 @@ contains
                     '   (no data_file: simulated only)']
       end do
       summary = [character(len=report_line_len) :: summary, '  (errors in '//cfg%units// &
-         ', strain for stress-controlled tests; peak: the largest |value| of the data)', &
+         ', strain for stress-controlled tests; peak: the largest |value| of the data; points: '// &
+         'those compared)', &
          '  wrote <test>.sim.txt, <test>.fit.txt, summary.txt into '//cfg%out_dir]
       if (any([(cfg%tests(i)%has_peaks(), i=1, size(cfg%tests))])) summary(size(summary)) = &
          trim(summary(size(summary)))//' (and <test>.peaks.txt)'
