@@ -294,7 +294,7 @@ contains
                      ' --constants '//shell_word(constants)//' --test '//shell_word(prob%cfg%tests(i)%name)
          header(3:4) = model_lines(best, prob%cfg%units, prob%cfg%tests(i), error)
          if (allocated(error)) return
-         call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), res(i), &
+         call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), once_a_time(res(i)), &
                              header, prob%cfg%units, error)
          if (allocated(error)) return
          call out%open(join_path(dir, prob%cfg%tests(i)%name//'.fit.txt'), error)
@@ -320,6 +320,26 @@ contains
          end if
       end do
    end subroutine write_curves
+
+   !> A response with each time once: a turning point compared both as a data point and as a
+   !> peak (target 'both') is one row of the curve, not two
+   pure function once_a_time(r) result(o)
+      type(sim_result), intent(in) :: r
+      type(sim_result) :: o
+      logical, allocatable :: keep(:)
+      integer :: n
+      n = size(r%t)
+      allocate (keep(n))
+      keep = .true.
+      if (n > 1) keep(2:) = r%t(2:) /= r%t(:n - 1)
+      o = r
+      o%t = pack(r%t, keep)
+      o%strain = pack(r%strain, keep)
+      o%stress = pack(r%stress, keep)
+      o%eps_in = pack(r%eps_in, keep)
+      o%back = pack(r%back, keep)
+      o%drag = pack(r%drag, keep)
+   end function once_a_time
 
    !> <test>.peaks.txt: each compared peak stress of test i beside the simulated stress at its
    !> turning point, with the simulated cycle's number (the cyclic hardening or softening curve)
