@@ -65,7 +65,8 @@ contains
          new_unittest('real-a617-cycles-counted-through-gaps', test_real_life), &
          new_unittest('test-shares-joined-as-one-rank-has-them', test_shares_merged), &
          new_unittest('residual-scale-is-the-peak-within-the-simulated-time', test_peak_within), &
-         new_unittest('gap-cycles-strain-in-percent-refused', test_gap_cycles_percent)]
+         new_unittest('gap-cycles-strain-in-percent-refused', test_gap_cycles_percent), &
+         new_unittest('peak-file-row-written-twice-refused', test_peak_twice)]
    end subroutine collect_fit
 
    subroutine rosen_eval(self, x, f, error)
@@ -524,6 +525,25 @@ contains
          '1,4.5,31.5,15.0,-30.5', '2,25.0,32.0,35.0,-31.0', '3,45.0,32.5,55.0,-31.5', &
          '4,65.0,33.0,75.0,-32.0', '5,85.0,.,.,.'])
    end function peak_file
+
+   !> A peak file with a cycle's row written twice: refused naming the rows, where the second
+   !> had been counted among the peaks "at no turning point of the history"
+   subroutine test_peak_twice(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(run_config) :: cfg
+      type(uerror), allocatable :: uerr
+      character(len=:), allocatable :: pf
+      character(len=200) :: lines(1)
+      pf = write_text('peaks-twice.csv', [character(len=60) :: 'cycle,time_max,max,time_min,min', &
+         '1,4.5,31.5,15.0,-30.5', '2,25.0,32.0,35.0,-31.0', '2,25.0,32.0,35.0,-31.0', '3,45.0,32.5,55.0,-31.5'])
+      lines(1) = "&test name='c', history='cyclic', strain_range=0.01, strain_rate=1e-3, cycles=3, "// &
+                 "target='peaks', peak_file='peaks-twice.csv' /"
+      call read_config(fit_deck('peaks-twice.nml', '', lines), cfg, uerr)
+      call check(error, allocated(uerr), 'a row written twice refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, "peaks-twice.csv: rows 2 and 3 of those read repeat the time "// &
+                 "'time_max' = 25.0") > 0, uerr%message)
+   end subroutine test_peak_twice
 
    !> target = 'peaks': the points are the history's turning points within the file's
    !> cycles, the data the file's peak stresses, the simulation's stress there compared

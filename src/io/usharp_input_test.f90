@@ -561,6 +561,14 @@ contains
                '(peak_columns: time of the maximum, maximum, time of the minimum, minimum)')
             return
          end if
+         ! A cycle's row repeated (an export written twice) has no turning point of its own
+         i = findloc(vals(2:, k) == vals(:n - 1, k), .true., 1)
+         if (i > 0) then
+            call fatal_error(error, t%peak_file//": rows "//str(i)//' and '//str(i + 1)//" of those read "// &
+               "repeat the time '"//trim(columns(k))//"' = "//real_str(vals(i, k), 'g0.6')// &
+               ' s: one cycle has one maximum and one minimum (a row written twice?)')
+            return
+         end if
       end do
       i = findloc(vals(:, 2) < vals(:, 4), .true., 1)
       if (i > 0) then
