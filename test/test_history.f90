@@ -37,7 +37,8 @@ contains
          new_unittest('gap-fill-linear-straight-across', test_gap_linear), &
          new_unittest('peaks-matched-through-a-drift', test_peaks_drift), &
          new_unittest('measured-forcing-hold-logged-slowly', test_measured_hold), &
-         new_unittest('gap-time-for-a-hold-logged-slowly', test_gap_time)]
+         new_unittest('gap-time-for-a-hold-logged-slowly', test_gap_time), &
+         new_unittest('gap-cycles-rate-too-slow-for-the-gap-refused', test_gap_rate)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -306,6 +307,32 @@ contains
       call check(error, abs(h%value_at(t(size(t)) - 1.0_dp) - cmd%value_at(t(size(t)) - 1.0_dp)) < 1.0e-7_dp, &
                  'the last hold followed')
    end subroutine test_gap_time
+
+   !> Cycles of 1 % at 1e-3/s recorded to 40 s and from 180 s: gap cycles stated at 1e-5/s
+   !> (a half cycle of 1000 s) cannot fill the 140 s gap and are refused naming it and
+   !> strain_rate, where they had been squeezed into it; at 1e-3/s they fill it
+   subroutine test_gap_rate(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      type(history_type) :: cont, filled
+      real(dp), allocatable :: t(:), v(:), spans(:, :)
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
+      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 3999)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = cont%value_at(t(k))
+      end do
+      call gap_filled_history(t, v, control_strain, 0.01_dp, 0.0_dp, 1.0e-5_dp, filled, spans, uerr, noise=0.0_dp)
+      call check(error, allocated(uerr), 'a rate too slow for the gap refused')
+      if (allocated(error)) return
+      call check(error, index(uerr%message, 'strain_rate = 1.00E-05 /s') > 0 .and. &
+                 index(uerr%message, 'longer than the gap from t = 39.95 to 180.00 s') > 0, uerr%message)
+      if (allocated(error)) return
+      deallocate (uerr)
+      call gap_filled_history(t, v, control_strain, 0.01_dp, 0.0_dp, 1.0e-3_dp, filled, spans, uerr, noise=0.0_dp)
+      call check(error, .not. allocated(uerr), 'at 1e-3/s the cycles fill the gap')
+   end subroutine test_gap_rate
 
    !> The times a logger records cmd at: every 0.5 s, every hold_step (s) in a hold (where
    !> the command stays put over the next 0.5 s and the next hold_step)

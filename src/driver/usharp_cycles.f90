@@ -115,6 +115,17 @@ contains
          if (j > 1) then
             ! The filled cycles' corners are knots and stops both (d2 = 0: straight between)
             b = piece_end(piece, .false.)
+            ! A stated rate at which not even a half cycle fits in the gap would be squeezed
+            ! into it at another rate (1e-5/s meant as 1e-3/s)
+            if (rate > 0.0_dp .and. .not. straight_fill()) then
+               if (half_cycle(a) > piece%t(1) - tt(size(tt))) then
+                  call fatal_error(error, 'strain_rate = '//real_str(rate, 'es9.2')//' /s: a half cycle '// &
+                     'of the cycles that fill the gaps takes '//real_str(half_cycle(a), 'es9.2')//' s, '// &
+                     'longer than the gap from t = '//real_str(tt(size(tt)), 'f0.2')//' to '// &
+                     real_str(piece%t(1), 'f0.2')//' s (is strain_rate per s?)')
+                  return
+               end if
+            end if
             call fill_gap(tt(size(tt)), a, piece%t(1), b, range, mean, rate, tc, vc)
             if (present(straight)) then
                if (straight) then
@@ -155,6 +166,21 @@ contains
       hist%d2 = d2
       hist%stops = stops
       hist%kstops = kstops
+   contains
+      pure logical function straight_fill()
+         straight_fill = .false.
+         if (present(straight)) straight_fill = straight
+      end function straight_fill
+      !> The half cycle (s) of the fill at the stated rate: its range (stated, else the
+      !> recorded piece's) over the rate
+      pure real(dp) function half_cycle(c)
+         type(cycle_shape), intent(in) :: c
+         if (range > 0.0_dp) then
+            half_cycle = range/rate
+         else
+            half_cycle = (c%upper - c%lower)/rate
+         end if
+      end function half_cycle
    end subroutine gap_filled_history
 
    !> The cycling of a recorded piece at its end (last = true) or its start: the turning
