@@ -38,7 +38,8 @@ contains
          new_unittest('peaks-matched-through-a-drift', test_peaks_drift), &
          new_unittest('measured-forcing-hold-logged-slowly', test_measured_hold), &
          new_unittest('gap-time-for-a-hold-logged-slowly', test_gap_time), &
-         new_unittest('gap-cycles-rate-too-slow-for-the-gap-refused', test_gap_rate)]
+         new_unittest('gap-cycles-rate-too-slow-for-the-gap-refused', test_gap_rate), &
+         new_unittest('measured-forcing-relaxation-logged-slowly', test_relax_slow)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -333,6 +334,34 @@ contains
       call gap_filled_history(t, v, control_strain, 0.01_dp, 0.0_dp, 1.0e-3_dp, filled, spans, uerr, noise=0.0_dp)
       call check(error, .not. allocated(uerr), 'at 1e-3/s the cycles fill the gap')
    end subroutine test_gap_rate
+
+   !> A relaxation test (a 5 s ramp to 0.5 %, then a 600 s hold, then a ramp to 1 % and a
+   !> hold) logged every 0.5 s on the ramps and every 20 s in the holds, rounded to 1e-5:
+   !> the holds are not at turning points, and the spline through the samples had swung to
+   !> below 0.35 % between them; it stays within 1e-5 of the command everywhere
+   subroutine test_relax_slow(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst
+      integer :: k
+      call history_from_points([0.0_dp, 5.0_dp, 605.0_dp, 610.0_dp, 1210.0_dp], &
+                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 1.0e-2_dp, 1.0e-2_dp], control_strain, cmd, uerr)
+      t = logged_times(cmd, 20.0_dp)
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
+      end do
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing failed')
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do k = 0, nint(10.0_dp*cmd%end_time())
+         worst = max(worst, abs(h%value_at(0.1_dp*k) - cmd%value_at(0.1_dp*k)))
+      end do
+      call check(error, worst <= 1.0e-5_dp, 'largest |forcing - command| '//str(worst)//' > 1e-5')
+   end subroutine test_relax_slow
 
    !> The times a logger records cmd at: every 0.5 s, every hold_step (s) in a hold (where
    !> the command stays put over the next 0.5 s and the next hold_step)

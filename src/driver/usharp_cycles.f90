@@ -328,7 +328,7 @@ contains
       type(history_type), intent(in) :: hist
       integer, allocatable, intent(out) :: idx(:), kind(:)
       integer, allocatable :: c(:)
-      integer :: i, j
+      integer :: i, j, k
       real(dp) :: prev, here, next
       c = hist%corners()
       allocate (idx(size(c)), kind(size(c)))
@@ -336,7 +336,15 @@ contains
       do i = 2, size(c) - 1
          prev = hist%v(c(i - 1))
          here = hist%v(c(i))
-         next = hist%v(c(i + 1))
+         ! A hold counts at its start; what follows it decides: a pause inside a ramp (a
+         ! hold logged at its two ends, two corners of one value) is no peak
+         if (here == prev) cycle
+         k = i + 1
+         do while (k < size(c))
+            if (hist%v(c(k)) /= here) exit
+            k = k + 1
+         end do
+         next = hist%v(c(k))
          if (here > prev .and. here >= next) then
             j = j + 1
             idx(j) = c(i)

@@ -10,7 +10,7 @@ module usharp_forcing
    use usharp_math, only: pow10_dp, cubic_piece
    use usharp_error, only: error_type
    use usharp_history, only: history_type, history_from_points, spline_eval
-   use usharp_sort, only: median
+   use usharp_sort, only: median, order_of
    implicit none
    private
 
@@ -47,6 +47,12 @@ module usharp_forcing
    !> hold: the Alloy 617 strains (cycles 1-2) stay within the band for at most 7.8 crossing times
    real(dp), parameter :: hold_noise = 3.0_dp
    real(dp), parameter :: hold_travel = 20.0_dp
+   !> Rounds of corners added where a branch's spline leaves its samples' range, across
+   !> steps longer than long_step times the branch's fine sampling (see leaves_samples)
+   integer, parameter :: max_passes = 4
+   real(dp), parameter :: long_step = 10.0_dp
+   !> ... by more than leave_tol times the noise
+   real(dp), parameter :: leave_tol = 10.0_dp
 
 contains
 
@@ -68,8 +74,9 @@ contains
       integer, allocatable :: stops(:), idx(:)
       real(dp), allocatable :: z(:), ends(:, :), mid(:), tk(:), vk(:), d2(:), mk(:)
       real(dp) :: rate
-      integer :: j, a, b, i, first
-      logical, allocatable :: flat(:)
+      integer :: j, a, b, i, first, pass
+      logical, allocatable :: flat(:), leaves(:)
+      integer, allocatable :: split(:)
       call history_from_points(t, v, control, hist, error)
       if (allocated(error)) return
       sigma = -1.0_dp
@@ -85,53 +92,70 @@ contains
       end if
       if (sigma <= 0.0_dp .or. size(t) < 3) return
       call turns_and_holds(t, v, stops, flat)
-      allocate (z(size(v)), ends(2, size(stops) - 1), mid(size(stops)))
-      do j = 1, size(stops) - 1
-         a = stops(j)
-         b = stops(j + 1)
-         if (flat(j)) then
-            z(a:b) = sum(v(a:b))/real(b - a + 1, dp)
-         else
-            z(a:b) = smooth_branch(t(a:b), monotone(v(a:b), v(b) >= v(a)), sigma)
-         end if
-         ends(:, j) = [z(a), z(b)]
-      end do
-      ! One value at each inner turning point, the mean of its two branches' ends (a hold's
-      ! own value at its ends), reached by a linear correction of each branch (which leaves
-      ! its curvature as it is)
-      mid(1) = ends(1, 1)
-      mid(size(stops)) = ends(2, size(stops) - 1)
-      do j = 2, size(stops) - 1
-         if (flat(j - 1)) then
-            mid(j) = ends(2, j - 1)
-         else if (flat(j)) then
-            mid(j) = ends(1, j)
-         else
-            mid(j) = 0.5_dp*(ends(2, j - 1) + ends(1, j))
-         end if
-      end do
-      allocate (tk(0), vk(0), d2(0), hist%kstops(size(stops)))
-      hist%kstops(1) = 1
-      do j = 1, size(stops) - 1
-         a = stops(j)
-         b = stops(j + 1)
-         ! The shared samples hold the neighbours' values: restore this branch's own ends
-         z(a) = ends(1, j)
-         z(b) = ends(2, j)
-         z(a:b) = z(a:b) + ((mid(j) - ends(1, j))*(t(b) - t(a:b)) + &
-                            (mid(j + 1) - ends(2, j))*(t(a:b) - t(a)))/(t(b) - t(a))
-         ! The branch's spline through a few of its smoothed samples; the samples take its
-         ! values. Each branch's spline is natural (d2 = 0 at its ends), so the branches
-         ! join at their shared knot
-         call spline_knots(t(a:b), z(a:b), knot_tol*sigma, idx, mk)
-         first = merge(1, 2, j == 1)
-         tk = [tk, t(a - 1 + idx(first:))]
-         vk = [vk, z(a - 1 + idx(first:))]
-         d2 = [d2, mk(first:)]
-         hist%kstops(j + 1) = size(tk)
-         do i = a + 1, b - 1
-            call spline_eval(tk, vk, d2, hist%kstops(j), hist%kstops(j + 1), t(i), z(i), rate)
+      ! A branch's spline is checked between its samples too: where it leaves the range of
+      ! two neighbouring samples by more than the knot tolerance (samples far apart, a hold
+      ! or a pause logged slowly), those two samples become corners and the step between
+      ! them a straight piece, and the branches are made again
+      split = [integer ::]
+      do pass = 1, max_passes
+         if (allocated(z)) deallocate (z, ends, mid, tk, vk, d2, hist%kstops)
+         allocate (z(size(v)), ends(2, size(stops) - 1), mid(size(stops)))
+         do j = 1, size(stops) - 1
+            a = stops(j)
+            b = stops(j + 1)
+            if (flat(j)) then
+               z(a:b) = sum(v(a:b))/real(b - a + 1, dp)
+            else
+               z(a:b) = smooth_branch(t(a:b), monotone(v(a:b), v(b) >= v(a)), sigma)
+            end if
+            ends(:, j) = [z(a), z(b)]
          end do
+         ! One value at each inner turning point, the mean of its two branches' ends (a hold's
+         ! own value at its ends), reached by a linear correction of each branch (which leaves
+         ! its curvature as it is)
+         mid(1) = ends(1, 1)
+         mid(size(stops)) = ends(2, size(stops) - 1)
+         do j = 2, size(stops) - 1
+            if (flat(j - 1)) then
+               mid(j) = ends(2, j - 1)
+            else if (flat(j)) then
+               mid(j) = ends(1, j)
+            else
+               mid(j) = 0.5_dp*(ends(2, j - 1) + ends(1, j))
+            end if
+         end do
+         allocate (tk(0), vk(0), d2(0), hist%kstops(size(stops)))
+         hist%kstops(1) = 1
+         do j = 1, size(stops) - 1
+            a = stops(j)
+            b = stops(j + 1)
+            ! The shared samples hold the neighbours' values: restore this branch's own ends
+            z(a) = ends(1, j)
+            z(b) = ends(2, j)
+            z(a:b) = z(a:b) + ((mid(j) - ends(1, j))*(t(b) - t(a:b)) + &
+                               (mid(j + 1) - ends(2, j))*(t(a:b) - t(a)))/(t(b) - t(a))
+            ! The branch's spline through a few of its smoothed samples; the samples take its
+            ! values. Each branch's spline is natural (d2 = 0 at its ends), so the branches
+            ! join at their shared knot
+            call spline_knots(t(a:b), z(a:b), knot_tol*sigma, idx, mk)
+            if (pass < max_passes) then
+               leaves = leaves_samples(t(a:b), z(a:b), idx, mk, leave_tol*sigma)
+               do i = 1, size(leaves)
+                  if (leaves(i)) split = [split, a - 1 + i, a + i]
+               end do
+            end if
+            first = merge(1, 2, j == 1)
+            tk = [tk, t(a - 1 + idx(first:))]
+            vk = [vk, z(a - 1 + idx(first:))]
+            d2 = [d2, mk(first:)]
+            hist%kstops(j + 1) = size(tk)
+            do i = a + 1, b - 1
+               call spline_eval(tk, vk, d2, hist%kstops(j), hist%kstops(j + 1), t(i), z(i), rate)
+            end do
+         end do
+         if (size(split) == 0) exit
+         call add_corners(stops, flat, split)
+         split = split(:0)
       end do
       hist%v = z
       hist%tk = tk
@@ -139,6 +163,87 @@ contains
       hist%d2 = d2
       hist%stops = stops
    end subroutine measured_history
+
+   !> Per interval between neighbouring samples (t, z), whether the spline through the knots
+   !> idx with second derivatives m leaves the range of its two samples by more than tol
+   !> (looked at 7 times inside each interval), for intervals longer than long_step times
+   !> the branch's fine sampling: between samples as close as their neighbours the knot
+   !> tolerance at them bounds the spline, across a long one nothing does
+   pure function leaves_samples(t, z, idx, m, tol) result(flag)
+      real(dp), intent(in) :: t(:), z(:), m(:), tol
+      integer, intent(in) :: idx(:)
+      logical :: flag(size(t) - 1)
+      real(dp) :: tk(size(idx)), zk(size(idx)), u, du, lo, hi, long
+      real(dp), allocatable :: steps(:)
+      integer :: i, k, p
+      tk = t(idx)
+      zk = z(idx)
+      flag = .false.
+      if (size(t) < 3) return
+      ! (the branch's fine sampling: its steps' tenth percentile, a hold logged slowly
+      ! holding most of a relaxation branch's samples)
+      steps = t(2:) - t(:size(t) - 1)
+      steps = steps(order_of(steps))
+      long = long_step*steps(max(1, (size(steps) + 5)/10))
+      p = 1
+      do i = 1, size(t) - 1
+         do while (p < size(idx) - 1)
+            if (idx(p + 1) > i) exit
+            p = p + 1
+         end do
+         if (t(i + 1) - t(i) <= long) cycle
+         lo = min(z(i), z(i + 1)) - tol
+         hi = max(z(i), z(i + 1)) + tol
+         do k = 1, 7
+            call cubic_piece(tk, zk, m, p, t(i) + (t(i + 1) - t(i))*real(k, dp)/8.0_dp, u, du)
+            if (u < lo .or. u > hi) then
+               flag(i) = .true.
+               exit
+            end if
+         end do
+      end do
+   end function leaves_samples
+
+   !> New corners (sample indices) into stops, in order, each branch they split keeping its
+   !> kind (flat: a hold) for its parts but the straight pieces between new corners
+   pure subroutine add_corners(stops, flat, new)
+      integer, allocatable, intent(inout) :: stops(:)
+      logical, allocatable, intent(inout) :: flat(:)
+      integer, intent(in) :: new(:)
+      integer, allocatable :: all(:)
+      logical, allocatable :: f(:)
+      integer :: j, k
+      all = stops
+      do k = 1, size(new)
+         if (.not. any(all == new(k))) all = [all, new(k)]
+      end do
+      all = all(order_ints(all))
+      allocate (f(size(all) - 1))
+      do j = 1, size(all) - 1
+         ! the branch of the old stops that holds this piece
+         k = count(stops <= all(j))
+         f(j) = flat(k) .and. .not. (any(new == all(j)) .and. any(new == all(j + 1)))
+      end do
+      stops = all
+      flat = f
+   end subroutine add_corners
+
+   !> The order of integers (insertion: a few corners)
+   pure function order_ints(x) result(o)
+      integer, intent(in) :: x(:)
+      integer :: o(size(x)), i, j, key
+      o = [(i, i=1, size(x))]
+      do i = 2, size(x)
+         key = o(i)
+         j = i - 1
+         do while (j >= 1)
+            if (x(o(j)) <= x(key)) exit
+            o(j + 1) = o(j)
+            j = j - 1
+         end do
+         o(j + 1) = key
+      end do
+   end function order_ints
 
    !> The corners of a measured signal v at times t: its turning points (see turning_points)
    !> and, where a turning point lies in a hold (see hold_noise), the hold's first and last
@@ -158,16 +263,11 @@ contains
       held = .false.
       do j = 2, size(turns) - 1
          k = turns(j)
-         s = k
-         do while (s - 1 > turns(j - 1))
-            if (abs(v(s - 1) - v(k)) > tol) exit
-            s = s - 1
-         end do
-         e = k
-         do while (e + 1 < turns(j + 1))
-            if (abs(v(e + 1) - v(k)) > tol) exit
-            e = e + 1
-         end do
+         ! The extreme of a noisy hold is its highest sample, not its level: the samples
+         ! within twice the band of it give the level (their median), the band about
+         ! that the hold
+         call walk(v, k, turns(j - 1), turns(j + 1), v(k), 2.0_dp*tol, s, e)
+         call walk(v, k, turns(j - 1), turns(j + 1), median(v(s:e)), tol, s, e)
          ! (the rates of the ramps before and after, per s)
          rate = min(abs(v(s) - v(turns(j - 1)))/(t(s) - t(turns(j - 1))), &
                     abs(v(turns(j + 1)) - v(e))/(t(turns(j + 1)) - t(e)))
@@ -187,6 +287,24 @@ contains
       stops = buf(:n)
       flat = held(:n - 1)
    end subroutine turns_and_holds
+
+   !> s, e: the first and last samples about index k (strictly between lo and hi) within band
+   !> of level, contiguous with k
+   pure subroutine walk(v, k, lo, hi, level, band, s, e)
+      real(dp), intent(in) :: v(:), level, band
+      integer, intent(in) :: k, lo, hi
+      integer, intent(out) :: s, e
+      s = k
+      do while (s - 1 > lo)
+         if (abs(v(s - 1) - level) > band) exit
+         s = s - 1
+      end do
+      e = k
+      do while (e + 1 < hi)
+         if (abs(v(e + 1) - level) > band) exit
+         e = e + 1
+      end do
+   end subroutine walk
 
    !> The knots (indices idx into t, the first and the last included) of a natural cubic
    !> spline through (t(idx), z(idx)) that passes within tol of every z, and its second
