@@ -113,6 +113,7 @@ contains
          ! usharp help [command]: as usharp --help, usharp <command> --help
          cmd%help = .true.
          if (size(args) >= 2) then
+            if (args(2)%s == 'help') return
             if (.not. any(command_list == args(2)%s)) then
                call fatal_error(error, "help: unknown command '"//args(2)%s//"'", stat_usage)
                return
