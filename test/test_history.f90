@@ -244,26 +244,13 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(history_type) :: cmd, h
       type(uerror), allocatable :: uerr
-      real(dp), allocatable :: t(:), v(:)
       integer, allocatable :: idx(:), kind(:)
-      real(dp) :: tt, worst
+      real(dp) :: tt
       integer :: k
       call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 3, 60.0_dp, 60.0_dp, cmd, uerr)
       call check(error, .not. allocated(uerr), 'programmed history')
       if (allocated(error)) return
-      t = logged_times(cmd, 20.0_dp)
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
-      end do
-      call measured_history(t, v, control_strain, h, uerr)
-      call check(error, .not. allocated(uerr), 'forcing failed')
-      if (allocated(error)) return
-      worst = 0.0_dp
-      do k = 0, nint(10.0_dp*cmd%end_time())
-         worst = max(worst, abs(h%value_at(0.1_dp*k) - cmd%value_at(0.1_dp*k)))
-      end do
-      call check(error, worst <= 1.0e-5_dp, 'largest |forcing - command| '//str(worst)//' > 1e-5')
+      call logged_forcing(cmd, h, error)
       if (allocated(error)) return
       call peak_corners(h, idx, kind)
       call check(error, size(idx) >= 5, 'turning points of the forcing: '//str(size(idx)))
@@ -318,12 +305,7 @@ contains
       type(history_type) :: cont, filled
       real(dp), allocatable :: t(:), v(:), spans(:, :)
       integer :: k
-      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
-      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 3999)]
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = cont%value_at(t(k))
-      end do
+      call cycles_with_a_gap(cont, t, v)
       call gap_filled_history(t, v, control_strain, 0.01_dp, 0.0_dp, 1.0e-5_dp, filled, spans, uerr, noise=0.0_dp)
       call check(error, allocated(uerr), 'a rate too slow for the gap refused')
       if (allocated(error)) return
@@ -343,11 +325,21 @@ contains
       type(error_type), allocatable, intent(out) :: error
       type(history_type) :: cmd, h
       type(uerror), allocatable :: uerr
+      call history_from_points([0.0_dp, 5.0_dp, 605.0_dp, 610.0_dp, 1210.0_dp], &
+                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 1.0e-2_dp, 1.0e-2_dp], control_strain, cmd, uerr)
+      call logged_forcing(cmd, h, error)
+   end subroutine test_relax_slow
+
+   !> h: the forcing of cmd as a logger records it (every 0.5 s, every 20 s in a hold,
+   !> rounded to 1e-5), which must stay within 1e-5 of cmd everywhere (looked at every 0.1 s)
+   subroutine logged_forcing(cmd, h, error)
+      type(history_type), intent(in) :: cmd
+      type(history_type), intent(out) :: h
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
       real(dp), allocatable :: t(:), v(:)
       real(dp) :: worst
       integer :: k
-      call history_from_points([0.0_dp, 5.0_dp, 605.0_dp, 610.0_dp, 1210.0_dp], &
-                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 1.0e-2_dp, 1.0e-2_dp], control_strain, cmd, uerr)
       t = logged_times(cmd, 20.0_dp)
       allocate (v(size(t)))
       do k = 1, size(t)
@@ -361,7 +353,22 @@ contains
          worst = max(worst, abs(h%value_at(0.1_dp*k) - cmd%value_at(0.1_dp*k)))
       end do
       call check(error, worst <= 1.0e-5_dp, 'largest |forcing - command| '//str(worst)//' > 1e-5')
-   end subroutine test_relax_slow
+   end subroutine logged_forcing
+
+   !> Ten cycles of 1 % at 1e-3/s (cont) sampled every 0.05 s to 40 s and from 180 s to
+   !> 200 s: one gap of 140 s
+   subroutine cycles_with_a_gap(cont, t, v)
+      type(history_type), intent(out) :: cont
+      real(dp), allocatable, intent(out) :: t(:), v(:)
+      type(uerror), allocatable :: uerr
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
+      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 3999)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = cont%value_at(t(k))
+      end do
+   end subroutine cycles_with_a_gap
 
    !> The times a logger records cmd at: every 0.5 s, every hold_step (s) in a hold (where
    !> the command stays put over the next 0.5 s and the next hold_step)
@@ -458,12 +465,7 @@ contains
       type(sim_result) :: r1, r2
       real(dp), allocatable :: t(:), v(:), spans(:, :), probe(:), t10(:)
       integer :: k
-      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
-      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 3999)]
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = cont%value_at(t(k))
-      end do
+      call cycles_with_a_gap(cont, t, v)
       call check(error, size(record_starts(t, 0.0_dp)), 2, 'one gap found')
       if (allocated(error)) return
       call gap_filled_history(t, v, 1, 0.0_dp, 0.0_dp, 0.0_dp, filled, spans, uerr, noise=0.0_dp)
@@ -602,13 +604,7 @@ contains
    subroutine noisy_recording(t, v)
       real(dp), allocatable, intent(out) :: t(:), v(:)
       type(history_type) :: cont
-      type(uerror), allocatable :: uerr
-      integer :: k
-      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 10, 0.0_dp, 0.0_dp, cont, uerr)
-      t = [(0.05_dp*k, k=0, 799), (0.05_dp*k, k=3600, 3999)]
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = 1.0e-5_dp*nint(1.0e5_dp*cont%value_at(t(k)))
-      end do
+      call cycles_with_a_gap(cont, t, v)
+      v = 1.0e-5_dp*nint(1.0e5_dp*v)
    end subroutine noisy_recording
 end module test_history

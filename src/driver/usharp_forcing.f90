@@ -217,7 +217,7 @@ contains
       do k = 1, size(new)
          if (.not. any(all == new(k))) all = [all, new(k)]
       end do
-      all = all(order_ints(all))
+      all = all(order_of(real(all, dp)))
       allocate (f(size(all) - 1))
       do j = 1, size(all) - 1
          ! the branch of the old stops that holds this piece
@@ -227,23 +227,6 @@ contains
       stops = all
       flat = f
    end subroutine add_corners
-
-   !> The order of integers (insertion: a few corners)
-   pure function order_ints(x) result(o)
-      integer, intent(in) :: x(:)
-      integer :: o(size(x)), i, j, key
-      o = [(i, i=1, size(x))]
-      do i = 2, size(x)
-         key = o(i)
-         j = i - 1
-         do while (j >= 1)
-            if (x(o(j)) <= x(key)) exit
-            o(j + 1) = o(j)
-            j = j - 1
-         end do
-         o(j + 1) = key
-      end do
-   end function order_ints
 
    !> The corners of a measured signal v at times t: its turning points (see turning_points)
    !> and, where a turning point lies in a hold (see hold_noise), the hold's first and last
