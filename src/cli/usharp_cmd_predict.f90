@@ -3,19 +3,18 @@
 module usharp_cmd_predict
    use usharp_kinds, only: dp
    use usharp_error, only: error_type, fatal_error, stat_input, prefix_error
-   use usharp_strings, only: real_str, pad, report_line_len, shell_word
+   use usharp_strings, only: real_str, pad, report_line_len
    use usharp_config, only: run_config
    use usharp_input, only: read_config_as, check_inputs_kept, check_not_a_fit
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_simulation, only: sim_result
    use usharp_output, only: write_lines
    use usharp_filesys, only: make_dir, join_path
-   use usharp_cmd_run, only: write_curves
+   use usharp_cmd_run, only: write_curves, curve_header
    use usharp_overwrite, only: check_overwrite, simulate_mark
    use usharp_experiment, only: data_note
-   use usharp_simulate, only: simulate_test, model_lines
+   use usharp_simulate, only: simulate_test
    use usharp_output, only: write_sim_file
-   use usharp_version, only: usharp_version_string
    use usharp_config, only: test_config
    implicit none
    private
@@ -41,6 +40,7 @@ contains
       type(fit_problem) :: prob
       !> the tests without data, simulated alone
       type(test_config), allocatable :: alone(:)
+      character(len=512), allocatable :: header(:)
       logical, allocatable :: measured(:)
       type(sim_result), allocatable :: res(:), res_alone(:)
       real(dp) :: rms, rel, worst
@@ -146,18 +146,12 @@ contains
          if (allocated(error)) return
       end if
       do i = 1, size(alone)
-         block
-            character(len=512), allocatable :: header(:)
-            header = [character(len=512) :: 'usharp '//usharp_version_string// &
-               ' prediction with the constants of '//constants_file//", test '"//alone(i)%name//"'", &
-               'the same curve, at every output time: usharp simulate '//shell_word(path)//' --constants '// &
-               shell_word(constants_file)//' --test '//shell_word(alone(i)%name)]
-            header = [character(len=512) :: header, model_lines(cfg%model, cfg%units, alone(i), error)]
-            if (allocated(error)) return
-            call write_sim_file(join_path(cfg%out_dir, alone(i)%name//'.sim.txt'), res_alone(i), &
-                                header, cfg%units, error)
-            if (allocated(error)) return
-         end block
+         call curve_header(path, constants_file, 'prediction with the constants of '//constants_file, &
+                           cfg%model, cfg%units, alone(i), header, error)
+         if (allocated(error)) return
+         call write_sim_file(join_path(cfg%out_dir, alone(i)%name//'.sim.txt'), res_alone(i), &
+                             header, cfg%units, error)
+         if (allocated(error)) return
       end do
       call write_lines(join_path(cfg%out_dir, 'summary.txt'), summary, error)
    end subroutine predict_command

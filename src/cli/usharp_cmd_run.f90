@@ -5,7 +5,7 @@ module usharp_cmd_run
    use usharp_error, only: error_type, fatal_error, stat_io, stat_report, stat_input, stat_usage
    use usharp_strings, only: str, real_str, pad, shell_word, join, report_line_len
    use usharp_model, only: model_type
-   use usharp_config, only: run_config, fit_config
+   use usharp_config, only: run_config, fit_config, test_config
    use usharp_input, only: read_config_as, check_inputs_kept, output_names
    use usharp_objective, only: fit_problem, setup_problem, simulated
    use usharp_simulate, only: model_lines
@@ -22,7 +22,7 @@ module usharp_cmd_run
    implicit none
    private
 
-   public :: run_command, write_curves
+   public :: run_command, write_curves, curve_header
 
    !> The files a run writes in its output folder, and those it writes for each test (after
    !> the test's name)
@@ -278,7 +278,7 @@ contains
       integer :: i, k
       type(result_file) :: out
       character(len=160) :: row
-      character(len=512) :: header(4)
+      character(len=512), allocatable :: header(:)
       character(len=:), allocatable :: resp, label
       real(dp), allocatable :: y(:)
       allocate (res(size(prob%targets)))
@@ -287,12 +287,8 @@ contains
       label = 'best fit'
       if (present(what)) label = what
       do i = 1, size(prob%targets)
-         header(1) = 'usharp '//usharp_version_string//' '//label//", test '"// &
-                     prob%cfg%tests(i)%name//"'"
-         ! (simulate writes every output time; a fit's curve those compared with the data)
-         header(2) = 'the same curve, at every output time: usharp simulate '//shell_word(prob%cfg%path)// &
-                     ' --constants '//shell_word(constants)//' --test '//shell_word(prob%cfg%tests(i)%name)
-         header(3:4) = model_lines(best, prob%cfg%units, prob%cfg%tests(i), error)
+         call curve_header(prob%cfg%path, constants, label, best, prob%cfg%units, prob%cfg%tests(i), &
+                           header, error)
          if (allocated(error)) return
          call write_sim_file(join_path(dir, prob%cfg%tests(i)%name//'.sim.txt'), once_a_time(res(i)), &
                              header, prob%cfg%units, error)
@@ -340,6 +336,21 @@ contains
       o%back = pack(r%back, keep)
       o%drag = pack(r%drag, keep)
    end function once_a_time
+
+   !> The first lines of a <test>.sim.txt of the constants in the file constants (what they
+   !> are: label): the program, the `usharp simulate` command of the same curve, the model
+   subroutine curve_header(path, constants, label, model, units, test, header, error)
+      character(len=*), intent(in) :: path, constants, label, units
+      class(model_type), intent(in) :: model
+      type(test_config), intent(in) :: test
+      character(len=512), allocatable, intent(out) :: header(:)
+      type(error_type), allocatable, intent(out) :: error
+      ! (simulate writes every output time; a fit's curve those compared with the data)
+      header = [character(len=512) :: 'usharp '//usharp_version_string//' '//label//", test '"// &
+                test%name//"'", 'the same curve, at every output time: usharp simulate '//shell_word(path)// &
+                ' --constants '//shell_word(constants)//' --test '//shell_word(test%name)]
+      header = [character(len=512) :: header, model_lines(model, units, test, error)]
+   end subroutine curve_header
 
    !> <test>.peaks.txt: each compared peak stress of test i beside the simulated stress at its
    !> turning point, with the simulated cycle's number (the cyclic hardening or softening curve)
