@@ -97,6 +97,7 @@ contains
          new_unittest('runs-made-before-are-not-made-again', test_memo), &
          new_unittest('resume-refuses-a-unit-made-for-another-request', test_unit_request), &
          new_unittest('verdict-simpler-effect-without-strong-evidence', test_parsimony), &
+         new_unittest('verdict-names-the-leaders-size-and-where-it-acts', test_verdict_size), &
          new_unittest('verdict-of-no-effect-names-weak-evidence', test_weak_evidence), &
          new_unittest('screening-near-ties-are-refitted', test_near_ties), &
          new_unittest('simpler-rivals-of-a-per-test-leader', test_simpler_rivals), &
@@ -1100,6 +1101,56 @@ contains
          e%worse = [.false., .false., .false.]
       end function weak
    end subroutine test_weak_evidence
+
+   !> The verdict says how large the leader is and where it acts: its fitted values with
+   !> their intervals (a per-test effect's only of the tests that show it; a value at its
+   !> search bound undetermined) and the region whose structured gap it removes most
+   subroutine test_verdict_size(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res
+      call verdict_case(10.0_dp, 5.0_dp, 1, res)
+      res%stress_unit = 'MPa'
+      res%regions = [region('a', 'hold', 3.0_dp), region('b', 'loading', 4.0_dp), region('a', 'whole test', 9.0_dp)]
+      res%effects(1)%k = 9
+      res%effects(1)%name = 'drift'
+      res%effects(1)%q = 2
+      res%effects(1)%dbic = -80.0_dp
+      res%effects(1)%confirmed = .true.
+      res%effects(1)%refitted = .true.
+      res%effects(1)%shrink_fit = 0.9_dp
+      res%effects(1)%shrink_held = 0.9_dp
+      res%effects(1)%held_gap = 0.5_dp
+      res%effects(1)%worse = [.false., .false., .false.]
+      res%effects(1)%p = [5.4e-7_dp, 1.0e-9_dp]
+      res%effects(1)%p_lo = [4.48e-7_dp, -3.0e-8_dp]
+      res%effects(1)%p_hi = [6.32e-7_dp, 3.2e-8_dp]
+      res%effects(1)%pname = [character(len=81) :: 'd a', 'd b']
+      res%effects(1)%punit = [character(len=12) :: '1/s', '1/s']
+      res%effects(1)%p_counted = [.true., .false.]
+      ! (the hold's gap 3.0 -> 0.1 removed most; the loading's 4.0 -> 3.5 less; whole tests not regions)
+      res%effects(1)%regions = [region('a', 'hold', 0.1_dp), region('b', 'loading', 3.5_dp), &
+                                region('a', 'whole test', 0.0_dp)]
+      call conclude(res)
+      call check(error, res%leading == 1 .and. index(res%verdict, '; fitted d a = 5.40E-07 [4.48E-07, 6.32E-07] '// &
+                 '1/s; it acts most on a hold (structured gap 3.00E+00 -> 1.00E-01)') > 0 .and. &
+                 index(res%verdict, 'd b') == 0, res%verdict)
+      if (allocated(error)) return
+      ! Both tests show it, the second at its upper search bound
+      res%effects(1)%p_counted = [.true., .true.]
+      res%effects(1)%p_bound = [0, 1]
+      call conclude(res)
+      call check(error, index(res%verdict, '6.32E-07] 1/s, d b = 1.00E-09 1/s (at its upper search bound: not '// &
+                 'determined)') > 0, res%verdict)
+   contains
+      function region(test, label, gap) result(r)
+         character(len=*), intent(in) :: test, label
+         real(dp), intent(in) :: gap
+         type(region_stat) :: r
+         r%test = test
+         r%label = label
+         r%gap = gap
+      end function region
+   end subroutine test_verdict_size
 
    !> Both sets' gaps below their floors: an effect that lowers BIC by 30, plausible and
    !> keeping the held-out tests at their noise level is confirmed; the same effect opening a

@@ -660,11 +660,13 @@ contains
       e%q_bic = count(ep%pfree)
       e%wald_dropped = 0.0_dp
       if (allocated(e%shown_on)) deallocate (e%shown_on)
+      e%p_counted = spread(.true., 1, count(ep%pfree))
       if (ctx%cat(e%k)%sharing /= param_per_test) return
       ! per-test parameters are parameter-major: test mod(j - 1, nt) + 1
       nt = size(ctx%prob%targets)
       test_of = pack([(mod(j - 1, nt) + 1, j=1, size(ep%p0))], ep%pfree)
       call shown_groups(test_of, nt, xp, cp, log_dp(real(res%m, dp)), counted, e%wald_dropped)
+      e%p_counted = counted
       e%q_bic = count(counted)
       if (all(counted)) return
       e%shown_on = ''
@@ -735,7 +737,9 @@ contains
       nt = size(ctx%prob%targets)
       if (allocated(e%pname)) deallocate (e%pname)
       if (allocated(e%punit)) deallocate (e%punit)
-      allocate (e%pname(count(ep%pfree)), e%punit(count(ep%pfree)))
+      if (allocated(e%p_test)) deallocate (e%p_test)
+      allocate (e%pname(count(ep%pfree)), e%punit(count(ep%pfree)), e%p_test(count(ep%pfree)))
+      e%p_test = 0
       g = 0
       associate (info => ctx%cat(e%k))
          do j = 1, size(ep%p0)
@@ -744,6 +748,7 @@ contains
             if (info%sharing == param_per_test) then
                e%pname(g) = trim(info%pname((j - 1)/nt + 1))//' '//trim(res%names(mod(j - 1, nt) + 1))
                e%punit(g) = info%punit((j - 1)/nt + 1)
+               e%p_test(g) = mod(j - 1, nt) + 1
             else
                e%pname(g) = info%pname(j)
                e%punit(g) = info%punit(j)

@@ -10,7 +10,7 @@ module usharp_diagnose_specimen
    use usharp_lapack, only: mat_mul, svd
    use usharp_math, only: log_dp, exp_dp
    use usharp_error, only: error_type, fatal_error, stat_input
-   use usharp_strings, only: str, real_str, report_line_len, add_line, interval_end, interval_format, csv_field
+   use usharp_strings, only: str, real_str, report_line_len, add_line, csv_field
    use usharp_config, only: run_config
    use usharp_history, only: control_strain
    use usharp_input_test, only: name_len
@@ -35,7 +35,7 @@ module usharp_diagnose_specimen
                                        block_sums, at_box_end, below_resolved, resolved_share
    use usharp_diagnose_verdict, only: power_cells, missed_note, correlated_note
    use usharp_diagnose_types, only: most, hidden_effect, hidden_size, bound_list, unit_text, &
-                                    params_bound_note, side_word, hardening_note
+                                    params_bound_note, side_word, hardening_note, interval_text
    use usharp_diagnose_separate, only: finding_test
    use usharp_diagnose_profile, only: profile_interval, profile_result, open_beyond_estimate
    implicit none
@@ -916,7 +916,7 @@ contains
       character(len=report_line_len), allocatable :: lines(:)
       integer :: j, g, lead, best
       logical :: rest_low
-      character(len=:), allocatable :: ln, verdict, fmt, subject
+      character(len=:), allocatable :: ln, verdict, subject
       character(len=16), allocatable :: names(:)
       real(dp), allocatable :: power(:)
       type(hidden_effect), allocatable :: hidden(:)
@@ -1015,16 +1015,8 @@ contains
             ln = ''
             do g = 1, size(e%p)
                if (g > 1) ln = ln//'; '
-               fmt = interval_format(e%p(g), merge(e%p(g), e%p_lo(g), e%lo_open(g)), &
-                                     merge(e%p(g), e%p_hi(g), e%hi_open(g)))
-               ln = ln//trim(e%pname(g))//' = '//trim(adjustl(real_str(e%p(g), fmt)))
-               if (bound_at(e, g)) then
-                  ln = ln//unit_text(e%punit(g), sr%stress_unit)//' (at its '//side_word(e%p_bound(g))// &
-                       ' search bound: not determined)'
-               else
-                  ln = ln//' ['//interval_end(e%p_lo(g), e%lo_open(g), fmt)//', '// &
-                       interval_end(e%p_hi(g), e%hi_open(g), fmt)//']'//unit_text(e%punit(g), sr%stress_unit)
-               end if
+               ln = ln//interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), e%lo_open(g), e%hi_open(g), &
+                                      bound_side(e, g), e%punit(g), sr%stress_unit)
             end do
             if (e%significant .and. e%plausible .and. unresolved(e)) then
                verdict = 'significant, below what is resolved'
@@ -1142,14 +1134,15 @@ contains
       end subroutine add
 
       !> Parameter g of e at an outer end of its search box
-      pure logical function bound_at(e, g)
+      !> -1, 1: e's parameter g at the lower, upper end of its search box; 0: not
+      pure integer function bound_side(e, g)
          type(specimen_effect), intent(in) :: e
          integer, intent(in) :: g
-         bound_at = .false.
+         bound_side = 0
          if (allocated(e%p_bound)) then
-            if (g <= size(e%p_bound)) bound_at = e%p_bound(g) /= 0
+            if (g <= size(e%p_bound)) bound_side = e%p_bound(g)
          end if
-      end function bound_at
+      end function bound_side
    end function specimen_report
 
    !> The report's table of effects as rows of specimen-<name>.csv, one per parameter of each

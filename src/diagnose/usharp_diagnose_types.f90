@@ -4,7 +4,7 @@ module usharp_diagnose_types
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_math, only: log_dp
-   use usharp_strings, only: real_str
+   use usharp_strings, only: real_str, interval_format, interval_end
    use usharp_objective, only: fit_problem
    use usharp_input_test, only: name_len
    use usharp_effects, only: test_effects, effect_info
@@ -18,6 +18,7 @@ module usharp_diagnose_types
    public :: params_bound_note, hardening_note, side_word
    public :: diagnose_context, physical_point, effect_outcome, diagnose_result, fit_structured, held_quiet
    public :: diagnose_progress, tell, separation_type, n_candidates, leaves_noise, explains_most, hidden_effect, magnitude_text, &
+             interval_text, &
              hidden_size
    public :: explains_resolved, rest_at_noise, gap_fit_ref, unit_text, bound_list, per_test_ref
    public :: deviance_change, prediction_open, open_spread, separating_d
@@ -161,6 +162,7 @@ module usharp_diagnose_types
       !> catalogue's: 'stress' for the model's stress unit, '-' for none)
       character(len=name_len + 17), allocatable :: pname(:)
       character(len=12), allocatable :: punit(:)
+      integer, allocatable :: p_test(:)      !< each one's test (a per-test parameter; 0: global)
       real(dp), allocatable :: c(:)          !< constants of the refit
       !> the initial drag stress of the model at those constants (model stress unit; what an
       !> initial effect's dD0 adds to and a scatter's dD0/D0 scales), negative when none
@@ -189,6 +191,9 @@ module usharp_diagnose_types
       integer :: q_bic = -1
       real(dp) :: wald_dropped = 0.0_dp, dbic_all = 0.0_dp
       character(len=:), allocatable :: shown_on
+      !> Which of its free parameters (as p) BIC counts: all but a per-test effect's values of
+      !> the tests that do not show it
+      logical, allocatable :: p_counted(:)
       real(dp) :: held_gap = 0.0_dp          !< structured gap of the held-out tests with it
       real(dp) :: shrink_fit = 0.0_dp, shrink_held = 0.0_dp
       real(dp) :: gap_fit_after = 0.0_dp  !< the fit tests' structured gap left with the effect
@@ -348,6 +353,26 @@ contains
       character(len=:), allocatable :: text
       text = trim(name)//' = '//real_str(value, 'es9.2')//unit_text(unit, stress_unit)
    end function magnitude_text
+
+   !> A fitted parameter with its 95 % interval as the reports give it: 'name = value [lo,
+   !> hi] unit', with the digits that tell the value from its interval's ends
+   !> (interval_format); an end the data do not bound is open (interval_end); a parameter at
+   !> a search bound (side -1, 1; 0: not) has no interval and is said to be undetermined
+   pure function interval_text(name, value, lo, hi, lo_open, hi_open, side, unit, stress_unit) result(text)
+      character(len=*), intent(in) :: name, unit, stress_unit
+      real(dp), intent(in) :: value, lo, hi
+      logical, intent(in) :: lo_open, hi_open
+      integer, intent(in) :: side
+      character(len=:), allocatable :: text, fmt
+      fmt = interval_format(value, merge(value, lo, lo_open), merge(value, hi, hi_open))
+      text = trim(name)//' = '//trim(adjustl(real_str(value, fmt)))
+      if (side /= 0) then
+         text = text//unit_text(unit, stress_unit)//' (at its '//side_word(side)//' search bound: not determined)'
+      else
+         text = text//' ['//interval_end(lo, lo_open, fmt)//', '//interval_end(hi, hi_open, fmt)//']'// &
+                unit_text(unit, stress_unit)
+      end if
+   end function interval_text
 
    !> The magnitude an effect the tests could hide would have at the parameters p (one group
    !> of info's, in the catalogue's order) as a verdict says it, and whether it lies beyond

@@ -14,7 +14,7 @@ module usharp_diagnose_verdict
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
                                     joint_partial, hidden_effect, bound_list, params_bound_note, &
-                                    hardening_note, joint_not_carried, held_rest_open
+                                    hardening_note, joint_not_carried, held_rest_open, interval_text
    implicit none
    private
 
@@ -204,6 +204,7 @@ contains
                text = text//alike_note(e)
             end if
          end if
+         text = text//size_note(res, e)
          if (size(res%alike) > 1) text = text//alike_text(res)
          if (allocated(e%p)) text = text//hardening_note(e%name, e%p)
          if (any(e%worse)) text = text//'; it makes '//test_list(res, e%worse)//' worse'
@@ -216,6 +217,62 @@ contains
       end associate
       res%verdict = text
    end subroutine effect_verdict
+
+   !> What the verdict says of the leader's size and where it acts: its fitted parameters
+   !> with their 95 % intervals (of a per-test effect those of the tests that show it, at
+   !> most max_sized, the rest counted: all are in the refit's details), and the region
+   !> whose structured gap it removes most, with that gap before and after
+   function size_note(res, e) result(text)
+      type(diagnose_result), intent(in) :: res
+      type(effect_outcome), intent(in) :: e
+      character(len=:), allocatable :: text
+      integer, parameter :: max_sized = 3
+      integer :: g, n, i, side
+      logical :: lo_open, hi_open
+      real(dp) :: removed, most_removed
+      text = ''
+      if (allocated(e%p) .and. allocated(e%p_lo) .and. allocated(e%p_hi) .and. allocated(e%pname) .and. &
+          allocated(e%punit)) then
+         n = 0
+         do g = 1, size(e%p)
+            if (allocated(e%p_counted)) then
+               if (g <= size(e%p_counted)) then
+                  if (.not. e%p_counted(g)) cycle
+               end if
+            end if
+            n = n + 1
+            if (n > max_sized) cycle
+            lo_open = .false.
+            hi_open = .false.
+            if (allocated(e%p_lo_open) .and. allocated(e%p_hi_open)) then
+               lo_open = e%p_lo_open(g)
+               hi_open = e%p_hi_open(g)
+            end if
+            side = 0
+            if (allocated(e%p_bound)) then
+               if (g <= size(e%p_bound)) side = e%p_bound(g)
+            end if
+            text = text//trim(merge('; fitted', ',       ', n == 1))//' '// &
+                   interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), lo_open, hi_open, side, e%punit(g), &
+                                 res%stress_unit)
+         end do
+         if (n > max_sized) text = text//' and '//str(n - max_sized)//' more'
+      end if
+      if (.not. allocated(e%regions) .or. .not. allocated(res%regions)) return
+      if (size(e%regions) /= size(res%regions)) return
+      most_removed = 0.0_dp
+      n = 0
+      do i = 1, size(res%regions)
+         if (res%regions(i)%label == 'whole test') cycle
+         removed = res%regions(i)%gap - e%regions(i)%gap
+         if (removed > most_removed) then
+            most_removed = removed
+            n = i
+         end if
+      end do
+      if (n > 0) text = text//'; it acts most on '//trim(res%regions(n)%test)//' '//trim(res%regions(n)%label)// &
+         ' (structured gap '//real_str(res%regions(n)%gap, 'es9.2')//' -> '//real_str(e%regions(n)%gap, 'es9.2')//')'
+   end function size_note
 
    !> What the verdict says of the other effects that explain the gap alike (res%alike): those
    !> within bic_margin of the leader's BIC equally well (the tests cannot tell them apart);
