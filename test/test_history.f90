@@ -39,7 +39,8 @@ contains
          new_unittest('measured-forcing-hold-logged-slowly', test_measured_hold), &
          new_unittest('gap-time-for-a-hold-logged-slowly', test_gap_time), &
          new_unittest('gap-cycles-rate-too-slow-for-the-gap-refused', test_gap_rate), &
-         new_unittest('measured-forcing-relaxation-logged-slowly', test_relax_slow)]
+         new_unittest('measured-forcing-relaxation-logged-slowly', test_relax_slow), &
+         new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -329,6 +330,49 @@ contains
                                [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 1.0e-2_dp, 1.0e-2_dp], control_strain, cmd, uerr)
       call logged_forcing(cmd, h, error)
    end subroutine test_relax_slow
+
+   !> A sine of 1 % range and 20 s period sampled every 0.02 s and rounded to 1e-5: near
+   !> its peaks it stays within the hold band (3 noise scales, 3e-5) for 0.7 s, over 20 times
+   !> the time its average ramp rate takes to cross the band, and its peaks had been taken as
+   !> holds (each a flat branch from 0.36 s before the peak); a rounded top approaches its
+   !> value ever more slowly, a hold does not, so no peak is a hold: one corner at each, at
+   !> the last of the samples that share the top value (0.14 s after the peak), and the
+   !> forcing within 2.5 resolution steps of the sine (2.1e-5 beside that corner)
+   subroutine test_sine_peaks(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      real(dp), parameter :: pi = acos(-1.0_dp)
+      real(dp), allocatable :: t(:), v(:)
+      integer, allocatable :: idx(:), kind(:)
+      real(dp) :: worst, tt, tworst
+      integer :: k
+      t = [(0.02_dp*k, k=0, 2500)]
+      v = 1.0e-5_dp*anint(5.0e-3_dp*sin(2.0_dp*pi*t/20.0_dp)/1.0e-5_dp)
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing failed')
+      if (allocated(error)) return
+      call peak_corners(h, idx, kind)
+      call check(error, size(idx), 5, 'peaks of 2.5 cycles')
+      if (allocated(error)) return
+      do k = 1, size(idx)
+         tt = h%t(idx(k))
+         call check(error, abs(tt - (5.0_dp + 10.0_dp*(k - 1))) <= 0.15_dp, 'peak '//str(k)//' at t = '// &
+                    str(tt)//' s, the sine''s at '//str(5.0_dp + 10.0_dp*(k - 1))//' s')
+         if (allocated(error)) return
+      end do
+      worst = 0.0_dp
+      tworst = 0.0_dp
+      do k = 0, 5000
+         tt = 0.01_dp*k
+         if (abs(h%value_at(tt) - 5.0e-3_dp*sin(2.0_dp*pi*tt/20.0_dp)) > worst) then
+            worst = abs(h%value_at(tt) - 5.0e-3_dp*sin(2.0_dp*pi*tt/20.0_dp))
+            tworst = tt
+         end if
+      end do
+      call check(error, worst <= 2.5e-5_dp, 'largest |forcing - sine| '//str(worst)//' > 2.5e-5 at t = '// &
+                 str(tworst)//' s')
+   end subroutine test_sine_peaks
 
    !> h: the forcing of cmd as a logger records it (every 0.5 s, every 20 s in a hold,
    !> rounded to 1e-5), which must stay within 1e-5 of cmd everywhere (looked at every 0.1 s)

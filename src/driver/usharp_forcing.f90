@@ -40,13 +40,17 @@ module usharp_forcing
    real(dp), parameter :: knot_tol = 1.0_dp
    !> A hold at a turning point: the samples about it within hold_noise times the noise scale
    !> (see turn_hysteresis) of its value, for at least hold_travel times the time the slower
-   !> of the ramps beside it takes to cross that band. It becomes a branch of its own, flat,
+   !> of the ramps beside it takes to cross that band as it meets it. It becomes a branch of its own, flat,
    !> with a corner at each end: a spline through a hold logged more slowly than the ramps
    !> (a sample every 20 s against every 0.5 s) had swung across it to half as much again as
    !> the peak strain, and a peak is compared where its hold starts. A rounded reversal is no
    !> hold: the Alloy 617 strains (cycles 1-2) stay within the band for at most 7.8 crossing times
    real(dp), parameter :: hold_noise = 3.0_dp
    real(dp), parameter :: hold_travel = 20.0_dp
+   !> ... the ramps' rates taken over their last approach_band band widths (see
+   !> approach_rate): a sine rounded to 1e-5 at 1 % range had stayed within the band for 28
+   !> times the time its average rate takes to cross it, and its peaks had been holds
+   real(dp), parameter :: approach_band = 4.0_dp
    !> Rounds of corners added where a branch's spline leaves its samples' range, across
    !> steps longer than long_step times the branch's fine sampling (see leaves_samples)
    integer, parameter :: max_passes = 4
@@ -251,9 +255,9 @@ contains
          ! that the hold
          call walk(v, k, turns(j - 1), turns(j + 1), v(k), 2.0_dp*tol, s, e)
          call walk(v, k, turns(j - 1), turns(j + 1), median(v(s:e)), tol, s, e)
-         ! (the rates of the ramps before and after, per s)
-         rate = min(abs(v(s) - v(turns(j - 1)))/(t(s) - t(turns(j - 1))), &
-                    abs(v(turns(j + 1)) - v(e))/(t(turns(j + 1)) - t(e)))
+         ! (the rates, per s, at which the ramps before and after meet the band)
+         rate = min(approach_rate(t, v, s, turns(j - 1), median(v(s:e)), approach_band*tol), &
+                    approach_rate(t, v, e, turns(j + 1), median(v(s:e)), approach_band*tol))
          if (e > s .and. (t(e) - t(s))*rate >= hold_travel*tol) then
             buf(n + 1:n + 2) = [s, e]
             held(n + 1) = .true.
@@ -270,6 +274,25 @@ contains
       stops = buf(:n)
       flat = held(:n - 1)
    end subroutine turns_and_holds
+
+   !> The rate (per s) at which the signal v reaches sample k from the side of sample far:
+   !> over its samples from the last that lies farther than reach from level (far if none)
+   !> to k. A ramp into a hold keeps its rate up to the hold; a rounded top slows as it
+   !> nears (a parabola crosses the band's width beyond it in under a third of the time it
+   !> stays within it)
+   pure real(dp) function approach_rate(t, v, k, far, level, reach) result(rate)
+      real(dp), intent(in) :: t(:), v(:), level, reach
+      integer, intent(in) :: k, far
+      integer :: i, step
+      step = merge(-1, 1, far < k)
+      i = k
+      do while (i /= far)
+         i = i + step
+         if (abs(v(i) - level) > reach) exit
+      end do
+      rate = 0.0_dp
+      if (i /= k) rate = abs(v(i) - v(k))/abs(t(i) - t(k))
+   end function approach_rate
 
    !> s, e: the first and last samples about index k (strictly between lo and hi) within band
    !> of level, contiguous with k

@@ -7,7 +7,7 @@ module usharp_experiment
    use usharp_config, only: test_config
    use usharp_history, only: history_type, control_stress, control_strain
    use usharp_input, only: read_data_columns
-   use usharp_input_test, only: max_strain, percent_strain, compared_columns, history_settings
+   use usharp_input_test, only: max_strain, percent_strain, compared_columns, history_settings, stress_share_side
    use usharp_table, only: merge_repeated_times
    use usharp_units, only: stress_factor
    use usharp_sort, only: median
@@ -17,9 +17,6 @@ module usharp_experiment
    public :: experiment_type, load_experiment, interpolate, fits_strain, response_name, check_scale
    public :: measured_times, compare_where_measured, data_note, check_programme
 
-   !> The stress a test's data may peak at, as a share of Young's modulus: below, a column in
-   !> GPa (0.35 for 350 MPa) or a strain column; above, one in Pa or kPa
-   real(dp), parameter :: min_stress_share = 1.0e-5_dp, max_stress_share = 0.05_dp
    !> A measured strain's stiffest stretch (the elastic unloading after a reversal, the first
    !> loading) below this share of Young's modulus is a strain column in percent (1/100)
    real(dp), parameter :: min_stiffness_share = 0.1_dp
@@ -123,7 +120,7 @@ contains
       if (test%has_peaks() .and. youngs > 0.0_dp) then
          ! The peak file's stresses, read in the same unit as the data's
          peak = maxval(abs(pack(test%peak_y, test%point_kind /= 0)))*stress_factor(test%data%unit, model_units)
-         if (peak < min_stress_share*youngs .or. peak > max_stress_share*youngs) then
+         if (stress_share_side(peak, youngs) /= 0) then
             call fatal_error(error, stress_scale_message(test%peak_file, 'its stresses reach', peak, youngs, &
                                                          model_units, test%data%unit))
             return
@@ -135,7 +132,7 @@ contains
          if (peak > max_strain) call fatal_error(error, percent_strain(test%data%file, &
                                                                      test%data%strain_col, peak))
       else if (youngs > 0.0_dp .and. peak > 0.0_dp) then
-         if (peak < min_stress_share*youngs .or. peak > max_stress_share*youngs) &
+         if (stress_share_side(peak, youngs) /= 0) &
             call fatal_error(error, stress_scale_message(test%data%file, "column '"//test%data%stress_col// &
                                                          "' peaks at", peak, youngs, model_units, test%data%unit))
       end if
@@ -205,7 +202,7 @@ contains
              real_str(peak/youngs, 'es8.1')//" of Young's modulus ("//real_str(youngs, 'f0.0')//' '// &
              model_units//'): '//trim(merge('is it a stress in GPa, or another column?', &
                                             'is it a stress in Pa or kPa?             ', &
-                                            peak < min_stress_share*youngs))//" (data_unit = '"//data_unit//"')"
+                                            stress_share_side(peak, youngs) < 0))//" (data_unit = '"//data_unit//"')"
    end function stress_scale_message
 
    !> The secants |d stress / d strain| of a test over stretches of one direction of the

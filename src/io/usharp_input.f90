@@ -17,7 +17,7 @@ module usharp_input
    use usharp_input_fit, only: read_fit_group
    use usharp_input_design, only: read_design_group
    use usharp_input_diagnose, only: read_diagnose_group, specimen_unused
-   use usharp_input_test, only: read_test_groups, read_data_columns
+   use usharp_input_test, only: read_test_groups, read_data_columns, stress_share_side
    implicit none
    private
 
@@ -74,11 +74,11 @@ contains
          if (cfg%tests(i)%hist%control /= control_stress .or. cfg%tests(i)%history_kind == 'data') cycle
          if (size(cfg%tests(i)%hist%v) == 0) cycle
          peak = maxval(abs(cfg%tests(i)%hist%v))
-         if (peak >= 1.0e-5_dp*e .and. peak <= 0.05_dp*e) cycle
+         if (stress_share_side(peak, e) == 0) cycle
          call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': its stress reaches "// &
             real_str(peak, 'es9.2')//' '//cfg%units//', '//real_str(peak/e, 'es8.1')//" of Young's modulus ("// &
             str(nint(e))//' '//cfg%units//'): no test of a metal loads it so (is the stress in '// &
-            trim(merge('GPa or a strain', 'Pa or kPa      ', peak < 1.0e-5_dp*e))//', not '//cfg%units//'?)', &
+            trim(merge('GPa or a strain', 'Pa or kPa      ', stress_share_side(peak, e) < 0))//', not '//cfg%units//'?)', &
             stat_input)
          return
       end do

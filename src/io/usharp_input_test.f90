@@ -19,13 +19,16 @@ module usharp_input_test
 
    public :: test_config, data_spec, external_spec, read_test_groups, write_test_defaults
    public :: read_data_columns, max_strain, percent_strain, compared_columns, history_settings
-   public :: test_increments
+   public :: test_increments, stress_share_side
 
    !> Longest filter value (a text in a data file's filter column)
    integer, parameter :: filter_len = 128
    !> The largest measured strain (mm/mm) a test driven by it may reach: Alloy 617's tensile
    !> test ends at 0.62; a column in percent of a 1.5 % test reaches 1.5
    real(dp), parameter :: max_strain = 1.0_dp
+   !> The stress a test may peak at, as a share of Young's modulus: below, a stress in GPa
+   !> (0.35 for 350 MPa) or a strain; above, one in Pa or kPa (see stress_share_side)
+   real(dp), parameter :: min_stress_share = 1.0e-5_dp, max_stress_share = 0.05_dp
    !> Largest strain (mm/mm) of a commanded push-pull cycle: a specimen buckles before
    real(dp), parameter :: max_cycle_strain = 0.1_dp
 
@@ -1032,4 +1035,17 @@ contains
          opts%dt_min = min(opts%dt_min, opts%dt_init)
       end if
    end function test_increments
+   !> Whether a peak stress is one a test of a metal reaches, against Young's modulus youngs
+   !> (the same unit): 0 between min_stress_share and max_stress_share of it, -1 below (a
+   !> stress in GPa, a strain), 1 above (a stress in Pa or kPa)
+   elemental integer function stress_share_side(peak, youngs) result(side)
+      real(dp), intent(in) :: peak, youngs
+      side = 0
+      if (peak < min_stress_share*youngs) then
+         side = -1
+      else if (peak > max_stress_share*youngs) then
+         side = 1
+      end if
+   end function stress_share_side
+
 end module usharp_input_test
