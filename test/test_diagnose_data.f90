@@ -441,6 +441,19 @@ contains
                  'drift '//real_str(sr%effects(1)%p(1), 'es10.3')//' ['//real_str(sr%effects(1)%p_lo(1), &
                  'es10.3')//', '//real_str(sr%effects(1)%p_hi(1), 'es10.3')//'] misses 8e-6')
       if (allocated(error)) return
+      ! The verdict gives the drift's size with its interval
+      block
+         character(len=report_line_len), allocatable :: lines(:)
+         character(len=:), allocatable :: verdict
+         lines = specimen_report(sr)
+         verdict = ''
+         do j = 1, size(lines)
+            if (index(lines(j), '**Verdict:**') == 1) verdict = trim(lines(j))
+         end do
+         call check(error, index(verdict, 'explains how') > 0 .and. index(verdict, '; fitted d = ') > 0 .and. &
+                    index(verdict, ' 1/s') > 0, verdict)
+      end block
+      if (allocated(error)) return
       ! The power statement: the drift's chi-square at the low end of its range (2e-5 strain
       ! over the test), scaled to the injected drift (the signal is linear in it), is the fall
       ! of the specimen's chi-square that fitting the drift gives (expected: lambda + 1, within

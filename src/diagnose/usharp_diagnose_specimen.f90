@@ -1012,12 +1012,7 @@ contains
       call add('|---|---|---|---|---|---|---|---|---|---|')
       do j = 1, size(sr%effects)
          associate (e => sr%effects(j))
-            ln = ''
-            do g = 1, size(e%p)
-               if (g > 1) ln = ln//'; '
-               ln = ln//interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), e%lo_open(g), e%hi_open(g), &
-                                      bound_side(e, g), e%punit(g), sr%stress_unit)
-            end do
+            ln = magnitudes(e, '; ')
             if (e%significant .and. e%plausible .and. unresolved(e)) then
                verdict = 'significant, below what is resolved'
             else if (e%significant .and. e%plausible) then
@@ -1080,7 +1075,10 @@ contains
          if (len(ln) > 0) verdict = verdict//'; as well (BIC within '//real_str(bic_margin, 'f0.0')//'): '//ln(3:)
          if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
          associate (e => sr%effects(lead))
-            if (allocated(e%p)) verdict = verdict//hardening_note(e%name, e%p)
+            if (allocated(e%p)) then
+               if (size(e%p) > 0) verdict = verdict//'; fitted '//magnitudes(e, ', ')
+               verdict = verdict//hardening_note(e%name, e%p)
+            end if
             if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p) .and. allocated(e%punit)) &
                verdict = verdict//params_bound_note(e%pname, e%p, e%p_bound, e%punit, sr%stress_unit)
          end associate
@@ -1134,6 +1132,20 @@ contains
       end subroutine add
 
       !> Parameter g of e at an outer end of its search box
+      !> e's fitted parameters with their 95 % intervals (interval_text), joined by sep
+      function magnitudes(e, sep) result(text)
+         type(specimen_effect), intent(in) :: e
+         character(len=*), intent(in) :: sep
+         character(len=:), allocatable :: text
+         integer :: g
+         text = ''
+         do g = 1, size(e%p)
+            if (g > 1) text = text//sep
+            text = text//interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), e%lo_open(g), e%hi_open(g), &
+                                       bound_side(e, g), e%punit(g), sr%stress_unit)
+         end do
+      end function magnitudes
+
       !> -1, 1: e's parameter g at the lower, upper end of its search box; 0: not
       pure integer function bound_side(e, g)
          type(specimen_effect), intent(in) :: e
