@@ -40,7 +40,8 @@ contains
          new_unittest('gap-time-for-a-hold-logged-slowly', test_gap_time), &
          new_unittest('gap-cycles-rate-too-slow-for-the-gap-refused', test_gap_rate), &
          new_unittest('measured-forcing-relaxation-logged-slowly', test_relax_slow), &
-         new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks)]
+         new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks), &
+         new_unittest('measured-forcing-regular-sampling-is-no-rounding', test_regular_grid)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -373,6 +374,37 @@ contains
       call check(error, worst <= 2.5e-5_dp, 'largest |forcing - sine| '//str(worst)//' > 2.5e-5 at t = '// &
                  str(tworst)//' s')
    end subroutine test_sine_peaks
+
+   !> A triangle of 1 % range at 1e-3/s sampled every 0.5 s from 0.4 s and rounded to
+   !> 1e-5: every sample lies on 1e-4, the grid of the sampling itself (steps of 5e-4 along
+   !> the ramps, shorter only where a reversal falls between samples), and no rounding shows.
+   !> Taken as a quantum, 1e-4 had let the smoother lay each branch straight from its
+   !> turning point, 1.9e-4 off the samples after each reversal; the forcing passes through
+   !> every sample
+   subroutine test_regular_grid(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h, cmd
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 0.0_dp, 0.0_dp, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [0.0_dp, (0.4_dp + 0.5_dp*k, k=0, 78)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
+      end do
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing failed')
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do k = 1, size(t)
+         worst = max(worst, abs(h%value_at(t(k)) - v(k)))
+      end do
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - sample| '//str(worst)//' > 1e-8')
+   end subroutine test_regular_grid
 
    !> h: the forcing of cmd as a logger records it (every 0.5 s, every 20 s in a hold,
    !> rounded to 1e-5), which must stay within 1e-5 of cmd everywhere (looked at every 0.1 s)

@@ -51,6 +51,11 @@ module usharp_forcing
    !> approach_rate): a sine rounded to 1e-5 at 1 % range had stayed within the band for 28
    !> times the time its average rate takes to cross it, and its peaks had been holds
    real(dp), parameter :: approach_band = 4.0_dp
+   !> Rounding shows in at least this share of the second differences inside a signal's
+   !> ramps (see rounding_shows): a noisy strain rounded to 1e-5 in most (the Alloy 617
+   !> files), a dip of 5e-5 in a ramp logged on a grid of 1e-4 in 2 %, a regular sampling
+   !> of steady ramps in none
+   real(dp), parameter :: jitter_share = 0.01_dp
    !> Rounds of corners added where a branch's spline leaves its samples' range, across
    !> steps longer than long_step times the branch's fine sampling (see leaves_samples)
    integer, parameter :: max_passes = 4
@@ -493,29 +498,54 @@ contains
 
    !> The rounding of recorded values: the largest q = s/k (s the smallest non-zero step
    !> between neighbours, k = 1 to 4) of which nearly every value (95 %) is a whole multiple,
-   !> with steps of typically 1.5 quanta or more; 0 when there is none (a simulation's
-   !> values, or noise without rounding). A logger's
+   !> with steps of typically 1.5 quanta or more, where the rounding shows (see
+   !> jitter_share); 0 when there is none (a simulation's values, noise without rounding,
+   !> or values that all fall on the grid of their own sampling). A logger's
    !> step can be several quanta (an Alloy 617 strain recorded to 1e-5 moves by 2e-5 at
    !> least), and samples of a repeated time, averaged, fall between the quanta.
    pure real(dp) function quantum(v) result(q)
       real(dp), intent(in) :: v(:)
       real(dp), allocatable :: steps(:)
-      integer :: k
+      integer :: k, n
       q = signal_resolution(v)
       if (q == 0.0_dp) return
-      steps = abs(v(2:) - v(:size(v) - 1))
+      n = size(v)
+      steps = abs(v(2:) - v(:n - 1))
       steps = pack(steps, steps > 0.0_dp)
       do k = 1, 4
-         if (count(abs(v/(q/k) - anint(v/(q/k))) <= 1.0e-3_dp) >= 0.95_dp*size(v)) then
+         if (count(abs(v/(q/k) - anint(v/(q/k))) <= 1.0e-3_dp) >= 0.95_dp*n) then
             q = q/k
-            ! Rounding shows in steps of different numbers of quanta; steps all alike are a
-            ! regular sampling of a steady ramp, whose values fall on its own grid
-            if (median(steps) < 1.5_dp*q) q = 0.0_dp
+            ! Steps of typically one quantum are a signal creeping by its resolution, whose
+            ! own scatter is the finer measure of its noise; steps alike along every ramp
+            ! are a regular sampling of steady ramps, whose values fall on a grid of their
+            ! own (a 1e-3/s ramp sampled every 0.5 s from 0.4 s lies on 1e-4, which as a
+            ! quantum made every branch a straight line 1.9e-4 off its samples)
+            if (median(steps) < 1.5_dp*q .or. .not. rounding_shows(v, q)) q = 0.0_dp
             return
          end if
       end do
       q = 0.0_dp
    end function quantum
+
+   !> Whether rounding to q shows in v as jitter: of the samples inside ramps (the two
+   !> steps either side of it move the same way; a turn's neighbours are left out, where a
+   !> reversal between samples shortens a step), at least jitter_share have a second
+   !> difference of half a quantum or more. True where no sample lies inside a ramp (a slow
+   !> ramp's rounding makes plateaus, which is rounding)
+   pure logical function rounding_shows(v, q)
+      real(dp), intent(in) :: v(:), q
+      real(dp) :: st(4)
+      integer :: k, inside, jitter
+      inside = 0
+      jitter = 0
+      do k = 3, size(v) - 2
+         st = v(k - 1:k + 2) - v(k - 2:k + 1)
+         if (.not. (all(st > 0.0_dp) .or. all(st < 0.0_dp))) cycle
+         inside = inside + 1
+         if (abs(v(k + 1) - 2.0_dp*v(k) + v(k - 1)) >= 0.5_dp*q) jitter = jitter + 1
+      end do
+      rounding_shows = inside == 0 .or. jitter >= jitter_share*inside
+   end function rounding_shows
 
    !> Resolution of recorded values: their smallest non-zero step between neighbours
    !> (0 when all are equal)
