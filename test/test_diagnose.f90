@@ -1103,14 +1103,18 @@ contains
    end subroutine test_weak_evidence
 
    !> The verdict says how large the leader is and where it acts: its fitted values with
-   !> their intervals (a per-test effect's only of the tests that show it; a value at its
-   !> search bound undetermined) and the region whose structured gap it removes most
+   !> their intervals (a per-test effect's only of the tests that show it where its BIC
+   !> counts only those; a value at its search bound said once, by the note of the bounds)
+   !> and, of the regions with a structured residual, the one whose gap it removes most
    subroutine test_verdict_size(error)
       type(error_type), allocatable, intent(out) :: error
       type(diagnose_result) :: res
       call verdict_case(10.0_dp, 5.0_dp, 1, res)
       res%stress_unit = 'MPa'
-      res%regions = [region('a', 'hold', 3.0_dp), region('b', 'loading', 4.0_dp), region('a', 'whole test', 9.0_dp)]
+      ! (c's elastic points carry no structured residual: a fall there is no place it acts)
+      res%regions = [region('a', 'hold', 3.0_dp), region('b', 'loading', 4.0_dp), region('a', 'whole test', 9.0_dp), &
+                     region('c', 'elastic', 5.0_dp)]
+      res%regions(4)%structured = .false.
       res%effects(1)%k = 9
       res%effects(1)%name = 'drift'
       res%effects(1)%q = 2
@@ -1127,20 +1131,27 @@ contains
       res%effects(1)%pname = [character(len=81) :: 'd a', 'd b']
       res%effects(1)%punit = [character(len=12) :: '1/s', '1/s']
       res%effects(1)%p_counted = [.true., .false.]
+      res%effects(1)%shown_on = 'a'
+      res%effects(1)%dbic_all = -70.0_dp
       ! (the hold's gap 3.0 -> 0.1 removed most; the loading's 4.0 -> 3.5 less; whole tests not regions)
       res%effects(1)%regions = [region('a', 'hold', 0.1_dp), region('b', 'loading', 3.5_dp), &
-                                region('a', 'whole test', 0.0_dp)]
+                                region('a', 'whole test', 0.0_dp), region('c', 'elastic', 0.0_dp)]
       call conclude(res)
       call check(error, res%leading == 1 .and. index(res%verdict, '; fitted d a = 5.40E-07 [4.48E-07, 6.32E-07] '// &
                  '1/s; it acts most on a hold (structured gap 3.00E+00 -> 1.00E-01)') > 0 .and. &
                  index(res%verdict, 'd b') == 0, res%verdict)
       if (allocated(error)) return
-      ! Both tests show it, the second at its upper search bound
-      res%effects(1)%p_counted = [.true., .true.]
+      ! Its BIC counting every test's values, both are given
+      res%effects(1)%dbic_all = -90.0_dp
+      call conclude(res)
+      call check(error, index(res%verdict, '6.32E-07] 1/s, d b = 1.00E-09 [-3.00E-08, 3.20E-08] 1/s;') > 0, res%verdict)
+      if (allocated(error)) return
+      ! The second at its upper search bound: said once, by the note of the bounds
       res%effects(1)%p_bound = [0, 1]
       call conclude(res)
-      call check(error, index(res%verdict, '6.32E-07] 1/s, d b = 1.00E-09 1/s (at its upper search bound: not '// &
-                 'determined)') > 0, res%verdict)
+      call check(error, index(res%verdict, '6.32E-07] 1/s; it acts') > 0 .and. &
+                 index(res%verdict, 'search bound') > 0 .and. &
+                 index(res%verdict, 'search bound') == index(res%verdict, 'search bound', back=.true.), res%verdict)
    contains
       function region(test, label, gap) result(r)
          character(len=*), intent(in) :: test, label
@@ -1149,6 +1160,7 @@ contains
          r%test = test
          r%label = label
          r%gap = gap
+         r%structured = .true.
       end function region
    end subroutine test_verdict_size
 

@@ -219,25 +219,32 @@ contains
    end subroutine effect_verdict
 
    !> What the verdict says of the leader's size and where it acts: its fitted parameters
-   !> with their 95 % intervals (of a per-test effect those of the tests that show it, at
-   !> most max_sized, the rest counted: all are in the refit's details), and the region
-   !> whose structured gap it removes most, with that gap before and after
+   !> with their 95 % intervals (of a per-test effect those of the tests that show it where
+   !> its BIC counts only those, at most max_sized, the rest counted: all are in the refit's
+   !> details; one at a search bound is left to bound_note), and, of the regions whose
+   !> residual is structured, the one whose structured gap it removes most, with that gap
+   !> before and after (not a held-out test's where its values there were fitted to it)
    function size_note(res, e) result(text)
       type(diagnose_result), intent(in) :: res
       type(effect_outcome), intent(in) :: e
       character(len=:), allocatable :: text
       integer, parameter :: max_sized = 3
-      integer :: g, n, i, side
-      logical :: lo_open, hi_open
+      integer :: g, n, i
+      logical :: lo_open, hi_open, shown_only
       real(dp) :: removed, most_removed
       text = ''
       if (allocated(e%p) .and. allocated(e%p_lo) .and. allocated(e%p_hi) .and. allocated(e%pname) .and. &
           allocated(e%punit)) then
+         shown_only = allocated(e%shown_on) .and. allocated(e%p_counted)
+         if (shown_only) shown_only = e%dbic < e%dbic_all
          n = 0
          do g = 1, size(e%p)
-            if (allocated(e%p_counted)) then
-               if (g <= size(e%p_counted)) then
-                  if (.not. e%p_counted(g)) cycle
+            if (shown_only .and. g <= size(e%p_counted)) then
+               if (.not. e%p_counted(g)) cycle
+            end if
+            if (allocated(e%p_bound)) then
+               if (g <= size(e%p_bound)) then
+                  if (e%p_bound(g) /= 0) cycle
                end if
             end if
             n = n + 1
@@ -248,12 +255,8 @@ contains
                lo_open = e%p_lo_open(g)
                hi_open = e%p_hi_open(g)
             end if
-            side = 0
-            if (allocated(e%p_bound)) then
-               if (g <= size(e%p_bound)) side = e%p_bound(g)
-            end if
             text = text//trim(merge('; fitted', ',       ', n == 1))//' '// &
-                   interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), lo_open, hi_open, side, e%punit(g), &
+                   interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), lo_open, hi_open, 0, e%punit(g), &
                                  res%stress_unit)
          end do
          if (n > max_sized) text = text//' and '//str(n - max_sized)//' more'
@@ -263,7 +266,8 @@ contains
       most_removed = 0.0_dp
       n = 0
       do i = 1, size(res%regions)
-         if (res%regions(i)%label == 'whole test') cycle
+         if (res%regions(i)%label == 'whole test' .or. .not. res%regions(i)%structured) cycle
+         if (e%held_fitted .and. index(res%regions(i)%test, '(held out)') > 0) cycle
          removed = res%regions(i)%gap - e%regions(i)%gap
          if (removed > most_removed) then
             most_removed = removed
