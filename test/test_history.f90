@@ -41,7 +41,8 @@ contains
          new_unittest('gap-cycles-rate-too-slow-for-the-gap-refused', test_gap_rate), &
          new_unittest('measured-forcing-relaxation-logged-slowly', test_relax_slow), &
          new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks), &
-         new_unittest('measured-forcing-regular-sampling-is-no-rounding', test_regular_grid)]
+         new_unittest('measured-forcing-regular-sampling-is-no-rounding', test_regular_grid), &
+         new_unittest('measured-forcing-ramp-into-a-hold-logged-ten-times-slower', test_relax_tenfold)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -405,6 +406,44 @@ contains
       end do
       call check(error, worst <= 1.0e-8_dp, 'largest |forcing - sample| '//str(worst)//' > 1e-8')
    end subroutine test_regular_grid
+
+   !> The thesis's two-level relaxation (a 1 s ramp to 7.5e-4, 600 s held, a ramp to 1e-3,
+   !> held) logged every 0.05 s on the ramps and every 0.5 s in the holds, ten times as
+   !> long: the spline across the first hold steps after a ramp had swung 5.8e-5 off the
+   !> hold where only steps over ten times the fine sampling were looked at between
+   !> samples; the forcing stays within 1e-8 of the command
+   subroutine test_relax_tenfold(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tt, tworst
+      integer :: k
+      call history_from_points([0.0_dp, 1.0_dp, 601.0_dp, 602.0_dp, 1202.0_dp], &
+                               [0.0_dp, 7.5e-4_dp, 7.5e-4_dp, 1.0e-3_dp, 1.0e-3_dp], control_strain, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [(0.05_dp*k, k=0, 20), (1.0_dp + 0.5_dp*k, k=1, 1200), (601.0_dp + 0.05_dp*k, k=1, 20), &
+           (602.0_dp + 0.5_dp*k, k=1, 1200)]
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = cmd%value_at(t(k))
+      end do
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing failed')
+      if (allocated(error)) return
+      worst = 0.0_dp
+      tworst = 0.0_dp
+      do k = 0, 120200
+         tt = 0.01_dp*k
+         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
+            worst = abs(h%value_at(tt) - cmd%value_at(tt))
+            tworst = tt
+         end if
+      end do
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
+                 str(tworst)//' s')
+   end subroutine test_relax_tenfold
 
    !> h: the forcing of cmd as a logger records it (every 0.5 s, every 20 s in a hold,
    !> rounded to 1e-5), which must stay within 1e-5 of cmd everywhere (looked at every 0.1 s)

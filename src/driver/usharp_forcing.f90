@@ -56,8 +56,9 @@ module usharp_forcing
    !> files), a dip of 5e-5 in a ramp logged on a grid of 1e-4 in 2 %, a regular sampling
    !> of steady ramps in none
    real(dp), parameter :: jitter_share = 0.01_dp
-   !> Rounds of corners added where a branch's spline leaves its samples' range, across
-   !> steps longer than long_step times the branch's fine sampling (see leaves_samples)
+   !> Rounds of corners added where a branch's spline leaves its samples' range (at a
+   !> branch's ends across steps longer than long_step times its fine sampling; see
+   !> leaves_samples)
    integer, parameter :: max_passes = 4
    real(dp), parameter :: long_step = 10.0_dp
    !> ... by more than leave_tol times the noise
@@ -175,9 +176,11 @@ contains
 
    !> Per interval between neighbouring samples (t, z), whether the spline through the knots
    !> idx with second derivatives m leaves the range of its two samples by more than tol
-   !> (looked at 7 times inside each interval), for intervals longer than long_step times
-   !> the branch's fine sampling: between samples as close as their neighbours the knot
-   !> tolerance at them bounds the spline, across a long one nothing does
+   !> (looked at 7 times inside each interval): every interval inside the branch (a ramp
+   !> logged every 0.05 s into a relaxation hold logged every 0.5 s, ten times as long, had
+   !> swung by 0.3 ksi of stress there), and at its two ends those longer than long_step
+   !> times the branch's fine sampling (next to a turning point the extreme of a reversal
+   !> between samples lies beyond the two, and the spline may follow it)
    pure function leaves_samples(t, z, idx, m, tol) result(flag)
       real(dp), intent(in) :: t(:), z(:), m(:), tol
       integer, intent(in) :: idx(:)
@@ -200,7 +203,9 @@ contains
             if (idx(p + 1) > i) exit
             p = p + 1
          end do
-         if (t(i + 1) - t(i) <= long) cycle
+         ! (a reversal between two samples puts the extreme beyond the pair next to the
+         ! turning point: the branch's end steps are looked at only when long)
+         if ((i == 1 .or. i == size(t) - 1) .and. t(i + 1) - t(i) <= long) cycle
          lo = min(z(i), z(i + 1)) - tol
          hi = max(z(i), z(i + 1)) + tol
          do k = 1, 7
