@@ -409,6 +409,10 @@ contains
          "&test #1 'cr': its stress reaches 1.45E-03 ksi, 6.4E-08 of Young's modulus (22500 ksi): no test of "// &
          "a metal loads it so (is the stress in GPa or a strain, not ksi?)")
       if (allocated(error)) return
+      ! No stress at all: no unit slip to suggest
+      call refused('scale-creep-zero.nml', "&test name='cr', history='creep', stress=0.0, duration=100.0 /", &
+         "&test #1 'cr': its stress is 0 throughout: a stress-controlled test needs a stress")
+      if (allocated(error)) return
       call refused('scale-creep.nml', "&test name='cr', history='creep', stress=10.0, duration=100.0, "// &
          "data_file='scale-creep.csv', strain_column='strain' /", &
          "scale-creep.csv: column 'strain' reaches 1.200: strain is in mm/mm (is it in percent?)")

@@ -75,6 +75,11 @@ contains
          if (size(cfg%tests(i)%hist%v) == 0) cycle
          peak = maxval(abs(cfg%tests(i)%hist%v))
          if (stress_share_side(peak, e) == 0) cycle
+         if (.not. peak > 0.0_dp) then
+            call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': its stress is 0 "// &
+               'throughout: a stress-controlled test needs a stress (stress, or the history file)', stat_input)
+            return
+         end if
          call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': its stress reaches "// &
             real_str(peak, 'es9.2')//' '//cfg%units//', '//real_str(peak/e, 'es8.1')//" of Young's modulus ("// &
             str(nint(e))//' '//cfg%units//'): no test of a metal loads it so (is the stress in '// &
