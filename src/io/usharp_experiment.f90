@@ -201,7 +201,7 @@ contains
       text = file//': '//what//' '//real_str(peak, 'es10.3')//' '//model_units//', '// &
              real_str(peak/youngs, 'es8.1')//" of Young's modulus ("//real_str(youngs, 'f0.0')//' '// &
              model_units//'): '//trim(merge('is it a stress in GPa, or another column?', &
-                                            'is it a stress in Pa or kPa?             ', &
+                                            'is it a stress in Pa, kPa or psi?        ', &
                                             stress_share_side(peak, youngs) < 0))//" (data_unit = '"//data_unit//"')"
    end function stress_scale_message
 

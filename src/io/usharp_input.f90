@@ -69,6 +69,7 @@ contains
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: peak, e
       integer :: i
+      character(len=:), allocatable :: what
       e = cfg%model%youngs
       do i = 1, size(cfg%tests)
          if (cfg%tests(i)%hist%control /= control_stress .or. cfg%tests(i)%history_kind == 'data') cycle
@@ -80,7 +81,9 @@ contains
                'throughout: a stress-controlled test needs a stress (stress, or the history file)', stat_input)
             return
          end if
-         call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': its stress reaches "// &
+         what = 'its stress'
+         if (allocated(cfg%tests(i)%history_file)) what = "file = '"//cfg%tests(i)%history_file//"': its stress"
+         call fatal_error(error, path//": &test #"//str(i)//" '"//cfg%tests(i)%name//"': "//what//" reaches "// &
             real_str(peak, 'es9.2')//' '//cfg%units//', '//real_str(peak/e, 'es8.1')//" of Young's modulus ("// &
             str(nint(e))//' '//cfg%units//'): no test of a metal loads it so (is the stress in '// &
             trim(merge('GPa or a strain', 'Pa or kPa      ', stress_share_side(peak, e) < 0))//', not '//cfg%units//'?)', &
