@@ -393,12 +393,7 @@ contains
       call check(error, .not. allocated(uerr), 'programmed history')
       if (allocated(error)) return
       t = [0.0_dp, (0.4_dp + 0.5_dp*k, k=0, 78)]
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
-      end do
-      call measured_history(t, v, control_strain, h, uerr)
-      call check(error, .not. allocated(uerr), 'forcing failed')
+      call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
       if (allocated(error)) return
       worst = 0.0_dp
       do k = 1, size(t)
@@ -425,12 +420,7 @@ contains
       if (allocated(error)) return
       t = [(0.05_dp*k, k=0, 20), (1.0_dp + 0.5_dp*k, k=1, 1200), (601.0_dp + 0.05_dp*k, k=1, 20), &
            (602.0_dp + 0.5_dp*k, k=1, 1200)]
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = cmd%value_at(t(k))
-      end do
-      call measured_history(t, v, control_strain, h, uerr)
-      call check(error, .not. allocated(uerr), 'forcing failed')
+      call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
       if (allocated(error)) return
       worst = 0.0_dp
       tworst = 0.0_dp
@@ -445,23 +435,35 @@ contains
                  str(tworst)//' s')
    end subroutine test_relax_tenfold
 
+   !> v: cmd sampled at the times t and rounded to q (0: not rounded); h: its forcing
+   subroutine sampled_forcing(cmd, t, q, v, h, error)
+      type(history_type), intent(in) :: cmd
+      real(dp), intent(in) :: t(:), q
+      real(dp), allocatable, intent(out) :: v(:)
+      type(history_type), intent(out) :: h
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: uerr
+      integer :: k
+      allocate (v(size(t)))
+      do k = 1, size(t)
+         v(k) = cmd%value_at(t(k))
+         if (q > 0.0_dp) v(k) = q*anint(v(k)/q)
+      end do
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing failed')
+   end subroutine sampled_forcing
+
    !> h: the forcing of cmd as a logger records it (every 0.5 s, every 20 s in a hold,
    !> rounded to 1e-5), which must stay within 1e-5 of cmd everywhere (looked at every 0.1 s)
    subroutine logged_forcing(cmd, h, error)
       type(history_type), intent(in) :: cmd
       type(history_type), intent(out) :: h
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: uerr
       real(dp), allocatable :: t(:), v(:)
       real(dp) :: worst
       integer :: k
       t = logged_times(cmd, 20.0_dp)
-      allocate (v(size(t)))
-      do k = 1, size(t)
-         v(k) = 1.0e-5_dp*anint(cmd%value_at(t(k))/1.0e-5_dp)
-      end do
-      call measured_history(t, v, control_strain, h, uerr)
-      call check(error, .not. allocated(uerr), 'forcing failed')
+      call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
       if (allocated(error)) return
       worst = 0.0_dp
       do k = 0, nint(10.0_dp*cmd%end_time())
