@@ -409,6 +409,17 @@ contains
          "&test #1 'cr': its stress reaches 1.45E-03 ksi, 6.4E-08 of Young's modulus (22500 ksi): no test of "// &
          "a metal loads it so (is the stress in GPa or a strain, not ksi?)")
       if (allocated(error)) return
+      ! At the bound itself, 1e-5 of E = 144000 MPa (whose product rounds above 1.44), it passes
+      block
+         type(run_config) :: cfg
+         type(uerror), allocatable :: uerr
+         call read_config(write_text('scale-creep-bound.nml', [character(len=100) :: &
+            "&model name='miller', units='MPa', temperature=866.15, tm=1800.0, youngs=144000.0 /", &
+            '&constants a1=0.1, a2=1e-7, b=1e13, c2=1.0, h1=1000, h2=100, n=3.0, q=91000 /', &
+            "&fit fitted='H1', 'n' /", "&test name='cr', history='creep', stress=1.44, duration=100.0 /"]), cfg, uerr)
+         if (allocated(uerr)) call check(error, index(uerr%message, "Young's modulus") == 0, uerr%message)
+      end block
+      if (allocated(error)) return
       ! No stress at all: no unit slip to suggest
       call refused('scale-creep-zero.nml', "&test name='cr', history='creep', stress=0.0, duration=100.0 /", &
          "&test #1 'cr': its stress is 0 throughout: a stress-controlled test needs a stress")

@@ -29,6 +29,8 @@ module usharp_input_test
    !> The stress a test may peak at, as a share of Young's modulus: below, a stress in GPa
    !> (0.35 for 350 MPa) or a strain; above, one in Pa or kPa (see stress_share_side)
    real(dp), parameter :: min_stress_share = 1.0e-5_dp, max_stress_share = 0.05_dp
+   !> Relative slack at those bounds, for the rounding of a stress given at one of them
+   real(dp), parameter :: bound_slack = 1.0e-9_dp
    !> Largest strain (mm/mm) of a commanded push-pull cycle: a specimen buckles before
    real(dp), parameter :: max_cycle_strain = 0.1_dp
 
@@ -1040,10 +1042,12 @@ contains
    !> stress in GPa, a strain), 1 above (a stress in Pa or kPa)
    elemental integer function stress_share_side(peak, youngs) result(side)
       real(dp), intent(in) :: peak, youngs
+      ! (the bounds themselves pass, whatever the rounding of their product: 1.44 MPa at
+      ! E = 144000 MPa had been refused as below 1e-5 E)
       side = 0
-      if (peak < min_stress_share*youngs) then
+      if (peak < (1.0_dp - bound_slack)*min_stress_share*youngs) then
          side = -1
-      else if (peak > max_stress_share*youngs) then
+      else if (peak > (1.0_dp + bound_slack)*max_stress_share*youngs) then
          side = 1
       end if
    end function stress_share_side
