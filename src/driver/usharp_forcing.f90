@@ -40,11 +40,12 @@ module usharp_forcing
    real(dp), parameter :: knot_tol = 1.0_dp
    !> A hold at a turning point: the samples about it within hold_noise times the noise scale
    !> (see turn_hysteresis) of its value, for at least hold_travel times the time the slower
-   !> of the ramps beside it takes to cross that band as it meets it. It becomes a branch of its own, flat,
-   !> with a corner at each end: a spline through a hold logged more slowly than the ramps
-   !> (a sample every 20 s against every 0.5 s) had swung across it to half as much again as
-   !> the peak strain, and a peak is compared where its hold starts. A rounded reversal is no
-   !> hold: the Alloy 617 strains (cycles 1-2) stay within the band for at most 7.8 crossing times
+   !> of the ramps beside it takes to cross that band as it meets it. It becomes a branch of
+   !> its own, flat, with a corner at each end: a spline through a hold logged more slowly
+   !> than the ramps (a sample every 20 s against every 0.5 s) had swung across it to half
+   !> as much again as the peak strain, and a peak is compared where its hold starts. A
+   !> rounded reversal is no hold: the Alloy 617 strains (cycles 1-2) stay within the band
+   !> for at most 7.8 times their average ramp's crossing time
    real(dp), parameter :: hold_noise = 3.0_dp
    real(dp), parameter :: hold_travel = 20.0_dp
    !> ... the ramps' rates taken over their last approach_band band widths (see
@@ -252,7 +253,7 @@ contains
       integer, allocatable :: turns(:)
       integer :: buf(2*size(v)), j, n, s, e, k
       logical :: held(2*size(v))
-      real(dp) :: tol, rate
+      real(dp) :: tol, rate, level
       turns = turning_points(v, turn_hysteresis(v))
       tol = hold_noise*max(quantum(v), noise_sd(v))
       n = 1
@@ -266,8 +267,9 @@ contains
          call walk(v, k, turns(j - 1), turns(j + 1), v(k), 2.0_dp*tol, s, e)
          call walk(v, k, turns(j - 1), turns(j + 1), median(v(s:e)), tol, s, e)
          ! (the rates, per s, at which the ramps before and after meet the band)
-         rate = min(approach_rate(t, v, s, turns(j - 1), median(v(s:e)), approach_band*tol), &
-                    approach_rate(t, v, e, turns(j + 1), median(v(s:e)), approach_band*tol))
+         level = median(v(s:e))
+         rate = min(approach_rate(t, v, s, turns(j - 1), level, approach_band*tol), &
+                    approach_rate(t, v, e, turns(j + 1), level, approach_band*tol))
          if (e > s .and. (t(e) - t(s))*rate >= hold_travel*tol) then
             buf(n + 1:n + 2) = [s, e]
             held(n + 1) = .true.
