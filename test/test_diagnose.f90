@@ -23,7 +23,7 @@ module test_diagnose
                               diagnose_options_of, gn_decrease, diagnose_baseline, diagnose_context, &
                              n_leading, simpler_rivals
    use usharp_selfcheck, only: selfcheck_result, selfcheck_run
-   use usharp_distributions, only: gamma_q, chi2_sf, ncx2_sf
+   use usharp_distributions, only: gamma_q, chi2_sf, chi2_isf, ncx2_sf
    use usharp_diagnose_types, only: effect_outcome, joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
                                     baseline_left_behind, separating_d, open_spread, &
                                     held_fit_only, form_beats_leader, joint_reason, joint_held_only, joint_form_open, &
@@ -110,6 +110,7 @@ contains
          new_unittest('per-test-effect-counted-on-the-tests-that-show-it', test_bic_shown), &
          new_unittest('when-every-test-is-fitted-together', test_joint_rule), &
          new_unittest('partial-prediction-fitted-with-every-test', test_partial_carry), &
+         new_unittest('held-out-agreement-at-constants-the-fit-tests-allow', test_held_agreement), &
          new_unittest('specimen-residual-covariance-with-the-constants', test_specimen_quad), &
          new_unittest('lower-ranked-refits-when-the-leader-leaves-a-gap', test_gap_left_rule), &
          new_unittest('leader-fitted-to-the-held-out-tests-gives-way', test_held_fit_rule), &
@@ -1773,6 +1774,69 @@ contains
                  res%verdict)
    end subroutine test_partial_carry
 
+   !> A per-test leader whose held-out values, fitted with the fit tests' constants, meet part
+   !> of the held-out gap goes on to every test fitted together; where the same effect there
+   !> removes most of the held-out gap at constants the fit tests allow (their deviance within
+   !> the 95 % region of the parameters the tests share), the verdict says it explains the
+   !> gap and that the fit tests leave those constants open; beyond the region it stays
+   !> "partly" (the numbers of a drift with the LCF test held out)
+   subroutine test_held_agreement(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(diagnose_result) :: res, jres
+      character(len=*), parameter :: before = 'drift partly explains the gap: BIC -625.2'
+      res%held = [.true., .false., .false.]
+      res%npts = [1000, 1202, 1202]
+      res%c = [1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp, 6.0_dp, 7.0_dp]
+      res%gap_fit = 0.159_dp
+      res%floor_fit = 0.075_dp
+      ! held-out objective 10.57: noise 0.36, and 0.17 from the constants' own uncertainty
+      res%noise_held = 0.53_dp
+      res%pred_held = 0.17_dp
+      res%gap_held = 10.04_dp
+      res%gap_held_noise = 10.21_dp
+      res%floor_held = 0.657_dp
+      allocate (res%effects(1))
+      res%effects(1)%name = 'drift'
+      res%effects(1)%confirmed = .true.
+      res%effects(1)%held_fitted = .true.
+      res%effects(1)%shrink_fit = 1.0_dp
+      res%effects(1)%shrink_held = 0.723_dp
+      res%effects(1)%per_test_after = [3.316_dp, 0.2549_dp, 0.2454_dp]
+      res%effects(1)%p_test = [2, 3]
+      res%leading = 1
+      res%verdict = before
+      call check(error, joint_wanted(res, .false.), 'held-out values meeting 72 % go on to every test fitted')
+      if (allocated(error)) return
+      jres%held = [.false., .false., .false.]
+      jres%gap_fit = 0.88_dp
+      jres%floor_fit = 0.144_dp
+      jres%effects = res%effects
+      jres%effects(1)%held_fitted = .false.
+      jres%effects(1)%shrink_fit = 0.973_dp
+      jres%effects(1)%dbic = -1724.2_dp
+      ! the fit tests each 0.4 % above their own fit: deviance 2*1202*ln(1.004) = 9.6
+      jres%effects(1)%per_test_after = [0.38_dp, 1.004_dp*0.2549_dp, 1.004_dp*0.2454_dp]
+      jres%leading = 1
+      jres%verdict = 'drift explains the gap'
+      call joint_verdict(res, jres)
+      call check(error, index(res%verdict, 'drift explains the gap: BIC -625.2') == 1, res%verdict)
+      if (allocated(error)) return
+      call check(error, index(res%verdict, 'and 99.8 % of the held-out tests'' gap against their noise, at '// &
+                 'constants the fit tests allow (their deviance up 9.6 from their own fit, within the 14.1 of a '// &
+                 '95 % region of the 7 parameters the tests share): it explains every test, and the fit tests '// &
+                 'leave open the constants the held-out tests need: with those they alone give, its values '// &
+                 'fitted to the held-out tests meet 72.3 % of their gap') > 0, res%verdict)
+      if (allocated(error)) return
+      ! The fit tests each 1 % worse: deviance 23.9, beyond the region; the verdict stays "partly"
+      jres%effects(1)%per_test_after = [0.38_dp, 1.01_dp*0.2549_dp, 1.01_dp*0.2454_dp]
+      res%verdict = before
+      call joint_verdict(res, jres)
+      call check(error, index(res%verdict, before) == 1 .and. index(res%verdict, 'at constants the fit tests '// &
+                 'do not allow (their deviance up 23.9 from their own fit, beyond the 14.1') > 0 .and. &
+                 index(res%verdict, 'it can explain every test, but with the constants the fit tests alone '// &
+                 'give it') > 0, res%verdict)
+   end subroutine test_held_agreement
+
    !> The specimen's -2 log-likelihood in the covariance s diag(nv) + Jc C Jc', minimised over
    !> the noise scale s: against the whole matrix factorised and solved at each s; without C,
    !> m ln(|x|**2/m) + m; and where the residual's structure lies along the constants'
@@ -2618,8 +2682,9 @@ contains
       end do
    end subroutine test_rate_held
 
-   !> The chi-square tails the power statement uses, against closed forms and scipy 1.x
-   !> (scipy.special.gammaincc, scipy.stats.chi2.sf and ncx2.sf, printed to 17 digits)
+   !> The chi-square tails the power statement uses and the critical values of a
+   !> likelihood-ratio region, against closed forms and scipy 1.x (scipy.special.gammaincc,
+   !> scipy.stats.chi2.sf, isf and ncx2.sf, printed to 17 digits)
    subroutine test_chi2_tails(error)
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: got(9), want(9)
@@ -2637,6 +2702,12 @@ contains
       if (allocated(error)) return
       ! The noncentral tail with no signal is the central one
       call check(error, abs(ncx2_sf(16.0_dp, 3.0_dp, 0.0_dp) - want(5)) < 1.0e-15_dp, 'lambda = 0')
+      if (allocated(error)) return
+      ! Critical values against scipy.stats.chi2.isf (k = 2 in closed form: -2 ln p)
+      got(1:4) = chi2_isf([0.05_dp, 0.05_dp, 0.05_dp, 1.0e-3_dp], [1.0_dp, 7.0_dp, 9.0_dp, 2.0_dp])
+      want(1:4) = [3.8414588206941285_dp, 14.067140449340167_dp, 16.91897760462045_dp, -2.0_dp*log(1.0e-3_dp)]
+      call check(error, all(abs(got(1:4) - want(1:4)) <= 1.0e-8_dp*want(1:4)), 'chi-square critical values: '// &
+                 real_str(maxval(abs(got(1:4) - want(1:4))), 'es9.2')//' off')
    end subroutine test_chi2_tails
 
    !> Zero-width F descriptors print a leading zero and no bare point; a negative value that

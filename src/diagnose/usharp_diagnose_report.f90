@@ -527,6 +527,11 @@ contains
             call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
                'tests, but they leave its prediction of the held-out tests open: the held-out tests fix '// &
                'the parameters it depends on.')
+         else if (res%effects(res%leading)%held_fitted) then
+            call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
+               'tests, but with its values of the held-out tests fitted to them and the fit tests'' constants '// &
+               'carried over it meets only part of the held-out tests'' gap: either those constants fail '// &
+               'there, or another effect adds to it.')
          else
             call add_line(lines, trim(res%effects(res%leading)%name)//' leaves no structured gap on the fit '// &
                'tests, but its prediction carries only part of the held-out tests'': either what the fit '// &

@@ -9,12 +9,13 @@ module usharp_diagnose_verdict
    use usharp_regions, only: region_stat
    use usharp_diagnose_options, only: bic_margin, corr_lag, correlated_ratio
    use usharp_forcing, only: noise_lag_ratio
+   use usharp_distributions, only: chi2_isf
    use usharp_diagnose_types, only: diagnose_result, effect_outcome, fit_structured, held_quiet, prediction_open, &
                                     leaves_noise, explains_resolved, rest_at_noise, most, little, gap_fit_ref, &
                                     fit_effect_not_carried, form_beats_leader, joint_reason, &
                                     joint_bic_only, joint_held_fit, joint_form_beats, joint_loose, &
                                     joint_partial, hidden_effect, bound_list, params_bound_note, &
-                                    hardening_note, joint_not_carried, held_rest_open, interval_text
+                                    hardening_note, joint_not_carried, held_rest_open, interval_text, deviance_change
    implicit none
    private
 
@@ -352,8 +353,15 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(diagnose_result), intent(in) :: jres
       integer :: n, why
+      character(len=:), allocatable :: lead
       why = joint_reason(res, .false.)
       if (why == joint_partial) then
+         ! Where the held-out tests agree with the leader at constants the fit tests allow, what
+         ! its prediction left is what the fit tests leave open: it explains the gap
+         lead = trim(res%effects(res%leading)%name)
+         n = len(lead//' partly explains the gap')
+         if (held_agrees(res, jres) .and. index(res%verdict, lead//' partly explains the gap') == 1) &
+            res%verdict = lead//' explains the gap'//res%verdict(n + 1:)
          res%verdict = res%verdict//'; '//carry_note(res, jres)
       else if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
@@ -439,15 +447,102 @@ contains
             text = 'fitted to every test together, '//trim(e%name)//' removes '// &
                    real_str(100.0_dp*je%shrink_fit, 'f0.1')//' % of their structured gap (BIC '// &
                    real_str(je%dbic, 'f0.1')//')'
-            if (explains_resolved(je, jres)) then
-               text = text//': it can explain every test, but the parameters the fit tests alone give '// &
-                      'it carry '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out gap'
+            text = text//agreement_text(res, e, je)
+            if (held_agrees(res, jres)) then
+               if (e%held_fitted) then
+                  text = text//': it explains every test, and the fit tests leave open the constants the '// &
+                         'held-out tests need: with those they alone give, its values fitted to the held-out '// &
+                         'tests meet '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'
+               else
+                  text = text//': it explains every test, and the fit tests leave open what the held-out '// &
+                         'tests need: the parameters they alone give it carry '// &
+                         real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out gap'
+               end if
+            else if (explains_resolved(je, jres)) then
+               if (e%held_fitted) then
+                  text = text//': it can explain every test, but with the constants the fit tests alone '// &
+                         'give it, its values fitted to the held-out tests meet '// &
+                         real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'
+               else
+                  text = text//': it can explain every test, but the parameters the fit tests alone give '// &
+                         'it carry '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out gap'
+               end if
             else
                text = text//': the held-out tests show more than it carries'
             end if
          end associate
       end associate
    end function carry_note
+
+   !> How much of the held-out tests' gap (against their noise alone) effect e removes with
+   !> every test fitted together (its joint refit je), and whether the fit tests allow the
+   !> constants of that fit: their deviance above that of e's refit on them alone against
+   !> the 95 % point of chi-square in the parameters the tests share (the constants and the
+   !> effect's global ones), the likelihood-ratio region of those parameters. Within it the
+   !> fit tests cannot tell the joint constants from their own, and what the prediction left
+   !> is what they leave open, not what the effect misses (ok false: not measured).
+   subroutine held_agreement(res, e, je, share, dev, crit, nshared, ok)
+      type(diagnose_result), intent(in) :: res
+      type(effect_outcome), intent(in) :: e, je
+      real(dp), intent(out) :: share   !< share of the held-out gap removed, 1 = all
+      real(dp), intent(out) :: dev     !< the fit tests' deviance above their own fit
+      real(dp), intent(out) :: crit    !< its 95 % point
+      integer, intent(out) :: nshared  !< parameters the tests share
+      logical, intent(out) :: ok
+      real(dp) :: noise_only
+      logical, allocatable :: fit(:)
+      share = 0.0_dp
+      dev = 0.0_dp
+      crit = 0.0_dp
+      nshared = 0
+      ok = .false.
+      if (.not. (allocated(e%per_test_after) .and. allocated(je%per_test_after) .and. allocated(res%npts))) return
+      if (.not. (allocated(res%held) .and. allocated(res%c))) return
+      if (size(je%per_test_after) /= size(res%held) .or. size(e%per_test_after) /= size(res%held)) return
+      if (res%gap_held_noise <= 0.0_dp) return
+      fit = .not. res%held
+      noise_only = res%noise_held - res%pred_held
+      share = 1.0_dp - max(sum(je%per_test_after, res%held) - noise_only, 0.0_dp)/res%gap_held_noise
+      dev = deviance_change(pack(res%npts, fit), pack(e%per_test_after, fit), pack(je%per_test_after, fit))
+      nshared = size(res%c)
+      if (allocated(e%p_test)) nshared = nshared + count(e%p_test == 0)
+      crit = chi2_isf(0.05_dp, real(nshared, dp))
+      ok = .true.
+   end subroutine held_agreement
+
+   !> held_agreement as a clause ('' where not measured)
+   function agreement_text(res, e, je) result(text)
+      type(diagnose_result), intent(in) :: res
+      type(effect_outcome), intent(in) :: e, je
+      character(len=:), allocatable :: text
+      real(dp) :: share, dev, crit
+      integer :: nshared
+      logical :: ok
+      text = ''
+      call held_agreement(res, e, je, share, dev, crit, nshared, ok)
+      if (.not. ok) return
+      text = ' and '//real_str(100.0_dp*share, 'f0.1')//' % of the held-out tests'' gap against their noise, '// &
+             'at constants the fit tests '//trim(merge('allow       ', 'do not allow', dev <= crit))// &
+             ' (their deviance '//trim(merge('up  ', 'down', dev >= 0.0_dp))//' '//real_str(abs(dev), 'f0.1')// &
+             ' from their own fit, '//trim(merge('within', 'beyond', dev <= crit))//' the '// &
+             real_str(crit, 'f0.1')//' of a 95 % region of the '//str(nshared)//' parameters the tests share)'
+   end function agreement_text
+
+   !> The same effect leads every test fitted together, explains them, and removes most of
+   !> the held-out gap there at constants the fit tests allow (see held_agreement)
+   logical function held_agrees(res, jres)
+      type(diagnose_result), intent(in) :: res, jres
+      real(dp) :: share, dev, crit
+      integer :: nshared
+      logical :: ok
+      held_agrees = .false.
+      if (res%leading == 0 .or. jres%leading == 0) return
+      associate (e => res%effects(res%leading), je => jres%effects(jres%leading))
+         if (je%name /= e%name .or. .not. explains_resolved(je, jres)) return
+         call held_agreement(res, e, je, share, dev, crit, nshared, ok)
+         held_agrees = ok .and. share >= most .and. dev <= crit
+      end associate
+   end function held_agrees
 
    !> Why a leader that rests on a fit of the held-out tests (see held_fit_only) gave way to
    !> the diagnosis with every test fitted, as a clause

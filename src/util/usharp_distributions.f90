@@ -9,7 +9,7 @@ module usharp_distributions
    implicit none
    private
 
-   public :: gamma_q, chi2_sf, ncx2_sf
+   public :: gamma_q, chi2_sf, chi2_isf, ncx2_sf
 
    integer, parameter :: max_terms = 100000
    real(dp), parameter :: tiny_fp = 1.0e-300_dp
@@ -68,6 +68,34 @@ contains
       real(dp), intent(in) :: k
       p = gamma_q(0.5_dp*k, 0.5_dp*max(x, 0.0_dp))
    end function chi2_sf
+
+   !> The x with P(X > x) = p for X chi-square with k degrees of freedom (the critical value of
+   !> a likelihood-ratio region at level 1 - p), by bisection on chi2_sf to 1e-10 of x
+   elemental real(dp) function chi2_isf(p, k) result(x)
+      !> upper tail probability, 0 < p < 1
+      real(dp), intent(in) :: p
+      !> degrees of freedom, > 0
+      real(dp), intent(in) :: k
+      real(dp) :: lo, hi
+      integer :: it
+      lo = 0.0_dp
+      hi = max(1.0_dp, k)
+      ! The tail falls with x: widen until it is below p
+      do it = 1, 200
+         if (chi2_sf(hi, k) < p) exit
+         lo = hi
+         hi = 2.0_dp*hi
+      end do
+      do it = 1, 200
+         x = 0.5_dp*(lo + hi)
+         if (hi - lo <= 1.0e-10_dp*max(1.0_dp, x)) exit
+         if (chi2_sf(x, k) > p) then
+            lo = x
+         else
+            hi = x
+         end if
+      end do
+   end function chi2_isf
 
    !> P(X > x) for X noncentral chi-square with k degrees of freedom and noncentrality lambda
    !> (the expected chi-square of a signal: the sum of its squares over the noise variance)
