@@ -42,7 +42,8 @@ contains
          new_unittest('measured-forcing-relaxation-logged-slowly', test_relax_slow), &
          new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks), &
          new_unittest('measured-forcing-regular-sampling-is-no-rounding', test_regular_grid), &
-         new_unittest('measured-forcing-ramp-into-a-hold-logged-ten-times-slower', test_relax_tenfold)]
+         new_unittest('measured-forcing-ramp-into-a-hold-logged-ten-times-slower', test_relax_tenfold), &
+         new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -434,6 +435,54 @@ contains
       call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
                  str(tworst)//' s')
    end subroutine test_relax_tenfold
+
+   !> A triangle of 1e-3/s to +-5e-3 with 60 s holds at its peaks, logged every 0.5 s from
+   !> 0.4 s on the ramps and every 20 s in the holds (at 20.4, 40.4, 60.4 s, ...), rounded to
+   !> 1e-5: each hold starts 0.1 s after a ramp's last sample and ends 4.6 s before the
+   !> next ramp's first. The forcing had run straight from the last ramp sample to the first
+   !> hold sample (15.5 s for 0.1 s of ramp) and from the hold's last into the ramp, and a
+   !> hold between two such steps had lost its flatness; it follows the command within 1e-8
+   !> everywhere (looked at every 0.01 s), the ramps run at their rate up to the level
+   subroutine test_hold_ends_unsampled(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tt, tworst
+      integer :: k
+      call history_from_points([0.0_dp, 5.0_dp, 65.0_dp, 75.0_dp, 135.0_dp, 145.0_dp, 205.0_dp, 210.0_dp], &
+                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, -5.0e-3_dp, -5.0e-3_dp, 5.0e-3_dp, 5.0e-3_dp, &
+                                0.0_dp], control_strain, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [0.0_dp]
+      do k = 0, 419
+         tt = 0.4_dp + 0.5_dp*k
+         ! in a hold only every 20 s
+         if (in_hold(tt) .and. abs(modulo(tt - 0.4_dp, 20.0_dp)) > 1.0e-9_dp .and. &
+             abs(modulo(tt - 0.4_dp, 20.0_dp) - 20.0_dp) > 1.0e-9_dp) cycle
+         t = [t, tt]
+      end do
+      call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
+      if (allocated(error)) return
+      worst = 0.0_dp
+      tworst = 0.0_dp
+      do k = 0, 20900
+         tt = 0.01_dp*k
+         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
+            worst = abs(h%value_at(tt) - cmd%value_at(tt))
+            tworst = tt
+         end if
+      end do
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
+                 str(tworst)//' s')
+   contains
+      logical function in_hold(x)
+         real(dp), intent(in) :: x
+         in_hold = (x > 5.0_dp .and. x < 65.0_dp) .or. (x > 75.0_dp .and. x < 135.0_dp) .or. &
+                   (x > 145.0_dp .and. x < 205.0_dp)
+      end function in_hold
+   end subroutine test_hold_ends_unsampled
 
    !> v: cmd sampled at the times t and rounded to q (0: not rounded); h: its forcing
    subroutine sampled_forcing(cmd, t, q, v, h, error)

@@ -64,6 +64,9 @@ module usharp_forcing
    real(dp), parameter :: long_step = 10.0_dp
    !> ... by more than leave_tol times the noise
    real(dp), parameter :: leave_tol = 10.0_dp
+   !> A step between a hold and its ramp longer than this many times the ramp's fine
+   !> sampling holds the hold's start (or end): a regular logger's steps vary far less
+   real(dp), parameter :: hold_step = 2.0_dp
 
 contains
 
@@ -151,6 +154,18 @@ contains
             call spline_knots(t(a:b), z(a:b), knot_tol*sigma, idx, mk)
             if (pass < max_passes) then
                leaves = leaves_samples(t(a:b), z(a:b), idx, mk, leave_tol*sigma)
+               ! A step next to a hold longer than hold_step times the branch's fine
+               ! sampling: the hold began or ended inside it (a logger slowed for the hold),
+               ! and the ramp runs straight to it (see hold_ends_between_samples)
+               if (pass == 1 .and. .not. flat(j) .and. b - a >= 2) then
+                  if (j > 1) then
+                     if (flat(j - 1) .and. t(a + 1) - t(a) > hold_step*fine_step(t(a:b))) leaves(1) = .true.
+                  end if
+                  if (j < size(flat)) then
+                     if (flat(j + 1) .and. t(b) - t(b - 1) > hold_step*fine_step(t(a:b))) &
+                        leaves(size(leaves)) = .true.
+                  end if
+               end if
                do i = 1, size(leaves)
                   if (leaves(i)) split = [split, a - 1 + i, a + i]
                end do
@@ -173,7 +188,110 @@ contains
       hist%vk = vk
       hist%d2 = d2
       hist%stops = stops
+      call hold_ends_between_samples(hist, flat)
    end subroutine measured_history
+
+   !> A hold whose start (or end) falls between two samples far apart (a ramp logged every
+   !> 0.5 s into a hold logged every 20 s, its level reached 0.1 s after the ramp's last
+   !> sample) is joined to its ramp by a straight piece across that step (see
+   !> leaves_samples): the ramp would run on at a fraction of its rate to the hold's first
+   !> sample, 15 s late, and the hold relax from there. The command runs at its rate up to
+   !> the level: a corner is added where the ramp's rate at its last sample (first, after a
+   !> hold) meets the hold's level, inside that step, and the forcing holds from there. The
+   !> samples and their corners (hist%stops) stay as they are; the new corners are knots
+   !> (hist%kstops) between samples.
+   pure subroutine hold_ends_between_samples(hist, flat)
+      type(history_type), intent(inout) :: hist
+      logical, intent(in) :: flat(:)  !< whether the branch from stops(j) to stops(j + 1) is a hold
+      real(dp), allocatable :: tnew(:), vnew(:)
+      integer, allocatable :: after(:), order(:)
+      real(dp) :: ts, u, rate
+      integer :: j, nb, kr, k0, k1
+      nb = size(flat)
+      allocate (tnew(0), vnew(0), after(0))
+      do j = 1, nb
+         if (.not. flat(j)) cycle
+         associate (tk => hist%tk, vk => hist%vk, d2 => hist%d2, ks => hist%kstops, st => hist%stops)
+            ! Into the hold: a ramp (j - 2), then a straight piece of one step (j - 1)
+            if (j >= 3) then
+               if (.not. flat(j - 2) .and. .not. flat(j - 1) .and. st(j) - st(j - 1) == 1 .and. &
+                   ks(j) - ks(j - 1) == 1) then
+                  k0 = ks(j - 1)
+                  kr = ks(j - 1) - 1     ! the ramp's last piece
+                  call cubic_piece(tk, vk, d2, kr, tk(k0), u, rate)
+                  ts = meet(tk(k0), vk(k0), rate, vk(ks(j)), tk(k0), tk(ks(j)))
+                  if (ts > tk(k0)) then
+                     tnew = [tnew, ts]
+                     vnew = [vnew, vk(ks(j))]
+                     after = [after, k0]
+                  end if
+               end if
+            end if
+            ! Out of the hold: a straight piece of one step (j + 1), then a ramp (j + 2)
+            if (j + 2 <= nb) then
+               if (.not. flat(j + 2) .and. .not. flat(j + 1) .and. st(j + 2) - st(j + 1) == 1 .and. &
+                   ks(j + 2) - ks(j + 1) == 1) then
+                  k1 = ks(j + 2)
+                  call cubic_piece(tk, vk, d2, k1, tk(k1), u, rate)
+                  ts = meet(tk(k1), vk(k1), rate, vk(ks(j + 1)), tk(ks(j + 1)), tk(k1))
+                  if (ts > tk(ks(j + 1))) then
+                     tnew = [tnew, ts]
+                     vnew = [vnew, vk(ks(j + 1))]
+                     after = [after, ks(j + 1)]
+                  end if
+               end if
+            end if
+         end associate
+      end do
+      if (size(tnew) == 0) return
+      ! Each new knot after knot after(i), a corner of its own
+      order = order_of(tnew)
+      tnew = tnew(order)
+      vnew = vnew(order)
+      after = after(order)
+      call insert_knots(hist, tnew, vnew, after)
+   contains
+      !> Where a ramp through (t0, v0) at rate meets level: inside (lo, hi), away from both by
+      !> a millionth of the step, or -huge where it does not
+      pure real(dp) function meet(t0, v0, rate, level, lo, hi) result(ts)
+         real(dp), intent(in) :: t0, v0, rate, level, lo, hi
+         real(dp) :: gap
+         ts = -huge(1.0_dp)
+         if (.not. abs(rate) > 0.0_dp) return
+         gap = 1.0e-6_dp*(hi - lo)
+         if (.not. ((level - v0)/rate > lo - t0 + gap .and. (level - v0)/rate < hi - t0 - gap)) return
+         ts = t0 + (level - v0)/rate
+      end function meet
+   end subroutine hold_ends_between_samples
+
+   !> Knots (t, v), with zero second derivative, into a smooth history after its knots
+   !> after(:) (ascending), each a corner (kstops) of its own
+   pure subroutine insert_knots(hist, t, v, after)
+      type(history_type), intent(inout) :: hist
+      real(dp), intent(in) :: t(:), v(:)
+      integer, intent(in) :: after(:)
+      real(dp), allocatable :: tk(:), vk(:), d2(:)
+      integer, allocatable :: knew(:), old(:), ks(:)
+      integer :: i, k, n
+      n = size(hist%tk)
+      ! Knot k moves on by the new knots before it; new knot i lands after knot after(i)
+      ! and the i - 1 new ones before it
+      old = [(k + count(after < k), k=1, n)]
+      knew = [(after(i) + i, i=1, size(t))]
+      allocate (tk(n + size(t)), vk(n + size(t)), d2(n + size(t)))
+      tk(old) = hist%tk
+      vk(old) = hist%vk
+      d2(old) = hist%d2
+      tk(knew) = t
+      vk(knew) = v
+      d2(knew) = 0.0_dp
+      ks = [old(hist%kstops), knew]
+      ks = ks(order_of(real(ks, dp)))
+      hist%tk = tk
+      hist%vk = vk
+      hist%d2 = d2
+      hist%kstops = ks
+   end subroutine insert_knots
 
    !> Per interval between neighbouring samples (t, z), whether the spline through the knots
    !> idx with second derivatives m leaves the range of its two samples by more than tol
@@ -187,17 +305,12 @@ contains
       integer, intent(in) :: idx(:)
       logical :: flag(size(t) - 1)
       real(dp) :: tk(size(idx)), zk(size(idx)), u, du, lo, hi, long
-      real(dp), allocatable :: steps(:)
       integer :: i, k, p
       tk = t(idx)
       zk = z(idx)
       flag = .false.
       if (size(t) < 3) return
-      ! (the branch's fine sampling: its steps' tenth percentile, a hold logged slowly
-      ! holding most of a relaxation branch's samples)
-      steps = t(2:) - t(:size(t) - 1)
-      steps = steps(order_of(steps))
-      long = long_step*steps(max(1, (size(steps) + 5)/10))
+      long = long_step*fine_step(t)
       p = 1
       do i = 1, size(t) - 1
          do while (p < size(idx) - 1)
@@ -219,11 +332,23 @@ contains
       end do
    end function leaves_samples
 
+   !> A branch's fine sampling (s): its steps' tenth percentile (a hold logged slowly holds
+   !> most of a relaxation branch's samples)
+   pure real(dp) function fine_step(t) result(dt)
+      real(dp), intent(in) :: t(:)   !< its sample times, s, at least two
+      real(dp), allocatable :: steps(:)
+      steps = t(2:) - t(:size(t) - 1)
+      steps = steps(order_of(steps))
+      dt = steps(max(1, (size(steps) + 5)/10))
+   end function fine_step
+
    !> New corners (sample indices) into stops, in order, each branch they split keeping its
-   !> kind (flat: a hold) for its parts but the straight pieces between new corners
+   !> kind (flat: a hold) for its parts but the straight pieces between two new corners of a
+   !> pair (a hold between two such pieces, each of its ends a new corner, stays a hold)
    pure subroutine add_corners(stops, flat, new)
       integer, allocatable, intent(inout) :: stops(:)
       logical, allocatable, intent(inout) :: flat(:)
+      !> pairs of neighbouring samples, the ends of a straight piece each
       integer, intent(in) :: new(:)
       integer, allocatable :: all(:)
       logical, allocatable :: f(:)
@@ -237,7 +362,7 @@ contains
       do j = 1, size(all) - 1
          ! the branch of the old stops that holds this piece
          k = count(stops <= all(j))
-         f(j) = flat(k) .and. .not. (any(new == all(j)) .and. any(new == all(j + 1)))
+         f(j) = flat(k) .and. .not. any(new(1::2) == all(j) .and. new(2::2) == all(j + 1))
       end do
       stops = all
       flat = f
