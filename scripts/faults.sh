@@ -151,9 +151,6 @@ row 'data: stress in GPa on a deck in ksi' - u run gpa.nml -o gpa
 awk '/^#/ { print; next } { $3 = $3 * 6.894757; print }' lcf.txt > mpa.txt
 mk mpa.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='mpa.txt' /"
 row 'data: stress in MPa on a deck in ksi' - u run mpa.nml -o mpa
-awk '/^#/ { print; next } { $3 = $3 / 6.894757; print }' lcf.txt > ksi-big.txt
-mk ksi-big.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='ksi-big.txt' /"
-row 'data: stress in a unit 6.9 times larger than the deck'"'"'s (ksi read as MPa)' - u run ksi-big.nml -o ksi-big
 awk '/^#/ { print; next } { $1 = 1000 * $1; print }' lcf.txt > ms.txt
 mk ms.nml "$fitg" "&test name='lcf', history='thesis_lcf', data_file='ms.txt' /"
 row 'data: time in ms' - u run ms.nml -o ms

@@ -102,14 +102,12 @@ contains
          call set_target(prob%cfg%tests(i), cfg%units, prob%targets(i), error)
          if (allocated(error)) exit
          if (.not. present(experiments)) then
-            ! A programmed history that is not the recorded test first: the stiffness that
-            ! check_scale reads under it means nothing then
-            call check_programme(cfg%tests(i), cfg%units, error)
-            if (allocated(error)) exit
             associate (tg => prob%targets(i))
                ! (against every output time, not only those compared)
                call check_scale(cfg%tests(i), tg%exp, cfg%model%youngs, cfg%units, cfg%tests(i)%times(), error)
             end associate
+            if (allocated(error)) exit
+            call check_programme(cfg%tests(i), cfg%units, error)
             if (allocated(error)) exit
          end if
       end do

@@ -24,12 +24,6 @@ module usharp_experiment
    !> (MPa read as ksi: 6.9 times; the measured Alloy 617 cycles give medians of 0.67 to 0.99
    !> of E and 4.7 to 6.9 so misread, where their largest secants reach 5.7 from noise)
    real(dp), parameter :: max_stiffness_share = 2.5_dp
-   !> ... and the median over a cycling test's stretches of their stiffness just after their
-   !> reversals (see reversal_stiffness) below this share one in a larger unit (ksi read as
-   !> MPa: 0.145 times; the measured Alloy 617 cycles give 1.11 to 1.30 of E for cycles 1-2
-   !> and 1.00 to 1.45 over their selected cycles of life, the thesis's and Chaboche's
-   !> simulated data 0.92 to 1.11, an extensometer mounting's compliance of 0.3 some 0.77)
-   real(dp), parameter :: min_reversal_share = 0.35_dp
    !> A measured strain history whose first stress exceeds this share of its peak starts loaded
    real(dp), parameter :: loaded_start = 0.25_dp
    !> Time in ms: under this share of a data file's rows within the simulated time, and its
@@ -122,8 +116,7 @@ contains
       character(len=*), intent(in) :: model_units
       type(error_type), allocatable, intent(out) :: error
       real(dp) :: peak, share, tol, t0, t1, stiff
-      real(dp), allocatable :: slopes(:), stiffest(:)
-      integer, allocatable :: stretch(:)
+      real(dp), allocatable :: slopes(:)
       if (test%has_peaks() .and. youngs > 0.0_dp) then
          ! The peak file's stresses, read in the same unit as the data's
          peak = maxval(abs(pack(test%peak_y, test%point_kind /= 0)))*stress_factor(test%data%unit, model_units)
@@ -150,11 +143,7 @@ contains
          ! Each secant spans a strain of at least a fifth of the elastic strain of its stress
          ! change too: a programmed strain that holds while the measured stress, a little
          ! later in time, still rises is no stiffness
-         call secants(test%hist, exp%t, exp%y, 0.2_dp*peak, 0.04_dp*peak/youngs, 0.05_dp*peak/youngs, &
-                      slopes, stretch)
-         ! Of a cycling test (three stretches or more with a secant), each stretch's
-         ! stiffness after its reversal, before the list is changed
-         stiffest = reversal_stiffness(slopes, stretch)
+         slopes = secants(test%hist, exp%t, exp%y, 0.2_dp*peak, 0.04_dp*peak/youngs, 0.05_dp*peak/youngs)
          if (size(slopes) == 0) slopes = [0.0_dp]
          stiff = maxval(slopes)
          if (stiff > 0.0_dp .and. stiff < min_stiffness_share*youngs) then
@@ -176,23 +165,6 @@ contains
                "): is the stress in another unit than data_unit = '"//test%data%unit// &
                "' (MPa read as ksi: 6.9 times), or Young's modulus in a larger one?")
             return
-         end if
-         ! Too soft the other way: a stress in a larger unit (ksi read as MPa: 0.145 times)
-         ! or Young's modulus in a smaller one. The median secant is no guide here (a first
-         ! loading's flow, a tensile test, is soft); the stiffness of a cycle's stretches
-         ! just after their reversals, elastic, is
-         if (size(stiffest) >= 3) then
-            stiff = median(stiffest)
-            if (stiff < min_reversal_share*youngs) then
-               call fatal_error(error, test%data%file//": column '"//test%data%stress_col// &
-                  "' rises with the strain after its reversals by "//real_str(stiff, 'es10.3')//' '// &
-                  model_units//' per unit strain (the median over its '//str(size(stiffest))// &
-                  ' stretches of their first secants), '//real_str(stiff/youngs, 'f0.3')// &
-                  " of Young's modulus ("//real_str(youngs, 'f0.0')//' '//model_units// &
-                  "): is the stress in a larger unit than data_unit = '"//test%data%unit// &
-                  "' (ksi read as MPa: 0.145 times), or Young's modulus in a smaller one?")
-               return
-            end if
          end if
       end if
       ! A simulation starts unloaded: a measured strain history whose stress starts far from
@@ -240,37 +212,17 @@ contains
    !> elastically, whatever the noise of the strain (dsig over E is some 1e-4), less where it
    !> flows. A stretch ends where the strain turns back by more than back (a secant across
    !> a reversal measures the loop's width, not a stiffness)
-   pure subroutine secants(hist, ts, sig, dsig, dmin, back, slope, stretch)
+   pure function secants(hist, ts, sig, dsig, dmin, back) result(slope)
       !> the test's strain history (measured or programmed)
       type(history_type), intent(in) :: hist
       !> the measured stress (model unit) at times ts (s)
       real(dp), intent(in) :: ts(:), sig(:)
       real(dp), intent(in) :: dsig, dmin, back
-      real(dp), allocatable, intent(out) :: slope(:)
-      !> the stretch each secant starts in (1 the first; a new one where the strain turns
-      !> back from its extreme by more than back)
-      integer, allocatable, intent(out) :: stretch(:)
-      real(dp) :: eps(size(ts)), d, dmax, found(size(ts)), ext
-      integer :: i, j, n, at(size(ts)), from(size(ts)), dir
+      real(dp), allocatable :: slope(:)
+      real(dp) :: eps(size(ts)), d, dmax, found(size(ts))
+      integer :: i, j, n
       do i = 1, size(ts)
          eps(i) = hist%value_at(min(max(ts(i), hist%t(1)), hist%t(size(hist%t))))
-      end do
-      ! Stretches by the strain's reversals, with hysteresis back
-      at(1) = 1
-      ext = eps(1)
-      dir = 0
-      do i = 2, size(ts)
-         at(i) = at(i - 1)
-         if (dir == 0) then
-            if (abs(eps(i) - ext) > back) dir = merge(1, -1, eps(i) > ext)
-            if (dir /= 0) ext = eps(i)
-         else if (dir*(eps(i) - ext) > 0.0_dp) then
-            ext = eps(i)
-         else if (abs(eps(i) - ext) > back) then
-            dir = -dir
-            ext = eps(i)
-            at(i) = at(i) + 1
-         end if
       end do
       n = 0
       do i = 1, size(ts) - 1
@@ -284,31 +236,12 @@ contains
             if ((sig(j) - sig(i))*(eps(j) - eps(i)) > 0.0_dp) then
                n = n + 1
                found(n) = abs(sig(j) - sig(i))/d
-               from(n) = at(i)
             end if
             exit
          end do
       end do
       slope = found(:n)
-      stretch = from(:n)
-   end subroutine secants
-
-   !> Per stretch that has secants (stretch: each one's, ascending), the median of its first
-   !> three: those from just after its reversal, elastic. (The largest of a stretch is no
-   !> guide: over its many starts the noise of the strain lifts it to 1.4 to 3.8 times E
-   !> on the Alloy 617 cycles.)
-   pure function reversal_stiffness(slopes, stretch) result(st)
-      real(dp), intent(in) :: slopes(:)
-      integer, intent(in) :: stretch(:)
-      real(dp), allocatable :: st(:), first(:)
-      integer :: k
-      allocate (st(0))
-      if (size(slopes) == 0) return
-      do k = minval(stretch), maxval(stretch)
-         first = pack(slopes, stretch == k)
-         if (size(first) > 0) st = [st, median(first(:min(3, size(first))))]
-      end do
-   end function reversal_stiffness
+   end function secants
 
    !> Which output times t (s, ascending) have a measurement to be compared with, for data
    !> sampled at ts (s, ascending) and an output interval dt (s): those within dt/2 of a
