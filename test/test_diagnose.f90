@@ -1827,6 +1827,13 @@ contains
                  'leave open the constants the held-out tests need: with those they alone give, its values '// &
                  'fitted to the held-out tests meet 72.3 % of their gap') > 0, res%verdict)
       if (allocated(error)) return
+      ! Another effect explains every test as well there: the headline stays "partly"
+      res%verdict = before
+      jres%alike = [1, 2]
+      call joint_verdict(res, jres)
+      call check(error, index(res%verdict, before) == 1, 'with an alike effect: '//res%verdict)
+      if (allocated(error)) return
+      deallocate (jres%alike)
       ! The fit tests each 1 % worse: deviance 23.9, beyond the region; the verdict stays "partly"
       jres%effects(1)%per_test_after = [0.38_dp, 1.01_dp*0.2549_dp, 1.01_dp*0.2454_dp]
       res%verdict = before

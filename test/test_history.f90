@@ -442,7 +442,8 @@ contains
    !> next ramp's first. The forcing had run straight from the last ramp sample to the first
    !> hold sample (15.5 s for 0.1 s of ramp) and from the hold's last into the ramp, and a
    !> hold between two such steps had lost its flatness; it follows the command within 1e-8
-   !> everywhere (looked at every 0.01 s), the ramps run at their rate up to the level
+   !> everywhere (looked at every 0.01 s), the ramps run at their rate up to the level. So
+   !> too where the steps holding the hold's ends are twice the ramps' own
    subroutine test_hold_ends_unsampled(error)
       type(error_type), allocatable, intent(out) :: error
       type(history_type) :: cmd, h
@@ -476,6 +477,29 @@ contains
       end do
       call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
                  str(tworst)//' s')
+      if (allocated(error)) return
+      ! A trapezoid logged every 0.5 s on its ramps whose holds start and end inside steps of
+      ! 1 s, twice the ramps' (the hold's first sample 0.75 s after its start, its last
+      ! 0.25 s before its end): left to the spline those had been 1.85e-4 off
+      call history_from_points([0.0_dp, 5.0_dp, 65.0_dp, 70.0_dp, 130.0_dp, 135.0_dp], &
+                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 0.0_dp, 0.0_dp, 5.0e-3_dp], control_strain, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed trapezoid')
+      if (allocated(error)) return
+      t = [0.0_dp, (0.25_dp + 0.5_dp*k, k=0, 9), 5.75_dp, 25.75_dp, 45.75_dp, 64.75_dp, &
+           (65.75_dp + 0.5_dp*k, k=0, 8), 70.75_dp, 90.75_dp, 110.75_dp, 129.75_dp, &
+           (130.75_dp + 0.5_dp*k, k=0, 8), 135.0_dp]
+      call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do k = 0, 13500
+         tt = 0.01_dp*k
+         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
+            worst = abs(h%value_at(tt) - cmd%value_at(tt))
+            tworst = tt
+         end if
+      end do
+      call check(error, worst <= 1.0e-8_dp, 'trapezoid: largest |forcing - command| '//str(worst)// &
+                 ' > 1e-8 at t = '//str(tworst)//' s')
    contains
       logical function in_hold(x)
          real(dp), intent(in) :: x

@@ -528,8 +528,9 @@ contains
              real_str(crit, 'f0.1')//' of a 95 % region of the '//str(nshared)//' parameters the tests share)'
    end function agreement_text
 
-   !> The same effect leads every test fitted together, explains them, and removes most of
-   !> the held-out gap there at constants the fit tests allow (see held_agreement)
+   !> The same effect leads every test fitted together, explains them with no other effect
+   !> alike there (carry_note gives the leader's figures alone), and removes most of the
+   !> held-out gap there at constants the fit tests allow (see held_agreement)
    logical function held_agrees(res, jres)
       type(diagnose_result), intent(in) :: res, jres
       real(dp) :: share, dev, crit
@@ -537,6 +538,9 @@ contains
       logical :: ok
       held_agrees = .false.
       if (res%leading == 0 .or. jres%leading == 0) return
+      if (allocated(jres%alike)) then
+         if (size(jres%alike) > 1) return
+      end if
       associate (e => res%effects(res%leading), je => jres%effects(jres%leading))
          if (je%name /= e%name .or. .not. explains_resolved(je, jres)) return
          call held_agreement(res, e, je, share, dev, crit, nshared, ok)

@@ -65,8 +65,12 @@ module usharp_forcing
    !> ... by more than leave_tol times the noise
    real(dp), parameter :: leave_tol = 10.0_dp
    !> A step between a hold and its ramp longer than this many times the ramp's fine
-   !> sampling holds the hold's start (or end): a regular logger's steps vary far less
-   real(dp), parameter :: hold_step = 2.0_dp
+   !> sampling holds the hold's start (or end): a regular logger's steps vary far less (a
+   !> step of twice the ramp's, the hold's end inside it, had been left to the spline:
+   !> 1.85e-4 off the command between the samples). Steps of the ramp's own length are
+   !> left to it: a straight piece there starts the ramp from one noisy sample, not from
+   !> the hold's level (5e-6 off along a whole ramp out of a hold at a noise of 3e-6)
+   real(dp), parameter :: hold_step = 1.5_dp
 
 contains
 
