@@ -443,7 +443,8 @@ contains
    !> hold sample (15.5 s for 0.1 s of ramp) and from the hold's last into the ramp, and a
    !> hold between two such steps had lost its flatness; it follows the command within 1e-8
    !> everywhere (looked at every 0.01 s), the ramps run at their rate up to the level. So
-   !> too where the steps holding the hold's ends are twice the ramps' own
+   !> too where the steps holding the hold's ends are twice the ramps' own, and unrounded
+   !> with a hold's first sample a hair short of its level
    subroutine test_hold_ends_unsampled(error)
       type(error_type), allocatable, intent(out) :: error
       type(history_type) :: cmd, h
@@ -499,6 +500,25 @@ contains
          end if
       end do
       call check(error, worst <= 1.0e-8_dp, 'trapezoid: largest |forcing - command| '//str(worst)// &
+                 ' > 1e-8 at t = '//str(tworst)//' s')
+      if (allocated(error)) return
+      ! Unrounded, the hold's first sample 1e-12 short of its level (a controller's approach):
+      ! the hold had taken in only the samples at the level exactly
+      call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
+      if (allocated(error)) return
+      v(12) = v(12) - 1.0e-12_dp
+      call measured_history(t, v, control_strain, h, uerr)
+      call check(error, .not. allocated(uerr), 'forcing of the trapezoid')
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do k = 0, 13500
+         tt = 0.01_dp*k
+         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
+            worst = abs(h%value_at(tt) - cmd%value_at(tt))
+            tworst = tt
+         end if
+      end do
+      call check(error, worst <= 1.0e-8_dp, 'unrounded trapezoid: largest |forcing - command| '//str(worst)// &
                  ' > 1e-8 at t = '//str(tworst)//' s')
    contains
       logical function in_hold(x)

@@ -384,7 +384,9 @@ contains
       logical :: held(2*size(v))
       real(dp) :: tol, rate, level
       turns = turning_points(v, turn_hysteresis(v))
-      tol = hold_noise*max(quantum(v), noise_sd(v))
+      ! (values without rounding or scatter, a simulation's, have the smoother's floor: a
+      ! hold sample 1e-12 short of the level had been no part of the hold)
+      tol = hold_noise*max(quantum(v), noise_sd(v), unrounded_floor*(maxval(v) - minval(v)))
       n = 1
       buf(1) = turns(1)
       held = .false.
