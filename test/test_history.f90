@@ -413,7 +413,7 @@ contains
       type(history_type) :: cmd, h
       type(uerror), allocatable :: uerr
       real(dp), allocatable :: t(:), v(:)
-      real(dp) :: worst, tt, tworst
+      real(dp) :: worst, tworst
       integer :: k
       call history_from_points([0.0_dp, 1.0_dp, 601.0_dp, 602.0_dp, 1202.0_dp], &
                                [0.0_dp, 7.5e-4_dp, 7.5e-4_dp, 1.0e-3_dp, 1.0e-3_dp], control_strain, cmd, uerr)
@@ -423,15 +423,7 @@ contains
            (602.0_dp + 0.5_dp*k, k=1, 1200)]
       call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
       if (allocated(error)) return
-      worst = 0.0_dp
-      tworst = 0.0_dp
-      do k = 0, 120200
-         tt = 0.01_dp*k
-         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
-            worst = abs(h%value_at(tt) - cmd%value_at(tt))
-            tworst = tt
-         end if
-      end do
+      call command_gap(h, cmd, 120200, worst, tworst)
       call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
                  str(tworst)//' s')
    end subroutine test_relax_tenfold
@@ -467,15 +459,7 @@ contains
       end do
       call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
       if (allocated(error)) return
-      worst = 0.0_dp
-      tworst = 0.0_dp
-      do k = 0, 20900
-         tt = 0.01_dp*k
-         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
-            worst = abs(h%value_at(tt) - cmd%value_at(tt))
-            tworst = tt
-         end if
-      end do
+      call command_gap(h, cmd, 20900, worst, tworst)
       call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
                  str(tworst)//' s')
       if (allocated(error)) return
@@ -491,14 +475,7 @@ contains
            (130.75_dp + 0.5_dp*k, k=0, 8), 135.0_dp]
       call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
       if (allocated(error)) return
-      worst = 0.0_dp
-      do k = 0, 13500
-         tt = 0.01_dp*k
-         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
-            worst = abs(h%value_at(tt) - cmd%value_at(tt))
-            tworst = tt
-         end if
-      end do
+      call command_gap(h, cmd, 13500, worst, tworst)
       call check(error, worst <= 1.0e-8_dp, 'trapezoid: largest |forcing - command| '//str(worst)// &
                  ' > 1e-8 at t = '//str(tworst)//' s')
       if (allocated(error)) return
@@ -510,14 +487,7 @@ contains
       call measured_history(t, v, control_strain, h, uerr)
       call check(error, .not. allocated(uerr), 'forcing of the trapezoid')
       if (allocated(error)) return
-      worst = 0.0_dp
-      do k = 0, 13500
-         tt = 0.01_dp*k
-         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
-            worst = abs(h%value_at(tt) - cmd%value_at(tt))
-            tworst = tt
-         end if
-      end do
+      call command_gap(h, cmd, 13500, worst, tworst)
       call check(error, worst <= 1.0e-8_dp, 'unrounded trapezoid: largest |forcing - command| '//str(worst)// &
                  ' > 1e-8 at t = '//str(tworst)//' s')
    contains
@@ -527,6 +497,25 @@ contains
                    (x > 145.0_dp .and. x < 205.0_dp)
       end function in_hold
    end subroutine test_hold_ends_unsampled
+
+   !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
+   !> n hundredths of a second
+   subroutine command_gap(h, cmd, n, worst, tworst)
+      type(history_type), intent(in) :: h, cmd
+      integer, intent(in) :: n
+      real(dp), intent(out) :: worst, tworst
+      real(dp) :: tt
+      integer :: k
+      worst = 0.0_dp
+      tworst = 0.0_dp
+      do k = 0, n
+         tt = 0.01_dp*k
+         if (abs(h%value_at(tt) - cmd%value_at(tt)) > worst) then
+            worst = abs(h%value_at(tt) - cmd%value_at(tt))
+            tworst = tt
+         end if
+      end do
+   end subroutine command_gap
 
    !> v: cmd sampled at the times t and rounded to q (0: not rounded); h: its forcing
    subroutine sampled_forcing(cmd, t, q, v, h, error)
