@@ -501,7 +501,7 @@ contains
 
    !> Two cycles of 1 % range at 1e-3/s sampled every 0.5 s from 0.4 s, rounded to 1e-5:
    !> each reversal falls 0.1 s after a sample. The forcing had turned at the samples, 1e-4
-   !> short of each peak (the stress of the thesis constants up to 1.8 ksi off); it follows the
+   !> short of each peak (the stress 2.1 ksi off along the next ramp); it follows the
    !> command within 1e-8 everywhere (looked at every 0.01 s)
    subroutine test_reversal_unsampled(error)
       type(error_type), allocatable, intent(out) :: error
