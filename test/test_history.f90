@@ -43,8 +43,7 @@ contains
          new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks), &
          new_unittest('measured-forcing-regular-sampling-is-no-rounding', test_regular_grid), &
          new_unittest('measured-forcing-ramp-into-a-hold-logged-ten-times-slower', test_relax_tenfold), &
-         new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled), &
-         new_unittest('measured-forcing-reversal-between-samples', test_reversal_unsampled)]
+         new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -498,28 +497,6 @@ contains
                    (x > 145.0_dp .and. x < 205.0_dp)
       end function in_hold
    end subroutine test_hold_ends_unsampled
-
-   !> Two cycles of 1 % range at 1e-3/s sampled every 0.5 s from 0.4 s, rounded to 1e-5:
-   !> each reversal falls 0.1 s after a sample. The forcing had turned at the samples, 1e-4
-   !> short of each peak (the stress 2.1 ksi off along the next ramp); it follows the
-   !> command within 1e-8 everywhere (looked at every 0.01 s)
-   subroutine test_reversal_unsampled(error)
-      type(error_type), allocatable, intent(out) :: error
-      type(history_type) :: h, cmd
-      type(uerror), allocatable :: uerr
-      real(dp), allocatable :: t(:), v(:)
-      real(dp) :: worst, tworst
-      integer :: k
-      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 0.0_dp, 0.0_dp, cmd, uerr)
-      call check(error, .not. allocated(uerr), 'programmed history')
-      if (allocated(error)) return
-      t = [0.0_dp, (0.4_dp + 0.5_dp*k, k=0, 78)]
-      call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
-      if (allocated(error)) return
-      call command_gap(h, cmd, 3930, worst, tworst)
-      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
-                 str(tworst)//' s')
-   end subroutine test_reversal_unsampled
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second

@@ -71,9 +71,6 @@ module usharp_forcing
    !> left to it: a straight piece there starts the ramp from one noisy sample, not from
    !> the hold's level (5e-6 off along a whole ramp out of a hold at a noise of 3e-6)
    real(dp), parameter :: hold_step = 1.5_dp
-   !> A reversal's extreme between two samples is given its own corner where it lies beyond
-   !> both samples by more than this many times the noise scale (see reversal_steps)
-   real(dp), parameter :: reversal_excess = 10.0_dp
 
 contains
 
@@ -97,7 +94,7 @@ contains
       real(dp) :: rate
       integer :: j, a, b, i, first, pass
       logical, allocatable :: flat(:), leaves(:)
-      integer, allocatable :: split(:), turn_steps(:)
+      integer, allocatable :: split(:)
       call history_from_points(t, v, control, hist, error)
       if (allocated(error)) return
       sigma = -1.0_dp
@@ -113,7 +110,6 @@ contains
       end if
       if (sigma <= 0.0_dp .or. size(t) < 3) return
       call turns_and_holds(t, v, stops, flat)
-      allocate (turn_steps(0))
       ! A branch's spline is checked between its samples too: where it leaves the range of
       ! two neighbouring samples by more than the knot tolerance (samples far apart, a hold
       ! or a pause logged slowly), those two samples become corners and the step between
@@ -187,12 +183,6 @@ contains
                call spline_eval(tk, vk, d2, hist%kstops(j), hist%kstops(j + 1), t(i), z(i), rate)
             end do
          end do
-         ! A reversal between two samples: the step that holds its extreme becomes a
-         ! straight piece (its corner between the samples: see reversal_between_samples)
-         if (pass == 1) then
-            turn_steps = reversal_steps(t, v, stops, flat, reversal_excess*sigma)
-            split = [split, turn_steps]
-         end if
          if (size(split) == 0) exit
          call add_corners(stops, flat, split)
          split = split(:0)
@@ -202,7 +192,7 @@ contains
       hist%vk = vk
       hist%d2 = d2
       hist%stops = stops
-      call hold_ends_between_samples(hist, flat, turn_steps(1::2))
+      call hold_ends_between_samples(hist, flat)
    end subroutine measured_history
 
    !> A hold whose start (or end) falls between two samples far apart (a ramp logged every
@@ -214,14 +204,12 @@ contains
    !> hold) meets the hold's level, inside that step, and the forcing holds from there. The
    !> samples and their corners (hist%stops) stay as they are; the new corners are knots
    !> (hist%kstops) between samples.
-   pure subroutine hold_ends_between_samples(hist, flat, turn_at)
+   pure subroutine hold_ends_between_samples(hist, flat)
       type(history_type), intent(inout) :: hist
       logical, intent(in) :: flat(:)  !< whether the branch from stops(j) to stops(j + 1) is a hold
-      !> first samples of the steps that hold a reversal's extreme (see reversal_steps)
-      integer, intent(in) :: turn_at(:)
       real(dp), allocatable :: tnew(:), vnew(:)
       integer, allocatable :: after(:), order(:)
-      real(dp) :: ts, u, rate, rate1
+      real(dp) :: ts, u, rate
       integer :: j, nb, kr, k0, k1
       nb = size(flat)
       allocate (tnew(0), vnew(0), after(0))
@@ -259,27 +247,6 @@ contains
             end if
          end associate
       end do
-      ! A step that holds a reversal's extreme (see reversal_steps), a straight piece
-      ! between two ramps: a corner where the ramps, run on at their rates at its two ends,
-      ! meet inside it
-      do j = 2, nb - 1
-         if (flat(j - 1) .or. flat(j) .or. flat(j + 1)) cycle
-         associate (tk => hist%tk, vk => hist%vk, d2 => hist%d2, ks => hist%kstops, st => hist%stops)
-            if (st(j + 1) - st(j) /= 1 .or. ks(j + 1) - ks(j) /= 1) cycle
-            if (.not. any(turn_at == st(j))) cycle
-            k0 = ks(j)
-            k1 = ks(j + 1)
-            call cubic_piece(tk, vk, d2, k0 - 1, tk(k0), u, rate)
-            call cubic_piece(tk, vk, d2, k1, tk(k1), u, rate1)
-            if (.not. (rate*rate1 < 0.0_dp)) cycle
-            ts = (vk(k1) - vk(k0) + rate*tk(k0) - rate1*tk(k1))/(rate - rate1)
-            if (.not. (ts > tk(k0) + 1.0e-6_dp*(tk(k1) - tk(k0)) .and. ts < tk(k1) - 1.0e-6_dp*(tk(k1) - tk(k0)))) &
-               cycle
-            tnew = [tnew, ts]
-            vnew = [vnew, vk(k0) + rate*(ts - tk(k0))]
-            after = [after, k0]
-         end associate
-      end do
       if (size(tnew) == 0) return
       ! Each new knot after knot after(i), a corner of its own
       order = order_of(tnew)
@@ -300,52 +267,6 @@ contains
          ts = t0 + (level - v0)/rate
       end function meet
    end subroutine hold_ends_between_samples
-
-   !> The steps (pairs of neighbouring samples) that hold the extreme of a reversal between
-   !> two samples: at an inner turning point stops(j) = k of two ramps (no hold beside it),
-   !> the ramp before it, run on at the rate of its last two samples before k, and the ramp
-   !> after it, run back at the rate of its first two after k, meet beyond v(k) by more than
-   !> excess, either inside the step after k (from k on the first line, from k + 1 on the
-   !> second) or inside the step before it, a step no longer than hold_step times the
-   !> sampling on either side. A triangle of 1e-3/s turning at 135.5 s, sampled
-   !> at 135.1 and 135.6 s, had turned at its 135.6 s sample, 1e-4 short of its peak, and
-   !> the stress had run 2.2 ksi off along the whole next ramp
-   pure function reversal_steps(t, v, stops, flat, excess) result(pairs)
-      real(dp), intent(in) :: t(:), v(:), excess
-      integer, intent(in) :: stops(:)
-      logical, intent(in) :: flat(:)
-      integer, allocatable :: pairs(:)
-      real(dp) :: r1, r2, ts, vs, s, local
-      integer :: j, k
-      allocate (pairs(0))
-      do j = 2, size(stops) - 1
-         if (flat(j - 1) .or. flat(j)) cycle
-         k = stops(j)
-         if (k - 2 < stops(j - 1) .or. k + 2 > stops(j + 1)) cycle
-         r1 = (v(k - 1) - v(k - 2))/(t(k - 1) - t(k - 2))
-         r2 = (v(k + 2) - v(k + 1))/(t(k + 2) - t(k + 1))
-         ! A step longer than the sampling on either side holds a pause, not a turn between
-         ! two samples (a controller's slow approach to a hold logged every 20 s, its next
-         ! ramp every 0.5 s, had been given a valley beyond the hold)
-         local = hold_step*min(t(k - 1) - t(k - 2), t(k + 2) - t(k + 1))
-         ! (+1 at a maximum: the ramps rise into it and fall out of it)
-         s = sign(1.0_dp, r1)
-         if (.not. (r1*r2 < 0.0_dp)) cycle
-         ! after k: the first line from (t(k), v(k)), the second from (t(k+1), v(k+1))
-         ts = (v(k + 1) - v(k) + r1*t(k) - r2*t(k + 1))/(r1 - r2)
-         vs = v(k) + r1*(ts - t(k))
-         if (ts > t(k) .and. ts < t(k + 1) .and. s*(vs - v(k)) > excess .and. s*(vs - v(k + 1)) > excess .and. &
-             t(k + 1) - t(k) <= local) then
-            pairs = [pairs, k, k + 1]
-            cycle
-         end if
-         ! before k: the first line from (t(k-1), v(k-1)), the second from (t(k), v(k))
-         ts = (v(k) - v(k - 1) + r1*t(k - 1) - r2*t(k))/(r1 - r2)
-         vs = v(k - 1) + r1*(ts - t(k - 1))
-         if (ts > t(k - 1) .and. ts < t(k) .and. s*(vs - v(k)) > excess .and. s*(vs - v(k - 1)) > excess .and. &
-             t(k) - t(k - 1) <= local) pairs = [pairs, k - 1, k]
-      end do
-   end function reversal_steps
 
    !> Knots (t, v), with zero second derivative, into a smooth history after its knots
    !> after(:) (ascending), each a corner (kstops) of its own
