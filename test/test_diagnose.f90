@@ -1746,8 +1746,8 @@ contains
       call check(error, index(res%verdict, before) == 1, 'the prediction''s verdict stays first: '//res%verdict)
       if (allocated(error)) return
       call check(error, index(res%verdict, 'fitted to every test together, softening removes 100.0 % of their '// &
-                 'structured gap (BIC -676.3): it can explain every test, but the parameters the fit tests '// &
-                 'alone give it carry 54.6 % of the held-out gap') > 0, res%verdict)
+                 'structured gap (BIC -676.3): it can explain every test, but with the constants the fit tests '// &
+                 'alone give it, its parameters carry 54.6 % of the held-out gap') > 0, res%verdict)
       if (allocated(error)) return
       ! The prediction's leader stays the one named
       res%effects(1)%k = 7
@@ -1801,6 +1801,9 @@ contains
       res%effects(1)%held_fitted = .true.
       res%effects(1)%shrink_fit = 1.0_dp
       res%effects(1)%shrink_held = 0.723_dp
+      res%effects(1)%dbic = -625.2_dp
+      res%effects(1)%worse = [.false., .false., .false.]
+      res%alike = [1]
       res%effects(1)%per_test_after = [3.316_dp, 0.2549_dp, 0.2454_dp]
       res%effects(1)%p_test = [2, 3]
       res%leading = 1
@@ -1824,7 +1827,7 @@ contains
       call check(error, index(res%verdict, 'and 99.8 % of the held-out tests'' gap against their noise, at '// &
                  'constants the fit tests allow (their deviance up 9.6 from their own fit, within the 14.1 of a '// &
                  '95 % region of the 7 parameters the tests share): it explains every test, and the fit tests '// &
-                 'leave open the constants the held-out tests need: with those they alone give, its values '// &
+                 'leave open what the held-out tests need: with the constants they alone give it, its values '// &
                  'fitted to the held-out tests meet 72.3 % of their gap') > 0, res%verdict)
       if (allocated(error)) return
       ! Another effect explains every test as well there: the headline stays "partly"

@@ -37,8 +37,10 @@ contains
    subroutine separate(ctx, res)
       type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
+      res%separation = ''
       call separate_alike(ctx, res)
       call pin_open(ctx, res)
+      res%verdict = res%verdict//res%separation
    end subroutine separate
 
    !> For each pair of the effects that explain the gap equally well (res%alike, at most the
@@ -81,7 +83,7 @@ contains
       res%seps = seps
       res%nevals = res%nevals + n
       associate (sp => seps(1))
-         if (sp%d(sp%best) > 0.0_dp) res%verdict = res%verdict//'; a '//trim(sp%names(sp%best))// &
+         if (sp%d(sp%best) > 0.0_dp) res%separation = res%separation//'; a '//trim(sp%names(sp%best))// &
             ' would tell '//trim(res%effects(sp%a)%name)//' from '//trim(res%effects(sp%b)%name)// &
             ' (expected chi-square difference '//real_str(sp%d(sp%best), 'es9.2')//')'
       end associate
@@ -123,11 +125,11 @@ contains
          res%nevals = res%nevals + n
          res%pin = pin
          if (pin%d(pin%best) >= separating_d) then
-            res%verdict = res%verdict//'; a '//trim(names(pin%best))//' would tell those end points apart'
+            res%separation = res%separation//'; a '//trim(names(pin%best))//' would tell those end points apart'
          else
-            res%verdict = res%verdict//'; none of the candidate tests would tell those end points apart'
+            res%separation = res%separation//'; none of the candidate tests would tell those end points apart'
          end if
-         res%verdict = res%verdict//' (expected chi-square difference '//real_str(pin%d(pin%best), 'es9.2')// &
+         res%separation = res%separation//' (expected chi-square difference '//real_str(pin%d(pin%best), 'es9.2')// &
                        ' between the two that carry '//real_str(100.0_dp*e%shrink_alike_lo, 'f0.1')// &
                        ' and '//real_str(100.0_dp*e%shrink_alike_hi, 'f0.1')//' %)'
       end associate

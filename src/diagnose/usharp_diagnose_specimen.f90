@@ -41,7 +41,7 @@ module usharp_diagnose_specimen
    implicit none
    private
 
-   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index
+   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index, specimen_verdict
    public :: specimen_csv, specimen_csv_header, own_measure
    public :: specimen_deviance, profiled_deviance, constants_directions, specimen_noncentrality
 
@@ -129,6 +129,8 @@ module usharp_diagnose_specimen
       !> variances nv, an orthonormal basis w of the directions diag(nv)^-1/2 Jc C^1/2 spans
       !> and their squared singular values sig2 (none when the constants are given)
       real(dp), allocatable :: nv(:), w(:, :), sig2(:)
+      !> The effect every test carries with the constants, as the report names it ('': none)
+      character(len=:), allocatable :: carried
    end type specimen_result
 
 contains
@@ -147,7 +149,8 @@ contains
    !> Diagnose test ispec of cfg against the others: constants fitted to them from cfg's
    !> (refit_constants false: cfg's constants as they are), then each of opts's effects
    !> fitted to the specimen alone
-   subroutine specimen_run(cfg, ispec, opts, refit_constants, sr, error, experiments)
+   subroutine specimen_run(cfg, ispec, opts, refit_constants, sr, error, experiments, replicates, carried, &
+                           carried_text)
       type(run_config), intent(in) :: cfg
       integer, intent(in) :: ispec
       type(diagnose_options), intent(in) :: opts
@@ -155,6 +158,13 @@ contains
       type(specimen_result), intent(out) :: sr
       type(error_type), allocatable, intent(out) :: error
       type(experiment_type), intent(in), optional :: experiments(:)
+      !> The replicates (indices into cfg's tests; absent: every other test)
+      integer, intent(in), optional :: replicates(:)
+      !> Effects every test carries, the specimen's own fitted on top of them (an effect
+      !> fitted to the replicates with cfg's constants, see held_own in usharp_diagnose;
+      !> absent: none), and how the report names them
+      type(test_effects), intent(in), optional :: carried
+      character(len=*), intent(in), optional :: carried_text
       type(fit_problem) :: prob
       type(effect_problem) :: ep, es, ej0, er
       type(optimum_type) :: opt, oj0
@@ -178,6 +188,7 @@ contains
       call setup_problem(cfg, prob, error, experiments)
       if (allocated(error)) return
       reps = pack([(i, i=1, nt)], [(i, i=1, nt)] /= ispec)
+      if (present(replicates)) reps = pack(replicates, replicates /= ispec)
       sr%name = cfg%tests(ispec)%name
       allocate (sr%replicates(size(reps)))
       do i = 1, size(reps)
@@ -194,6 +205,8 @@ contains
       own = effect_catalogue(speak)
       base%dlnE_dT = opts%dlnE_dT
       base%gamma3 = opts%gamma3
+      if (present(carried)) base = carried
+      if (present(carried_text)) sr%carried = carried_text
       ! The constants of the replicates
       call new_effect_problem(prob, reps, 0, base, peak, ep)
       if (refit_constants) then
@@ -914,16 +927,15 @@ contains
    function specimen_report(sr) result(lines)
       type(specimen_result), intent(in) :: sr
       character(len=report_line_len), allocatable :: lines(:)
-      integer :: j, g, lead, best
-      logical :: rest_low
-      character(len=:), allocatable :: ln, verdict, subject
-      character(len=16), allocatable :: names(:)
-      real(dp), allocatable :: power(:)
-      type(hidden_effect), allocatable :: hidden(:)
+      integer :: j, g
+      character(len=:), allocatable :: ln, verdict
       allocate (lines(0))
       call add('# Per-specimen diagnosis: '//trim(sr%name))
       call add('')
       ln = 'Constants fitted to the replicates'
+      if (allocated(sr%carried)) then
+         if (len(sr%carried) > 0) ln = ln//' with '//sr%carried
+      end if
       do j = 1, size(sr%replicates)
          ln = ln//trim(merge(': ', ', ', j == 1))//' '//trim(sr%replicates(j))
       end do
@@ -1012,7 +1024,7 @@ contains
       call add('|---|---|---|---|---|---|---|---|---|---|')
       do j = 1, size(sr%effects)
          associate (e => sr%effects(j))
-            ln = magnitudes(e, '; ')
+            ln = magnitudes(e, '; ', sr%stress_unit)
             if (e%significant .and. e%plausible .and. unresolved(e)) then
                verdict = 'significant, below what is resolved'
             else if (e%significant .and. e%plausible) then
@@ -1030,6 +1042,31 @@ contains
          end associate
       end do
       call add('')
+      call add('**Verdict:** '//specimen_verdict(sr))
+      call add('')
+      call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &
+               str(sr%nevals - sr%nevals_rep)//' of the specimen alone or with them (its effects, the joint '// &
+               'fits and the intervals).')
+   contains
+      subroutine add(text)
+         character(len=*), intent(in) :: text
+         call add_line(lines, text)
+      end subroutine add
+
+   end function specimen_report
+
+   !> The per-specimen verdict: the effect that explains how the specimen differs from its
+   !> replicates (or, where it does not stand out from them, the gap it shares with them),
+   !> in words scaled with the evidence, with its magnitudes
+   function specimen_verdict(sr) result(verdict)
+      type(specimen_result), intent(in) :: sr
+      character(len=:), allocatable :: verdict
+      character(len=:), allocatable :: ln, subject
+      character(len=16), allocatable :: names(:)
+      real(dp), allocatable :: power(:)
+      type(hidden_effect), allocatable :: hidden(:)
+      integer :: j, lead, best
+      logical :: rest_low
       ! What an effect explains: how the specimen differs from its replicates, or where it
       ! does not stand out from them, the gap it shares with them
       if (typical(sr)) then
@@ -1076,7 +1113,7 @@ contains
          if (lead /= best) verdict = verdict//'; '//trim(sr%effects(lead)%name)//' leads as the simplest'
          associate (e => sr%effects(lead))
             if (allocated(e%p)) then
-               if (size(e%p) > 0) verdict = verdict//'; fitted '//magnitudes(e, ', ')
+               if (size(e%p) > 0) verdict = verdict//'; fitted '//magnitudes(e, ', ', sr%stress_unit)
                verdict = verdict//hardening_note(e%name, e%p)
             end if
             if (allocated(e%p_bound) .and. allocated(e%pname) .and. allocated(e%p) .and. allocated(e%punit)) &
@@ -1120,42 +1157,32 @@ contains
       else if (sr%effects(lead)%removed < most) then
          verdict = verdict//correlated_note([sr%name], [sr%noise_corr], 'their constants leave')
       end if
-      call add('**Verdict:** '//verdict)
-      call add('')
-      call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &
-               str(sr%nevals - sr%nevals_rep)//' of the specimen alone or with them (its effects, the joint '// &
-               'fits and the intervals).')
-   contains
-      subroutine add(text)
-         character(len=*), intent(in) :: text
-         call add_line(lines, text)
-      end subroutine add
+   end function specimen_verdict
 
-      !> Parameter g of e at an outer end of its search box
-      !> e's fitted parameters with their 95 % intervals (interval_text), joined by sep
-      function magnitudes(e, sep) result(text)
-         type(specimen_effect), intent(in) :: e
-         character(len=*), intent(in) :: sep
-         character(len=:), allocatable :: text
-         integer :: g
-         text = ''
-         do g = 1, size(e%p)
-            if (g > 1) text = text//sep
-            text = text//interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), e%lo_open(g), e%hi_open(g), &
-                                       bound_side(e, g), e%punit(g), sr%stress_unit)
-         end do
-      end function magnitudes
+   !> e's fitted parameters with their 95 % intervals (interval_text), joined by sep
+   function magnitudes(e, sep, stress_unit) result(text)
+      type(specimen_effect), intent(in) :: e
+      character(len=*), intent(in) :: sep
+      character(len=*), intent(in) :: stress_unit   !< the model's stress unit
+      character(len=:), allocatable :: text
+      integer :: g
+      text = ''
+      do g = 1, size(e%p)
+         if (g > 1) text = text//sep
+         text = text//interval_text(e%pname(g), e%p(g), e%p_lo(g), e%p_hi(g), e%lo_open(g), e%hi_open(g), &
+                                    bound_side(e, g), e%punit(g), stress_unit)
+      end do
+   end function magnitudes
 
-      !> -1, 1: e's parameter g at the lower, upper end of its search box; 0: not
-      pure integer function bound_side(e, g)
-         type(specimen_effect), intent(in) :: e
-         integer, intent(in) :: g
-         bound_side = 0
-         if (allocated(e%p_bound)) then
-            if (g <= size(e%p_bound)) bound_side = e%p_bound(g)
-         end if
-      end function bound_side
-   end function specimen_report
+   !> -1, 1: e's parameter g at the lower, upper end of its search box; 0: not
+   pure integer function bound_side(e, g)
+      type(specimen_effect), intent(in) :: e
+      integer, intent(in) :: g
+      bound_side = 0
+      if (allocated(e%p_bound)) then
+         if (g <= size(e%p_bound)) bound_side = e%p_bound(g)
+      end if
+   end function bound_side
 
    !> The report's table of effects as rows of specimen-<name>.csv, one per parameter of each
    !> effect in the report's order (rank: by BIC; leads: the verdict's effect; value, 95 %

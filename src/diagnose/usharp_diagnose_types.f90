@@ -300,6 +300,9 @@ module usharp_diagnose_types
       !> held-out gap (a = b = leading; best 0: not computed)
       type(separation_type) :: pin
       character(len=:), allocatable :: verdict
+      !> The verdict's clause of the tests that would separate what it leaves open (see
+      !> separate), kept for a verdict drawn again after it
+      character(len=:), allocatable :: separation
       integer :: nevals = 0
       ! For the plots: every point of every test
       integer, allocatable :: test_of(:), cls(:), cycle(:)

@@ -25,6 +25,17 @@ module usharp_diagnose_verdict
    !> 6-10, a Bayes factor of 20-150): named in a verdict of no effect as a hint
    real(dp), parameter :: hint_margin = 6.0_dp
 
+   !> The held-out tests against a leader at the constants of every test fitted together
+   !> (see agreement_of)
+   type :: agreement_type
+      logical :: measured = .false.
+      real(dp) :: share = 0.0_dp     !< share of the held-out gap removed, 1 = all
+      real(dp) :: dev = 0.0_dp       !< the fit tests' deviance above their own fit
+      real(dp) :: crit = 0.0_dp      !< its 95 % point
+      integer :: nshared = 0         !< parameters the tests share
+      logical :: agrees = .false.    !< most of the gap removed within the region, nothing alike
+   end type agreement_type
+
    public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note, bound_note, &
              correlated_note
 
@@ -70,7 +81,16 @@ contains
       end do
       res%alike = res%alike(order_of(real(keys, dp) + 1.0e-6_dp*squash(res%effects(res%alike)%dbic)))
       res%leading = res%alike(1)
-      call effect_verdict(res)
+      call lead_verdict(res, .false.)
+   end subroutine conclude
+
+   !> The verdict of the leader res%leading with the notes every verdict carries (serrated
+   !> flow, the baseline, correlated residual, separating tests); agreed: the held-out tests agree with it at
+   !> constants the fit tests allow (see agreement_of), which lets a partial carry explain
+   subroutine lead_verdict(res, agreed)
+      type(diagnose_result), intent(inout) :: res
+      logical, intent(in) :: agreed
+      call effect_verdict(res, agreed)
       res%verdict = res%verdict//serration_note(res)//baseline_note(res)
       ! The residual the leader leaves: a structured gap with sharp features (a lag's at each
       ! reversal) raises the ratio of the baseline's residual as correlated noise would
@@ -80,7 +100,8 @@ contains
       else if (allocated(res%noise_corr)) then
          res%verdict = res%verdict//correlated_note(res%names, res%noise_corr, 'the baseline leaves')
       end if
-   end subroutine conclude
+      if (allocated(res%separation)) res%verdict = res%verdict//res%separation
+   end subroutine lead_verdict
 
    !> Per test, noise_sd of the residual y_ex - y from second differences corr_lag samples
    !> apart over that from neighbours (1 for independent noise; 0: too few points)
@@ -142,6 +163,7 @@ contains
       character(len=:), allocatable :: text
       integer :: i
       text = ''
+      if (.not. allocated(res%regions)) return
       do i = 1, size(res%regions)
          if (res%regions(i)%label /= 'serrated flow') cycle
          if (len(text) > 0) text = text//', '
@@ -162,12 +184,13 @@ contains
    end function complexity
 
    !> The verdict when an effect leads: how much of the gap it explains, on which sets, what
-   !> explains it as well, and which fit tests it makes worse
-   subroutine effect_verdict(res)
+   !> explains it as well, and which fit tests it makes worse; agreed: see lead_verdict
+   subroutine effect_verdict(res, agreed)
       type(diagnose_result), intent(inout) :: res
+      logical, intent(in) :: agreed
       character(len=:), allocatable :: text
       associate (e => res%effects(res%leading))
-         if (explains_resolved(e, res)) then
+         if (agreed .or. explains_resolved(e, res)) then
             text = trim(e%name)//' explains the gap'
          else if (little_share(e, res)) then
             ! A few percent of a gap removed is a lower BIC, not an explanation
@@ -353,16 +376,14 @@ contains
       type(diagnose_result), intent(inout) :: res
       type(diagnose_result), intent(in) :: jres
       integer :: n, why
-      character(len=:), allocatable :: lead
+      type(agreement_type) :: ag
       why = joint_reason(res, .false.)
       if (why == joint_partial) then
          ! Where the held-out tests agree with the leader at constants the fit tests allow, what
          ! its prediction left is what the fit tests leave open: it explains the gap
-         lead = trim(res%effects(res%leading)%name)
-         n = len(lead//' partly explains the gap')
-         if (held_agrees(res, jres) .and. index(res%verdict, lead//' partly explains the gap') == 1) &
-            res%verdict = lead//' explains the gap'//res%verdict(n + 1:)
-         res%verdict = res%verdict//'; '//carry_note(res, jres)
+         ag = agreement_of(res, jres)
+         if (ag%agrees) call lead_verdict(res, .true.)
+         res%verdict = res%verdict//'; '//carry_note(res, jres, ag)
       else if (jres%leading > 0) then
          n = len_trim(jres%effects(jres%leading)%name)
          res%verdict = jres%verdict(:n)//' (fitted with the held-out tests: '//why_note(res, why)// &
@@ -431,9 +452,10 @@ contains
    !> What every test fitted together (jres) makes of a leader that carried only part of the
    !> held-out gap (see partial_carry), as a clause: the same effect closing every gap says
    !> that what the fit tests alone make of its parameters fails, not its form
-   function carry_note(res, jres) result(text)
+   function carry_note(res, jres, ag) result(text)
       type(diagnose_result), intent(in) :: res, jres
-      character(len=:), allocatable :: text
+      type(agreement_type), intent(in) :: ag   !< see agreement_of
+      character(len=:), allocatable :: text, carried
       associate (e => res%effects(res%leading))
          text = 'with the held-out tests fitted too, '//jres%verdict
          if (jres%leading == 0) then
@@ -446,27 +468,21 @@ contains
             if (je%name /= e%name) return
             text = 'fitted to every test together, '//trim(e%name)//' removes '// &
                    real_str(100.0_dp*je%shrink_fit, 'f0.1')//' % of their structured gap (BIC '// &
-                   real_str(je%dbic, 'f0.1')//')'
-            text = text//agreement_text(res, e, je)
-            if (held_agrees(res, jres)) then
-               if (e%held_fitted) then
-                  text = text//': it explains every test, and the fit tests leave open the constants the '// &
-                         'held-out tests need: with those they alone give, its values fitted to the held-out '// &
-                         'tests meet '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'
-               else
-                  text = text//': it explains every test, and the fit tests leave open what the held-out '// &
-                         'tests need: the parameters they alone give it carry '// &
-                         real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out gap'
-               end if
-            else if (explains_resolved(je, jres)) then
-               if (e%held_fitted) then
-                  text = text//': it can explain every test, but with the constants the fit tests alone '// &
-                         'give it, its values fitted to the held-out tests meet '// &
+                   real_str(je%dbic, 'f0.1')//')'//agreement_text(ag)
+            ! What the leader made of the held-out gap from the fit tests alone
+            if (e%held_fitted) then
+               carried = 'its values fitted to the held-out tests meet '// &
                          real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'
-               else
-                  text = text//': it can explain every test, but the parameters the fit tests alone give '// &
-                         'it carry '//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of the held-out gap'
-               end if
+            else
+               carried = 'its parameters carry '//real_str(100.0_dp*e%shrink_held, 'f0.1')// &
+                         ' % of the held-out gap'
+            end if
+            if (ag%agrees) then
+               text = text//': it explains every test, and the fit tests leave open what the held-out '// &
+                      'tests need: with the constants they alone give it, '//carried
+            else if (explains_resolved(je, jres)) then
+               text = text//': it can explain every test, but with the constants the fit tests alone give '// &
+                      'it, '//carried
             else
                text = text//': the held-out tests show more than it carries'
             end if
@@ -474,79 +490,55 @@ contains
       end associate
    end function carry_note
 
-   !> How much of the held-out tests' gap (against their noise alone) effect e removes with
-   !> every test fitted together (its joint refit je), and whether the fit tests allow the
-   !> constants of that fit: their deviance above that of e's refit on them alone against
-   !> the 95 % point of chi-square in the parameters the tests share (the constants and the
-   !> effect's global ones), the likelihood-ratio region of those parameters. Within it the
-   !> fit tests cannot tell the joint constants from their own, and what the prediction left
-   !> is what they leave open, not what the effect misses (ok false: not measured).
-   subroutine held_agreement(res, e, je, share, dev, crit, nshared, ok)
-      type(diagnose_result), intent(in) :: res
-      type(effect_outcome), intent(in) :: e, je
-      real(dp), intent(out) :: share   !< share of the held-out gap removed, 1 = all
-      real(dp), intent(out) :: dev     !< the fit tests' deviance above their own fit
-      real(dp), intent(out) :: crit    !< its 95 % point
-      integer, intent(out) :: nshared  !< parameters the tests share
-      logical, intent(out) :: ok
+   !> How much of the held-out tests' gap (against their noise alone) the leader removes with
+   !> every test fitted together (the joint stage jres), and whether the fit tests allow the
+   !> constants of that fit: their deviance above that of the leader's refit on them alone
+   !> against the 95 % point of chi-square in the parameters the tests share (the constants
+   !> and the effect's global ones), the likelihood-ratio region of those parameters. Within
+   !> it the fit tests cannot tell the joint constants from their own, and what the prediction
+   !> left is what they leave open, not what the effect misses. It agrees where the same
+   !> effect leads the joint stage and explains it with no other effect alike there
+   !> (carry_note gives the leader's figures alone) and removes most of the held-out gap
+   !> within that region.
+   function agreement_of(res, jres) result(ag)
+      type(diagnose_result), intent(in) :: res, jres
+      type(agreement_type) :: ag
       real(dp) :: noise_only
       logical, allocatable :: fit(:)
-      share = 0.0_dp
-      dev = 0.0_dp
-      crit = 0.0_dp
-      nshared = 0
-      ok = .false.
-      if (.not. (allocated(e%per_test_after) .and. allocated(je%per_test_after) .and. allocated(res%npts))) return
-      if (.not. (allocated(res%held) .and. allocated(res%c))) return
-      if (size(je%per_test_after) /= size(res%held) .or. size(e%per_test_after) /= size(res%held)) return
-      if (res%gap_held_noise <= 0.0_dp) return
-      fit = .not. res%held
-      noise_only = res%noise_held - res%pred_held
-      share = 1.0_dp - max(sum(je%per_test_after, res%held) - noise_only, 0.0_dp)/res%gap_held_noise
-      dev = deviance_change(pack(res%npts, fit), pack(e%per_test_after, fit), pack(je%per_test_after, fit))
-      nshared = size(res%c)
-      if (allocated(e%p_test)) nshared = nshared + count(e%p_test == 0)
-      crit = chi2_isf(0.05_dp, real(nshared, dp))
-      ok = .true.
-   end subroutine held_agreement
-
-   !> held_agreement as a clause ('' where not measured)
-   function agreement_text(res, e, je) result(text)
-      type(diagnose_result), intent(in) :: res
-      type(effect_outcome), intent(in) :: e, je
-      character(len=:), allocatable :: text
-      real(dp) :: share, dev, crit
-      integer :: nshared
-      logical :: ok
-      text = ''
-      call held_agreement(res, e, je, share, dev, crit, nshared, ok)
-      if (.not. ok) return
-      text = ' and '//real_str(100.0_dp*share, 'f0.1')//' % of the held-out tests'' gap against their noise, '// &
-             'at constants the fit tests '//trim(merge('allow       ', 'do not allow', dev <= crit))// &
-             ' (their deviance '//trim(merge('up  ', 'down', dev >= 0.0_dp))//' '//real_str(abs(dev), 'f0.1')// &
-             ' from their own fit, '//trim(merge('within', 'beyond', dev <= crit))//' the '// &
-             real_str(crit, 'f0.1')//' of a 95 % region of the '//str(nshared)//' parameters the tests share)'
-   end function agreement_text
-
-   !> The same effect leads every test fitted together, explains them with no other effect
-   !> alike there (carry_note gives the leader's figures alone), and removes most of the
-   !> held-out gap there at constants the fit tests allow (see held_agreement)
-   logical function held_agrees(res, jres)
-      type(diagnose_result), intent(in) :: res, jres
-      real(dp) :: share, dev, crit
-      integer :: nshared
-      logical :: ok
-      held_agrees = .false.
       if (res%leading == 0 .or. jres%leading == 0) return
-      if (allocated(jres%alike)) then
-         if (size(jres%alike) > 1) return
-      end if
       associate (e => res%effects(res%leading), je => jres%effects(jres%leading))
-         if (je%name /= e%name .or. .not. explains_resolved(je, jres)) return
-         call held_agreement(res, e, je, share, dev, crit, nshared, ok)
-         held_agrees = ok .and. share >= most .and. dev <= crit
+         if (je%name /= e%name) return
+         if (.not. (allocated(e%per_test_after) .and. allocated(je%per_test_after) .and. allocated(res%npts))) return
+         if (.not. (allocated(res%held) .and. allocated(res%c))) return
+         if (size(je%per_test_after) /= size(res%held) .or. size(e%per_test_after) /= size(res%held)) return
+         if (res%gap_held_noise <= 0.0_dp) return
+         fit = .not. res%held
+         noise_only = res%noise_held - res%pred_held
+         ag%share = 1.0_dp - max(sum(je%per_test_after, res%held) - noise_only, 0.0_dp)/res%gap_held_noise
+         ag%dev = deviance_change(pack(res%npts, fit), pack(e%per_test_after, fit), pack(je%per_test_after, fit))
+         ag%nshared = size(res%c)
+         if (allocated(e%p_test)) ag%nshared = ag%nshared + count(e%p_test == 0)
+         ag%crit = chi2_isf(0.05_dp, real(ag%nshared, dp))
+         ag%measured = .true.
+         ag%agrees = ag%share >= most .and. ag%dev <= ag%crit .and. explains_resolved(je, jres)
+         if (allocated(jres%alike)) ag%agrees = ag%agrees .and. size(jres%alike) <= 1
       end associate
-   end function held_agrees
+   end function agreement_of
+
+   !> agreement_of as a clause ('' where not measured)
+   pure function agreement_text(ag) result(text)
+      type(agreement_type), intent(in) :: ag
+      character(len=:), allocatable :: text
+      logical :: within
+      text = ''
+      if (.not. ag%measured) return
+      within = ag%dev <= ag%crit
+      text = ' and '//real_str(100.0_dp*ag%share, 'f0.1')//' % of the held-out tests'' gap against their noise, '// &
+             'at constants the fit tests '//trim(merge('allow       ', 'do not allow', within))// &
+             ' (their deviance '//trim(merge('up  ', 'down', ag%dev >= 0.0_dp))//' '//real_str(abs(ag%dev), 'f0.1')// &
+             ' from their own fit, '//trim(merge('within', 'beyond', within))//' the '// &
+             real_str(ag%crit, 'f0.1')//' of a 95 % region of the '//str(ag%nshared)//' parameters the tests share)'
+   end function agreement_text
 
    !> Why a leader that rests on a fit of the held-out tests (see held_fit_only) gave way to
    !> the diagnosis with every test fitted, as a clause
