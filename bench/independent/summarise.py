@@ -90,7 +90,7 @@ def main(dirs):
     print(f'{"matrix":20s} {"injected":12s} {"right/reps":>10s} {"held-out gap removed min/median %":>34s} '
           f'{">=80 % or rest at noise":>24s} {"or agreeing":>12s}  answers')
     tot = ok = nrem = nmost = nagree = 0
-    order = lambda k: (list(sc.MATRICES).index(k[0]), sc.ROWS.index(k[1]))
+    order = lambda k: (list(sc.MATRICES).index(k[0]), list(sc.ACCEPT).index(k[1]))
     for (mname, row), r in sorted(rows.items(), key=lambda kr: order(kr[0])):
         rem = sorted(r['rem'])
         rs = f'{rem[0]:.0f} / {rem[len(rem)//2]:.0f}' if rem else '-'

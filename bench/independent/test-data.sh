@@ -19,6 +19,7 @@ cases=(
   "ratchet-temperature thesis-hold-ratchet temperature 0.5 3"
   "lcf-softening thesis-hold-lcf softening 0.3 3"
   "relax-softening thesis-hold-relax softening 0.55 5"
+  "relax-softening-colder thesis-hold-relax softening-colder 0.63 7"
 )
 for c in "${cases[@]}"; do
   read -r name matrix row u seed <<< "$c"

@@ -49,6 +49,7 @@ contains
       call shrink_section(lines, res, opts)
       call separate_section(lines, res)
       if (allocated(res%joint)) call joint_section(lines, res, opts)
+      call own_section(lines, res)
       call add_line(lines, '')
       call add_line(lines, str(res%nevals)//' simulations of the test set.')
       call steps_list(lines, res)
@@ -603,6 +604,36 @@ contains
       call separate_section(lines, jres, '### Which test would tell them apart, every test fitted')
       end associate
    end subroutine joint_section
+
+   !> The last section, where an effect explained the fit tests but did not carry to the
+   !> held-out tests (see held_own in usharp_diagnose): each held-out test diagnosed beside
+   !> the fit tests with that effect carried, its per-specimen report one heading down
+   subroutine own_section(lines, res)
+      character(len=report_line_len), allocatable, intent(inout) :: lines(:)
+      type(diagnose_result), intent(in) :: res
+      integer :: j, n
+      if (res%own_base == 0 .or. .not. allocated(res%own_report)) return
+      n = 4 + count([has_separation(res), allocated(res%joint)])
+      call add_line(lines, '')
+      call add_line(lines, '## '//str(n)//'. What the held-out tests have of their own')
+      call add_line(lines, '')
+      associate (e => res%effects(res%own_base))
+         call add_line(lines, trim(e%name)//' explains the fit tests (BIC '//real_str(e%dbic, 'f0.1')//', '// &
+            real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but not the held-out tests ('// &
+            real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap). The prediction tries one effect at a '// &
+            'time; here each held-out test is diagnosed as a specimen beside the fit tests (its "replicates"), '// &
+            'with '//trim(e%name)//' and its refit''s constants carried to it, and each effect fitted to it alone '// &
+            'on top of them: what it has of its own beyond '//trim(e%name)//'.')
+      end associate
+      do j = 1, size(res%own_report)
+         ! (one heading down: the specimen's title is a subsection here)
+         if (index(res%own_report(j), '# ') == 1) then
+            call add_line(lines, '##'//trim(res%own_report(j)))
+         else
+            call add_line(lines, trim(res%own_report(j)))
+         end if
+      end do
+   end subroutine own_section
 
    !> Section 4, when effects explain the gap equally well or the fit tests leave the
    !> leader's held-out prediction open: the candidate tests that would separate them

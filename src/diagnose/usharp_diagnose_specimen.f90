@@ -18,7 +18,7 @@ module usharp_diagnose_specimen
    use usharp_objective, only: fit_problem, setup_problem
    use usharp_experiment, only: experiment_type, fits_strain
    use usharp_effects, only: test_effects, effect_info, effect_catalogue, n_effects, &
-                             effect_nparams, param_per_test
+                             effect_nparams, param_per_test, effects_of
    use usharp_effect_problem, only: effect_problem, new_effect_problem
    use usharp_levenberg, only: levenberg_marquardt
    use usharp_optimiser, only: optimum_type
@@ -131,6 +131,8 @@ module usharp_diagnose_specimen
       real(dp), allocatable :: nv(:), w(:, :), sig2(:)
       !> The effect every test carries with the constants, as the report names it ('': none)
       character(len=:), allocatable :: carried
+      !> What the verdict calls the replicates (unallocated: 'its replicates')
+      character(len=:), allocatable :: peers
    end type specimen_result
 
 contains
@@ -149,8 +151,8 @@ contains
    !> Diagnose test ispec of cfg against the others: constants fitted to them from cfg's
    !> (refit_constants false: cfg's constants as they are), then each of opts's effects
    !> fitted to the specimen alone
-   subroutine specimen_run(cfg, ispec, opts, refit_constants, sr, error, experiments, replicates, carried, &
-                           carried_text)
+   subroutine specimen_run(cfg, ispec, opts, refit_constants, sr, error, experiments, replicates, carried_k, &
+                           carried_p, carried_free, carried_text, peers)
       type(run_config), intent(in) :: cfg
       integer, intent(in) :: ispec
       type(diagnose_options), intent(in) :: opts
@@ -160,17 +162,26 @@ contains
       type(experiment_type), intent(in), optional :: experiments(:)
       !> The replicates (indices into cfg's tests; absent: every other test)
       integer, intent(in), optional :: replicates(:)
-      !> Effects every test carries, the specimen's own fitted on top of them (an effect
-      !> fitted to the replicates with cfg's constants, see held_own in usharp_diagnose;
-      !> absent: none), and how the report names them
-      type(test_effects), intent(in), optional :: carried
+      !> A global catalogue effect every test carries with cfg's constants, the specimen's
+      !> own fitted on top of it (an effect fitted to the replicates with those constants,
+      !> see held_own in usharp_diagnose; absent: none): its parameters (physical units),
+      !> which of them were fitted (their uncertainty, with the constants', is the
+      !> replicates' to give), and how the report names it
+      integer, intent(in), optional :: carried_k
+      real(dp), intent(in), optional :: carried_p(:)
+      logical, intent(in), optional :: carried_free(:)
       character(len=*), intent(in), optional :: carried_text
+      !> What the verdict calls the replicates (absent: 'its replicates')
+      character(len=*), intent(in), optional :: peers
       type(fit_problem) :: prob
       type(effect_problem) :: ep, es, ej0, er
       type(optimum_type) :: opt, oj0
       real(dp), allocatable :: x_rep(:)
       integer, allocatable :: alltests(:), npts(:)
-      type(test_effects) :: base
+      type(test_effects) :: base, base0
+      type(test_effects), allocatable :: eff_all(:)
+      type(effect_problem) :: ec
+      integer :: kc
       type(effect_info) :: cat(n_effects), own(n_effects)
       real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:), jc(:, :), cov(:, :)
       real(dp), allocatable :: yfit(:), ysim(:), rrep(:)
@@ -205,8 +216,15 @@ contains
       own = effect_catalogue(speak)
       base%dlnE_dT = opts%dlnE_dT
       base%gamma3 = opts%gamma3
-      if (present(carried)) base = carried
+      base0 = base
+      kc = 0
+      if (present(carried_k) .and. present(carried_p) .and. present(carried_free)) kc = carried_k
+      if (kc > 0) then
+         eff_all = effects_of(kc, carried_p, nt, base0)
+         base = eff_all(ispec)
+      end if
       if (present(carried_text)) sr%carried = carried_text
+      if (present(peers)) sr%peers = peers
       ! The constants of the replicates
       call new_effect_problem(prob, reps, 0, base, peak, ep)
       if (refit_constants) then
@@ -236,6 +254,22 @@ contains
       else
          call ep%eval(ep%start(), sr%f_rep, error)
          if (allocated(error)) return
+         ! Given constants and a carried effect fitted to the replicates: the covariance of
+         ! both from the replicates' noise at that point, as their own fit gives it above
+         if (kc > 0) then
+            call carried_problem(reps, ec)
+            call tight_jacobian(ec, ec%start(), cfg%fit%fd_step, rr, jr, ok)
+            sr%nevals = sr%nevals + size(jr, 2) + 1
+            if (ok) then
+               allocate (yfit(ec%nres()))
+               call ec%residual_at(ec%start(), rr, ok, yfit)
+               sr%nevals = sr%nevals + 1
+            end if
+            if (ok) then
+               nvr = noise_variance(prob, reps, residual_noise(prob, reps, yfit))
+               cov = sandwich_covariance(jr, nvr)
+            end if
+         end if
       end if
       sr%cnames = constant_names(prob%cfg%model, prob%idx)
       sr%c = [(prob%cfg%model%get_constant(prob%idx(j)), j=1, size(prob%idx))]
@@ -266,7 +300,11 @@ contains
       ! (data without noise leave no covariance to weigh by)
       if (allocated(cov) .and. any(sr%nv > 0.0_dp)) then
          ! The specimen's residuals in the constants (the same packing as the replicates')
-         call new_effect_problem(prob, [ispec], 0, base, peak, es)
+         if (kc > 0) then
+            call carried_problem([ispec], es)
+         else
+            call new_effect_problem(prob, [ispec], 0, base, peak, es)
+         end if
          call tight_jacobian(es, es%start(), cfg%fit%fd_step, rr, jc, ok)
          sr%nevals = sr%nevals + size(jc, 2) + 1
          if (ok) call constants_directions(sr, jc, cov)
@@ -323,6 +361,15 @@ contains
          if (allocated(error)) return
       end if
    contains
+      !> The tests `tests` with the carried effect kc, the constants and its fitted
+      !> parameters free (the layout the covariance is in)
+      subroutine carried_problem(tests, ek)
+         integer, intent(in) :: tests(:)
+         type(effect_problem), intent(out) :: ek
+         call new_effect_problem(prob, tests, kc, base0, peak, ek, p0=carried_p)
+         ek%pfree = carried_free .and. ek%pacts
+      end subroutine carried_problem
+
       !> The joint fit without an effect from x: oj0, and what follows of it in sr
       subroutine joint_fit(x, error)
          real(dp), intent(in) :: x(:)
@@ -933,6 +980,7 @@ contains
       call add('# Per-specimen diagnosis: '//trim(sr%name))
       call add('')
       ln = 'Constants fitted to the replicates'
+      if (allocated(sr%peers)) ln = 'Constants fitted to '//sr%peers
       if (allocated(sr%carried)) then
          if (len(sr%carried) > 0) ln = ln//' with '//sr%carried
       end if
@@ -1002,10 +1050,17 @@ contains
             'intervals 95 % profile likelihood with those constants held, the leading effect''s with the '// &
             'constants refitted to all the tests at each point ("open": the data do not bound that end):')
       else
-         call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
-            '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'), taken in the '// &
-            'residual''s covariance with the constants'' uncertainty beside the noise, whose scale is fitted; '// &
-            'intervals 95 % profile likelihood ("open": the data do not bound that end):')
+         if (allocated(sr%w)) then
+            call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
+               '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'), taken in the '// &
+               'residual''s covariance with the constants'' uncertainty beside the noise, whose scale is fitted; '// &
+               'intervals 95 % profile likelihood ("open": the data do not bound that end):')
+         else
+            call add('Each effect fitted to '//trim(sr%name)//' alone, the constants fixed; ranked by BIC '// &
+               '(significant: BIC falls by more than '//real_str(bic_margin, 'f0.0')//'); intervals 95 % '// &
+               'profile likelihood at those constants, without their uncertainty ("open": the data do not '// &
+               'bound that end):')
+         end if
       end if
       call add('')
       if (allocated(sr%w)) then
@@ -1067,12 +1122,16 @@ contains
       type(hidden_effect), allocatable :: hidden(:)
       integer :: j, lead, best
       logical :: rest_low
+      character(len=:), allocatable :: peers
+      ! (what the specimen is set against: its replicates, or the fit tests of a diagnosis)
+      peers = 'its replicates'
+      if (allocated(sr%peers)) peers = sr%peers
       ! What an effect explains: how the specimen differs from its replicates, or where it
       ! does not stand out from them, the gap it shares with them
       if (typical(sr)) then
-         subject = ' the gap of '//trim(sr%name)//' at its replicates'' constants'
+         subject = ' the gap of '//trim(sr%name)//' at '//peers//''' constants'
       else
-         subject = ' how '//trim(sr%name)//' differs from its replicates'
+         subject = ' how '//trim(sr%name)//' differs from '//peers
       end if
       verdict = 'no effect explains'//subject
       call specimen_lead(sr, lead, best)
@@ -1122,10 +1181,10 @@ contains
       end if
       if (sr%gap <= sr%floor .and. lead == 0) then
          if (sr%f_joint >= 0.0_dp) then
-            verdict = 'one set of constants fits '//trim(sr%name)//' and its replicates to its noise level'
+            verdict = 'one set of constants fits '//trim(sr%name)//' and '//peers//' to its noise level'
             if (sr%gap > 0.0_dp) verdict = verdict//' (its structured gap below its floor)'
          else
-            verdict = trim(sr%name)//' is predicted to its noise level by its replicates'
+            verdict = trim(sr%name)//' is predicted to its noise level by '//peers
          end if
       end if
       if (lead == 0) then
@@ -1146,7 +1205,7 @@ contains
          hidden = sr%effects%hidden
          verdict = verdict//missed_note(names, power, hidden, 'this test alone')
       end if
-      if (typical(sr)) verdict = trim(sr%name)//' does not stand out from its replicates (objective'// &
+      if (typical(sr)) verdict = trim(sr%name)//' does not stand out from '//peers//' (objective'// &
          trim(merge(' per point', '          ', sr%per_point))//' at their constants '// &
          real_str(own_measure(sr), 'es9.2')//', theirs '// &
          real_str(minval(sr%rep_ms), 'es9.2')//' to '//real_str(maxval(sr%rep_ms), 'es9.2')//'); '//verdict

@@ -4,7 +4,7 @@ module usharp_diagnose_types
    use, intrinsic :: iso_fortran_env, only: int64
    use usharp_kinds, only: dp
    use usharp_math, only: log_dp
-   use usharp_strings, only: real_str, interval_format, interval_end
+   use usharp_strings, only: real_str, interval_format, interval_end, report_line_len
    use usharp_objective, only: fit_problem
    use usharp_input_test, only: name_len
    use usharp_effects, only: test_effects, effect_info
@@ -24,7 +24,7 @@ module usharp_diagnose_types
    public :: deviance_change, prediction_open, open_spread, separating_d
    public :: step_cost, step_done, joint_wanted, named_effect, fit_effects_shown, bic_only, &
              joint_decides, fit_gap_left, rest_wanted, held_fit_only, form_left_open, form_beats_leader, &
-             partial_carry, held_rest_open, joint_reason, fit_effect_not_carried, baseline_left_behind
+             partial_carry, held_rest_open, joint_reason, fit_effect_not_carried, baseline_left_behind, form_open
 
    !> An effect "explains" the gap when it removes at least this share of the structured
    !> gap on the fit tests and on the held-out tests (else it "partly explains" it); the
@@ -321,6 +321,13 @@ module usharp_diagnose_types
       !> When the held-out tests show a structured gap that the fit tests do not and no
       !> effect is confirmed: the diagnosis of every test fitted together
       type(diagnose_result), allocatable :: joint
+      !> The effect that explains the fit tests but does not carry to the held-out tests
+      !> (form_open) and is carried to them as each is diagnosed beside the fit tests (see
+      !> held_own in usharp_diagnose; 0: not run), the verdict's clause of what they have of
+      !> their own, and each held-out test's per-specimen report
+      integer :: own_base = 0
+      character(len=:), allocatable :: own_note
+      character(len=report_line_len), allocatable :: own_report(:)
    end type diagnose_result
 
    !> Why the data leave a rate undetermined: its 95 % interval spans zero or is open, or it
