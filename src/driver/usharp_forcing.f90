@@ -88,7 +88,7 @@ contains
       type(history_type), intent(out) :: hist
       type(error_type), allocatable, intent(out) :: error
       real(dp), intent(in), optional :: noise
-      real(dp) :: sigma
+      real(dp) :: sigma, scale, fine
       integer, allocatable :: stops(:), idx(:)
       real(dp), allocatable :: z(:), ends(:, :), mid(:), tk(:), vk(:), d2(:), mk(:)
       real(dp) :: rate
@@ -97,6 +97,7 @@ contains
       integer, allocatable :: split(:)
       call history_from_points(t, v, control, hist, error)
       if (allocated(error)) return
+      scale = noise_scale(v)
       sigma = -1.0_dp
       if (present(noise)) sigma = noise
       if (sigma < 0.0_dp) then
@@ -105,11 +106,11 @@ contains
          else
             ! Unrounded values (a simulation's, or noise without rounding): their smallest
             ! step is a sample's increment, not a resolution; their own scatter is the noise
-            sigma = max(noise_sd(v), unrounded_floor*(maxval(v) - minval(v)))
+            sigma = scale
          end if
       end if
       if (sigma <= 0.0_dp .or. size(t) < 3) return
-      call turns_and_holds(t, v, stops, flat)
+      call turns_and_holds(t, v, scale, stops, flat)
       ! A branch's spline is checked between its samples too: where it leaves the range of
       ! two neighbouring samples by more than the knot tolerance (samples far apart, a hold
       ! or a pause logged slowly), those two samples become corners and the step between
@@ -157,17 +158,17 @@ contains
             ! join at their shared knot
             call spline_knots(t(a:b), z(a:b), knot_tol*sigma, idx, mk)
             if (pass < max_passes) then
-               leaves = leaves_samples(t(a:b), z(a:b), idx, mk, leave_tol*sigma)
+               fine = fine_step(t(a:b))
+               leaves = leaves_samples(t(a:b), z(a:b), idx, mk, leave_tol*sigma, long_step*fine)
                ! A step next to a hold longer than hold_step times the branch's fine
                ! sampling: the hold began or ended inside it (a logger slowed for the hold),
                ! and the ramp runs straight to it (see hold_ends_between_samples)
                if (pass == 1 .and. .not. flat(j) .and. b - a >= 2) then
                   if (j > 1) then
-                     if (flat(j - 1) .and. t(a + 1) - t(a) > hold_step*fine_step(t(a:b))) leaves(1) = .true.
+                     if (flat(j - 1) .and. t(a + 1) - t(a) > hold_step*fine) leaves(1) = .true.
                   end if
                   if (j < size(flat)) then
-                     if (flat(j + 1) .and. t(b) - t(b - 1) > hold_step*fine_step(t(a:b))) &
-                        leaves(size(leaves)) = .true.
+                     if (flat(j + 1) .and. t(b) - t(b - 1) > hold_step*fine) leaves(size(leaves)) = .true.
                   end if
                end if
                do i = 1, size(leaves)
@@ -301,20 +302,19 @@ contains
    !> idx with second derivatives m leaves the range of its two samples by more than tol
    !> (looked at 7 times inside each interval): every interval inside the branch (a ramp
    !> logged every 0.05 s into a relaxation hold logged every 0.5 s, ten times as long, had
-   !> swung by 0.3 ksi of stress there), and at its two ends those longer than long_step
-   !> times the branch's fine sampling (next to a turning point the extreme of a reversal
-   !> between samples lies beyond the two, and the spline may follow it)
-   pure function leaves_samples(t, z, idx, m, tol) result(flag)
-      real(dp), intent(in) :: t(:), z(:), m(:), tol
+   !> swung by 0.3 ksi of stress there), and at its two ends those longer than long (s;
+   !> long_step times the branch's fine sampling: next to a turning point the extreme of a
+   !> reversal between samples lies beyond the two, and the spline may follow it)
+   pure function leaves_samples(t, z, idx, m, tol, long) result(flag)
+      real(dp), intent(in) :: t(:), z(:), m(:), tol, long
       integer, intent(in) :: idx(:)
       logical :: flag(size(t) - 1)
-      real(dp) :: tk(size(idx)), zk(size(idx)), u, du, lo, hi, long
+      real(dp) :: tk(size(idx)), zk(size(idx)), u, du, lo, hi
       integer :: i, k, p
       tk = t(idx)
       zk = z(idx)
       flag = .false.
       if (size(t) < 3) return
-      long = long_step*fine_step(t)
       p = 1
       do i = 1, size(t) - 1
          do while (p < size(idx) - 1)
@@ -375,18 +375,17 @@ contains
    !> The corners of a measured signal v at times t: its turning points (see turning_points)
    !> and, where a turning point lies in a hold (see hold_noise), the hold's first and last
    !> samples in its place; flat(j) whether the branch from stops(j) to stops(j + 1) is a hold
-   pure subroutine turns_and_holds(t, v, stops, flat)
+   pure subroutine turns_and_holds(t, v, scale, stops, flat)
       real(dp), intent(in) :: t(:), v(:)
+      real(dp), intent(in) :: scale   !< the noise scale of v (see noise_scale)
       integer, allocatable, intent(out) :: stops(:)
       logical, allocatable, intent(out) :: flat(:)
       integer, allocatable :: turns(:)
       integer :: buf(2*size(v)), j, n, s, e, k
       logical :: held(2*size(v))
       real(dp) :: tol, rate, level
-      turns = turning_points(v, turn_hysteresis(v))
-      ! (values without rounding or scatter, a simulation's, have the smoother's floor: a
-      ! hold sample 1e-12 short of the level had been no part of the hold)
-      tol = hold_noise*max(quantum(v), noise_sd(v), unrounded_floor*(maxval(v) - minval(v)))
+      turns = turning_points(v, turn_hysteresis(v, scale))
+      tol = hold_noise*scale
       n = 1
       buf(1) = turns(1)
       held = .false.
@@ -595,13 +594,23 @@ contains
       end do
    end function monotone
 
-   !> The hysteresis of the turning points of v (its unit): turn_noise times its noise scale,
-   !> the larger of its quantum (see quantum) and its noise (see noise_sd); at least
-   !> turn_fraction of its range
-   pure real(dp) function turn_hysteresis(v) result(delta)
+   !> The hysteresis of the turning points of v (its unit): turn_noise times its noise scale
+   !> (see noise_scale), at least turn_fraction of its range
+   pure real(dp) function turn_hysteresis(v, scale) result(delta)
       real(dp), intent(in) :: v(:)
-      delta = max(turn_noise*max(quantum(v), noise_sd(v)), turn_fraction*(maxval(v) - minval(v)))
+      real(dp), intent(in) :: scale   !< the noise scale of v
+      delta = max(turn_noise*scale, turn_fraction*(maxval(v) - minval(v)))
    end function turn_hysteresis
+
+   !> The noise scale of a measured signal v (its unit), for its turning points, its holds
+   !> and, unrounded, its smoothing: the larger of its quantum (see quantum) and its noise
+   !> (see noise_sd), and at least unrounded_floor of its range (values without rounding
+   !> or scatter, a simulation's: a hold sample 1e-12 short of its level had been no part
+   !> of the hold)
+   pure real(dp) function noise_scale(v) result(scale)
+      real(dp), intent(in) :: v(:)
+      scale = max(quantum(v), noise_sd(v), unrounded_floor*(maxval(v) - minval(v)))
+   end function noise_scale
 
    !> Noise standard deviation of a sampled signal from its second differences, robustly
    !> (median absolute deviation): a smooth signal's second difference is far below the noise
