@@ -43,7 +43,8 @@ contains
          new_unittest('measured-forcing-rounded-sine-peaks-are-no-holds', test_sine_peaks), &
          new_unittest('measured-forcing-regular-sampling-is-no-rounding', test_regular_grid), &
          new_unittest('measured-forcing-ramp-into-a-hold-logged-ten-times-slower', test_relax_tenfold), &
-         new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled)]
+         new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled), &
+         new_unittest('measured-forcing-jittered-sample-times', test_jittered_times)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -497,6 +498,31 @@ contains
                    (x > 145.0_dp .and. x < 205.0_dp)
       end function in_hold
    end subroutine test_hold_ends_unsampled
+
+   !> A triangle of 1e-3/s to +-5e-3 logged every 0.5 s at times jittered by up to 0.2 s
+   !> (40 % of the step; stamped to 0.01 s), unrounded: read from second differences of the
+   !> values alone, the jitter had been noise of 2e-4 and the forcing smoothed up to 3.4e-4
+   !> off the samples; read against the sample times, the ramps are straight, and the
+   !> forcing passes within 1e-8 of every sample
+   subroutine test_jittered_times(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst
+      integer :: k
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 0.0_dp, 0.0_dp, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [0.0_dp, (anint(100.0_dp*(0.5_dp*k + 0.2_dp*sin(1.7_dp*k)))/100.0_dp, k=1, 79)]
+      call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
+      if (allocated(error)) return
+      worst = 0.0_dp
+      do k = 1, size(t)
+         worst = max(worst, abs(h%value_at(t(k)) - v(k)))
+      end do
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - sample| '//str(worst)//' > 1e-8')
+   end subroutine test_jittered_times
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second

@@ -15,7 +15,7 @@ module usharp_forcing
    private
 
    public :: measured_history, turning_points, turn_hysteresis, signal_resolution, smooth_branch, monotone
-   public :: noise_sd, noise_lag_ratio
+   public :: noise_sd, noise_lag_ratio, signal_noise
 
    !> A turning point is confirmed once the signal has come back from its extreme by more
    !> than turn_noise times its noise scale (see turn_hysteresis), and at least turn_fraction
@@ -97,7 +97,7 @@ contains
       integer, allocatable :: split(:)
       call history_from_points(t, v, control, hist, error)
       if (allocated(error)) return
-      scale = noise_scale(v)
+      scale = noise_scale(t, v)
       sigma = -1.0_dp
       if (present(noise)) sigma = noise
       if (sigma < 0.0_dp) then
@@ -602,15 +602,74 @@ contains
       delta = max(turn_noise*scale, turn_fraction*(maxval(v) - minval(v)))
    end function turn_hysteresis
 
-   !> The noise scale of a measured signal v (its unit), for its turning points, its holds
-   !> and, unrounded, its smoothing: the larger of its quantum (see quantum) and its noise
-   !> (see noise_sd), and at least unrounded_floor of its range (values without rounding
-   !> or scatter, a simulation's: a hold sample 1e-12 short of its level had been no part
-   !> of the hold)
-   pure real(dp) function noise_scale(v) result(scale)
-      real(dp), intent(in) :: v(:)
-      scale = max(quantum(v), noise_sd(v), unrounded_floor*(maxval(v) - minval(v)))
+   !> The noise scale of a measured signal v at times t (its unit), for its turning points,
+   !> its holds and, unrounded, its smoothing: the larger of its quantum (see quantum) and
+   !> its noise (see signal_noise), and at least unrounded_floor of its range (values
+   !> without rounding or scatter, a simulation's: a hold sample 1e-12 short of its level
+   !> had been no part of the hold)
+   pure real(dp) function noise_scale(t, v) result(scale)
+      real(dp), intent(in) :: t(:), v(:)
+      scale = max(quantum(v), signal_noise(t, v), unrounded_floor*(maxval(v) - minval(v)))
    end function noise_scale
+
+   !> Noise standard deviation of a signal v sampled at times t: the robust scatter (median
+   !> absolute deviation) of each sample's residual from the line through its two
+   !> neighbours at their times, over the residual's own noise factor (see
+   !> fit_residual_sd). Where the sampling is regular this is noise_sd's second
+   !> difference; at uneven times the neighbours' line, not their mean, is the reference
+   !> (ramps logged at times jittered by 40 % of their step had read as noise of 8e-5 and
+   !> been smoothed 2e-4 off the command). The smaller of that and the same read in sample
+   !> order is the noise: values smooth in their order but not in their times are a
+   !> regular sampling whose time stamps scatter, not noise of the values
+   pure real(dp) function signal_noise(t, v) result(sd)
+      real(dp), intent(in) :: t(:), v(:)
+      real(dp) :: at_times
+      integer :: i
+      sd = max(fit_residual_sd([(real(i, dp), i=1, size(v))], v, 1, 3), 0.0_dp)
+      ! (no reading at the times, where too many share one, leaves the order's)
+      at_times = fit_residual_sd(t, v, 1, 3)
+      if (at_times >= 0.0_dp) sd = min(sd, at_times)
+   end function signal_noise
+
+   !> The robust standard deviation (1.4826 times the median absolute residual) of the
+   !> residuals of v(i) from the polynomial of degree 2 half - 1 through v(i - half:i + half)
+   !> but v(i) at their times t, each over its noise factor (1 plus the sum of its squared
+   !> interpolation weights, square-rooted, for independent noise); -1 for fewer than least
+   !> residuals (a sample whose neighbours share a time has none)
+   pure real(dp) function fit_residual_sd(t, v, half, least) result(sd)
+      real(dp), intent(in) :: t(:), v(:)
+      integer, intent(in) :: half, least
+      real(dp) :: r(max(size(v) - 2*half, 0)), w, pred, ss
+      integer :: i, j, l, m
+      logical :: ok
+      sd = -1.0_dp
+      m = 0
+      do i = half + 1, size(v) - half
+         pred = 0.0_dp
+         ss = 1.0_dp
+         ok = .true.
+         do j = i - half, i + half
+            if (j == i) cycle
+            w = 1.0_dp
+            do l = i - half, i + half
+               if (l == i .or. l == j) cycle
+               if (.not. abs(t(j) - t(l)) > 0.0_dp) then
+                  ok = .false.
+                  exit
+               end if
+               w = w*(t(i) - t(l))/(t(j) - t(l))
+            end do
+            if (.not. ok) exit
+            pred = pred + w*v(j)
+            ss = ss + w**2
+         end do
+         if (.not. ok) cycle
+         m = m + 1
+         r(m) = abs(v(i) - pred)/sqrt(ss)
+      end do
+      if (m < least) return
+      sd = 1.4826_dp*median(r(:m))
+   end function fit_residual_sd
 
    !> Noise standard deviation of a sampled signal from its second differences, robustly
    !> (median absolute deviation): a smooth signal's second difference is far below the noise
