@@ -71,6 +71,9 @@ module usharp_forcing
    !> left to it: a straight piece there starts the ramp from one noisy sample, not from
    !> the hold's level (5e-6 off along a whole ramp out of a hold at a noise of 3e-6)
    real(dp), parameter :: hold_step = 1.5_dp
+   !> The noise of a signal is read from the residuals of local fits of rising degree (see
+   !> signal_noise) up to degree 2 max_half - 1, each tried on at least fit_residuals samples
+   integer, parameter :: max_half = 5, fit_residuals = 10
 
 contains
 
@@ -620,16 +623,39 @@ contains
    !> (ramps logged at times jittered by 40 % of their step had read as noise of 8e-5 and
    !> been smoothed 2e-4 off the command). The smaller of that and the same read in sample
    !> order is the noise: values smooth in their order but not in their times are a
-   !> regular sampling whose time stamps scatter, not noise of the values
+   !> regular sampling whose time stamps scatter, not noise of the values. Nor is a smooth
+   !> signal's curvature noise: independent noise leaves the same scatter about the
+   !> polynomial through more neighbours (degree 3 through two each side, up to degree 9
+   !> through five), a well-sampled smooth signal a scatter that falls with each degree;
+   !> while it falls to under half, the last was the signal's, and the noise is read where
+   !> it stops falling (see falling_fit_sd). A sine logged 10 times a period had read as
+   !> noise of 9.4e-4, its own curvature in its second differences; 12 times that exceeded
+   !> its range, no turning point was found and its simulation failed. It reads 1.1e-7
    pure real(dp) function signal_noise(t, v) result(sd)
       real(dp), intent(in) :: t(:), v(:)
       real(dp) :: at_times
       integer :: i
-      sd = max(fit_residual_sd([(real(i, dp), i=1, size(v))], v, 1, 3), 0.0_dp)
+      sd = max(falling_fit_sd([(real(i, dp), i=1, size(v))], v), 0.0_dp)
       ! (no reading at the times, where too many share one, leaves the order's)
-      at_times = fit_residual_sd(t, v, 1, 3)
+      at_times = falling_fit_sd(t, v)
       if (at_times >= 0.0_dp) sd = min(sd, at_times)
    end function signal_noise
+
+   !> The noise of v at positions t read from local fits of rising degree (see
+   !> signal_noise); -1 without a reading (too few samples)
+   pure real(dp) function falling_fit_sd(t, v) result(sd)
+      real(dp), intent(in) :: t(:), v(:)
+      real(dp) :: next
+      integer :: half
+      sd = fit_residual_sd(t, v, 1, 3)
+      if (sd < 0.0_dp) return
+      do half = 2, max_half
+         next = fit_residual_sd(t, v, half, fit_residuals)
+         ! (too few samples for the next degree, next < 0, is no reading and no fall)
+         if (.not. (next >= 0.0_dp .and. next < 0.5_dp*sd)) exit
+         sd = next
+      end do
+   end function falling_fit_sd
 
    !> The robust standard deviation (1.4826 times the median absolute residual) of the
    !> residuals of v(i) from the polynomial of degree 2 half - 1 through v(i - half:i + half)
