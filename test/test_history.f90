@@ -45,7 +45,8 @@ contains
          new_unittest('measured-forcing-ramp-into-a-hold-logged-ten-times-slower', test_relax_tenfold), &
          new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled), &
          new_unittest('measured-forcing-jittered-sample-times', test_jittered_times), &
-         new_unittest('measured-forcing-coarse-sine-curvature-is-no-noise', test_coarse_sine)]
+         new_unittest('measured-forcing-coarse-sine-curvature-is-no-noise', test_coarse_sine), &
+         new_unittest('measured-forcing-hold-at-the-end', test_end_hold)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -563,6 +564,44 @@ contains
       end do
       call check(error, worst <= 1.1e-4_dp, 'largest |forcing - sine| '//str(worst)//' > 1.1e-4')
    end subroutine test_coarse_sine
+
+   !> A ramp of 1e-3/s to 5e-3, 60 s held, a ramp back to 0 held to the test's end (100 s),
+   !> logged every 0.5 s from 0.4 s on the ramps and every 20 s in the holds, rounded to
+   !> 1e-5: the last hold starts 0.1 s after the last ramp sample. After the last turning
+   !> point the end was no hold, and the forcing had run straight from that sample to the
+   !> hold's first, 10.5 s later (9.9e-5 off the command at the hold's start); it follows
+   !> the command within 1e-8
+   subroutine test_end_hold(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tt, tworst
+      integer :: k
+      call history_from_points([0.0_dp, 5.0_dp, 65.0_dp, 70.0_dp, 170.0_dp], &
+                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 0.0_dp, 0.0_dp], control_strain, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [0.0_dp]
+      do k = 0, 339
+         tt = 0.4_dp + 0.5_dp*k
+         ! in a hold only every 20 s
+         if (in_hold(tt) .and. abs(modulo(tt - 0.4_dp, 20.0_dp)) > 1.0e-9_dp .and. &
+             abs(modulo(tt - 0.4_dp, 20.0_dp) - 20.0_dp) > 1.0e-9_dp) cycle
+         t = [t, tt]
+      end do
+      t = [t, 170.0_dp]
+      call sampled_forcing(cmd, t, 1.0e-5_dp, v, h, error)
+      if (allocated(error)) return
+      call command_gap(h, cmd, 17000, worst, tworst)
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
+                 str(tworst)//' s')
+   contains
+      logical function in_hold(x)
+         real(dp), intent(in) :: x
+         in_hold = (x > 5.0_dp .and. x < 65.0_dp) .or. x > 70.0_dp
+      end function in_hold
+   end subroutine test_end_hold
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second

@@ -413,8 +413,32 @@ contains
          end if
       end do
       if (size(turns) > 1) then
+         ! The signal's end in a hold logged more slowly than the ramp into it (a test
+         ! ending on a hold after its last turning point, its first sample a step of more
+         ! than hold_step times the ramp's fine sampling after the ramp's last): the hold's
+         ! first sample becomes a corner and the hold a flat branch, as at a turning point
+         ! but with the ramp before it alone (from the last corner), so the ramp runs at its
+         ! rate into it (see hold_ends_between_samples). Logged as the ramp, the branch runs
+         ! on to the end as before, where a servo's rounded approach to the level is
+         ! followed (a corner at its first sample within the band had laid the ramp before
+         ! it 3e-5 off); so too after an overshoot beyond the band that settles back
+         k = turns(size(turns))
+         call walk(v, k, buf(n), k + 1, v(k), 2.0_dp*tol, s, e)
+         call walk(v, k, buf(n), k + 1, median(v(s:e)), tol, s, e)
+         level = median(v(s:e))
+         rate = 0.0_dp
+         if (s - buf(n) >= 2) then
+            if (t(s) - t(s - 1) > hold_step*fine_step(t(buf(n):s)) .and. &
+                .not. any((v(buf(n) + 1:s - 1) - level)*sign(1.0_dp, level - v(buf(n))) > tol)) &
+               rate = approach_rate(t, v, s, buf(n), level, approach_band*tol)
+         end if
+         if (e > s .and. (t(e) - t(s))*rate >= hold_travel*tol) then
+            n = n + 1
+            buf(n) = s
+            held(n) = .true.
+         end if
          n = n + 1
-         buf(n) = turns(size(turns))
+         buf(n) = k
       end if
       stops = buf(:n)
       flat = held(:n - 1)
