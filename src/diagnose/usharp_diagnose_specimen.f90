@@ -183,8 +183,8 @@ contains
       type(effect_problem) :: ec
       integer :: kc
       type(effect_info) :: cat(n_effects), own(n_effects)
-      real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jr(:, :), nvr(:), jc(:, :), cov(:, :)
-      real(dp), allocatable :: yfit(:), ysim(:), rrep(:)
+      real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jc(:, :), cov(:, :)
+      real(dp), allocatable :: ysim(:), rrep(:)
       type(specimen_effect), allocatable :: all(:)
       integer, allocatable :: reps(:)
       integer :: i, nt, j, lead
@@ -237,20 +237,7 @@ contains
          call set_constants_at(prob, opt%x)
          sr%f_rep = opt%f
          sr%c_bound = at_bound(opt%x, lo, hi)
-         ! What the replicates leave open of the constants: their covariance from the
-         ! replicates' noise (the sandwich at a tight tolerance)
-         call tight_jacobian(ep, opt%x, cfg%fit%fd_step, rr, jr, ok)
-         sr%nevals = sr%nevals + size(jr, 2) + 1
-         if (ok) then
-            ! (their noise from their residuals at these constants, as the specimen's below)
-            allocate (yfit(ep%nres()))
-            call ep%residual_at(opt%x, rr, ok, yfit)
-            sr%nevals = sr%nevals + 1
-         end if
-         if (ok) then
-            nvr = noise_variance(prob, reps, residual_noise(prob, reps, yfit))
-            cov = sandwich_covariance(jr, nvr)
-         end if
+         call replicates_covariance(ep, opt%x)
       else
          call ep%eval(ep%start(), sr%f_rep, error)
          if (allocated(error)) return
@@ -258,17 +245,7 @@ contains
          ! both from the replicates' noise at that point, as their own fit gives it above
          if (kc > 0) then
             call carried_problem(reps, ec)
-            call tight_jacobian(ec, ec%start(), cfg%fit%fd_step, rr, jr, ok)
-            sr%nevals = sr%nevals + size(jr, 2) + 1
-            if (ok) then
-               allocate (yfit(ec%nres()))
-               call ec%residual_at(ec%start(), rr, ok, yfit)
-               sr%nevals = sr%nevals + 1
-            end if
-            if (ok) then
-               nvr = noise_variance(prob, reps, residual_noise(prob, reps, yfit))
-               cov = sandwich_covariance(jr, nvr)
-            end if
+            call replicates_covariance(ec, ec%start())
          end if
       end if
       sr%cnames = constant_names(prob%cfg%model, prob%idx)
@@ -361,6 +338,28 @@ contains
          if (allocated(error)) return
       end if
    contains
+      !> What the replicates leave open of the free parameters of ek (the constants, and a
+      !> carried effect's) at x: their covariance from the replicates' noise, the sandwich
+      !> at a tight tolerance (cov; unallocated where a point fails to simulate)
+      subroutine replicates_covariance(ek, x)
+         type(effect_problem), intent(inout) :: ek
+         real(dp), intent(in) :: x(:)
+         real(dp), allocatable :: rr(:), jr(:, :), yfit(:), nvr(:)
+         logical :: ok
+         call tight_jacobian(ek, x, cfg%fit%fd_step, rr, jr, ok)
+         sr%nevals = sr%nevals + size(jr, 2) + 1
+         if (ok) then
+            ! (their noise from their residuals at this point, as the specimen's below)
+            allocate (yfit(ek%nres()))
+            call ek%residual_at(x, rr, ok, yfit)
+            sr%nevals = sr%nevals + 1
+         end if
+         if (ok) then
+            nvr = noise_variance(prob, reps, residual_noise(prob, reps, yfit))
+            cov = sandwich_covariance(jr, nvr)
+         end if
+      end subroutine replicates_covariance
+
       !> The tests `tests` with the carried effect kc, the constants and its fitted
       !> parameters free (the layout the covariance is in)
       subroutine carried_problem(tests, ek)
