@@ -36,14 +36,16 @@ module usharp_diagnose
    use usharp_diagnose_types, only: diagnose_context, diagnose_result, effect_outcome, held_quiet, &
                                     rest_at_noise, fit_structured, diagnose_progress, tell, step_done, &
                                     joint_wanted, named_effect, joint_decides, fit_gap_left, rest_wanted, &
-                                    baseline_left_behind, physical_point, form_open
+                                    baseline_left_behind, physical_point, form_open, explains_resolved, most, &
+                                    bound_list
    use usharp_diagnose_numerics, only: gn_decrease, held_rate
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions, baseline_step
    use usharp_diagnose_screen, only: screen
    use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding, refit
-   use usharp_diagnose_verdict, only: conclude, joint_verdict
+   use usharp_diagnose_verdict, only: conclude, joint_verdict, own_against_joint
    use usharp_diagnose_separate, only: separate
-   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_verdict
+   use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_verdict, &
+                                       specimen_lead
    use usharp_diagnose_report, only: diagnose_report, write_report
    use usharp_diagnose_profile, only: profile_leading
    use usharp_diagnose_journal, only: diagnose_journal
@@ -102,7 +104,7 @@ contains
          call joint_stage(cfg, opts, src, ctx, res, error)
          if (allocated(error)) return
       end if
-      if (allocated(res%own_note)) res%verdict = res%verdict//res%own_note
+      if (allocated(res%own_note)) res%verdict = res%verdict//res%own_note//own_against_joint(res)
       call tell(ctx, 'done', res%nevals)
    end subroutine diagnose_run
 
@@ -126,13 +128,26 @@ contains
       type(specimen_result) :: sr
       logical, allocatable :: free(:)
       character(len=:), allocatable :: carried
-      integer :: j, f, g
+      type(error_type), allocatable :: err
+      integer :: j, f, g, lead, best
       f = 0
       if (.not. allocated(res%held)) return
       if (.not. any(res%held) .or. held_quiet(res)) return
+      ! (a leader that explains both sets leaves nothing for a second effect)
+      if (res%leading > 0) then
+         if (explains_resolved(res%effects(res%leading), res)) return
+      end if
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
+            ! It explains most of a structured gap of the fit tests, and makes the held-out
+            ! tests worse or leaves them as they were (a third of their gap carried is a
+            ! prediction that partly holds, not a second effect's sign)
             if (.not. form_open(e, res)) cycle
+            if (e%shrink_fit < most .or. e%shrink_held > 0.0_dp) cycle
+            ! ... and fits the fit tests better than a confirmed leader, which carries
+            if (res%leading > 0) then
+               if (res%effects(res%leading)%dbic <= e%dbic + bic_margin) cycle
+            end if
             if (ctx%cat(e%k)%sharing == param_per_test) cycle
             if (.not. (allocated(e%c) .and. allocated(e%p_all) .and. allocated(e%p) .and. allocated(e%pname))) cycle
             if (f == 0) then
@@ -161,22 +176,63 @@ contains
          if (e%held .and. held_rate(ctx%cat(e%k)) > 0) free(held_rate(ctx%cat(e%k))) = .false.
          res%own_base = f
          res%own_note = '; '//trim(e%name)//' explains the fit tests (BIC '//real_str(e%dbic, 'f0.1')//', '// &
-                        real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but not the '// &
-                        'held-out tests ('//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap); '// &
-                        'with it and its constants carried, each held-out test beside the fit tests:'
-         allocate (res%own_report(0))
+                        real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but does not carry '// &
+                        'to the held-out tests ('//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'// &
+                        trim(merge(': worse', '       ', e%shrink_held < 0.0_dp))//'); with it and its constants '// &
+                        'carried, each held-out test beside the fit tests:'
+         if (allocated(e%c_bound) .and. allocated(res%cnames)) then
+            if (any(e%c_bound /= 0)) res%own_note = res%own_note//' (its refit ran away: '// &
+               bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit)'
+         end if
+         allocate (res%own_report(0), res%own_f(size(ctx%ihold)))
+         res%own_q = 0
          do j = 1, size(ctx%ihold)
-            call specimen_run(fcfg, ctx%ihold(j), opts, .false., sr, error, src%experiments, &
+            call specimen_run(fcfg, ctx%ihold(j), opts, .false., sr, err, src%experiments, &
                               replicates=ctx%ifit, carried_k=e%k, carried_p=e%p_all, carried_free=free, &
                               carried_text=carried, peers='the fit tests')
-            if (allocated(error)) return
+            if (allocated(err)) then
+               ! (the one-effect diagnosis stands without this step)
+               res%own_note = res%own_note//trim(merge('  ', '; ', j == 1))//' '//trim(cfg%tests(ctx%ihold(j))%name)// &
+                              ' could not be diagnosed so: '//err%message
+               res%own_base = 0
+               exit
+            end if
             res%nevals = res%nevals + sr%nevals
             res%own_report = [character(len=report_line_len) :: res%own_report, specimen_report(sr)]
-            res%own_note = res%own_note//trim(merge(' ', ',', j == 1))//' '//specimen_verdict(sr)
+            res%own_note = res%own_note//trim(merge('  ', '; ', j == 1))//' '//specimen_verdict(sr)//also_removing(sr)
+            call specimen_lead(sr, lead, best)
+            res%own_f(j) = sr%f0
+            if (lead > 0) then
+               res%own_f(j) = sr%effects(lead)%f_after
+               res%own_q = res%own_q + sr%effects(lead)%q
+            end if
          end do
          call step_done(res, 'the held-out tests beside the fit tests with '//trim(e%name))
       end associate
    end subroutine held_own
+
+   !> The other significant effects of plausible magnitude that remove most of a held-out
+   !> test's structured gap beside the carried effect (see held_own), with their BIC against
+   !> the leader, as a clause ('' when none): one test can be fitted by several, and BIC
+   !> alone tells them apart
+   function also_removing(sr) result(text)
+      type(specimen_result), intent(in) :: sr
+      character(len=:), allocatable :: text
+      integer :: j, lead, best
+      text = ''
+      call specimen_lead(sr, lead, best)
+      if (lead == 0) return
+      do j = 1, size(sr%effects)
+         if (j == lead) cycle
+         associate (o => sr%effects(j))
+            if (.not. (o%significant .and. o%plausible .and. o%removed >= most)) cycle
+            if (len(text) > 0) text = text//', '
+            text = text//trim(o%name)//' (BIC '//trim(merge('+', '-', o%dbic >= sr%effects(lead)%dbic))// &
+                   real_str(abs(o%dbic - sr%effects(lead)%dbic), 'f0.1')//')'
+         end associate
+      end do
+      if (len(text) > 0) text = ' (also removing 80 % or more of its gap: '//text//')'
+   end function also_removing
 
    !> One stage of a diagnosis, of the fit tests or of every test fitted together: the
    !> baseline, the steps after it, and the baseline fitted again from a refit's constants

@@ -619,8 +619,9 @@ contains
       call add_line(lines, '')
       associate (e => res%effects(res%own_base))
          call add_line(lines, trim(e%name)//' explains the fit tests (BIC '//real_str(e%dbic, 'f0.1')//', '// &
-            real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but not the held-out tests ('// &
-            real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap). The prediction tries one effect at a '// &
+            real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but does not carry to the '// &
+            'held-out tests ('//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap). The prediction '// &
+            'tries one effect at a '// &
             'time; here each held-out test is diagnosed as a specimen beside the fit tests (its "replicates"), '// &
             'with '//trim(e%name)//' and its refit''s constants carried to it, and each effect fitted to it alone '// &
             'on top of them: what it has of its own beyond '//trim(e%name)//'.')

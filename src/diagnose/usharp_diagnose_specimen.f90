@@ -41,7 +41,8 @@ module usharp_diagnose_specimen
    implicit none
    private
 
-   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index, specimen_verdict
+   public :: specimen_result, specimen_effect, specimen_run, specimen_report, specimen_index, specimen_verdict, &
+             specimen_lead
    public :: specimen_csv, specimen_csv_header, own_measure
    public :: specimen_deviance, profiled_deviance, constants_directions, specimen_noncentrality
 
@@ -182,6 +183,7 @@ contains
       type(test_effects), allocatable :: eff_all(:)
       type(effect_problem) :: ec
       integer :: kc
+      integer, allocatable :: kinds(:)
       type(effect_info) :: cat(n_effects), own(n_effects)
       real(dp), allocatable :: lo(:), hi(:), r0(:), dbic(:), rr(:), jc(:, :), cov(:, :)
       real(dp), allocatable :: ysim(:), rrep(:)
@@ -321,10 +323,12 @@ contains
          x_rep = ej0%start()
          if (allocated(error)) return
       end if
-      ! Each effect on the specimen alone
-      allocate (all(size(opts%effects)))
-      do j = 1, size(opts%effects)
-         call fit_effect(opts%effects(j), all(j), error)
+      ! Each effect on the specimen alone (not the carried effect's kind, whose parameters
+      ! would replace the carried ones, not add to them)
+      kinds = pack(opts%effects, opts%effects /= kc)
+      allocate (all(size(kinds)))
+      do j = 1, size(kinds)
+         call fit_effect(kinds(j), all(j), error)
          if (allocated(error)) return
          sr%nevals = sr%nevals + all(j)%nevals
       end do

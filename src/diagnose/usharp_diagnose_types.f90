@@ -327,6 +327,10 @@ module usharp_diagnose_types
       !> their own, and each held-out test's per-specimen report
       integer :: own_base = 0
       character(len=:), allocatable :: own_note
+      !> Each held-out test's objective with that effect and its own leading effect (the
+      !> carried effect's prediction where none leads), and the own effects' parameters
+      real(dp), allocatable :: own_f(:)
+      integer :: own_q = 0
       character(len=report_line_len), allocatable :: own_report(:)
    end type diagnose_result
 

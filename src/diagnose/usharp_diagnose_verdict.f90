@@ -37,7 +37,7 @@ module usharp_diagnose_verdict
    end type agreement_type
 
    public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note, bound_note, &
-             correlated_note
+             correlated_note, own_against_joint
 
 contains
 
@@ -408,6 +408,44 @@ contains
          res%verdict = res%verdict//'; with the held-out tests fitted too, '//jres%verdict
       end if
    end subroutine joint_verdict
+
+   !> The held-out tests' own differences beside the carried effect (see held_own in
+   !> usharp_diagnose) against the leader of every test fitted together, as a clause ('' where
+   !> either is missing): both account for every test, the first with the carried effect at
+   !> the fit tests' constants and each held-out test's own effect on top, the second with
+   !> one effect fitted to every test. BIC over every test's points (each test's residuals
+   !> of a variance of their own) says which the data prefer. The first's constants are the
+   !> fit tests' alone, so it is the one put at a disadvantage.
+   function own_against_joint(res) result(text)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: text
+      real(dp), allocatable :: two(:)
+      real(dp) :: dbic
+      integer :: i
+      text = ''
+      if (res%own_base == 0 .or. .not. allocated(res%own_f) .or. .not. allocated(res%joint)) return
+      if (res%joint%leading == 0 .or. .not. (allocated(res%npts) .and. allocated(res%held))) return
+      associate (e => res%effects(res%own_base), je => res%joint%effects(res%joint%leading))
+         if (.not. (allocated(e%per_test_after) .and. allocated(je%per_test_after))) return
+         if (size(e%per_test_after) /= size(res%npts) .or. size(je%per_test_after) /= size(res%npts) .or. &
+             count(res%held) /= size(res%own_f)) return
+         two = e%per_test_after
+         two(pack([(i, i=1, size(two))], res%held)) = res%own_f
+         dbic = deviance_change(res%npts, je%per_test_after, two) + &
+                real(e%q + res%own_q - je%q, dp)*log(real(sum(res%npts), dp))
+         if (dbic < -bic_margin) then
+            text = '; the two together fit every test better than '//trim(je%name)//' alone, which every test '// &
+                   'fitted together names (BIC '//real_str(dbic, 'f0.1')//' against it)'
+         else if (dbic > bic_margin) then
+            text = '; '//trim(je%name)//' alone, which every test fitted together names, fits them better than '// &
+                   'the two together (BIC '//real_str(-dbic, 'f0.1')//' against them): the held-out tests need no '// &
+                   'difference of their own'
+         else
+            text = '; '//trim(je%name)//' alone, which every test fitted together names, fits them as well as the '// &
+                   'two together (BIC within '//str(nint(bic_margin))//')'
+         end if
+      end associate
+   end function own_against_joint
 
    !> Why the prediction of a diagnosis could not decide (see joint_reason), as a clause
    function why_note(res, why) result(text)
