@@ -4,6 +4,7 @@
 module usharp_diagnose_verdict
    use usharp_kinds, only: dp
    use usharp_strings, only: real_str, str
+   use usharp_math, only: log_dp
    use usharp_sort, only: order_of
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    use usharp_regions, only: region_stat
@@ -432,7 +433,7 @@ contains
          two = e%per_test_after
          two(pack([(i, i=1, size(two))], res%held)) = res%own_f
          dbic = deviance_change(res%npts, je%per_test_after, two) + &
-                real(e%q + res%own_q - je%q, dp)*log(real(sum(res%npts), dp))
+                real(e%q + res%own_q - je%q, dp)*log_dp(real(sum(res%npts), dp))
          if (dbic < -bic_margin) then
             text = '; the two together fit every test better than '//trim(je%name)//' alone, which every test '// &
                    'fitted together names (BIC '//real_str(dbic, 'f0.1')//' against it)'
