@@ -1102,9 +1102,15 @@ contains
       call add('')
       call add('**Verdict:** '//specimen_verdict(sr))
       call add('')
-      call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &
-               str(sr%nevals - sr%nevals_rep)//' of the specimen alone or with them (its effects, the joint '// &
-               'fits and the intervals).')
+      if (sr%nevals_rep > 0) then
+         call add(str(sr%nevals_rep)//' simulations of the replicates (their fit), '// &
+                  str(sr%nevals - sr%nevals_rep)//' of the specimen alone or with them (its effects, the joint '// &
+                  'fits and the intervals).')
+      else
+         ! (constants given: no fit of the replicates to count apart)
+         call add(str(sr%nevals)//' simulations, the constants given (the specimen''s effects and intervals, and '// &
+                  'the replicates'' covariance where one is carried).')
+      end if
    contains
       subroutine add(text)
          character(len=*), intent(in) :: text
