@@ -121,7 +121,7 @@ contains
       type(run_config), intent(in) :: cfg
       type(diagnose_options), intent(in) :: opts
       type(stage_sources), intent(in) :: src
-      type(diagnose_context), intent(inout) :: ctx
+      type(diagnose_context), intent(in) :: ctx
       type(diagnose_result), intent(inout) :: res
       type(error_type), allocatable, intent(out) :: error
       type(run_config) :: fcfg

@@ -15,7 +15,7 @@ module usharp_forcing
    private
 
    public :: measured_history, turning_points, turn_hysteresis, signal_resolution, smooth_branch, monotone
-   public :: noise_sd, noise_lag_ratio, signal_noise
+   public :: noise_sd, noise_lag_ratio
 
    !> A turning point is confirmed once the signal has come back from its extreme by more
    !> than turn_noise times its noise scale (see turn_hysteresis), and at least turn_fraction
