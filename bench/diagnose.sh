@@ -7,7 +7,7 @@
 # <out>/diagnose/steps.csv (printed here).
 # usage: bash bench/diagnose.sh [--specimen] [--selfcheck]
 #   --specimen   also the Alloy 617 per-specimen diagnosis (each of the seven tests)
-#   --selfcheck  also the whole self-check (9 rows x 10 repetitions; long)
+#   --selfcheck  also the whole self-check (clean data and each effect, 10 repetitions each; long)
 # Times on a shared machine depend on its load: compare the processor times, or runs made
 # one after another under the same load.
 set -euo pipefail

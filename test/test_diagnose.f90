@@ -8,7 +8,7 @@ module test_diagnose
    use usharp_error, only: uerror => error_type
    use usharp_config, only: run_config
    use usharp_input, only: read_config
-   use usharp_history, only: history_type, cyclic_history, output_times
+   use usharp_history, only: history_type, cyclic_history, output_times, control_stress
    use usharp_model_miller, only: miller_model, model_setup
    use usharp_simulation, only: sim_result, solver_options
    use usharp_cvode_driver, only: simulate_cvode
@@ -42,7 +42,7 @@ module test_diagnose
    use usharp_diagnose_units, only: lm_unit, starts_unit
    use usharp_diagnose_memo, only: run_memo
    use usharp_diagnose_journal, only: diagnose_journal
-   use usharp_effect_problem, only: effect_problem, new_effect_problem
+   use usharp_effect_problem, only: effect_problem, new_effect_problem, simulate_effect
    use usharp_diagnose_profile, only: open_beyond_estimate
    use usharp_diagnose_memo, only: effect_reals
    use usharp_effect_values, only: test_effects
@@ -82,6 +82,7 @@ contains
          new_unittest('extended-model-at-zero-is-the-plain-model', test_zero_effect), &
          new_unittest('extended-rodas4-vs-tight-reference', test_extended_rodas4), &
          new_unittest('compliance-is-a-softer-machine', test_compliance), &
+         new_unittest('gain-reads-the-stress-through-its-factor', test_gain), &
          new_unittest('lag-solution-against-differences', test_lag), &
          new_unittest('runs-test-on-known-sequences', test_runs), &
          new_unittest('noise-estimate-from-second-differences', test_noise), &
@@ -247,6 +248,52 @@ contains
       call check(error, maxval(abs(a%stress - b%stress)) > 1.0e-2_dp*maxval(abs(a%stress)), &
                  'compliance has no effect')
    end subroutine test_compliance
+
+   !> A stress channel of gain g: under strain control the measured stress is (1 + g) times
+   !> the plain model's; under stress control the specimen sees the command over (1 + g), so
+   !> the strain is the plain model's under that command (a creep test at 15 and at
+   !> 15/1.04 ksi), and the reading is the command again
+   subroutine test_gain(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(uerror), allocatable :: e
+      type(miller_model) :: model
+      type(history_type) :: hist, creep, lower
+      type(solver_options) :: opts
+      type(sim_result) :: a, b
+      type(test_effects) :: eff, none
+      real(dp), allocatable :: t(:)
+      call thesis_model(model)
+      call cycles(hist, e)
+      eff%gain = 0.04_dp
+      t = output_times(hist, 1.0_dp)
+      call simulate_effect(model, eff, hist, t, opts, a, e)
+      if (.not. allocated(e)) call simulate_effect(model, none, hist, t, opts, b, e)
+      call check(error, .not. allocated(e), 'simulation failed')
+      if (allocated(error)) return
+      call check(error, maxval(abs(a%stress - 1.04_dp*b%stress)) < 1.0e-12_dp*maxval(abs(b%stress)) .and. &
+                 maxval(abs(a%strain - b%strain)) == 0.0_dp, 'strain control: the stress is not read through the gain')
+      if (allocated(error)) return
+      creep%control = control_stress
+      creep%t = [0.0_dp, 1.0_dp, 601.0_dp]
+      creep%v = [0.0_dp, 15.0_dp, 15.0_dp]
+      lower = creep
+      lower%v = (1.0_dp/(1.0_dp + eff%gain))*creep%v
+      t = output_times(creep, 1.0_dp)
+      call simulate_effect(model, eff, creep, t, opts, a, e)
+      if (.not. allocated(e)) call simulate_effect(model, none, lower, t, opts, b, e)
+      call check(error, .not. allocated(e), 'simulation failed')
+      if (allocated(error)) return
+      call check(error, maxval(abs(a%strain - b%strain)) < 1.0e-12_dp*maxval(abs(b%strain)), &
+                 'stress control: the specimen does not see the command over 1 + g')
+      if (allocated(error)) return
+      call check(error, maxval(abs(a%stress - 1.04_dp*b%stress)) < 1.0e-12_dp*15.0_dp, &
+                 'stress control: the reading is not the command')
+      if (allocated(error)) return
+      ! and the gain moves the creep strain far beyond that
+      call simulate_effect(model, none, creep, t, opts, b, e)
+      call check(error, maxval(abs(a%strain - b%strain)) > 1.0e-2_dp*maxval(abs(b%strain)), &
+                 'stress control: the gain has no effect')
+   end subroutine test_gain
 
    !> The closed-form lag solves dy/dt = (u - y)/tau, of a piecewise-linear control and of a
    !> cubic spline's pieces (a smooth forcing): its rate against central differences of its

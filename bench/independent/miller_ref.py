@@ -101,6 +101,9 @@ def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):
     drift = eff.get('drift', 0.0)
     tau = eff.get('tau', 0.0)
     h3, g3 = eff.get('H3', 0.0), eff.get('gamma3', 0.0)
+    # The stress channel reads (1 + gain) times the specimen's stress; a stress-controlled
+    # specimen is so driven to the command over (1 + gain)
+    gain = eff.get('gain', 0.0)
 
     def command(t, k):
         s = (vc[k + 1] - vc[k]) / (tc[k + 1] - tc[k])
@@ -110,7 +113,7 @@ def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):
         u = y[5] if tau > 0.0 else command(t, k)[0]
         if control == 'strain':
             return E * (u - drift * t - y[0])
-        return u
+        return u / (1.0 + gain)
 
     def rates(t, y, k):
         try:
@@ -151,7 +154,7 @@ def simulate(control, tc, vc, tout, c=TABLE4, T=T_NOM, eff=None):
         for j, i in enumerate(sel):
             yi = sol.y[:, j]
             s = sigma_of(tout[i], yi, k)
-            sig_m[i] = s
+            sig_m[i] = (1.0 + gain) * s
             if control == 'strain':
                 eps_m[i] = command(tout[i], k)[0]
             else:

@@ -69,6 +69,10 @@ def draw(row, u, rng, tests):
             tot = (1.0 if rng.uniform() < 0.5 else -1.0) * lo_hi(2e-5, 1e-4)
             out[t] = {'drift': tot / tc[-1]}
         return out, 'drift ' + ' '.join(f'{out[t]["drift"]:.1e}' for t in tests) + ' 1/s'
+    if row == 'gain':
+        # Per test: a load cell's calibration or a cross-section measured wrong
+        out = {t: {'gain': (1.0 if rng.uniform() < 0.5 else -1.0) * lo_hi(0.02, 0.06)} for t in tests}
+        return out, 'gain ' + ' '.join(f'{out[t]["gain"]:+.3f}' for t in tests)
     if row == 'lag':
         tau = lo_hi(0.1, 0.5)
         return {t: {'tau': tau} for t in tests}, f'tau {tau:.2f} s'
@@ -91,7 +95,8 @@ ACCEPT = {'clean': ['none'], 'modulus': ['compliance', 'scatter'], 'temperature'
           'backstress2-fast': ['backstress2'],
           # two effects: the one-effect verdict may name either (the held-out test's own
           # difference is then in its last clause: see own.py)
-          'softening-colder': ['softening', 'temperature', 'initial', 'scatter']}
+          'softening-colder': ['softening', 'temperature', 'initial', 'scatter'],
+          'gain': ['gain']}
 # (softening-colder only where asked for: --rows)
 ROWS = [r for r in ACCEPT if r != 'softening-colder']
 
@@ -203,7 +208,7 @@ def hidden_right(row, mname, label, v):
 
 
 CATALOGUE = ['compliance', 'lag', 'temperature', 'scatter', 'initial', 'shift', 'softening', 'backstress2',
-             'drift']
+             'drift', 'gain']
 
 
 def make_case(mname, row, u, rng, case, noise):

@@ -20,6 +20,7 @@ cases=(
   "lcf-softening thesis-hold-lcf softening 0.3 3"
   "relax-softening thesis-hold-relax softening 0.55 5"
   "relax-softening-colder thesis-hold-relax softening-colder 0.63 7"
+  "specimen-gain specimen gain 0.0 11"
 )
 for c in "${cases[@]}"; do
   read -r name matrix row u seed <<< "$c"
@@ -29,7 +30,7 @@ for c in "${cases[@]}"; do
   {
     echo "! Data made by bench/independent/selfcheck.py --make $matrix $row $u $seed (Python and"
     echo "! scipy's Radau, not usharp; made again by bash bench/independent/test-data.sh): the"
-    echo "! thesis's three tests, injected effect '$row' at u = $u of its range, 0.5 % noise. Read by"
+    echo "! tests of its matrix '$matrix', injected effect '$row' at u = $u of its range, 0.5 % noise. Read by"
     echo "! test/test_diagnose_data.f90."
     sed "s#out_dir = 'out'#out_dir = '../../build/test-scratch/independent-$name'#" "$dir/diagnose.nml"
   } > "$dir/diagnose.tmp"

@@ -13,7 +13,7 @@ module usharp_effect_problem
    use usharp_objective, only: fit_problem, test_residuals, simulated
    use usharp_optimiser, only: least_squares_type
    use usharp_simulation, only: sim_result, solver_options
-   use usharp_history, only: history_type, control_strain
+   use usharp_history, only: history_type, control_strain, control_stress
    use usharp_cvode_driver, only: simulate_cvode
    use usharp_rosenbrock_driver, only: simulate_rosenbrock
    use omp_lib, only: omp_in_parallel
@@ -277,16 +277,21 @@ contains
       if (allocated(error)) return
       ! The stress channel lags by shift: the data at t saw the response at t - shift
       tout = min(max(t - eff%shift, hist0%t(1)), hist0%end_time())
-      ! (linear in time, so the corners stay the corners; the history is copied only then)
-      if (eff%drift /= 0.0_dp .and. hist0%control == control_strain) then
+      ! A strain-controlled specimen follows the command less the drift, a stress-controlled
+      ! one the command read through the gain (both linear, so the corners stay the
+      ! corners; the history is copied only then)
+      if ((eff%drift /= 0.0_dp .and. hist0%control == control_strain) .or. &
+          (eff%gain /= 0.0_dp .and. hist0%control == control_stress)) then
          hist = hist0
-         call hist%add_ramp(-eff%drift)
+         if (hist%control == control_strain) call hist%add_ramp(-eff%drift)
+         if (hist%control == control_stress) call hist%scale(1.0_dp/(1.0_dp + eff%gain))
          call simulate_on(hist)
       else
          call simulate_on(hist0)
       end if
       if (allocated(error)) return
       if (eff%drift /= 0.0_dp) res%strain = res%strain + eff%drift*(tout - hist0%t(1))
+      if (eff%gain /= 0.0_dp) res%stress = (1.0_dp + eff%gain)*res%stress
    contains
       subroutine simulate_on(h)
          type(history_type), intent(in) :: h

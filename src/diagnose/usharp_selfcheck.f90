@@ -92,6 +92,8 @@ contains
          p(1) = sat*p(2)                               ! H3 = saturation * gamma3
       case (9)
          p = [(draw(2.0e-6_dp, 6.0e-6_dp, .true.), i=1, nt)]   ! drift, 1/s
+      case (10)
+         p = [(draw(0.02_dp, 0.05_dp, .true.), i=1, nt)]       ! gain, -
       case default
          allocate (p(0))
       end select

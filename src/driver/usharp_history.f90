@@ -45,6 +45,7 @@ module usharp_history
       procedure :: corners => history_corners
       procedure :: forcing => history_forcing
       procedure :: add_ramp => history_add_ramp
+      procedure :: scale => history_scale
    end type history_type
 
    !> One linear piece of a history: control, start time (s), start value and slope (per s)
@@ -153,6 +154,19 @@ contains
       self%v = self%v + rate*(self%t - t0)
       if (self%smooth()) self%vk = self%vk + rate*(self%tk - t0)
    end subroutine history_add_ramp
+
+   !> Multiply the history's values by factor (-): a control read through a channel of that
+   !> gain. Linear, so the corners stay the corners and a spline stays the spline through
+   !> its scaled knots
+   pure subroutine history_scale(self, factor)
+      class(history_type), intent(inout) :: self
+      real(dp), intent(in) :: factor
+      self%v = factor*self%v
+      if (self%smooth()) then
+         self%vk = factor*self%vk
+         self%d2 = factor*self%d2
+      end if
+   end subroutine history_scale
 
    !> The cubic spline through (tk, vk) with second derivatives mk at time t, its interval
    !> found by bisection between k0 and k1

@@ -30,6 +30,10 @@ module usharp_effect_values
       !> 1/s, extensometer drift: the measured strain is the specimen's plus drift*(t - t0), t0
       !> the test's start (a strain-controlled specimen sees the command less the drift)
       real(dp) :: drift = 0.0_dp
+      !> -, stress-channel gain: the measured stress is (1 + gain) times the specimen's (a
+      !> load cell's calibration, a cross-section measured wrong); a stress-controlled
+      !> specimen so sees the command divided by 1 + gain
+      real(dp) :: gain = 0.0_dp
    end type test_effects
 
 contains
@@ -41,6 +45,6 @@ contains
       type(test_effects), intent(in) :: e
       real(dp), allocatable :: v(:)
       v = [e%compliance, e%lag, e%dtemp, e%dlnE_dT, e%modulus, e%strength, e%r0, e%dd0, e%shift, &
-           e%soften, e%soften_rate, e%h3, e%gamma3, e%drift]
+           e%soften, e%soften_rate, e%h3, e%gamma3, e%drift, e%gain]
    end function effect_reals
 end module usharp_effect_values

@@ -25,7 +25,7 @@ module usharp_effects
    !> How an effect's parameter is shared: one value for all tests, or one per test
    integer, parameter :: param_global = 1, param_per_test = 2
    !> Number of effects in the catalogue
-   integer, parameter :: n_effects = 9
+   integer, parameter :: n_effects = 10
 
    !> One catalogue entry
    type :: effect_info
@@ -97,10 +97,18 @@ contains
          'specimen strain + d*(t - t0)', 1, param_per_test, ['d           ', '            '], &
          ['1/s         ', '            '], [1.0e-6_dp, 1.0_dp], [.false., .false.], [.true., .true.], &
          [1.0e-5_dp, 0.0_dp])
+      ! A gain shared by every test is a factor on every stress of the model that its
+      ! constants take up: only how tests differ in it shows, hence one per test. A tenth
+      ! is a diameter 5 % off or a load cell far out of calibration
+      cat(10) = effect_info('gain', 'stress-channel gain per test (load-cell calibration, '// &
+         'cross-section area): measured stress = (1 + g) sigma', 1, param_per_test, &
+         ['g           ', '            '], ['-           ', '            '], [1.0_dp, 1.0_dp], &
+         [.false., .false.], [.true., .true.], [0.1_dp, 0.0_dp])
       ! The low ends of the ranges the diagnosis is validated over (docs/validation.md): a
       ! modulus 3 % off, a lag or delay of 0.1 s, 5 K, a modulus 2 % and a drag 3 % off per
       ! specimen, an initial back stress or drag 2 % of the peak, a softening of 5 %, a second
-      ! back stress saturating at 4 % of the peak, a drift of 2e-5 strain over a test
+      ! back stress saturating at 4 % of the peak, a drift of 2e-5 strain over a test, a
+      ! stress channel reading 2 % off
       cat(1)%low = [0.03_dp, 0.0_dp]
       cat(1)%low_what = 'kappa 0.03'
       cat(2)%low = [0.1_dp, 0.0_dp]
@@ -119,6 +127,10 @@ contains
       cat(8)%low_what = 'H3/gamma3 4 % of the peak'
       cat(9)%low = [2.0e-5_dp, 0.0_dp]
       cat(9)%low_what = '2e-5 strain over a test'
+      cat(10)%low = [0.02_dp, 0.0_dp]
+      cat(10)%low_what = 'g 0.02 per test'
+      ! (1 + g) > 0: a gain beyond a half stands for nothing a rig shows
+      cat(10)%box = [0.5_dp, 0.5_dp]
       ! The second back stress's magnitude is its saturation H3/gamma3: H3's box reaches the
       ! peak's saturation at gamma3's box end (1e6). At 1000 times the peak it capped the
       ! saturation at 0.1 of the peak for gamma3 = 1e4 and 0.2 for 5000, below Alloy 617's
@@ -223,6 +235,10 @@ contains
       case (9)
          do i = 1, ntests
             eff(i)%drift = p(i)
+         end do
+      case (10)
+         do i = 1, ntests
+            eff(i)%gain = p(i)
          end do
       end select
    end function effects_of
