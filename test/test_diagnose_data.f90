@@ -606,24 +606,8 @@ contains
    !> temperature leads, with an interval that holds the injected offset
    subroutine test_specimen_temperature_low(error)
       type(error_type), allocatable, intent(out) :: error
-      type(uerror), allocatable :: e
-      type(run_config) :: cfg
-      type(diagnose_options) :: opts
-      type(specimen_result) :: sr
-      real(dp), parameter :: dt_true = -5.0_dp
-      call read_config('data/independent-specimen-temperature-low/diagnose.nml', cfg, e)
-      if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
-      if (.not. allocated(e)) call specimen_run(cfg, 2, opts, .true., sr, e)
-      if (allocated(e)) call test_failed(error, 'per-specimen diagnosis failed: '//e%message)
-      if (allocated(error)) return
-      associate (lead => sr%effects(1))
-         write (*, '(4x,a)') trim(sr%name)//': leading '//trim(lead%name)//', BIC '//real_str(lead%dbic, 'f0.1')
-         call check(error, lead%name == 'temperature' .and. lead%significant, 'ranked first: '//trim(lead%name))
-         if (allocated(error)) return
-         call check(error, lead%p_lo(1) <= dt_true .and. dt_true <= lead%p_hi(1), &
-                    'dT '//real_str(lead%p(1), 'f0.3')//' ['//real_str(lead%p_lo(1), 'f0.3')//', '// &
-                    real_str(lead%p_hi(1), 'f0.3')//'] K misses -5 K')
-      end associate
+      call specimen_low_end('data/independent-specimen-temperature-low/diagnose.nml', 'temperature', -5.0_dp, &
+                            'dT', error)
    end subroutine test_specimen_temperature_low
 
    !> One specimen's stress read 2 % low (a load cell's calibration or its cross-section, the
@@ -632,25 +616,34 @@ contains
    !> and is named beside it)
    subroutine test_specimen_gain_low(error)
       type(error_type), allocatable, intent(out) :: error
+      call specimen_low_end('data/independent-specimen-gain/diagnose.nml', 'gain', -0.02_dp, 'g', error)
+   end subroutine test_specimen_gain_low
+
+   !> The per-specimen diagnosis of the second test of the deck at path (independent data,
+   !> one effect at the low end of its range on that specimen alone): the effect leads,
+   !> significant, and the interval of its first parameter (pname) holds the injected value
+   subroutine specimen_low_end(path, effect, p_true, pname, error)
+      character(len=*), intent(in) :: path, effect, pname
+      real(dp), intent(in) :: p_true
+      type(error_type), allocatable, intent(out) :: error
       type(uerror), allocatable :: e
       type(run_config) :: cfg
       type(diagnose_options) :: opts
       type(specimen_result) :: sr
-      real(dp), parameter :: g_true = -0.02_dp
-      call read_config('data/independent-specimen-gain/diagnose.nml', cfg, e)
+      call read_config(path, cfg, e)
       if (.not. allocated(e)) call diagnose_options_of(cfg, opts, e)
       if (.not. allocated(e)) call specimen_run(cfg, 2, opts, .true., sr, e)
       if (allocated(e)) call test_failed(error, 'per-specimen diagnosis failed: '//e%message)
       if (allocated(error)) return
       associate (lead => sr%effects(1))
          write (*, '(4x,a)') trim(sr%name)//': leading '//trim(lead%name)//', BIC '//real_str(lead%dbic, 'f0.1')
-         call check(error, lead%name == 'gain' .and. lead%significant, 'ranked first: '//trim(lead%name))
+         call check(error, lead%name == effect .and. lead%significant, 'ranked first: '//trim(lead%name))
          if (allocated(error)) return
-         call check(error, lead%p_lo(1) <= g_true .and. g_true <= lead%p_hi(1), &
-                    'g '//real_str(lead%p(1), 'f0.4')//' ['//real_str(lead%p_lo(1), 'f0.4')//', '// &
-                    real_str(lead%p_hi(1), 'f0.4')//'] misses -0.02')
+         call check(error, lead%p_lo(1) <= p_true .and. p_true <= lead%p_hi(1), &
+                    pname//' '//real_str(lead%p(1), 'es10.3')//' ['//real_str(lead%p_lo(1), 'es10.3')//', '// &
+                    real_str(lead%p_hi(1), 'es10.3')//'] misses '//real_str(p_true, 'es10.3'))
       end associate
-   end subroutine test_specimen_gain_low
+   end subroutine specimen_low_end
 
    !> A softening shared by every test (a = 0.120, b = 200) and the held-out relaxation test
    !> 13.8 K colder besides (independent data): beside the fit tests, at the constants the
