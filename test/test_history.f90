@@ -46,7 +46,8 @@ contains
          new_unittest('measured-forcing-hold-ends-between-slow-samples', test_hold_ends_unsampled), &
          new_unittest('measured-forcing-jittered-sample-times', test_jittered_times), &
          new_unittest('measured-forcing-coarse-sine-curvature-is-no-noise', test_coarse_sine), &
-         new_unittest('measured-forcing-hold-at-the-end', test_end_hold)]
+         new_unittest('measured-forcing-hold-at-the-end', test_end_hold), &
+         new_unittest('measured-forcing-controller-approach-into-a-slow-hold', test_pid_approach)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -602,6 +603,51 @@ contains
          in_hold = (x > 5.0_dp .and. x < 65.0_dp) .or. x > 70.0_dp
       end function in_hold
    end subroutine test_end_hold
+
+   !> A ramp of 1e-3/s to 4.5e-3, then a controller's exponential approach to 5e-3 (time
+   !> constant 3 s, then 5 s), held to 185 s and ramped back down, logged every 0.5 s on
+   !> the ramps and every 20 s in the hold, unrounded: the hold's first samples fall short
+   !> of its level (by 6.4e-7 at 3 s; at 5 s by 9.2e-6, 1.7e-7 and 3.1e-9, three
+   !> samples). Those samples had been corners of straight pieces, the first 20 s long, and
+   !> the forcing 2.8e-4 off the approach (2.0e-4 at 5 s); it follows the approach within 1e-6
+   subroutine test_pid_approach(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tworst, tt, d
+      integer :: k, i
+      real(dp), parameter :: taus(2) = [3.0_dp, 5.0_dp]
+      t = [(0.5_dp*k, k=0, 9), (24.5_dp + 20.0_dp*k, k=0, 8), (185.5_dp + 0.5_dp*k, k=0, 9)]
+      do i = 1, size(taus)
+         v = [(approach(t(k), taus(i)), k=1, size(t))]
+         call measured_history(t, v, control_strain, h, uerr)
+         call check(error, .not. allocated(uerr), 'forcing failed')
+         if (allocated(error)) return
+         worst = 0.0_dp
+         tworst = 0.0_dp
+         do k = 0, 19000
+            tt = 0.01_dp*k
+            d = abs(h%value_at(tt) - approach(tt, taus(i)))
+            if (d > worst) then
+               worst = d
+               tworst = tt
+            end if
+         end do
+         call check(error, worst <= 1.0e-6_dp, 'time constant '//str(taus(i))//' s: largest |forcing - command| '// &
+                    str(worst)//' > 1e-6 at t = '//str(tworst)//' s')
+         if (allocated(error)) return
+      end do
+   contains
+      pure real(dp) function approach(x, tau) result(y)
+         real(dp), intent(in) :: x, tau
+         if (x <= 4.5_dp) then
+            y = 1.0e-3_dp*x
+         else
+            y = 5.0e-3_dp - 5.0e-4_dp*exp(-(min(x, 185.0_dp) - 4.5_dp)/tau) - 1.0e-3_dp*max(x - 185.0_dp, 0.0_dp)
+         end if
+      end function approach
+   end subroutine test_pid_approach
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second

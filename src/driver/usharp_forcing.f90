@@ -7,7 +7,7 @@
 !> longer reaches the simulated response as elastic spikes.
 module usharp_forcing
    use usharp_kinds, only: dp
-   use usharp_math, only: pow10_dp, cubic_piece
+   use usharp_math, only: pow10_dp, cubic_piece, exp_dp, log_dp
    use usharp_error, only: error_type
    use usharp_history, only: history_type, history_from_points, spline_eval
    use usharp_sort, only: median, order_of
@@ -196,8 +196,117 @@ contains
       hist%vk = vk
       hist%d2 = d2
       hist%stops = stops
+      call approaches_into_holds(hist, flat, knot_tol*sigma)
       call hold_ends_between_samples(hist, flat)
    end subroutine measured_history
+
+   !> A controller's approach to a hold logged slowly: between the ramp's last sample and the
+   !> hold's first (its first within the hold's band) lie samples logged at the hold's pace,
+   !> short of the level by less and less, each a corner of a straight piece so far (a PID
+   !> that slows over the last few per cent of a ramp, its approach caught by a sample 20 s
+   !> on, 3.5e-7 short, 3.3e-4 off the approach's strain for 20 s and 2 ksi of stress). The
+   !> command approaches the level as a first-order system does: the shortfall decays
+   !> exponentially from the ramp's last sample, through each of these samples (its time
+   !> constant between two of them read from their shortfalls), to the hold. The pieces
+   !> become one branch of a few cubic pieces along that exponential; its samples are no
+   !> longer corners. Where the samples do not close in on the level monotonically, or the
+   !> approach would leave the ramp faster than the ramp ran (a hold that drifts after the
+   !> ramp ran into it), it is left as it is.
+   pure subroutine approaches_into_holds(hist, flat, tol)
+      type(history_type), intent(inout) :: hist
+      logical, allocatable, intent(inout) :: flat(:)  !< whether branch j is a hold
+      real(dp), intent(in) :: tol   !< the forcing's tolerance (the unit of the signal)
+      real(dp), allocatable :: tn(:), vn(:), d2n(:), tf(:)
+      real(dp) :: level, sgn, fine, u, rate
+      integer :: j, m, r, s, k0, k1, i
+      ! (from the last branch back, so that a merge leaves the branches before it as they are)
+      j = size(flat) + 1
+      do while (j > 3)
+         j = j - 1
+         if (.not. flat(j)) cycle
+         ! Back from the hold: the straight pieces of one step each, logged slowly
+         m = 0
+         do i = j - 1, 2, -1
+            if (flat(i) .or. hist%stops(i + 1) - hist%stops(i) /= 1) exit
+            m = m + 1
+         end do
+         if (m < 2) cycle
+         if (flat(j - m - 1)) cycle
+         r = hist%stops(j - m)
+         s = hist%stops(j)
+         tf = hist%t(hist%stops(j - m - 1):r)
+         if (size(tf) < 2) cycle
+         fine = fine_step(tf)
+         if (minval(hist%t(r + 1:s) - hist%t(r:s - 1)) <= hold_step*fine) cycle
+         k0 = hist%kstops(j - m)
+         k1 = hist%kstops(j)
+         ! (one knot per sample between: no corner added inside these pieces)
+         if (k1 - k0 /= m) cycle
+         level = hist%vk(k1)
+         sgn = sign(1.0_dp, level - hist%v(r))
+         ! (the ramp's rate at its last sample)
+         call cubic_piece(hist%tk, hist%vk, hist%d2, k0 - 1, hist%tk(k0), u, rate)
+         call approach_knots(hist%t(r:s), sgn*(level - hist%v(r:s)), tol, abs(rate), tn, vn, d2n)
+         if (size(tn) == 0) cycle
+         ! (the approach becomes branch j - m; the next hold to look at lies before it)
+         j = j - m
+         vn = level - sgn*vn
+         d2n = -sgn*d2n
+         hist%tk = [hist%tk(:k0), tn, hist%tk(k1:)]
+         hist%vk = [hist%vk(:k0), vn, hist%vk(k1:)]
+         hist%d2 = [hist%d2(:k0), d2n, hist%d2(k1:)]
+         hist%kstops = [hist%kstops(:j), hist%kstops(j + m:) + size(tn) - m + 1]
+         hist%stops = [hist%stops(:j), hist%stops(j + m:)]
+         flat = [flat(:j), flat(j + m:)]
+      end do
+   end subroutine approaches_into_holds
+
+   !> The inner knots (t, shortfall d, its second derivative d2) of a first-order approach
+   !> through the shortfalls d(:) of samples at times t(:): d(1) the ramp's last sample's,
+   !> d(n) the hold's first (taken as none); between two samples the shortfall decays
+   !> exponentially, its time constant read from their ratio, past the last sample short
+   !> of the level at that sample's. Knots every half time constant (a cubic that matches
+   !> an exponential's value and second derivative at both ends is within 1e-3 of its
+   !> shortfall there), closer at the start, where the ramp's end keeps d2 = 0, until the
+   !> shortfall is within tol. None where the shortfalls do not fall from one sample to the
+   !> next, or where the approach would leave the ramp faster than fastest (per s).
+   pure subroutine approach_knots(t, d, tol, fastest, tk, dk, d2k)
+      real(dp), intent(in) :: t(:), d(:), tol, fastest
+      real(dp), allocatable, intent(out) :: tk(:), dk(:), d2k(:)
+      real(dp) :: tau, h, x, a, left
+      integer :: n, i, p
+      n = size(t)
+      allocate (tk(0), dk(0), d2k(0))
+      if (n < 3) return
+      if (.not. all(d(2:n - 1) > 0.0_dp .and. d(2:n - 1) < d(1:n - 2))) return
+      tau = 0.0_dp
+      left = 0.0_dp
+      do i = 1, n - 1
+         ! (the last step, into the hold, at the time constant before it)
+         if (i < n - 1) tau = (t(i + 1) - t(i))/log_dp(d(i)/d(i + 1))
+         if (i == 1 .and. d(1)/tau > fastest) return
+         a = d(i)
+         if (i > 1) then
+            tk = [tk, t(i)]
+            dk = [dk, a]
+            ! (the mean of the two exponentials' second derivatives at their shared sample)
+            d2k = [d2k, 0.5_dp*(left + a/tau**2)]
+         end if
+         ! knots inside: at tau/8, tau/4, tau/2, then every tau/2
+         x = 0.0_dp
+         h = merge(0.125_dp*tau, 0.5_dp*tau, i == 1)
+         do p = 1, 100000
+            x = x + h
+            if (x > t(i + 1) - t(i) - 0.25_dp*tau) exit
+            if (i == n - 1 .and. a*exp_dp(-x/tau) < tol) exit
+            tk = [tk, t(i) + x]
+            dk = [dk, a*exp_dp(-x/tau)]
+            d2k = [d2k, a*exp_dp(-x/tau)/tau**2]
+            h = min(2.0_dp*h, 0.5_dp*tau)
+         end do
+         left = d(i + 1)/tau**2
+      end do
+   end subroutine approach_knots
 
    !> A hold whose start (or end) falls between two samples far apart (a ramp logged every
    !> 0.5 s into a hold logged every 20 s, its level reached 0.1 s after the ramp's last
