@@ -54,11 +54,22 @@ def approach(tau, noise=0.0, quantum=0.0):
     return np.unique(np.round(times, 9)), cmd, noise, quantum
 
 
+def triangle(first):
+    """A triangle of 1e-3/s between +-5e-3, two cycles, logged every 0.5 s from first (s):
+    its reversals fall between samples"""
+    def cmd(t):
+        p = (t % 20.0)
+        return 1e-3*(p if p <= 5.0 else (10.0 - p if p <= 15.0 else p - 20.0))
+    t = np.r_[0.0, np.arange(first, 40.0, 0.5), 40.0]
+    return np.unique(np.round(t, 9)), cmd, 0.0, 0.0
+
+
 CASES = {
     'approach-3s': lambda: approach(3.0),
     'approach-5s-noise-1e-6': lambda: approach(5.0, 1.0e-6),
     'approach-1s': lambda: approach(1.0),
     'approach-3s-rounded-1e-6': lambda: approach(3.0, quantum=1.0e-6),
+    'triangle-reversals-between-samples': lambda: triangle(0.2),
 }
 
 
@@ -84,7 +95,7 @@ def run(exe, name):
     de = s[:, 1] - np.interp(s[:, 0], te, ve)
     ds = s[:, 2] - np.interp(s[:, 0], x[:, 0], x[:, 2])
     i, j = np.argmax(np.abs(de)), np.argmax(np.abs(ds))
-    print(f'{name:26s} strain max {abs(de[i]):.2e} at t = {s[i, 0]:.1f} s; stress RMS {np.sqrt(np.mean(ds**2)):.3f}'
+    print(f'{name:36s} strain max {abs(de[i]):.2e} at t = {s[i, 0]:.1f} s; stress RMS {np.sqrt(np.mean(ds**2)):.3f}'
           f' ksi, max {abs(ds[j]):.3f} ksi at t = {s[j, 0]:.1f} s')
 
 

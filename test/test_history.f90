@@ -47,7 +47,8 @@ contains
          new_unittest('measured-forcing-jittered-sample-times', test_jittered_times), &
          new_unittest('measured-forcing-coarse-sine-curvature-is-no-noise', test_coarse_sine), &
          new_unittest('measured-forcing-hold-at-the-end', test_end_hold), &
-         new_unittest('measured-forcing-controller-approach-into-a-slow-hold', test_pid_approach)]
+         new_unittest('measured-forcing-controller-approach-into-a-slow-hold', test_pid_approach), &
+         new_unittest('measured-forcing-reversal-between-samples', test_reversal_between)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -648,6 +649,34 @@ contains
          end if
       end function approach
    end subroutine test_pid_approach
+
+   !> A triangle of 1e-3/s to +-5e-3 logged every 0.5 s from 0.2 s (each reversal 0.3 s
+   !> after a sample, 0.2 s before the next), then from 0.35 s (0.15 s after, 0.35 s
+   !> before), unrounded: the corner had been at the sample nearer the peak, the forcing
+   !> 2.0e-4 (then 1.9e-4) short of it; where the lines of the two ramps meet it follows the
+   !> command within 1e-8
+   subroutine test_reversal_between(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tworst
+      real(dp), parameter :: offsets(2) = [0.2_dp, 0.35_dp]
+      integer :: k, i
+      call cyclic_history(0.01_dp, 0.0_dp, 1.0e-3_dp, 0.0_dp, 2, 0.0_dp, 0.0_dp, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      do i = 1, size(offsets)
+         t = [0.0_dp, (offsets(i) + 0.5_dp*k, k=0, 79), 40.0_dp]
+         t = pack(t, t <= 40.0_dp)
+         call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
+         if (allocated(error)) return
+         call command_gap(h, cmd, 4000, worst, tworst)
+         call check(error, worst <= 1.0e-8_dp, 'first sample at '//str(offsets(i))//' s: largest |forcing - command| '// &
+                    str(worst)//' > 1e-8 at t = '//str(tworst)//' s')
+         if (allocated(error)) return
+      end do
+   end subroutine test_reversal_between
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second
