@@ -64,12 +64,37 @@ def triangle(first):
     return np.unique(np.round(t, 9)), cmd, 0.0, 0.0
 
 
+def trapezoid(first, hold_step, noise=0.0, start=0.0):
+    """Ramps of 1e-3/s between +-5e-3 with 60 s holds (from 0, back to 0), after a hold at 0
+    of start (s) if given, logged every 0.5 s from first (s), every hold_step s in the
+    holds (from the ramp's last sample, the test's first at its start)"""
+    tc = list(start + np.array([0, 5, 65, 75, 135, 145, 205, 215, 275, 280]))
+    vc = [0, 5e-3, 5e-3, -5e-3, -5e-3, 5e-3, 5e-3, -5e-3, -5e-3, 0]
+    holds = [(start + a, start + b) for a, b in [(5, 65), (75, 135), (145, 205), (215, 275)]]
+    if start > 0:
+        tc, vc, holds = [0.0] + tc, [0.0] + vc, [(-1.0, start)] + holds
+    times, last = [0.0], 0.0
+    for t in np.arange(first, tc[-1], 0.5):
+        held = any(a < t < b for a, b in holds)
+        if not held:
+            last = t
+            times.append(t)
+        elif abs((t - last)/hold_step - round((t - last)/hold_step)) < 1e-9:
+            times.append(t)
+    times.append(tc[-1])
+    return np.unique(np.round(times, 9)), lambda t: np.interp(t, tc, vc), noise, 0.0
+
+
 CASES = {
     'approach-3s': lambda: approach(3.0),
     'approach-5s-noise-1e-6': lambda: approach(5.0, 1.0e-6),
     'approach-1s': lambda: approach(1.0),
     'approach-3s-rounded-1e-6': lambda: approach(3.0, quantum=1.0e-6),
     'triangle-reversals-between-samples': lambda: triangle(0.2),
+    'trapezoid-logged-throughout': lambda: trapezoid(0.25, 0.5),
+    'trapezoid-holds-logged-slowly': lambda: trapezoid(0.25, 20.0),
+    'trapezoid-holds-logged-slowly-noise-3e-6': lambda: trapezoid(0.25, 20.0, 3.0e-6),
+    'trapezoid-corners-at-samples-noise-3e-6': lambda: trapezoid(0.0, 20.0, 3.0e-6),
 }
 
 

@@ -48,7 +48,8 @@ contains
          new_unittest('measured-forcing-coarse-sine-curvature-is-no-noise', test_coarse_sine), &
          new_unittest('measured-forcing-hold-at-the-end', test_end_hold), &
          new_unittest('measured-forcing-controller-approach-into-a-slow-hold', test_pid_approach), &
-         new_unittest('measured-forcing-reversal-between-samples', test_reversal_between)]
+         new_unittest('measured-forcing-reversal-between-samples', test_reversal_between), &
+         new_unittest('measured-forcing-hold-ends-inside-regular-steps', test_hold_ends_inside)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -677,6 +678,29 @@ contains
          if (allocated(error)) return
       end do
    end subroutine test_reversal_between
+
+   !> A trapezoid of 1e-3/s to +-5e-3 with 60 s holds, logged every 0.5 s from 0.25 s
+   !> throughout, unrounded: each hold starts and ends 0.25 s into a step of the ramps' own
+   !> sampling. Left to the spline those corners had been cut, 1.0e-4 off the command; where
+   !> the ramps' lines meet the holds' levels the forcing follows it within 1e-8
+   subroutine test_hold_ends_inside(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tworst
+      integer :: k
+      call history_from_points([0.0_dp, 5.0_dp, 65.0_dp, 75.0_dp, 135.0_dp, 140.0_dp], &
+                               [0.0_dp, 5.0e-3_dp, 5.0e-3_dp, -5.0e-3_dp, -5.0e-3_dp, 0.0_dp], control_strain, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed trapezoid')
+      if (allocated(error)) return
+      t = [0.0_dp, (0.25_dp + 0.5_dp*k, k=0, 279), 140.0_dp]
+      call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
+      if (allocated(error)) return
+      call command_gap(h, cmd, 14000, worst, tworst)
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
+                 str(tworst)//' s')
+   end subroutine test_hold_ends_inside
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second
