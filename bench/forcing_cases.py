@@ -95,6 +95,8 @@ CASES = {
     'trapezoid-holds-logged-slowly': lambda: trapezoid(0.25, 20.0),
     'trapezoid-holds-logged-slowly-noise-3e-6': lambda: trapezoid(0.25, 20.0, 3.0e-6),
     'trapezoid-corners-at-samples-noise-3e-6': lambda: trapezoid(0.0, 20.0, 3.0e-6),
+    'hold-at-start-logged-slowly': lambda: trapezoid(0.0, 20.0, start=60.2),
+    'hold-at-start-logged-throughout': lambda: trapezoid(0.0, 0.5, start=60.2),
 }
 
 

@@ -49,7 +49,8 @@ contains
          new_unittest('measured-forcing-hold-at-the-end', test_end_hold), &
          new_unittest('measured-forcing-controller-approach-into-a-slow-hold', test_pid_approach), &
          new_unittest('measured-forcing-reversal-between-samples', test_reversal_between), &
-         new_unittest('measured-forcing-hold-ends-inside-regular-steps', test_hold_ends_inside)]
+         new_unittest('measured-forcing-hold-ends-inside-regular-steps', test_hold_ends_inside), &
+         new_unittest('measured-forcing-hold-at-the-start', test_start_hold)]
    end subroutine collect_history
 
    subroutine same(error, actual, expected, what)
@@ -701,6 +702,31 @@ contains
       call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
                  str(tworst)//' s')
    end subroutine test_hold_ends_inside
+
+   !> A test that rests at zero strain for 60.2 s, then ramps at 1e-3/s to 5e-3, holds it
+   !> 60 s and ramps back, logged every 20 s at rest and in the hold and every 0.5 s on the
+   !> ramps (the rest's last sample 0.2 s before the first ramp starts), unrounded: one
+   !> spline from the first sample had cut the corner where the rest ends, 1.0e-4 off the
+   !> command; as a hold the rest ends where the ramp's line meets it, within 1e-8
+   subroutine test_start_hold(error)
+      type(error_type), allocatable, intent(out) :: error
+      type(history_type) :: cmd, h
+      type(uerror), allocatable :: uerr
+      real(dp), allocatable :: t(:), v(:)
+      real(dp) :: worst, tworst
+      integer :: k
+      call history_from_points([0.0_dp, 60.2_dp, 65.2_dp, 125.2_dp, 130.2_dp], &
+                               [0.0_dp, 0.0_dp, 5.0e-3_dp, 5.0e-3_dp, 0.0_dp], control_strain, cmd, uerr)
+      call check(error, .not. allocated(uerr), 'programmed history')
+      if (allocated(error)) return
+      t = [0.0_dp, 20.0_dp, 40.0_dp, 60.0_dp, (60.5_dp + 0.5_dp*k, k=0, 9), 85.0_dp, 105.0_dp, 125.0_dp, &
+           (125.5_dp + 0.5_dp*k, k=0, 9), 130.2_dp]
+      call sampled_forcing(cmd, t, 0.0_dp, v, h, error)
+      if (allocated(error)) return
+      call command_gap(h, cmd, 13020, worst, tworst)
+      call check(error, worst <= 1.0e-8_dp, 'largest |forcing - command| '//str(worst)//' > 1e-8 at t = '// &
+                 str(tworst)//' s')
+   end subroutine test_start_hold
 
    !> The largest |h - cmd| (worst) and where (tworst, s), looked at every 0.01 s from 0 to
    !> n hundredths of a second

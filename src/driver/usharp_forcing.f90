@@ -685,6 +685,20 @@ contains
       n = 1
       buf(1) = turns(1)
       held = .false.
+      ! A hold at the start (a test that rests before its first ramp): the samples from the
+      ! first within the band of their level, for as long as at a turning point, become a
+      ! flat branch, so the ramp leaves it where its own line meets the level (see
+      ! hold_ends_between_samples, hold_ends_inside_steps); one spline from the first sample
+      ! had cut that corner, 1.0e-4 off the command and 2.3 ksi of stress there
+      call walk(v, 1, 0, turns(2), v(1), 2.0_dp*tol, s, e)
+      call walk(v, 1, 0, turns(2), median(v(s:e)), tol, s, e)
+      level = median(v(s:e))
+      rate = approach_rate(t, v, e, turns(2), level, approach_band*tol)
+      if (e > 1 .and. (t(e) - t(1))*rate >= hold_travel*tol) then
+         n = 2
+         buf(2) = e
+         held(1) = .true.
+      end if
       do j = 2, size(turns) - 1
          k = turns(j)
          ! The extreme of a noisy hold is its highest sample, not its level: the samples
