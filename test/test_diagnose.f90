@@ -1030,7 +1030,7 @@ contains
    !> where the rest of a gap lies below its floor, "partly explains" where it does not
    subroutine test_parsimony(error)
       type(error_type), allocatable, intent(out) :: error
-      type(diagnose_result) :: res
+      type(diagnose_result) :: res, res3
       call verdict_case(10.0_dp, 5.0_dp, 2, res)
       res%effects(1) = outcome(4, 'scatter', 4, -114.0_dp, 0.999_dp, 0.01_dp)
       res%effects(2) = outcome(1, 'compliance', 1, -100.0_dp, 0.999_dp, 0.01_dp)
@@ -1041,6 +1041,18 @@ contains
       ! (14 in BIC apart, alike by both leaving noise: named with the BIC that tells them apart)
       call check(error, index(res%verdict, 'scatter (BIC -14.0) explains it to the noise level too') > 0 .and. &
                  index(res%verdict, 'compliance is the simplest') > 0, res%verdict)
+      if (allocated(error)) return
+      ! A gain and a temperature offset of one parameter per test, a scatter of two far better
+      ! by BIC, all at the noise level: the gain leads as the simplest, by BIC only against
+      ! the temperature (once said "leads by BIC", as if against scatter too)
+      call verdict_case(10.0_dp, 5.0_dp, 3, res3)
+      res3%effects(1) = outcome(10, 'gain', 2, -100.0_dp, 0.999_dp, 0.01_dp)
+      res3%effects(2) = outcome(3, 'temperature', 2, -56.0_dp, 0.999_dp, 0.01_dp)
+      res3%effects(3) = outcome(4, 'scatter', 4, -267.0_dp, 0.999_dp, 0.01_dp)
+      call conclude(res3)
+      call check(error, res3%leading == 1 .and. size(res3%alike) == 3 .and. &
+                 index(res3%verdict, 'gain is the simplest with temperature, and leads by BIC among those') > 0 .and. &
+                 index(res3%verdict, 'scatter (BIC -167.0)') > 0, res3%verdict)
       if (allocated(error)) return
       ! Compliance leaves a structured gap (70 % removed): strong evidence for scatter
       res%effects(2)%shrink_fit = 0.7_dp

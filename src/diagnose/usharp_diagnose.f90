@@ -140,10 +140,11 @@ contains
       do j = 1, size(res%effects)
          associate (e => res%effects(j))
             ! It explains most of a structured gap of the fit tests, and makes the held-out
-            ! tests worse or leaves them as they were (a third of their gap carried is a
-            ! prediction that partly holds, not a second effect's sign)
+            ! tests worse or leaves them as they were: what it carries of their gap is below
+            ! its floor (a third of their gap carried is a prediction that partly holds, not
+            ! a second effect's sign; 0.02 % of it, nothing)
             if (.not. form_open(e, res)) cycle
-            if (e%shrink_fit < most .or. e%shrink_held > 0.0_dp) cycle
+            if (e%shrink_fit < most .or. e%shrink_held*res%gap_held > res%floor_held) cycle
             ! ... and fits the fit tests better than a confirmed leader, which carries
             if (res%leading > 0) then
                if (res%effects(res%leading)%dbic <= e%dbic + bic_margin) cycle

@@ -312,18 +312,20 @@ contains
    function alike_text(res) result(text)
       type(diagnose_result), intent(in) :: res
       character(len=:), allocatable :: text
-      character(len=:), allocatable :: within, noise
+      character(len=:), allocatable :: within, noise, peers
       integer :: j, nw, nn
-      logical :: simplest
       within = ''
       noise = ''
+      peers = ''
       nw = 0
       nn = 0
-      simplest = .true.
       associate (e => res%effects(res%leading))
          do j = 2, size(res%alike)
             associate (o => res%effects(res%alike(j)))
-               simplest = simplest .and. complexity(e) < complexity(o)
+               if (complexity(o) <= complexity(e)) then
+                  if (len(peers) > 0) peers = peers//', '
+                  peers = peers//trim(o%name)
+               end if
                if (abs(o%dbic - e%dbic) < bic_margin) then
                   if (nw > 0) within = within//', '
                   within = within//trim(o%name)
@@ -342,10 +344,11 @@ contains
          if (nn > 0) text = text//'; '//noise//' explain'//trim(merge('s', ' ', nn == 1))// &
             ' it to the noise level too: BIC tells '//trim(merge('it  ', 'them', nn == 1))//' from '// &
             trim(e%name)//', the noise level does not rule '//trim(merge('it  ', 'them', nn == 1))//' out'
-         if (simplest) then
+         ! (the simplest leads whatever a richer effect's BIC: of equal complexity, the lowest)
+         if (len(peers) == 0) then
             text = text//'; '//trim(e%name)//' is the simplest'
          else
-            text = text//'; '//trim(e%name)//' leads by BIC'
+            text = text//'; '//trim(e%name)//' is the simplest with '//peers//', and leads by BIC among those'
          end if
       end associate
    end function alike_text
@@ -822,14 +825,19 @@ contains
             if (all([(complexity(e) < complexity(res%effects(res%alike(i))), i=2, size(res%alike))])) then
                text = text//', leads as the simplest of those that explain it equally well'
             else
-               text = text//', leads by BIC among those that explain it alike'
+               text = text//', leads by BIC among the simplest of those that explain it alike'
             end if
          else if (any(res%alike == j) .and. j /= res%leading) then
             if (abs(e%dbic - res%effects(res%leading)%dbic) < bic_margin) then
                text = text//', as well as '//trim(res%effects(res%leading)%name)//': the tests cannot tell them apart'
             else
-               text = text//', to the noise level as '//trim(res%effects(res%leading)%name)//' does, '// &
-                      'which BIC prefers'
+               if (res%effects(res%leading)%dbic < e%dbic) then
+                  text = text//', to the noise level as '//trim(res%effects(res%leading)%name)//' does, '// &
+                         'which BIC prefers'
+               else
+                  text = text//', to the noise level as '//trim(res%effects(res%leading)%name)//' does, '// &
+                         'which is simpler'
+               end if
             end if
          else if (j /= res%leading) then
             text = text//', but '//trim(res%effects(res%leading)%name)//' is better by BIC'

@@ -97,11 +97,9 @@ contains
          'specimen strain + d*(t - t0)', 1, param_per_test, ['d           ', '            '], &
          ['1/s         ', '            '], [1.0e-6_dp, 1.0_dp], [.false., .false.], [.true., .true.], &
          [1.0e-5_dp, 0.0_dp])
-      ! One per test: each specimen has its own cross-section. A gain shared by every test
-      ! is a factor on every stress of the model, which the constants take up where E is
-      ! fitted with them (then only how the tests differ in it shows); with E fixed, each
-      ! test's elastic slope shows it. A tenth is a diameter 5 % off or a load cell far out
-      ! of calibration
+      ! One per test: each specimen has its own cross-section. E is the deck's, never a
+      ! fitted constant, so each test's elastic slope shows its gain, one that every test
+      ! shares too. A tenth is a diameter 5 % off or a load cell far out of calibration
       cat(10) = effect_info('gain', 'stress-channel gain per test (load-cell calibration, '// &
          'cross-section area): measured stress = (1 + g) sigma', 1, param_per_test, &
          ['g           ', '            '], ['-           ', '            '], [1.0_dp, 1.0_dp], &
