@@ -42,7 +42,7 @@ module usharp_diagnose
    use usharp_diagnose_baseline, only: fit_baseline, baseline_regions, baseline_step
    use usharp_diagnose_screen, only: screen
    use usharp_diagnose_refit, only: refit_candidates, refit_global, refit_deciding, refit
-   use usharp_diagnose_verdict, only: conclude, joint_verdict, own_against_joint
+   use usharp_diagnose_verdict, only: conclude, joint_verdict, own_against_joint, carried_clause
    use usharp_diagnose_separate, only: separate
    use usharp_diagnose_specimen, only: specimen_result, specimen_run, specimen_report, specimen_verdict, &
                                        specimen_lead
@@ -176,11 +176,8 @@ contains
          free = e%p_acts
          if (e%held .and. held_rate(ctx%cat(e%k)) > 0) free(held_rate(ctx%cat(e%k))) = .false.
          res%own_base = f
-         res%own_note = '; '//trim(e%name)//' explains the fit tests (BIC '//real_str(e%dbic, 'f0.1')//', '// &
-                        real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but does not carry '// &
-                        'to the held-out tests ('//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'// &
-                        trim(merge(': worse', '       ', e%shrink_held < 0.0_dp))//'); with it and its constants '// &
-                        'carried, each held-out test beside the fit tests:'
+         res%own_note = '; '//carried_clause(e)//'; with it and its constants carried, each held-out test '// &
+                        'beside the fit tests:'
          if (allocated(e%c_bound) .and. allocated(res%cnames)) then
             if (any(e%c_bound /= 0)) res%own_note = res%own_note//' (its refit ran away: '// &
                bound_list(res%cnames, e%c, e%c_bound)//' at a search bound of &fit)'

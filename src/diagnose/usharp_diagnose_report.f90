@@ -16,7 +16,7 @@ module usharp_diagnose_report
                                     joint_form_beats, joint_loose, fit_effect_not_carried, unit_text, &
                                     fit_structured, most, bound_list, per_test_ref, joint_decides, held_quiet, side_word, &
                                     rate_at_end, separation_type, prediction_open
-   use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells
+   use usharp_diagnose_verdict, only: verdict_of, top_regions, power_cells, carried_clause
    use usharp_diagnose_numerics, only: held_rate
    use usharp_effects, only: effect_info, effect_catalogue, n_effects, param_per_test
    implicit none
@@ -618,11 +618,8 @@ contains
       call add_line(lines, '## '//str(n)//'. What the held-out tests have of their own')
       call add_line(lines, '')
       associate (e => res%effects(res%own_base))
-         call add_line(lines, trim(e%name)//' explains the fit tests (BIC '//real_str(e%dbic, 'f0.1')//', '// &
-            real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but does not carry to the '// &
-            'held-out tests ('//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap). The prediction '// &
-            'tries one effect at a '// &
-            'time; here each held-out test is diagnosed as a specimen beside the fit tests (its "replicates"), '// &
+         call add_line(lines, carried_clause(e)//'. The prediction tries one effect at a time; here each '// &
+            'held-out test is diagnosed as a specimen beside the fit tests (its "replicates"), '// &
             'with '//trim(e%name)//' and its refit''s constants carried to it, and each effect fitted to it alone '// &
             'on top of them: what it has of its own beyond '//trim(e%name)//'.')
       end associate

@@ -38,7 +38,7 @@ module usharp_diagnose_verdict
    end type agreement_type
 
    public :: conclude, verdict_of, top_regions, joint_verdict, power_cells, missed_note, alike_note, bound_note, &
-             correlated_note, own_against_joint
+             correlated_note, own_against_joint, carried_clause
 
 contains
 
@@ -316,16 +316,12 @@ contains
       integer :: j, nw, nn
       within = ''
       noise = ''
-      peers = ''
+      peers = lead_peers(res)
       nw = 0
       nn = 0
       associate (e => res%effects(res%leading))
          do j = 2, size(res%alike)
             associate (o => res%effects(res%alike(j)))
-               if (complexity(o) <= complexity(e)) then
-                  if (len(peers) > 0) peers = peers//', '
-                  peers = peers//trim(o%name)
-               end if
                if (abs(o%dbic - e%dbic) < bic_margin) then
                   if (nw > 0) within = within//', '
                   within = within//trim(o%name)
@@ -352,6 +348,33 @@ contains
          end if
       end associate
    end function alike_text
+
+   !> The effects alike with the leader (res%alike) that are as simple as it, by name ('' where
+   !> the leader is the simplest): among those it leads by BIC, not by simplicity
+   function lead_peers(res) result(peers)
+      type(diagnose_result), intent(in) :: res
+      character(len=:), allocatable :: peers
+      integer :: j
+      peers = ''
+      do j = 2, size(res%alike)
+         associate (o => res%effects(res%alike(j)))
+            if (complexity(o) > complexity(res%effects(res%leading))) cycle
+            if (len(peers) > 0) peers = peers//', '
+            peers = peers//trim(o%name)
+         end associate
+      end do
+   end function lead_peers
+
+   !> What the effect carried to the held-out tests (see held_own in usharp_diagnose) does on
+   !> the fit tests and the held-out tests, for the verdict and the report alike
+   function carried_clause(e) result(text)
+      type(effect_outcome), intent(in) :: e
+      character(len=:), allocatable :: text
+      text = trim(e%name)//' explains the fit tests (BIC '//real_str(e%dbic, 'f0.1')//', '// &
+             real_str(100.0_dp*e%shrink_fit, 'f0.1')//' % of their structured gap) but does not carry to the '// &
+             'held-out tests ('//real_str(100.0_dp*e%shrink_held, 'f0.1')//' % of their gap'// &
+             trim(merge(': worse', '       ', e%shrink_held < 0.0_dp))//')'
+   end function carried_clause
 
    !> What the verdict adds of a leader's refit that ran to a search bound: its constants at
    !> a bound of &fit (the refit ran away), its own parameters at theirs (not determined);
@@ -822,7 +845,7 @@ contains
       end do
       if (e%confirmed .and. allocated(res%alike) .and. res%leading > 0) then
          if (j == res%leading .and. size(res%alike) > 1) then
-            if (all([(complexity(e) < complexity(res%effects(res%alike(i))), i=2, size(res%alike))])) then
+            if (len(lead_peers(res)) == 0) then
                text = text//', leads as the simplest of those that explain it equally well'
             else
                text = text//', leads by BIC among the simplest of those that explain it alike'
